@@ -1,0 +1,8 @@
+"""fusetrack: tracking with networks of different sensors, fused in Bayesian filters.
+
+The package is organised by stage (see ``DESIGN.md``): ``core`` values, ``motion`` and
+``sensors`` models, ``world`` geometry, ``filters``, ``management``, ``association``,
+``perception``, ``evaluation`` and the reproduced ``experiments``.
+"""
+
+__version__ = "0.1.0"

@@ -1,0 +1,1 @@
+"""fusetrack.association (see DESIGN.md)."""

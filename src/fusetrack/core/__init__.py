@@ -1,0 +1,57 @@
+"""Core values: beliefs, measurements, tracks, model interfaces, errors, angles, resampling."""
+
+from .angles import angle_diff, circular_mean, wrap_angle
+from .beliefs import Gaussian, GaussianMixture, GridBelief, Particles
+from .errors import (
+    ConfigError,
+    DegenerateWeightsWarning,
+    FusetrackError,
+    MeasurementError,
+    ShapeError,
+    UnknownExperimentError,
+    UnknownSensorError,
+    check_positive,
+    check_probability,
+    invalid,
+)
+from .measurement import Measurement, as_measurements, group_by_time, order_by_time, stack_values
+from .models import Filter, MotionModel, SensorMap, SensorModel
+from .resampling import RESAMPLERS, get_resampler, multinomial, residual, stratified, systematic
+from .track import Estimate, Track
+
+__all__ = [
+    "RESAMPLERS",
+    "ConfigError",
+    "DegenerateWeightsWarning",
+    "Estimate",
+    "Filter",
+    "FusetrackError",
+    "Gaussian",
+    "GaussianMixture",
+    "GridBelief",
+    "Measurement",
+    "MeasurementError",
+    "MotionModel",
+    "Particles",
+    "SensorMap",
+    "SensorModel",
+    "ShapeError",
+    "Track",
+    "UnknownExperimentError",
+    "UnknownSensorError",
+    "angle_diff",
+    "as_measurements",
+    "check_positive",
+    "check_probability",
+    "circular_mean",
+    "get_resampler",
+    "group_by_time",
+    "invalid",
+    "multinomial",
+    "order_by_time",
+    "residual",
+    "stack_values",
+    "stratified",
+    "systematic",
+    "wrap_angle",
+]

@@ -1,0 +1,1 @@
+"""fusetrack.evaluation (see DESIGN.md)."""

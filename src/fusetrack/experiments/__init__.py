@@ -1,0 +1,1 @@
+"""fusetrack.experiments (see DESIGN.md)."""

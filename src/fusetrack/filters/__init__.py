@@ -1,0 +1,1 @@
+"""fusetrack.filters (see DESIGN.md)."""

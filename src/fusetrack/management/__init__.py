@@ -1,0 +1,1 @@
+"""fusetrack.management (see DESIGN.md)."""

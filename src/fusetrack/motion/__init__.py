@@ -1,0 +1,1 @@
+"""fusetrack.motion (see DESIGN.md)."""

@@ -1,0 +1,1 @@
+"""fusetrack.perception (see DESIGN.md)."""

@@ -1,0 +1,1 @@
+"""fusetrack.sensors (see DESIGN.md)."""

@@ -1,0 +1,1 @@
+"""fusetrack.service (see DESIGN.md)."""

@@ -1,0 +1,1 @@
+"""fusetrack.world (see DESIGN.md)."""
