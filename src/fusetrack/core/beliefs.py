@@ -183,13 +183,12 @@ class GridBelief:
 
     @property
     def mean(self) -> NDArray[np.float64]:
-        p = self.prob
-        return np.einsum("...,...d->d", p, self.points)
+        return np.tensordot(self.prob, self.points, axes=self.dim)
 
     @property
     def cov(self) -> NDArray[np.float64]:
-        r = self.points - self.mean
-        return _symmetrise(np.einsum("...,...i,...j->ij", self.prob, r, r))
+        r = (self.points - self.mean).reshape(-1, self.dim)
+        return _symmetrise(np.einsum("n,ni,nj->ij", self.prob.ravel(), r, r))
 
     @property
     def map_estimate(self) -> NDArray[np.float64]:

@@ -1,0 +1,166 @@
+"""The experiment contract (DESIGN.md): ``results.parquet``, ``summary.json`` and ``report.md``.
+
+An experiment returns an :class:`Outcome` (tidy rows, claims, the report's markdown body); this
+module writes the three files, with the cost of the run (seconds, peak memory) measured here.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import resource
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..core.errors import ConfigError, invalid
+from .montecarlo import ENGINES, RunFunction, run_monte_carlo
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One checked statement: what the paper prints, what this run measured, and whether it holds."""
+
+    id: str
+    statement: str
+    paper: Any
+    ours: Any
+    tolerance: Any
+    holds: bool
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "holds", bool(self.holds))
+
+
+@dataclass
+class RunContext:
+    """Options of one ``fusetrack run``: the CLI builds it, the experiment reads it."""
+
+    name: str
+    out_dir: Path
+    quick: bool = False
+    runs: int | None = None
+    seed: int = 0
+    engine: str = "local"
+    scheduler: str | None = None
+    workers: int | None = None
+    progress: bool | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.out_dir = Path(self.out_dir)
+        if self.engine not in ENGINES:
+            raise ConfigError(invalid("engine", self.engine, f"one of {ENGINES}"))
+        if self.runs is not None and self.runs < 1:
+            raise ConfigError(invalid("runs", self.runs, "an integer >= 1"))
+        if self.scheduler is not None and self.engine != "dask":
+            raise ConfigError(invalid("scheduler", self.scheduler, "only with --engine dask"))
+
+    def n_runs(self, full: int, quick: int) -> int:
+        """Runs to do: ``--runs`` if given, else the paper's count (``full``) or ``quick``."""
+        if self.runs is not None:
+            return self.runs
+        return quick if self.quick else full
+
+    def monte_carlo(
+        self, fn: RunFunction, configs: Sequence[Mapping[str, Any]], runs: int, desc: str = "runs"
+    ) -> pd.DataFrame:
+        return run_monte_carlo(
+            fn,
+            configs,
+            runs,
+            self.seed,
+            engine=self.engine,  # type: ignore[arg-type]
+            workers=self.workers,
+            scheduler=self.scheduler,
+            progress=self.progress,
+            desc=f"{self.name}: {desc}",
+        )
+
+    def figure_path(self, stem: str) -> Path:
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        return self.out_dir / f"{stem}.png"
+
+
+@dataclass
+class Outcome:
+    """What an experiment hands back: tidy rows, claims, and the report's markdown body."""
+
+    results: pd.DataFrame
+    claims: list[Claim]
+    report: str
+    runs: int
+    title: str = ""
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _jsonable(v.tolist())
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None if math.isnan(v) else ("inf" if v > 0 else "-inf")
+    return v
+
+
+def peak_memory_mb() -> float:
+    """Peak resident memory of this process and of its finished child processes, in MiB."""
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return max(own, children) / 1024.0
+
+
+def claims_table(claims: Sequence[Claim]) -> str:
+    """Markdown table of claims."""
+    lines = ["| id | statement | paper | ours | tolerance | holds |", "|---|---|---|---|---|---|"]
+    for c in claims:
+        ours = f"{c.ours:.4g}" if isinstance(c.ours, float) else str(c.ours)
+        lines.append(
+            f"| {c.id} | {c.statement} | {c.paper} | {ours} | {c.tolerance} | {'yes' if c.holds else '**no**'} |"
+        )
+    return "\n".join(lines)
+
+
+def write_outputs(ctx: RunContext, outcome: Outcome, seconds: float, memory_mb: float) -> dict[str, Any]:
+    """Write ``results.parquet``, ``summary.json`` and ``report.md`` into ``ctx.out_dir``."""
+    out = ctx.out_dir
+    out.mkdir(parents=True, exist_ok=True)
+    df = outcome.results.copy()
+    for col in df.columns:  # Parquet needs one type per column
+        if df[col].dtype == object:
+            df[col] = df[col].map(lambda v: v if v is None or isinstance(v, str) else json.dumps(_jsonable(v)))
+    df.to_parquet(out / "results.parquet", index=False)
+    summary = {
+        "experiment": ctx.name,
+        "claims": [_jsonable(asdict(c)) for c in outcome.claims],
+        "runs": outcome.runs,
+        "seed": ctx.seed,
+        "seconds": round(seconds, 3),
+        "peak_memory_mb": round(memory_mb, 1),
+        "quick": ctx.quick,
+        "engine": ctx.engine,
+    }
+    (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    held = sum(c.holds for c in outcome.claims)
+    header = [
+        f"# {outcome.title or ctx.name}",
+        "",
+        f"`fusetrack run {ctx.name}{' --quick' if ctx.quick else ''} --runs {outcome.runs} --seed {ctx.seed}"
+        f" --engine {ctx.engine}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
+        f"{' (quick run: fewer runs, wider tolerances)' if ctx.quick else ''}.",
+        "",
+        f"## Claims ({held} of {len(outcome.claims)} hold)",
+        "",
+        claims_table(outcome.claims),
+        "",
+    ]
+    (out / "report.md").write_text("\n".join(header) + "\n" + outcome.report.strip() + "\n")
+    return summary

@@ -1,0 +1,278 @@
+"""The demo: one manoeuvring target, two microphone arrays, a camera and a radio tag.
+
+A target moves for 60 s in a 100 m x 60 m area under the coordinated-turn model with the turn
+rate in the state (so it turns, and the turn rate itself wanders). Two microphone arrays report
+bearings every step, a camera reports a sharp bearing while the target is inside its field of
+view and not behind an occluder, and a radio tag reports a noisy position fix every 2 s. An
+EKF, a UKF and a bootstrap particle filter fuse all of it; the posterior Cramér–Rao bound
+(Tichavský et al. 1998) over the same random trajectories and the same report pattern is the
+floor none of them can beat. The truth is drawn from the filters' own motion model and prior,
+so the bound is a real bound here, not an approximation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..core import Gaussian, Measurement
+from ..evaluation import plots
+from ..evaluation.crlb import posterior_crlb
+from ..evaluation.report import Claim, Outcome, RunContext
+from ..filters import (
+    BootstrapFilter,
+    ExtendedKalmanFilter,
+    UnscentedKalmanFilter,
+    run_filter,
+)
+from ..motion import CoordinatedTurnRate
+from ..sensors import Bearing, PositionFix
+
+AREA = (0.0, 100.0, 0.0, 60.0)
+POSITION = (0, 1)
+VELOCITY = (2, 3)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything the demo's world and sensors are made of (SI units, radians)."""
+
+    dt: float = 0.5
+    duration: float = 60.0
+    q: float = 0.05  # acceleration noise PSD (m^2/s^3)
+    q_omega: float = 2e-4  # turn-rate noise PSD (rad^2/s^3)
+    prior_mean: tuple[float, ...] = (20.0, 20.0, 1.5, 0.8, 0.02)
+    prior_std: tuple[float, ...] = (2.0, 2.0, 0.5, 0.5, 0.02)
+    sigma_mic: float = np.deg2rad(3.0)
+    sigma_camera: float = np.deg2rad(0.5)
+    camera_fov: float = np.deg2rad(70.0)
+    occluded: tuple[tuple[float, float], ...] = ((18.0, 26.0), (40.0, 46.0))
+    tag_period: float = 2.0
+    tag_cov: tuple[tuple[float, float], tuple[float, float]] = ((4.0, 1.2), (1.2, 2.25))
+
+    @property
+    def times(self) -> np.ndarray:
+        return self.dt * np.arange(1, int(round(self.duration / self.dt)) + 1)
+
+    def motion(self) -> CoordinatedTurnRate:
+        return CoordinatedTurnRate(q=self.q, q_omega=self.q_omega)
+
+    def prior(self) -> Gaussian:
+        return Gaussian(np.array(self.prior_mean), np.diag(np.square(self.prior_std)))
+
+    def sensors(self) -> dict[str, Any]:
+        return {
+            "mic_west": Bearing("mic_west", position=[0.0, 0.0], sigma=self.sigma_mic),
+            "mic_east": Bearing("mic_east", position=[100.0, 0.0], sigma=self.sigma_mic),
+            "camera": Bearing(
+                "camera",
+                position=[50.0, 62.0],
+                sigma=self.sigma_camera,
+                heading=-np.pi / 2,
+                fov=self.camera_fov,
+            ),
+            "tag": PositionFix("tag", cov=np.array(self.tag_cov)),
+        }
+
+
+def simulate(scn: Scenario, rng: np.random.Generator) -> tuple[np.ndarray, list[Measurement]]:
+    """A true trajectory ``(T, 5)`` drawn from the prior and the motion model, and its reports."""
+    motion, sensors = scn.motion(), scn.sensors()
+    x = scn.prior().sample(rng)
+    truth, reports = [], []
+    for t in scn.times:
+        x = motion.sample(x, scn.dt, rng)
+        truth.append(x)
+        for sid, sensor in sensors.items():
+            if sid == "tag" and not np.isclose(t % scn.tag_period, 0.0):
+                continue
+            if sid == "camera" and any(a <= t < b for a, b in scn.occluded):
+                continue
+            z = sensor.simulate(x, rng)
+            if np.all(np.isfinite(z)):
+                reports.append(Measurement(float(t), sid, z))
+    return np.array(truth), reports
+
+
+def report_mask(scn: Scenario, truth: np.ndarray, reports: list[Measurement]) -> np.ndarray:
+    """``(T, S)`` booleans: which sensor reported at which step (for the bound)."""
+    index = {t: k for k, t in enumerate(np.round(scn.times, 9))}
+    names = list(scn.sensors())
+    mask = np.zeros((len(truth), len(names)), dtype=bool)
+    for m in reports:
+        mask[index[round(m.time, 9)], names.index(m.sensor_id)] = True
+    return mask
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    """One Monte Carlo run: simulate, run the three filters, return one row per method and step."""
+    scn = Scenario()
+    rng = np.random.default_rng(seed)
+    truth, reports = simulate(scn, rng)
+    motion, sensors, prior = scn.motion(), scn.sensors(), scn.prior()
+    filters = {
+        "EKF": ExtendedKalmanFilter(motion, sensors),
+        "UKF": UnscentedKalmanFilter(motion, sensors),
+        "PF": BootstrapFilter(
+            motion, sensors, n_particles=int(config["n_particles"]), ess_threshold=0.5
+        ),
+    }
+    rows = []
+    for method, filt in filters.items():
+        track = run_filter(filt, prior, reports, rng=np.random.default_rng(seed + 1), times=scn.times)
+        keep = np.isin(np.round(track.times, 9), np.round(scn.times, 9))
+        est = track.means[keep]
+        err = est - truth
+        for k, t in enumerate(scn.times):
+            rows.append(
+                {
+                    "method": method,
+                    "step": k,
+                    "time": float(t),
+                    "x": est[k, 0],
+                    "y": est[k, 1],
+                    "true_x": truth[k, 0],
+                    "true_y": truth[k, 1],
+                    "sq_pos_err": float(np.sum(err[k, list(POSITION)] ** 2)),
+                    "sq_vel_err": float(np.sum(err[k, list(VELOCITY)] ** 2)),
+                }
+            )
+    return rows
+
+
+def bound(scn: Scenario, runs: int, seed: int) -> np.ndarray:
+    """Position RMSE bound per step from the PCRB over the same trajectories and report patterns."""
+    from ..evaluation.montecarlo import run_seed
+
+    truths, masks = [], []
+    for r in range(runs):
+        truth, reports = simulate(scn, np.random.default_rng(run_seed(seed, r)))
+        truths.append(truth)
+        masks.append(report_mask(scn, truth, reports))
+    sensors = scn.sensors()
+    J_inv = posterior_crlb(
+        scn.motion(),
+        list(sensors.values()),
+        np.array(truths),
+        scn.dt,
+        scn.prior().cov,
+        mask=np.array(masks),
+    )
+    return np.sqrt(np.trace(J_inv[:, 0:2, 0:2], axis1=-2, axis2=-1))
+
+
+def run(ctx: RunContext) -> Outcome:
+    scn = Scenario()
+    runs = ctx.n_runs(full=100, quick=8)
+    n_particles = 1000 if ctx.quick else 4000
+    df = ctx.monte_carlo(run_once, [{"n_particles": n_particles}], runs)
+    pcrb = bound(scn, runs, ctx.seed)
+    rmse = (
+        df.groupby(["method", "step"])["sq_pos_err"].mean().pow(0.5).unstack("method").sort_index()
+    )
+    vel = df.groupby(["method", "step"])["sq_vel_err"].mean().pow(0.5).unstack("method")
+    avg = rmse.mean()
+    bound_avg = float(pcrb.mean())
+    factor = 3.0 if ctx.quick else 2.0
+    claims = []
+    for method in ["EKF", "UKF", "PF"]:
+        claims.append(
+            Claim(
+                f"{method.lower()}_above_bound",
+                f"{method} time-averaged position RMSE is above the PCRB's ({bound_avg:.3g} m)",
+                ">= PCRB",
+                float(avg[method]),
+                "none",
+                avg[method] >= bound_avg,
+            )
+        )
+        claims.append(
+            Claim(
+                f"{method.lower()}_near_bound",
+                f"{method} time-averaged position RMSE is within {factor}x the PCRB",
+                f"<= {factor} x PCRB",
+                float(avg[method] / bound_avg),
+                factor,
+                avg[method] <= factor * bound_avg,
+            )
+        )
+    tol = 0.15 if ctx.quick else 0.05
+    claims.append(
+        Claim(
+            "pf_not_worse_than_ekf",
+            "the particle filter's time-averaged position RMSE is not worse than the EKF's",
+            "PF <= EKF",
+            float(avg["PF"] / avg["EKF"]),
+            f"ratio <= {1 + tol}",
+            avg["PF"] <= (1 + tol) * avg["EKF"],
+        )
+    )
+
+    times = scn.times
+    fig_rmse = plots.plot_series(
+        ctx.figure_path("rmse_vs_time"),
+        times,
+        {**{m: rmse[m].to_numpy() for m in ["EKF", "UKF", "PF"]}, "PCRB": pcrb},
+        xlabel="time (s)",
+        ylabel="position RMSE (m)",
+        title=f"Position RMSE over {runs} runs",
+        styles={"PCRB": "k--"},
+    )
+    run0 = df[df["run"] == 0]
+    truth0 = run0[run0["method"] == "EKF"][["true_x", "true_y"]].to_numpy()
+    sensors = scn.sensors()
+    fig_traj = plots.plot_trajectories(
+        ctx.figure_path("trajectory"),
+        truth0,
+        {m: run0[run0["method"] == m][["x", "y"]].to_numpy() for m in ["EKF", "UKF", "PF"]},
+        sensors=[(sid, s.position) for sid, s in sensors.items() if hasattr(s, "sensor_id") and sid != "tag"],
+        area=(AREA[0] - 5, AREA[1] + 5, AREA[2] - 5, AREA[3] + 5),
+        title="Run 0: truth and estimates",
+    )
+    table = pd.DataFrame(
+        {
+            "position RMSE (m)": avg,
+            "velocity RMSE (m/s)": vel.mean(),
+            "RMSE / PCRB": avg / bound_avg,
+        }
+    ).loc[["EKF", "UKF", "PF"]]
+    print(f"\nTime-averaged over {runs} runs (PCRB position bound {bound_avg:.3f} m):")
+    print(table.to_string(float_format=lambda v: f"{v:.3f}"))
+    body = f"""
+## Set-up
+
+A target moves for {scn.duration:.0f} s (step {scn.dt} s) under the coordinated-turn model with the
+turn rate in the state (acceleration PSD {scn.q} m²/s³, turn-rate PSD {scn.q_omega} rad²/s³),
+starting from a draw of the prior (mean {list(scn.prior_mean)}, std {list(scn.prior_std)}).
+Two microphone arrays at (0, 0) and (100, 0) m report bearings with σ = 3°; a camera at (50, 62) m
+looking down the area with a 70° field of view reports bearings with σ = 0.5° except while an
+occluder hides the target ({', '.join(f'{a:.0f}–{b:.0f} s' for a, b in scn.occluded)}); a radio tag
+reports its position every {scn.tag_period:.0f} s with covariance {[list(r) for r in scn.tag_cov]} m².
+The EKF, UKF and bootstrap particle filter ({n_particles} particles, systematic resampling when ESS < N/2)
+share the motion model, the prior and the reports. The bound is the posterior CRLB
+(Tichavský, Muravchik & Nehorai 1998) averaged over the same {runs} true trajectories, with exactly
+the reports each run received.
+
+## Results
+
+{table.to_markdown(floatfmt=".3f")}
+
+![RMSE versus time]({fig_rmse.name})
+
+![Trajectory]({fig_traj.name})
+
+## Discussion
+
+There is no paper for the demo: its claims are what theory demands (no unbiased estimator beats
+the PCRB) and what a working set of filters should show. The bound is tightest where the camera
+sees the target and loosens during the occluded stretches, where only the wide microphone bearings
+and the sparse tag fixes remain; the filters follow the same pattern. The particle filter carries
+the non-Gaussian posterior of the bearing geometry and so is not worse than the EKF, which
+linearises each bearing about its prediction.
+"""
+    return Outcome(df, claims, body, runs)
+
