@@ -72,7 +72,7 @@ def test_weights_normalised_and_ess_in_range(lw):
 
 def test_grid_belief_moments():
     x = np.linspace(-5, 5, 201)
-    y = np.linspace(-4, 6, 201)
+    y = np.linspace(-8, 12, 401)
     X, Y = np.meshgrid(x, y, indexing="ij")
     lp = -0.5 * ((X - 1) ** 2 / 0.5 + (Y - 2) ** 2 / 2.0)
     g = GridBelief((x, y), lp).normalized()
