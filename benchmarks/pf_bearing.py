@@ -1,0 +1,426 @@
+"""Speed of one bootstrap particle filter in fusetrack, Stone Soup, ``particles`` and plain NumPy.
+
+The filter (the same in all four): 2-D constant velocity ``[x, y, vx, vy]`` with continuous
+white-noise acceleration (PSD ``q``), three bearing sensors at fixed known positions, Gaussian
+prior, bootstrap proposal, systematic resampling after every step, 100 steps. All four filter
+the same simulated truth and measurements (``_scenario.py``, one fixed seed) and report the
+weighted particle mean of the position, so their RMSEs must agree within Monte Carlo error.
+
+    python benchmarks/pf_bearing.py [--N 1000 10000 100000 1000000]
+        [--libs fusetrack stonesoup particles numpy] [--repeats K] [--steps S] [--json]
+
+Timing: ``time.perf_counter`` around a whole run (prior draw, then ``steps`` predict + update
++ resample + mean), divided by ``steps``; the median over ``--repeats`` runs. Each library is
+first warmed up with a 3-step run (Numba JIT compile time is excluded); that run, or the
+previous N scaled linearly, estimates the time per step, and a library whose estimate exceeds
+``--budget`` seconds per step is skipped ("skipped (est. Xs)", JSON ``null``).
+
+Building models and measurement objects happens before the clock starts, for every library.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import math
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _scenario import Array, Scenario, cv_matrices, make_scenario, position_rmse, wrap
+
+LIBS = ("fusetrack", "stonesoup", "particles", "numpy")
+WARMUP_STEPS = 3
+
+
+# --------------------------------------------------------------------------------------------
+# (1) fusetrack
+
+
+class FusetrackPF:
+    """``filters.BootstrapFilter`` with ``motion.ConstantVelocity`` and ``sensors.Bearing``."""
+
+    def __init__(self, scn: Scenario, n: int) -> None:
+        from fusetrack.core import Gaussian, Measurement
+        from fusetrack.filters import BootstrapFilter
+        from fusetrack.motion import ConstantVelocity
+        from fusetrack.sensors import Bearing
+
+        sensors = [
+            Bearing(sensor_id=sid, position=pos, sigma=scn.sigma)
+            for sid, pos in zip(scn.sensor_ids, scn.sensors)
+        ]
+        self.filt = BootstrapFilter(
+            ConstantVelocity(ndim=2, q=scn.q, noise="continuous"),
+            sensors,
+            n_particles=n,
+            resampler="systematic",
+            ess_threshold=1.0,
+            engine="numba",
+        )
+        self.prior = Gaussian(scn.prior_mean, scn.prior_cov)
+        self.dt = scn.dt
+        self.measurements = [
+            [
+                Measurement((k + 1) * scn.dt, sid, [scn.z[k, i]])
+                for i, sid in enumerate(scn.sensor_ids)
+            ]
+            for k in range(scn.steps)
+        ]
+
+    def run(self, seed: int, steps: int) -> Array:
+        rng = np.random.default_rng(seed)
+        filt = self.filt
+        p = filt.initialize(self.prior, rng)
+        est = np.empty((steps, 2))
+        for k in range(steps):
+            p = filt.predict(p, self.dt, rng)
+            p = filt.update(p, self.measurements[k], rng)
+            est[k] = p.mean[:2]
+        return est
+
+
+# --------------------------------------------------------------------------------------------
+# (2) Stone Soup: state layout [x, vx, y, vy]; three detections per step, each with its own
+# Cartesian2DToBearing model, applied in sequence; only the last update of a step resamples.
+
+
+class StoneSoupPF:
+    """``ParticlePredictor``, ``ParticleUpdater`` and ``SystematicResampler`` (the tutorial way)."""
+
+    def __init__(self, scn: Scenario, n: int) -> None:
+        from datetime import datetime, timedelta
+
+        from stonesoup.models.measurement.nonlinear import Cartesian2DToBearing
+        from stonesoup.models.transition.linear import (
+            CombinedLinearGaussianTransitionModel,
+            ConstantVelocity,
+        )
+        from stonesoup.predictor.particle import ParticlePredictor
+        from stonesoup.resampler.particle import SystematicResampler
+        from stonesoup.types.angle import Bearing
+        from stonesoup.types.array import StateVector
+        from stonesoup.types.detection import Detection
+        from stonesoup.types.hypothesis import SingleHypothesis
+        from stonesoup.types.state import ParticleState, StateVectors
+        from stonesoup.updater.particle import ParticleUpdater
+
+        self._ParticleState, self._StateVectors, self._Hypothesis = (
+            ParticleState,
+            StateVectors,
+            SingleHypothesis,
+        )
+        self._ParticlePredictor = ParticlePredictor
+        self.n = n
+        transition = CombinedLinearGaussianTransitionModel(
+            [ConstantVelocity(scn.q), ConstantVelocity(scn.q)]
+        )
+        models = [
+            Cartesian2DToBearing(
+                ndim_state=4,
+                mapping=(0, 2),
+                noise_covar=np.array([[scn.sigma**2]]),
+                translation_offset=StateVector([[pos[0]], [pos[1]]]),
+            )
+            for pos in scn.sensors
+        ]
+        self.predictor = ParticlePredictor(transition)
+        self.updater = ParticleUpdater(measurement_model=models[0])
+        self.updater_resample = ParticleUpdater(
+            measurement_model=models[0], resampler=SystematicResampler()
+        )
+        self.start = datetime(2024, 1, 1)
+        self.detections = [
+            [
+                Detection(
+                    StateVector([[Bearing(scn.z[k, i])]]),
+                    timestamp=self.start + timedelta(seconds=(k + 1) * scn.dt),
+                    measurement_model=models[i],
+                )
+                for i in range(len(models))
+            ]
+            for k in range(scn.steps)
+        ]
+        perm = [0, 2, 1, 3]  # [x, y, vx, vy] -> [x, vx, y, vy]
+        self.prior_mean = scn.prior_mean[perm]
+        self.prior_cov = scn.prior_cov[np.ix_(perm, perm)]
+
+    def run(self, seed: int, steps: int) -> Array:
+        from scipy.stats import multivariate_normal
+
+        np.random.seed(seed)  # noqa: NPY002 - Stone Soup draws from NumPy's global generator
+        samples = multivariate_normal.rvs(self.prior_mean, self.prior_cov, size=self.n)
+        state = self._ParticleState(
+            self._StateVectors(samples.T),
+            log_weight=np.full(self.n, -np.log(self.n)),
+            timestamp=self.start,
+        )
+        est = np.empty((steps, 2))
+        for k in range(steps):
+            dets = self.detections[k]
+            state = self.predictor.predict(state, timestamp=dets[0].timestamp)
+            for i, det in enumerate(dets):
+                upd = self.updater_resample if i == len(dets) - 1 else self.updater
+                state = upd.update(self._Hypothesis(state, det))
+            est[k] = np.asarray(state.mean, float)[[0, 2], 0]
+        return est
+
+    def cleanup(self) -> None:
+        # ParticlePredictor.predict keeps an LRU cache (128 entries) of whole particle sets;
+        # release it between runs so N = 1e6 does not hold gigabytes (done outside the clock).
+        self._ParticlePredictor.predict.__wrapped__.cache_clear()
+
+
+# --------------------------------------------------------------------------------------------
+# (3) particles (N. Chopin): X_0 of the state-space model is the state at time 1 (the prior
+# pushed through the motion model), so Y_t is the measurement at time t + 1.
+
+
+def _particles_model(scn: Scenario) -> object:
+    import particles.distributions as dists
+    from particles import state_space_models as ssm
+
+    F, Q = cv_matrices(scn.dt, scn.q)
+    sensors, sigma = scn.sensors, scn.sigma
+
+    class WrappedBearings(dists.ProbDist):
+        """Three independent Gaussian bearings with the residual wrapped to [-pi, pi)."""
+
+        dim = 3
+
+        def __init__(self, x: Array) -> None:
+            self.x = x
+
+        def _pred(self) -> Array:
+            d = self.x[..., None, :2] - sensors
+            return np.arctan2(d[..., 1], d[..., 0])
+
+        def logpdf(self, y: Array) -> Array:
+            r = wrap(y - self._pred()) / sigma
+            return -0.5 * np.sum(r * r, axis=-1) - 3 * (np.log(sigma) + 0.5 * np.log(2 * np.pi))
+
+        def rvs(self, size: int | None = None) -> Array:
+            return wrap(self._pred() + sigma * np.random.standard_normal(self._pred().shape))  # noqa: NPY002
+
+    class BearingsOnlyCV(ssm.StateSpaceModel):
+        def PX0(self):
+            return dists.MvNormal(loc=F @ scn.prior_mean, cov=F @ scn.prior_cov @ F.T + Q)
+
+        def PX(self, t, xp):
+            return dists.MvNormal(loc=xp @ F.T, cov=Q)
+
+        def PY(self, t, xp, x):
+            return WrappedBearings(x)
+
+    return BearingsOnlyCV()
+
+
+class ParticlesPF:
+    """``SMC(fk=Bootstrap(...), resampling='systematic', ESSrmin=1.0)`` with ``Moments``."""
+
+    def __init__(self, scn: Scenario, n: int) -> None:
+        self.model = _particles_model(scn)
+        self.data = [scn.z[k] for k in range(scn.steps)]
+        self.n = n
+
+    def run(self, seed: int, steps: int) -> Array:
+        import particles
+        from particles import collectors
+        from particles import state_space_models as ssm
+
+        np.random.seed(seed)  # noqa: NPY002 - particles draws from NumPy's global generator
+        fk = ssm.Bootstrap(ssm=self.model, data=self.data[:steps])
+        alg = particles.SMC(
+            fk=fk,
+            N=self.n,
+            resampling="systematic",
+            ESSrmin=1.0,
+            collect=[collectors.Moments()],
+            verbose=False,
+        )
+        alg.run()
+        return np.array([m["mean"][:2] for m in alg.summaries.moments])
+
+
+# --------------------------------------------------------------------------------------------
+# (4) plain NumPy: what a user writes in twenty lines.
+
+
+class NumpyPF:
+    """A vectorised bootstrap filter written directly in NumPy."""
+
+    def __init__(self, scn: Scenario, n: int) -> None:
+        self.scn, self.n = scn, n
+        self.F, Q = cv_matrices(scn.dt, scn.q)
+        self.LQ = np.linalg.cholesky(Q)
+        self.L0 = np.linalg.cholesky(scn.prior_cov)
+
+    def run(self, seed: int, steps: int) -> Array:
+        rng = np.random.default_rng(seed)
+        scn, n = self.scn, self.n
+        x = scn.prior_mean + rng.standard_normal((n, 4)) @ self.L0.T
+        est = np.empty((steps, 2))
+        for k in range(steps):
+            x = x @ self.F.T + rng.standard_normal((n, 4)) @ self.LQ.T
+            logw = np.zeros(n)
+            for i, (sx, sy) in enumerate(scn.sensors):
+                r = wrap(scn.z[k, i] - np.arctan2(x[:, 1] - sy, x[:, 0] - sx)) / scn.sigma
+                logw -= 0.5 * r * r
+            w = np.exp(logw - logw.max())
+            w /= w.sum()
+            est[k] = w @ x[:, :2]
+            u = (rng.random() + np.arange(n)) / n
+            idx = np.minimum(np.searchsorted(np.cumsum(w), u), n - 1)
+            x = x[idx]
+        return est
+
+
+RUNNERS: dict[str, Callable[[Scenario, int], object]] = {
+    "fusetrack": FusetrackPF,
+    "stonesoup": StoneSoupPF,
+    "particles": ParticlesPF,
+    "numpy": NumpyPF,
+}
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def _timed_run(runner: object, seed: int, steps: int) -> tuple[float, Array]:
+    gc.collect()
+    t0 = time.perf_counter()
+    est = runner.run(seed, steps)  # type: ignore[attr-defined]
+    elapsed = time.perf_counter() - t0
+    if hasattr(runner, "cleanup"):
+        runner.cleanup()  # type: ignore[attr-defined]
+    return elapsed, est
+
+
+def measure(
+    lib: str,
+    scn: Scenario,
+    n: int,
+    steps: int,
+    repeats: int,
+    seed: int,
+    budget: float,
+    estimate: float | None,
+) -> dict[str, float | None]:
+    """Median seconds per step and the RMSE of the first timed run (``None`` when skipped)."""
+    if estimate is not None and estimate > budget:
+        return {"seconds_per_step": None, "rmse": None, "estimate": estimate}
+    runner = RUNNERS[lib](scn, n)
+    warm_steps = min(WARMUP_STEPS, steps)
+    t_warm, _ = _timed_run(runner, seed + 10_000, warm_steps)  # JIT compile, caches, page faults
+    est_step = t_warm / warm_steps
+    if est_step > budget:
+        return {"seconds_per_step": None, "rmse": None, "estimate": est_step}
+    times, rmse = [], math.nan
+    for r in range(repeats):
+        elapsed, est = _timed_run(runner, seed + r, steps)
+        times.append(elapsed / steps)
+        if r == 0:
+            rmse = position_rmse(est, scn.truth[1 : steps + 1, :2])
+    del runner
+    gc.collect()
+    return {"seconds_per_step": statistics.median(times), "rmse": rmse, "estimate": est_step}
+
+
+def _fmt_time(t: float | None, est: float | None) -> str:
+    if t is None:
+        return f"skipped (est. {est:.3g}s)" if est is not None else "failed"
+    return f"{t * 1e3:.3f} ms" if t < 1 else f"{t:.3f} s"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawTextHelpFormatter
+    )
+    ap.add_argument(
+        "--N",
+        type=int,
+        nargs="+",
+        default=[1000, 10_000, 100_000, 1_000_000],
+        help="particle counts",
+    )
+    ap.add_argument(
+        "--libs", nargs="+", default=list(LIBS), choices=LIBS, help="implementations to time"
+    )
+    ap.add_argument(
+        "--repeats", type=int, default=3, help="timed runs per (library, N); the median is reported"
+    )
+    ap.add_argument("--steps", type=int, default=100, help="time steps per run (default 100)")
+    ap.add_argument(
+        "--budget",
+        type=float,
+        default=0.5,
+        help="skip a library whose estimated seconds per step exceed this",
+    )
+    ap.add_argument(
+        "--seed",
+        type=int,
+        default=1,
+        help="seed of the filters' random draws (the scenario is fixed)",
+    )
+    ap.add_argument("--json", action="store_true", help="one JSON object per N instead of a table")
+    args = ap.parse_args(argv)
+    if args.steps < 1 or args.repeats < 1:
+        ap.error("--steps and --repeats must be >= 1")
+
+    scn = make_scenario(steps=args.steps)
+    if not args.json:
+        print(
+            "bootstrap PF, 4-D CV, 3 bearing sensors, systematic resampling every step, "
+            f"{args.steps} steps; median of {args.repeats} runs; budget {args.budget}s/step"
+        )
+    last: dict[str, tuple[int, float]] = {}  # lib -> (N, seconds per step) of the last measured N
+    for n in args.N:
+        res: dict[str, dict[str, float | None]] = {}
+        for lib in args.libs:
+            prev = last.get(lib)
+            extrapolated = prev[1] * n / prev[0] if prev is not None else None
+            res[lib] = measure(
+                lib, scn, n, args.steps, args.repeats, args.seed, args.budget, extrapolated
+            )
+            t = res[lib]["seconds_per_step"]
+            if t is not None:
+                last[lib] = (n, t)
+            else:  # remember the estimate so larger N are skipped without a warm-up
+                last[lib] = (n, float(res[lib]["estimate"]))  # type: ignore[arg-type]
+        if args.json:
+            print(
+                json.dumps(
+                    {
+                        "N": n,
+                        "seconds_per_step": {
+                            lib: res[lib]["seconds_per_step"] for lib in args.libs
+                        },
+                        "rmse": {lib: res[lib]["rmse"] for lib in args.libs},
+                    }
+                ),
+                flush=True,
+            )
+        else:
+            _print_table(n, args.libs, res)
+    return 0
+
+
+def _print_table(n: int, libs: list[str], res: dict[str, dict[str, float | None]]) -> None:
+    ft = res.get("fusetrack", {}).get("seconds_per_step")
+    print(f"\nN = {n:,}")
+    print(f"  {'library':<10} {'time / step':>24} {'RMSE (m)':>10} {'fusetrack speed-up':>19}")
+    for lib in libs:
+        t, rmse, est = res[lib]["seconds_per_step"], res[lib]["rmse"], res[lib]["estimate"]
+        ratio = "" if lib == "fusetrack" or ft is None or t is None else f"{t / ft:.1f}x"
+        rm = "" if rmse is None else f"{rmse:.3f}"
+        print(f"  {lib:<10} {_fmt_time(t, est):>24} {rm:>10} {ratio:>19}", flush=True)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

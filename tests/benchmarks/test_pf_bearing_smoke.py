@@ -1,0 +1,54 @@
+"""Smoke test of benchmarks/pf_bearing.py: it runs and prints JSON of the documented shape.
+
+No timing assertions: speed is measured by running the benchmark, not by the test suite.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "pf_bearing.py"
+
+
+def _has_bootstrap_filter() -> bool:
+    try:
+        from fusetrack.filters import BootstrapFilter  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _run(libs: list[str]) -> list[dict]:
+    cmd = [sys.executable, str(SCRIPT), "--N", "200", "300", "--steps", "4", "--repeats", "1"]
+    out = subprocess.run(
+        [*cmd, "--libs", *libs, "--json"], capture_output=True, text=True, timeout=300, check=False
+    )
+    assert out.returncode == 0, out.stderr
+    return [json.loads(line) for line in out.stdout.splitlines() if line.strip()]
+
+
+def _check_shape(rows: list[dict], libs: list[str]) -> None:
+    assert [r["N"] for r in rows] == [200, 300]
+    for r in rows:
+        assert set(r) == {"N", "seconds_per_step", "rmse"}
+        assert set(r["seconds_per_step"]) == set(libs)
+        assert set(r["rmse"]) == set(libs)
+        for lib in libs:
+            t, rmse = r["seconds_per_step"][lib], r["rmse"][lib]
+            assert isinstance(t, float) and t > 0
+            assert isinstance(rmse, float) and math.isfinite(rmse) and rmse >= 0
+
+
+def test_numpy_only_prints_documented_json() -> None:
+    _check_shape(_run(["numpy"]), ["numpy"])
+
+
+@pytest.mark.skipif(not _has_bootstrap_filter(), reason="fusetrack.filters.BootstrapFilter missing")
+def test_fusetrack_and_numpy_print_documented_json() -> None:
+    _check_shape(_run(["numpy", "fusetrack"]), ["numpy", "fusetrack"])
