@@ -1,1 +1,28 @@
-"""fusetrack.sensors (see DESIGN.md)."""
+"""Sensor (measurement) models: ``z = h(x) + v``, seen with a detection probability.
+
+Every model shares :class:`SensorBase` (geometry, field of view, maximum range, detection,
+residuals with wrapped angles, Gaussian log-likelihood, simulation, Fisher information) and adds
+only ``predict``, ``jacobian`` and ``noise_cov``:
+
+* :class:`Bearing` -- 2-D bearing relative to the heading;
+* :class:`AzimuthPolar` -- 3-D azimuth (relative to the heading) and polar angle from +z;
+* :class:`Range` -- distance in 2-D or 3-D;
+* :class:`RangeBearing` -- 2-D range and bearing;
+* :class:`PositionFix` -- radio tag / localiser: position + bias with a full covariance.
+"""
+
+from .angles import AzimuthPolar, Bearing
+from .base import MIN_RANGE_SQ, SensorBase, wrap
+from .position_fix import PositionFix
+from .range import Range, RangeBearing
+
+__all__ = [
+    "MIN_RANGE_SQ",
+    "AzimuthPolar",
+    "Bearing",
+    "PositionFix",
+    "Range",
+    "RangeBearing",
+    "SensorBase",
+    "wrap",
+]
