@@ -1,1 +1,27 @@
-"""fusetrack.motion (see DESIGN.md)."""
+"""Motion models ``x_k = f(x_{k-1}, dt) + w``, ``w ~ N(0, Q(dt))``, vectorised over ``(..., d)``.
+
+State layout: positions first, then velocities, then accelerations (turn rate last).
+See ``linear`` (random walk, constant velocity / acceleration), ``turn`` (coordinated turn) and
+``switching`` (Markov-switching sets of models).
+"""
+
+from .linear import (
+    ConstantAcceleration,
+    ConstantVelocity,
+    RandomWalk,
+    kinematic_noise,
+    kinematic_transition,
+)
+from .switching import MarkovSwitching
+from .turn import CoordinatedTurn, CoordinatedTurnRate
+
+__all__ = [
+    "ConstantAcceleration",
+    "ConstantVelocity",
+    "CoordinatedTurn",
+    "CoordinatedTurnRate",
+    "MarkovSwitching",
+    "RandomWalk",
+    "kinematic_noise",
+    "kinematic_transition",
+]

@@ -1,0 +1,171 @@
+"""Shared pieces of the motion models: argument checks and the Gaussian transition mechanics.
+
+Every model here is ``x_k = f(x_{k-1}, dt) + w`` with ``w ~ N(0, Q(dt))``;
+:class:`GaussianTransition` turns a model's ``mean`` and ``noise_cov`` into ``sample`` and
+``log_density`` once, so the concrete models only say what ``f`` and ``Q`` are.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.errors import ConfigError, ShapeError, check_positive, invalid
+
+Array = NDArray[np.float64]
+
+_LOG_2PI = math.log(2.0 * math.pi)
+# Eigenvalues of Q below this fraction of the largest are treated as zero (as scipy.stats does).
+_RANK_RTOL = 1e6 * np.finfo(float).eps
+# A residual whose component along the null space of Q exceeds this (relative) size is off-support.
+_SUPPORT_RTOL = 1e-8
+
+
+def check_dt(dt: Any) -> float:
+    """``float(dt)`` or :class:`ConfigError` unless it is a finite number of seconds ``>= 0``."""
+    try:
+        v = float(dt)
+    except (TypeError, ValueError):
+        raise ConfigError(invalid("dt", dt, "a finite number of seconds >= 0")) from None
+    if not (math.isfinite(v) and v >= 0.0):
+        raise ConfigError(invalid("dt", dt, "a finite number of seconds >= 0"))
+    return v
+
+
+def check_q(field: str, value: Any) -> float:
+    """A noise intensity: a finite number ``>= 0``."""
+    return check_positive(field, value, allow_zero=True)
+
+
+def check_int_range(field: str, value: Any, lo: int, hi: int) -> int:
+    """An integer in ``[lo, hi]`` (bools refused), else :class:`ConfigError`."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not lo <= value <= hi:
+        raise ConfigError(invalid(field, value, f"an integer in {lo}..{hi}"))
+    return int(value)
+
+
+def check_rng(rng: Any) -> np.random.Generator:
+    """Refuse anything but a :class:`numpy.random.Generator` (seeds must be explicit)."""
+    if not isinstance(rng, np.random.Generator):
+        raise ConfigError(
+            invalid("rng", rng, "a numpy.random.Generator, e.g. np.random.default_rng(0)")
+        )
+    return rng
+
+
+def as_state(x: ArrayLike, dim: int, names: tuple[str, ...], field: str = "x") -> Array:
+    """``x`` as a float array ``(..., dim)``, or :class:`ShapeError` naming the expected layout."""
+    a = np.asarray(x, dtype=float)
+    if a.ndim == 0 or a.shape[-1] != dim:
+        layout = "[" + ", ".join(names) + "]"
+        raise ShapeError(
+            invalid(f"{field}.shape", a.shape, f"(..., {dim}): state dimension d={dim}, {layout}")
+        )
+    return a
+
+
+def psd_factor(cov: Array) -> Array:
+    """A matrix ``G`` with ``G @ G.T == cov`` for a symmetric positive semi-definite ``cov``."""
+    try:
+        return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
+    except np.linalg.LinAlgError:  # singular Q (dt = 0, q = 0, Wiener-sequence noise)
+        s, v = np.linalg.eigh(cov)
+        return np.asarray(v * np.sqrt(np.clip(s, 0.0, None)), dtype=np.float64)
+
+
+def gaussian_logpdf(resid: Array, cov: Array, scale: Array | float = 0.0) -> Array:
+    """``log N(resid; 0, cov)`` over the leading axes of ``resid`` ``(..., d)``.
+
+    A singular ``cov`` gives the degenerate Gaussian: the density with respect to Lebesgue measure
+    on its support (pseudo-determinant, pseudo-inverse), ``-inf`` off the support; this matches
+    ``scipy.stats.multivariate_normal.logpdf(..., allow_singular=True)``. ``scale`` (broadcast
+    against ``resid[..., 0]``) is the size of the vectors whose difference ``resid`` is, so that
+    rounding does not push a point off the support. A zero ``cov`` (a point mass) raises
+    :class:`ConfigError`.
+    """
+    s, v = np.linalg.eigh(cov)
+    smax = float(s.max(initial=0.0))
+    keep = s > _RANK_RTOL * smax
+    if smax <= 0.0 or not keep.any():
+        raise ConfigError(
+            invalid(
+                "noise_cov(dt)",
+                "a zero matrix",
+                "a transition with noise for log_density: dt > 0 and q > 0 "
+                "(dt = 0 gives the identity transition, a point mass with no density)",
+            )
+        )
+    whiten = v[:, keep] / np.sqrt(s[keep])
+    maha = np.sum(np.square(resid @ whiten), axis=-1)
+    rank = int(keep.sum())
+    out = -0.5 * (rank * _LOG_2PI + float(np.sum(np.log(s[keep]))) + maha)
+    if rank < cov.shape[-1]:
+        off = np.linalg.norm(resid @ v[:, ~keep], axis=-1)
+        tol = _SUPPORT_RTOL * (math.sqrt(smax) + np.asarray(scale, dtype=float))
+        out = np.where(off > tol, -np.inf, out)
+    return np.asarray(out, dtype=float)
+
+
+class GaussianTransition:
+    """``sample`` and ``log_density`` from a model's ``mean`` and ``noise_cov``.
+
+    Subclasses provide ``dim``, ``state_names``, ``mean(x, dt)``, ``noise_cov(dt)``.
+    """
+
+    dim: int
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        raise NotImplementedError
+
+    def mean(self, x: ArrayLike, dt: float) -> Array:
+        raise NotImplementedError
+
+    def noise_cov(self, dt: float) -> Array:
+        raise NotImplementedError
+
+    def sample(self, x: ArrayLike, dt: float, rng: np.random.Generator) -> Array:
+        """A draw ``f(x, dt) + w``, ``w ~ N(0, Q(dt))``, for every row of ``x``; ``(..., d)``."""
+        check_rng(rng)
+        m = self.mean(x, dt)
+        g = psd_factor(self.noise_cov(dt))
+        return m + rng.standard_normal(m.shape) @ g.T
+
+    def log_density(self, x_next: ArrayLike, x: ArrayLike, dt: float) -> Array:
+        """``log N(x_next; f(x, dt), Q(dt))`` broadcast over leading axes; ``(...)``.
+
+        Raises :class:`ConfigError` when ``Q(dt) = 0`` (``dt = 0`` or ``q = 0``). A singular
+        ``Q`` (Wiener-sequence noise) gives the degenerate density on its support, ``-inf`` off it.
+        """
+        m = self.mean(x, dt)
+        xn = as_state(x_next, self.dim, self.state_names, field="x_next")
+        cov = self.noise_cov(dt)
+        if not np.any(cov):
+            raise ConfigError(
+                f"log_density is undefined for dt={dt!r}: Q(dt) is zero, so the next state is a "
+                "point mass (dt = 0 gives the identity transition, q = 0 removes the noise); "
+                "expected dt > 0 and q > 0"
+            )
+        scale = np.maximum(np.abs(xn).max(axis=-1), np.abs(m).max(axis=-1))
+        return gaussian_logpdf(xn - m, cov, scale)
+
+
+class LinearGaussian(GaussianTransition):
+    """A linear model ``f(x, dt) = F(dt) x``; subclasses provide ``transition_matrix(dt)``."""
+
+    def transition_matrix(self, dt: float) -> Array:
+        raise NotImplementedError
+
+    def mean(self, x: ArrayLike, dt: float) -> Array:
+        """``F(dt) x`` for every row of ``x``; ``(..., d)``."""
+        f = self.transition_matrix(dt)
+        return as_state(x, self.dim, self.state_names) @ f.T
+
+    def jacobian(self, x: ArrayLike, dt: float) -> Array:
+        """``F(dt)`` broadcast to ``(..., d, d)`` (a read-only view: no copy per particle)."""
+        f = self.transition_matrix(dt)
+        a = as_state(x, self.dim, self.state_names)
+        return np.broadcast_to(f, (*a.shape[:-1], self.dim, self.dim))
