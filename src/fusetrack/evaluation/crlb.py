@@ -1,0 +1,339 @@
+"""Posterior Cramér–Rao lower bound (PCRB) for filtering, by the information recursion.
+
+For ``x_{k+1} = f(x_k, dt_k) + w_k``, ``w_k ~ N(0, Q(dt_k))`` and sensors
+``z_{s,k} = h_s(x_k) + v``, ``v ~ N(0, R_s)``, any estimator's mean-square error obeys
+``E[(x_hat_k - x_k)(x_hat_k - x_k)^T] >= J_k^-1`` with the Fisher information ``J_k`` of the
+recursion of Tichavský, Muravchik & Nehorai (1998, IEEE Trans. Signal Process. 46(5),
+Proposition 1, additive-Gaussian case)::
+
+    J_{k+1} = D22_k - D21_k (J_k + D11_k)^-1 D12_k
+    D11_k = E[F_k^T Q_k^-1 F_k]            F_k = df/dx at x_k  (motion.jacobian(x_k, dt_k))
+    D12_k = -E[F_k]^T Q_k^-1 = D21_k^T     Q_k = motion.noise_cov(dt_k)
+    D22_k = Q_k^-1 + E[sum_s q_{s,k+1} H_s^T R_s^-1 H_s]     (sensor.fisher_information(x_{k+1}))
+    J_0   = P_0^-1 + E[sum_s q_{s,0} H_s^T R_s^-1 H_s]
+
+Expectations are Monte Carlo averages over true trajectories ``(R, T, d)``; with ``R = 1`` the
+bound is evaluated along one known trajectory. ``q_{s,k}`` is the *information reduction
+factor* of sensor ``s`` at step ``k``: the ``mask`` entry (1 = reported, 0 = no report, or any
+number in [0, 1]) times, optionally, the sensor's detection probability at the true state.
+Without clutter the reduction factor of a detection probability ``P_D`` is exactly ``P_D``
+(Niu, Willett & Bar-Shalom 2001; Hernandez, Farina & Ristic 2006): the expected information is
+``E[1_detected] H^T R^-1 H``.
+
+On a linear-Gaussian model the recursion is the Kalman filter's information-form covariance
+recursion, so ``J_k^-1`` equals the filter's posterior covariance.
+
+Step convention: ``trajectories[:, k]`` is the true state at step ``k``; ``dt[k]`` is the interval
+from step ``k`` to ``k + 1`` (irregular intervals are fine). ``prior_cov`` is the covariance of
+``x_0`` *before* the measurements of step 0; mask out step 0 (``mask[..., 0, :] = False``) when
+the filter does not update there.
+
+Models are used only through the :class:`~fusetrack.core.MotionModel` and
+:class:`~fusetrack.core.SensorModel` protocols (``jacobian``, ``noise_cov``,
+``fisher_information``, ``detection_probability``), so any combination works.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.errors import ConfigError, ShapeError, invalid
+from ..core.models import MotionModel, SensorModel
+
+Array = NDArray[np.float64]
+Sensors = Mapping[str, SensorModel] | Sequence[SensorModel]
+
+
+# --------------------------------------------------------------------------------------------
+# input checks
+
+
+def _sensor_list(sensors: Sensors) -> list[SensorModel]:
+    if isinstance(sensors, Mapping):
+        return list(sensors.values())
+    return list(sensors)
+
+
+def _trajectories(trajectories: ArrayLike, motion: MotionModel) -> tuple[Array, bool]:
+    x = np.asarray(trajectories, dtype=float)
+    single = x.ndim == 2
+    if single:
+        x = x[None]
+    if x.ndim != 3 or x.shape[1] < 1:
+        raise ShapeError(invalid("trajectories.shape", x.shape, "(R, T, d) or (T, d)"))
+    d = x.shape[-1]
+    mdim = getattr(motion, "dim", d)
+    if mdim != d:
+        raise ShapeError(invalid("trajectories.shape", x.shape, f"last axis = motion.dim = {mdim}"))
+    if not np.all(np.isfinite(x)):
+        raise ConfigError(invalid("trajectories", "non-finite values", "finite true states"))
+    return x, single
+
+
+def _steps(dt: float | ArrayLike, T: int) -> Array:
+    a = np.asarray(dt, dtype=float)
+    if a.ndim == 0:
+        a = np.full(max(T - 1, 0), float(a))
+    if a.shape != (max(T - 1, 0),):
+        raise ShapeError(invalid("dt.shape", a.shape, f"a scalar or ({T - 1},) (one per step)"))
+    bad = ~(np.isfinite(a) & (a > 0))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ConfigError(invalid(f"dt[{i}]", float(a[i]), "a finite interval > 0 (seconds)"))
+    return a
+
+
+def _prior_information(prior_cov: ArrayLike, d: int) -> Array:
+    P = np.asarray(prior_cov, dtype=float)
+    if P.shape != (d, d):
+        raise ShapeError(invalid("prior_cov.shape", P.shape, f"({d}, {d})"))
+    try:
+        L = np.linalg.cholesky(P)
+    except np.linalg.LinAlgError:
+        raise ConfigError(
+            invalid("prior_cov", "not positive definite", "a positive-definite covariance")
+        ) from None
+    Linv = np.linalg.solve(L, np.eye(d))
+    return Linv.T @ Linv
+
+
+def _weights(
+    mask: ArrayLike | None, R: int, T: int, S: int
+) -> Array:
+    """Information-reduction factors ``(R, T, S)`` from the mask (all ones when None)."""
+    if mask is None:
+        return np.ones((R, T, S))
+    m = np.asarray(mask, dtype=float)
+    if m.ndim == 2:
+        m = m[None]
+    try:
+        m = np.broadcast_to(m, (R, T, S))
+    except ValueError:
+        valid = f"(T, S) = ({T}, {S}) or (R, T, S) = ({R}, {T}, {S})"
+        raise ShapeError(invalid("mask.shape", np.shape(mask), valid)) from None
+    if not np.all((m >= 0.0) & (m <= 1.0)):
+        raise ConfigError(invalid("mask", "values outside [0, 1]", "booleans or factors in [0, 1]"))
+    return m
+
+
+def _inverse_noise(motion: MotionModel, dt: float, d: int) -> Array:
+    """``Q(dt)^-1``; ConfigError naming ``dt`` when ``Q(dt)`` is singular."""
+    Q = np.asarray(motion.noise_cov(dt), dtype=float)
+    if Q.shape != (d, d):
+        raise ShapeError(invalid(f"motion.noise_cov({dt!r}).shape", Q.shape, f"({d}, {d})"))
+    eig = np.linalg.eigvalsh(0.5 * (Q + Q.T)) if np.all(np.isfinite(Q)) else np.array([np.nan])
+    if not (np.all(np.isfinite(eig)) and eig[0] > d * np.finfo(float).eps * max(eig[-1], 0.0)):
+        raise ConfigError(
+            invalid(
+                f"motion.noise_cov(dt={dt!r})",
+                f"singular (eigenvalues {np.round(eig, 15).tolist()})",
+                "an invertible process-noise covariance: the PCRB needs Q^-1 (use a model with "
+                "full-rank noise, e.g. ConstantVelocity(noise='continuous'), or deterministic_crlb "
+                "for Q = 0)",
+            )
+        )
+    return np.linalg.inv(Q)
+
+
+def _jacobian(motion: MotionModel, x: Array, dt: float) -> Array:
+    R, d = x.shape
+    F = np.asarray(motion.jacobian(x, dt), dtype=float)
+    try:
+        return np.broadcast_to(F, (R, d, d))
+    except ValueError:
+        valid = f"(R, {d}, {d}) or ({d}, {d})"
+        raise ShapeError(invalid("motion.jacobian(x, dt).shape", F.shape, valid)) from None
+
+
+def _measurement_information(
+    sensors: list[SensorModel], x: Array, w: Array, use_detection_probability: bool
+) -> Array:
+    """``sum_s q_s(x) H_s^T R_s^-1 H_s`` at states ``x`` ``(R, d)``, factors ``w`` ``(R, S)``."""
+    R, d = x.shape
+    info = np.zeros((R, d, d))
+    for s, sensor in enumerate(sensors):
+        q = w[:, s]
+        if use_detection_probability:
+            q = q * np.broadcast_to(np.asarray(sensor.detection_probability(x), dtype=float), (R,))
+        if not np.any(q > 0):
+            continue  # no report: no information (and no need to evaluate the geometry)
+        fi = np.broadcast_to(np.asarray(sensor.fisher_information(x), dtype=float), (R, d, d))
+        info += np.where((q > 0)[:, None, None], q[:, None, None] * fi, 0.0)
+    return info
+
+
+def _symmetrise(a: NDArray[np.floating[Any]]) -> Array:
+    return np.asarray(0.5 * (a + np.swapaxes(a, -1, -2)), dtype=float)
+
+
+# --------------------------------------------------------------------------------------------
+# public
+
+
+def posterior_information(
+    motion: MotionModel,
+    sensors: Sensors,
+    trajectories: ArrayLike,
+    dt: float | ArrayLike,
+    prior_cov: ArrayLike,
+    *,
+    mask: ArrayLike | None = None,
+    use_detection_probability: bool = False,
+    average: bool = True,
+) -> Array:
+    """Fisher information matrices ``J_k`` of the Tichavský et al. (1998) recursion.
+
+    ``motion``: a :class:`~fusetrack.core.MotionModel` whose ``noise_cov(dt)`` is invertible
+    (:class:`~fusetrack.core.ConfigError` naming ``dt`` otherwise). ``sensors``: a sequence or a
+    mapping of :class:`~fusetrack.core.SensorModel`; their order is the ``S`` axis of ``mask``.
+    ``trajectories``: true states ``(R, T, d)`` (or ``(T, d)`` for one). ``dt``: a scalar or one
+    interval per step ``(T - 1,)``. ``prior_cov``: ``P_0`` ``(d, d)``.
+
+    ``mask`` ``(T, S)`` or ``(R, T, S)``: which sensor reported at which step (missing reports
+    add no information), or any factors in [0, 1]. ``use_detection_probability=True`` multiplies
+    every sensor's information by ``sensor.detection_probability(x_k)`` at the true state (its
+    detection probability, field of view and range), the expected-information (information
+    reduction factor) bound. Both may be used together.
+
+    ``average=True`` takes the expectations over the ``R`` trajectories and returns ``(T, d, d)``;
+    ``average=False`` runs the recursion along every trajectory separately (each its own
+    ``R = 1`` bound) and returns ``(R, T, d, d)``. Everything is vectorised over ``R``.
+    """
+    x, _ = _trajectories(trajectories, motion)
+    R, T, d = x.shape
+    sl = _sensor_list(sensors)
+    steps = _steps(dt, T)
+    w = _weights(mask, R, T, len(sl))
+
+    def expect(a: Array) -> Array:  # E[.] over trajectories, or per trajectory
+        return a.mean(axis=0, keepdims=True) if average else a
+
+    J = np.empty((x.shape[0] if not average else 1, T, d, d))
+    J0 = _prior_information(prior_cov, d)
+    # Tichavský et al. 1998: J_0 = P_0^-1, plus what the sensors report at step 0
+    J[:, 0] = J0 + expect(_measurement_information(sl, x[:, 0], w[:, 0], use_detection_probability))
+    Qinv_cache: dict[float, Array] = {}
+    for k in range(T - 1):  # loop over steps; every step is vectorised over the R trajectories
+        h = float(steps[k])
+        if h not in Qinv_cache:
+            Qinv_cache[h] = _inverse_noise(motion, h, d)
+        Qi = Qinv_cache[h]
+        F = _jacobian(motion, x[:, k], h)
+        D11 = expect(np.swapaxes(F, -1, -2) @ (Qi @ F))  # E[F^T Q^-1 F]
+        D12 = -np.swapaxes(expect(F), -1, -2) @ Qi  # -E[F]^T Q^-1
+        D22 = Qi + expect(
+            _measurement_information(sl, x[:, k + 1], w[:, k + 1], use_detection_probability)
+        )
+        # Tichavský et al. 1998, Prop. 1: J_{k+1} = D22 - D21 (J_k + D11)^-1 D12
+        Y = np.linalg.solve(J[:, k] + D11, D12)
+        J[:, k + 1] = _symmetrise(D22 - np.swapaxes(D12, -1, -2) @ Y)
+    return J[0] if average else J
+
+
+def posterior_crlb(
+    motion: MotionModel,
+    sensors: Sensors,
+    trajectories: ArrayLike,
+    dt: float | ArrayLike,
+    prior_cov: ArrayLike,
+    *,
+    mask: ArrayLike | None = None,
+    use_detection_probability: bool = False,
+    average: bool = True,
+) -> Array:
+    """The posterior Cramér–Rao bound ``J_k^-1``: ``(T, d, d)`` (or ``(R, T, d, d)``).
+
+    Arguments as :func:`posterior_information`. Use :func:`position_rmse_bound`,
+    :func:`velocity_rmse_bound` or :func:`axis_bounds` to compare with an RMSE.
+    """
+    J = posterior_information(
+        motion, sensors, trajectories, dt, prior_cov, mask=mask,
+        use_detection_probability=use_detection_probability, average=average,
+    )
+    return _symmetrise(np.linalg.inv(J))
+
+
+def deterministic_crlb(
+    motion: MotionModel,
+    sensors: Sensors,
+    trajectories: ArrayLike,
+    dt: float | ArrayLike,
+    prior_cov: ArrayLike,
+    *,
+    mask: ArrayLike | None = None,
+    use_detection_probability: bool = False,
+) -> Array:
+    """CRLB for a target with no process noise (``Q = 0``), along each trajectory.
+
+    The ``Q -> 0`` limit of the recursion for a deterministic state with invertible ``F``
+    (Taylor 1979; Ristic, Arulampalam & Gordon 2004, Ch. 4)::
+
+        J_{k+1} = F_k^-T J_k F_k^-1 + sum_s q_{s,k+1} H_s^T R_s^-1 H_s
+        J_0     = P_0^-1 + sum_s q_{s,0} H_s^T R_s^-1 H_s
+
+    Evaluated per trajectory (the state is a fixed parameter): returns ``J_k^-1`` as
+    ``(R, T, d, d)``, or ``(T, d, d)`` for ``(T, d)`` input. Other arguments as
+    :func:`posterior_information`.
+    """
+    x, single = _trajectories(trajectories, motion)
+    R, T, d = x.shape
+    sl = _sensor_list(sensors)
+    steps = _steps(dt, T)
+    w = _weights(mask, R, T, len(sl))
+    J = np.empty((R, T, d, d))
+    J[:, 0] = _prior_information(prior_cov, d) + _measurement_information(
+        sl, x[:, 0], w[:, 0], use_detection_probability
+    )
+    for k in range(T - 1):
+        F = _jacobian(motion, x[:, k], float(steps[k]))
+        FT = np.swapaxes(F, -1, -2)
+        try:
+            Y = np.linalg.solve(FT, J[:, k])  # F^-T J
+            A = np.swapaxes(np.linalg.solve(FT, np.swapaxes(Y, -1, -2)), -1, -2)  # F^-T J F^-1
+        except np.linalg.LinAlgError:
+            raise ConfigError(
+                invalid(f"motion.jacobian(x, dt={float(steps[k])!r})", "singular",
+                        "an invertible transition Jacobian (deterministic_crlb needs F^-1)")
+            ) from None
+        J[:, k + 1] = _symmetrise(
+            A + _measurement_information(sl, x[:, k + 1], w[:, k + 1], use_detection_probability)
+        )
+    bounds = _symmetrise(np.linalg.inv(J))
+    return bounds[0] if single else bounds
+
+
+def rmse_bound(bounds: ArrayLike, index: Sequence[int]) -> Array:
+    """``sqrt(trace(B[index, index]))``: the lowest achievable joint RMSE of those components.
+
+    ``bounds`` ``(..., d, d)`` (e.g. ``(T, d, d)`` from :func:`posterior_crlb`) -> ``(...)``.
+    """
+    B = np.asarray(bounds, dtype=float)
+    idx = [int(i) for i in index]
+    if not idx or any(not 0 <= i < B.shape[-1] for i in idx):
+        valid = f"non-empty state indices below {B.shape[-1]}"
+        raise ConfigError(invalid("index", tuple(index), valid))
+    diag = np.diagonal(B, axis1=-2, axis2=-1)[..., idx]
+    return np.sqrt(np.clip(diag.sum(axis=-1), 0.0, None))
+
+
+def position_rmse_bound(bounds: ArrayLike, position_index: Sequence[int]) -> Array:
+    """Position RMSE bound ``sqrt(trace of the position block)``, ``(..., d, d)`` -> ``(...)``."""
+    return rmse_bound(bounds, position_index)
+
+
+def velocity_rmse_bound(bounds: ArrayLike, velocity_index: Sequence[int]) -> Array:
+    """Velocity RMSE bound ``sqrt(trace of the velocity block)``, ``(..., d, d)`` -> ``(...)``."""
+    return rmse_bound(bounds, velocity_index)
+
+
+def axis_bounds(bounds: ArrayLike, index: Sequence[int] | None = None) -> Array:
+    """Per-component RMSE bounds ``sqrt(diag(B))``: ``(..., d, d)`` -> ``(..., k)``."""
+    B = np.asarray(bounds, dtype=float)
+    diag = np.diagonal(B, axis1=-2, axis2=-1)
+    if index is not None:
+        diag = diag[..., [int(i) for i in index]]
+    return np.sqrt(np.clip(diag, 0.0, None))
