@@ -1,1 +1,15 @@
-"""fusetrack.filters (see DESIGN.md)."""
+"""fusetrack.filters: recursive Bayesian filters and the loop that runs them (see DESIGN.md).
+
+One import per line, re-exported with ``as``: add new filters by adding lines.
+"""
+
+from .kalman import ExtendedKalmanFilter as ExtendedKalmanFilter
+from .kalman import GaussianFilter as GaussianFilter
+from .kalman import KalmanFilter as KalmanFilter
+from .kalman import SensorMoments as SensorMoments
+from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
+from .runner import run_filter as run_filter
+from .stats import FilterStats as FilterStats
+from .stats import ValidatedMeasurement as ValidatedMeasurement
+from .stats import as_sensor_map as as_sensor_map
+from .stats import validate_measurement as validate_measurement

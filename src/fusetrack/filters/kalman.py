@@ -1,0 +1,544 @@
+r"""Gaussian filters: the Kalman filter, the extended Kalman filter and the unscented Kalman filter.
+
+All three keep the belief as one Gaussian ``N(x, P)`` and run the same two steps.
+
+**Predict** through the motion model ``x_k = f(x_{k-1}, dt) + w``, ``w ~ N(0, Q(dt))``::
+
+    x^- = E[f(x)],   P^- = Cov[f(x)] + Q(dt)
+
+**Update** with a measurement ``z = h(x) + v``, ``v ~ N(0, R)``::
+
+    z^  = E[h(x)]                    predicted measurement
+    S   = Cov[h(x)] + R              innovation covariance   (P_zz + R)
+    C   = Cov[x, h(x)]               state-measurement cross covariance (P_xz)
+    K   = C S^-1                     gain
+    x^+ = x^- + K (z - z^)           (z - z^ through sensor.residual: angles wrapped)
+    P^+ = P^- - K S K^T
+
+The filters differ only in how they compute the moments ``E[f(x)]``, ``Cov[f(x)]``, ``E[h(x)]``,
+``Cov[h(x)]`` and ``Cov[x, h(x)]`` of a Gaussian pushed through ``f`` and ``h``:
+
+* :class:`KalmanFilter` — ``f`` and ``h`` are linear (``f(x) = F x``, ``h(x) = H x + c``); the
+  moments are exact: ``F x``, ``F P F^T``, ``H x + c``, ``H P H^T``, ``P H^T`` (Kalman 1960).
+* :class:`ExtendedKalmanFilter` — the same formulas with ``F`` and ``H`` the Jacobians of ``f``
+  and ``h`` at the current mean (a first-order Taylor expansion).
+* :class:`UnscentedKalmanFilter` — ``2d + 1`` sigma points that match the mean and covariance
+  are pushed through ``f`` and ``h`` and the moments are weighted sums over them (the scaled
+  unscented transform of Wan & van der Merwe 2000). Angular measurement components are averaged
+  on the circle.
+
+(Two more filters could be written in a few lines each: a subclass returning other moments,
+e.g. cubature points or a second-order expansion, gets everything else from the base.)
+
+:class:`GaussianFilter` holds the shared skeleton; a subclass only says how to propagate moments
+(:meth:`GaussianFilter.propagate_motion` and :meth:`GaussianFilter.propagate_sensor`).
+
+The covariance update uses the Joseph form ``P^+ = (I - K H) P^- (I - K H)^T + K R K^T``
+(Bucy & Joseph 1968) — for the UKF with its statistical linearisation ``H`` and the
+linearisation error added to ``R`` — which stays symmetric positive semi-definite in floating
+point even for a badly conditioned problem. Every returned covariance is symmetrised,
+``(P + P^T) / 2``.
+
+**Batches.** A belief may carry leading batch axes — ``mean`` ``(R, d)``, ``cov`` ``(R, d, d)``
+for ``R`` independent Monte Carlo runs or targets — and measurement values may be ``(R, m)``
+(one report per run). Every step is a handful of batched NumPy linear-algebra calls; there is no
+Python loop over ``R``.
+
+**Measurements.** Several measurements at one time are applied one after the other (for
+independent noises this equals one stacked update). The measurement covariance is
+``Measurement.covariance`` when given, else ``sensor.noise_cov(x^-)``. A value with NaN or
+infinite entries is skipped (the belief is unchanged in that run) and counted in
+``filter.stats.skipped_measurements``; an unknown ``sensor_id`` raises
+:class:`~fusetrack.core.UnknownSensorError`.
+
+Example (needs the motion and sensor models)::
+
+    >>> import numpy as np
+    >>> from fusetrack.core import Gaussian, Measurement
+    >>> from fusetrack.motion import ConstantVelocity
+    >>> from fusetrack.sensors import PositionFix
+    >>> kf = KalmanFilter(ConstantVelocity(q=0.1), [PositionFix("tag", cov=0.25 * np.eye(2))])
+    >>> belief = Gaussian(np.zeros(4), np.eye(4))
+    >>> belief = kf.predict(belief, dt=1.0)
+    >>> belief = kf.update(belief, [Measurement(1.0, "tag", [0.9, -0.2])])
+    >>> belief.mean.round(3)
+    array([ 0.801, -0.178,  0.414, -0.092])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any, NamedTuple, Protocol, cast
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.angles import circular_mean
+from ..core.beliefs import Gaussian
+from ..core.errors import ConfigError, ShapeError, check_positive, invalid
+from ..core.measurement import Measurement
+from ..core.models import MotionModel, SensorModel
+from .stats import FilterStats, ValidatedMeasurement, as_sensor_map, validate_measurement
+
+Array = NDArray[np.float64]
+Sensors = Mapping[str, SensorModel] | Sequence[SensorModel]
+
+_LOG_2PI = float(np.log(2.0 * np.pi))
+
+
+def _t(a: NDArray[Any]) -> NDArray[Any]:
+    """Transpose the last two axes (batched ``A^T``)."""
+    return np.swapaxes(a, -1, -2)
+
+
+def _sym(c: NDArray[Any]) -> NDArray[Any]:
+    """``(C + C^T) / 2``: exactly symmetric in floating point."""
+    return 0.5 * (c + _t(c))
+
+
+def _mv(a: NDArray[Any], x: NDArray[Any]) -> NDArray[Any]:
+    """Batched matrix-vector product ``A x`` for ``A`` ``(..., p, q)`` and ``x`` ``(..., q)``."""
+    return (a @ x[..., None])[..., 0]
+
+
+def _broadcast(mean: Array, cov: Array) -> tuple[Array, Array]:
+    """Give ``mean`` and ``cov`` the same leading (batch) axes."""
+    d = mean.shape[-1]
+    try:
+        batch = np.broadcast_shapes(mean.shape[:-1], cov.shape[:-2])
+    except ValueError:
+        raise ShapeError(
+            invalid("(mean.shape, cov.shape)", (mean.shape, cov.shape), "matching batch axes")
+        ) from None
+    if mean.shape[:-1] != batch:
+        mean = np.broadcast_to(mean, (*batch, d)).copy()
+    if cov.shape[:-2] != batch:
+        cov = np.broadcast_to(cov, (*batch, d, d)).copy()
+    return mean, cov
+
+
+class _LinearMotion(Protocol):
+    def transition_matrix(self, dt: float) -> Array: ...
+
+
+class SensorMoments(NamedTuple):
+    """Moments of ``z = h(x)`` for ``x ~ N(mean, cov)``, measurement noise excluded.
+
+    ``z_pred`` ``(..., m)``; ``pzz`` = ``Cov[h(x)]`` ``(..., m, m)``; ``pxz`` = ``Cov[x, h(x)]``
+    ``(..., d, m)``. ``jacobian`` is a linearisation ``H`` ``(..., m, d)`` with
+    ``H cov = pxz^T`` and ``lin_error`` = ``pzz - H cov H^T`` (None for 0): then the covariance
+    update uses the Joseph form ``(I - K H) P (I - K H)^T + K (R + lin_error) K^T``, which
+    equals ``P - K S K^T`` and stays positive semi-definite in floating point. With
+    ``jacobian=None`` the update is ``P - K S K^T``.
+    """
+
+    z_pred: Array
+    pzz: Array
+    pxz: Array
+    jacobian: Array | None
+    lin_error: Array | None = None
+
+
+class GaussianFilter:
+    """Shared predict/update skeleton of the Gaussian (Kalman-family) filters.
+
+    Subclasses implement :meth:`propagate_motion` and :meth:`propagate_sensor`; everything else —
+    measurement checks, sequential updates, the gain, the Joseph-form or ``K S K^T`` covariance
+    update, NaN masking, batching, symmetrisation — lives here.
+
+    Parameters
+    ----------
+    motion:
+        a :class:`~fusetrack.core.MotionModel` (``mean``, ``jacobian``, ``noise_cov``, ``dim``).
+    sensors:
+        a mapping ``sensor_id -> SensorModel`` or a sequence of sensor models (keyed by their
+        ``sensor_id``).
+
+    Attributes
+    ----------
+    stats:
+        a :class:`~fusetrack.filters.FilterStats` counting skipped measurements and degenerate
+        steps (singular innovation covariance, covariance that lost positive definiteness).
+    """
+
+    def __init__(self, motion: MotionModel, sensors: Sensors) -> None:
+        self.motion = motion
+        self.sensors = as_sensor_map(sensors)
+        self.stats = FilterStats()
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(motion={self.motion!r}, sensors={sorted(self.sensors)})"
+
+    # -- what a subclass provides ---------------------------------------------------------------
+
+    def propagate_motion(self, mean: Array, cov: Array, dt: float) -> tuple[Array, Array]:
+        """``(E[f(x)], Cov[f(x)])`` for ``x ~ N(mean, cov)``; the process noise is added later."""
+        raise NotImplementedError
+
+    def propagate_sensor(self, sensor: SensorModel, mean: Array, cov: Array) -> SensorMoments:
+        """Moments of ``h(x)`` for ``x ~ N(mean, cov)``; the measurement noise is added later."""
+        raise NotImplementedError
+
+    # -- the shared skeleton --------------------------------------------------------------------
+
+    def predict(
+        self, belief: Gaussian, dt: float, rng: np.random.Generator | None = None
+    ) -> Gaussian:
+        """Prior at ``t + dt``: ``x^- = E[f(x)]``, ``P^- = Cov[f(x)] + Q(dt)``.
+
+        ``rng`` is accepted for the common filter interface and ignored (the step is
+        deterministic). ``dt`` must be finite and ``>= 0``.
+        """
+        dt = check_positive("dt", dt, allow_zero=True)
+        mean, cov = _broadcast(belief.mean, belief.cov)
+        mean, cov = self.propagate_motion(mean, cov, dt)
+        q = np.asarray(self.motion.noise_cov(dt), dtype=float)
+        mean, cov = _broadcast(mean, _sym(cov + q))
+        return Gaussian(mean, cov)
+
+    def update(
+        self,
+        belief: Gaussian,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: np.random.Generator | None = None,
+    ) -> Gaussian:
+        """Posterior after the measurements, applied one after the other.
+
+        ``measurements`` may be any subset of the filter's sensors (or empty: the belief is
+        returned unchanged). ``rng`` is accepted for the common filter interface and ignored.
+        """
+        return self._update(belief, measurements, want_loglik=False)[0]
+
+    def update_with_likelihood(
+        self, belief: Gaussian, measurements: Sequence[Measurement] | Measurement
+    ) -> tuple[Gaussian, Array]:
+        """Like :meth:`update`, and also ``log p(z_1..z_k | past)`` ``(...)`` per batch entry.
+
+        Each usable measurement adds its predictive log density
+        ``log N(z - z^; 0, S) = -(y^T S^-1 y + log det S + m log 2 pi) / 2``, evaluated with the
+        belief just before it (so the sum is the joint predictive density). Multiple-model
+        filters (IMM) weigh their models with it. Skipped rows add 0.
+        """
+        return self._update(belief, measurements, want_loglik=True)
+
+    def _update(
+        self,
+        belief: Gaussian,
+        measurements: Sequence[Measurement] | Measurement,
+        want_loglik: bool,
+    ) -> tuple[Gaussian, Array]:
+        if isinstance(measurements, Measurement):
+            measurements = [measurements]
+        mean, cov = _broadcast(belief.mean, belief.cov)
+        loglik: Array = np.zeros(mean.shape[:-1])
+        for meas in measurements:
+            checked = validate_measurement(meas, self.sensors, self.stats)
+            if not checked.usable.any():
+                continue
+            mean, cov, ll = self._update_one(mean, cov, checked, want_loglik)
+            if want_loglik:
+                loglik = loglik + ll
+        if want_loglik:
+            loglik = np.broadcast_to(loglik, mean.shape[:-1]).copy()
+        return Gaussian(mean, cov), loglik
+
+    def _update_one(
+        self, mean: Array, cov: Array, checked: ValidatedMeasurement, want_loglik: bool
+    ) -> tuple[Array, Array, Array]:
+        sensor, usable = checked.sensor, checked.usable
+        mom = self.propagate_sensor(sensor, mean, cov)
+        if checked.covariance is not None:
+            r = checked.covariance
+        else:
+            r = np.asarray(sensor.noise_cov(mean), dtype=float)
+        partial = not bool(usable.all())
+        z = checked.value
+        if partial:  # unusable rows: any finite value, the result is discarded below
+            z = np.where(usable[..., None], z, mom.z_pred)
+            r = np.where(usable[..., None, None], r, np.eye(r.shape[-1]))
+        s = _sym(mom.pzz + r)
+        y = np.asarray(sensor.residual(z, mom.z_pred), dtype=float)
+        # K = P_xz S^-1, computed as (S^-1 P_xz^T)^T with S symmetric
+        try:
+            kt = np.linalg.solve(s, _t(mom.pxz))
+        except np.linalg.LinAlgError:
+            self.stats.degenerate_steps += 1
+            kt = np.linalg.pinv(s, hermitian=True) @ _t(mom.pxz)
+        k = _t(kt)
+        new_mean = mean + _mv(k, y)
+        h = mom.jacobian
+        if h is not None:
+            # Joseph form (Bucy & Joseph 1968; Bar-Shalom et al. 2001, Eq. 5.2.3-18), with the
+            # linearisation error added to R for the UKF (see UnscentedKalmanFilter)
+            ikh = np.eye(mean.shape[-1]) - k @ h
+            r_eff = r if mom.lin_error is None else r + mom.lin_error
+            new_cov = ikh @ cov @ _t(ikh) + k @ r_eff @ kt
+        else:
+            new_cov = cov - k @ s @ kt
+        new_cov = _sym(new_cov)
+        ll: Array = np.zeros(())
+        if want_loglik:
+            try:
+                sy = np.linalg.solve(s, y[..., None])[..., 0]
+            except np.linalg.LinAlgError:
+                sy = _mv(np.linalg.pinv(s, hermitian=True), y)
+            maha = np.sum(y * sy, axis=-1)
+            logdet = np.linalg.slogdet(s)[1]
+            ll = -0.5 * (maha + logdet + y.shape[-1] * _LOG_2PI)
+            if partial:
+                ll = np.where(usable, ll, 0.0)
+        if partial:
+            new_mean = np.where(usable[..., None], new_mean, mean)
+            new_cov = np.where(usable[..., None, None], new_cov, cov)
+        new_mean, new_cov = _broadcast(new_mean, new_cov)
+        return new_mean, new_cov, ll
+
+
+class KalmanFilter(GaussianFilter):
+    r"""The Kalman filter (Kalman 1960) for linear-Gaussian models.
+
+    Assumes ``x_k = F(dt) x_{k-1} + w`` with ``w ~ N(0, Q(dt))`` (the motion model must provide
+    ``transition_matrix(dt)``) and sensors ``z = H x + c + v``, ``v ~ N(0, R)``. For a linear
+    sensor ``H = sensor.jacobian(x)`` anywhere and ``H x + c = sensor.predict(x)``, so the filter
+    uses those; given a nonlinear sensor it would linearise at the prior mean, i.e. behave as
+    the :class:`ExtendedKalmanFilter` — use that class to say so.
+
+    Predict::
+
+        x^- = F x,           P^- = F P F^T + Q
+
+    Update (Joseph form)::
+
+        S = H P^- H^T + R,   K = P^- H^T S^-1
+        x^+ = x^- + K (z - H x^- - c)
+        P^+ = (I - K H) P^- (I - K H)^T + K R K^T
+
+    With a Gaussian prior this is the exact posterior: the same numbers as conditioning the joint
+    Gaussian of all states and measurements (see ``tests/filters/test_kalman_exact.py``).
+
+    Example::
+
+        >>> import numpy as np
+        >>> from fusetrack.core import Gaussian, Measurement
+        >>> from fusetrack.motion import ConstantVelocity
+        >>> from fusetrack.sensors import PositionFix
+        >>> kf = KalmanFilter(ConstantVelocity(q=0.1), [PositionFix("tag", cov=0.25 * np.eye(2))])
+        >>> prior = Gaussian(np.zeros(4), np.eye(4))
+        >>> post = kf.update(kf.predict(prior, 1.0), [Measurement(1.0, "tag", [0.9, -0.2])])
+        >>> np.allclose(post.cov, post.cov.T)
+        True
+    """
+
+    def __init__(self, motion: MotionModel, sensors: Sensors) -> None:
+        if not callable(getattr(motion, "transition_matrix", None)):
+            raise ConfigError(
+                invalid(
+                    "motion",
+                    motion,
+                    "a linear motion model with transition_matrix(dt) "
+                    "(use ExtendedKalmanFilter or UnscentedKalmanFilter for nonlinear motion)",
+                )
+            )
+        super().__init__(motion, sensors)
+
+    def propagate_motion(self, mean: Array, cov: Array, dt: float) -> tuple[Array, Array]:
+        f = np.asarray(cast(_LinearMotion, self.motion).transition_matrix(dt), dtype=np.float64)
+        return _mv(f, mean), f @ cov @ _t(f)
+
+    def propagate_sensor(self, sensor: SensorModel, mean: Array, cov: Array) -> SensorMoments:
+        h = np.asarray(sensor.jacobian(mean), dtype=float)
+        z_pred = np.asarray(sensor.predict(mean), dtype=float)
+        pxz = cov @ _t(h)
+        return SensorMoments(z_pred, h @ pxz, pxz, h)
+
+
+class ExtendedKalmanFilter(KalmanFilter):
+    r"""The extended Kalman filter: the Kalman filter on models linearised at the current mean.
+
+    Assumes ``x_k = f(x_{k-1}, dt) + w`` and ``z = h(x) + v`` with differentiable ``f`` and
+    ``h`` and additive Gaussian noises. With ``F = df/dx`` at the posterior mean and
+    ``H = dh/dx`` at the prior mean::
+
+        x^- = f(x, dt),      P^- = F P F^T + Q
+        S = H P^- H^T + R,   K = P^- H^T S^-1
+        x^+ = x^- + K r(z, h(x^-))          r = sensor.residual (angles wrapped)
+        P^+ = (I - K H) P^- (I - K H)^T + K R K^T
+
+    It is exact for linear models (then it equals :class:`KalmanFilter`) and good when ``f`` and
+    ``h`` are nearly linear over the spread of the belief; for a bearing-only sensor close to the
+    target prefer :class:`UnscentedKalmanFilter` or a particle filter.
+
+    Example::
+
+        >>> import numpy as np
+        >>> from fusetrack.core import Gaussian, Measurement
+        >>> from fusetrack.motion import ConstantVelocity
+        >>> from fusetrack.sensors import RangeBearing
+        >>> radar = RangeBearing("radar", position=[0.0, 0.0], sigma_range=0.5, sigma_bearing=0.01)
+        >>> ekf = ExtendedKalmanFilter(ConstantVelocity(q=0.1), [radar])
+        >>> prior = Gaussian(np.array([10.0, 0.0, 0.0, 1.0]), np.eye(4))
+        >>> post = ekf.update(ekf.predict(prior, 1.0), [Measurement(1.0, "radar", [10.1, 0.1])])
+        >>> post.mean.shape
+        (4,)
+    """
+
+    def __init__(self, motion: MotionModel, sensors: Sensors) -> None:
+        GaussianFilter.__init__(self, motion, sensors)
+
+    def propagate_motion(self, mean: Array, cov: Array, dt: float) -> tuple[Array, Array]:
+        f = np.asarray(self.motion.jacobian(mean, dt), dtype=float)
+        return np.asarray(self.motion.mean(mean, dt), dtype=float), f @ cov @ _t(f)
+
+
+class UnscentedKalmanFilter(GaussianFilter):
+    r"""The unscented Kalman filter with the scaled unscented transform (Wan & van der Merwe 2000).
+
+    Assumes ``x_k = f(x_{k-1}, dt) + w`` and ``z = h(x) + v`` with additive Gaussian noises; ``f``
+    and ``h`` need not be differentiable. For a state of dimension ``n`` with
+    ``lambda = alpha^2 (n + kappa) - n`` the ``2n + 1`` sigma points and weights are::
+
+        X_0 = x,   X_i = x + sqrt(n + lambda) L_i,   X_{n+i} = x - sqrt(n + lambda) L_i
+        Wm_0 = lambda / (n + lambda),   Wc_0 = Wm_0 + 1 - alpha^2 + beta
+        Wm_i = Wc_i = 1 / (2 (n + lambda))                       (i = 1..2n)
+
+    with ``L_i`` the columns of the Cholesky factor ``L L^T = P``. The moments are::
+
+        x^- = sum Wm_i f(X_i),       P^- = sum Wc_i (f(X_i) - x^-)(f(X_i) - x^-)^T + Q
+        z^  = sum Wm_i h(X_i)        (circular mean atan2(sum Wm sin, sum Wm cos) for the
+                                      sensor's angular components)
+        P_zz = sum Wc_i r(h(X_i), z^) r(h(X_i), z^)^T,   P_xz = sum Wc_i (X_i - x^-) r(h(X_i), z^)^T
+
+    with ``r = sensor.residual`` (angles wrapped), then ``S = P_zz + R``, ``K = P_xz S^-1``,
+    ``x^+ = x^- + K r(z, z^)``, ``P^+ = P^- - K S K^T``. Sigma points are drawn afresh from the
+    current belief for every predict and every measurement, so several measurements at one time
+    are applied correctly in sequence.
+
+    ``P^- - K S K^T`` subtracts two nearly equal matrices when a measurement is much more
+    precise than the prior, and can lose positive definiteness. The filter therefore computes
+    the same matrix in Joseph form: with the statistical linearisation ``H = P_xz^T P^-1``
+    (obtained from the sigma points as ``G^T L^-1``, no inverse of ``P``) and the part of
+    ``P_zz`` no linear map explains, ``E = P_zz - H P H^T = sum Wc_i e_i e_i^T`` with
+    ``e_i = r(h(X_i), z^) - H (X_i - x^-)``::
+
+        P^+ = (I - K H) P^- (I - K H)^T + K (R + E) K^T      (= P^- - K S K^T exactly)
+
+    For a linear sensor ``E = 0`` and this is the Kalman filter's own update.
+
+    Parameters
+    ----------
+    alpha, beta, kappa:
+        spread of the sigma points, prior-knowledge weight (2 is optimal for Gaussians) and
+        secondary scaling. ``kappa=None`` means ``3 - n`` (Julier's choice, giving
+        ``n + lambda = 3 alpha^2``). ``alpha^2 (n + kappa)`` must be positive. With
+        ``alpha = 1`` all covariance weights are positive and ``P`` stays positive
+        semi-definite; a small ``alpha`` (the paper suggests 1e-3) makes ``Wc_0`` very negative.
+        These match FilterPy's ``MerweScaledSigmaPoints(n, alpha, beta, kappa)``.
+
+    Example::
+
+        >>> import numpy as np
+        >>> from fusetrack.core import Gaussian, Measurement
+        >>> from fusetrack.motion import ConstantVelocity
+        >>> from fusetrack.sensors import Bearing
+        >>> mics = [Bearing("mic0", position=[0, 0], sigma=0.02),
+        ...         Bearing("mic1", position=[10, 0], sigma=0.02)]
+        >>> ukf = UnscentedKalmanFilter(ConstantVelocity(q=0.1), mics)
+        >>> prior = Gaussian(np.array([5.0, 5.0, 0.0, 0.0]), np.eye(4))
+        >>> post = ukf.update(ukf.predict(prior, 0.5),
+        ...                   [Measurement(0.5, "mic0", [0.8]), Measurement(0.5, "mic1", [2.3])])
+        >>> post.mean.shape
+        (4,)
+    """
+
+    def __init__(
+        self,
+        motion: MotionModel,
+        sensors: Sensors,
+        alpha: float = 1.0,
+        beta: float = 2.0,
+        kappa: float | None = None,
+    ) -> None:
+        super().__init__(motion, sensors)
+        n = int(motion.dim)
+        self.alpha = check_positive("alpha", alpha)
+        self.beta = float(beta)
+        self.kappa = float(3 - n if kappa is None else kappa)
+        scale = self.alpha**2 * (n + self.kappa)  # n + lambda
+        if not scale > 0:
+            raise ConfigError(
+                invalid("kappa", kappa, f"a number > {-n} (the state dimension is {n})")
+            )
+        lam = scale - n
+        # Wan & van der Merwe 2000, Eq. 15
+        wm = np.full(2 * n + 1, 0.5 / scale)
+        wc = wm.copy()
+        wm[0] = lam / scale
+        wc[0] = lam / scale + 1.0 - self.alpha**2 + self.beta
+        self.n = n
+        self.scale = scale
+        self.wm: Array = wm
+        self.wc: Array = wc
+
+    def sigma_points(self, mean: Array, cov: Array) -> Array:
+        """The ``2n + 1`` sigma points of ``N(mean, cov)``: ``(..., 2n + 1, n)``.
+
+        Order: the mean, then ``mean + sqrt(n + lambda) L_i`` for ``i = 1..n``, then
+        ``mean - sqrt(n + lambda) L_i`` (FilterPy's order).
+        """
+        return self._sigma_points(mean, cov)[0]
+
+    def _sigma_points(self, mean: Array, cov: Array) -> tuple[Array, NDArray[Any]]:
+        """Sigma points and the square root ``A`` (``A A^T = cov``) they were built from."""
+        if mean.shape[-1] != self.n:
+            raise ShapeError(
+                invalid("mean.shape", mean.shape, f"(..., {self.n}) to match the motion model")
+            )
+        a = self._sqrt(cov)
+        root = _t(a) * np.sqrt(self.scale)  # row i = column i of the square root
+        centre = mean[..., None, :]
+        return np.concatenate([centre, centre + root, centre - root], axis=-2), a
+
+    def _sqrt(self, cov: Array) -> NDArray[Any]:
+        """A square root ``A A^T = cov``: Cholesky, or eigen-decomposition with clipped
+        eigenvalues when ``cov`` is not numerically positive definite (counted as degenerate)."""
+        try:
+            return np.linalg.cholesky(cov)
+        except np.linalg.LinAlgError:
+            self.stats.degenerate_steps += 1
+            w, v = np.linalg.eigh(_sym(cov))
+            floor = 1e-12 * np.maximum(np.abs(w).max(axis=-1, keepdims=True), 1e-300)
+            return v * np.sqrt(np.maximum(w, floor))[..., None, :]
+
+    def _weighted_cov(self, a: Array, b: Array) -> Array:
+        """``sum_i Wc_i a_i b_i^T`` for ``a`` ``(..., 2n+1, p)``, ``b`` ``(..., 2n+1, q)``."""
+        return _t(a * self.wc[:, None]) @ b
+
+    def propagate_motion(self, mean: Array, cov: Array, dt: float) -> tuple[Array, Array]:
+        xf = np.asarray(self.motion.mean(self.sigma_points(mean, cov), dt), dtype=float)
+        m = np.einsum("k,...kd->...d", self.wm, xf)
+        dx = xf - m[..., None, :]
+        return m, self._weighted_cov(dx, dx)
+
+    def propagate_sensor(self, sensor: SensorModel, mean: Array, cov: Array) -> SensorMoments:
+        x, a = self._sigma_points(mean, cov)
+        zs = np.asarray(sensor.predict(x), dtype=float)
+        z_pred = np.einsum("k,...km->...m", self.wm, zs)
+        ang = np.asarray(getattr(sensor, "angular", ()), dtype=bool)
+        if ang.any():
+            z_pred[..., ang] = circular_mean(zs[..., ang], self.wm[:, None], axis=-2)
+        dz = np.asarray(sensor.residual(zs, z_pred[..., None, :]), dtype=float)
+        dx = x - mean[..., None, :]
+        pzz = self._weighted_cov(dz, dz)
+        pxz = self._weighted_cov(dx, dz)
+        # Statistical linearisation H = P_xz^T P^-1. With dX_i = +-sqrt(n+lambda) A_i,
+        # P_xz = A G where row i of G is Wc_i sqrt(n+lambda) (dZ_i - dZ_{n+i}), so H = G^T A^-1.
+        n = self.n
+        g = (dz[..., 1 : n + 1, :] - dz[..., n + 1 :, :]) * (self.wc[1] * np.sqrt(self.scale))
+        try:
+            h = _t(np.linalg.solve(_t(a), g))
+        except np.linalg.LinAlgError:  # cannot happen after _sqrt's eigenvalue floor
+            return SensorMoments(z_pred, pzz, pxz, None)
+        # pzz - H P H^T = sum Wc_i e_i e_i^T with e_i = dZ_i - H dX_i: the part of Cov[h(x)] no
+        # linear map explains, summed without cancellation
+        e = dz - dx @ _t(h)
+        return SensorMoments(z_pred, pzz, pxz, h, _sym(self._weighted_cov(e, e)))

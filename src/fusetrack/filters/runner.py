@@ -1,0 +1,191 @@
+"""The generic filter loop: time-stamped measurements in, a :class:`~fusetrack.core.Track` out.
+
+The loop is the same for every filter (Kalman family, particle filters, anything with
+``predict(belief, dt, rng)`` and ``update(belief, measurements, rng)``)::
+
+    belief = prior                                  (particle filters: filt.initialize(prior, rng))
+    for each distinct time t (measurement times, plus the requested output `times`):
+        belief = filt.predict(belief, t - t_prev, rng)        if t > t_prev
+        belief = filt.update(belief, measurements at t, rng)  if there are any
+        record belief.mean, belief.cov at t
+
+Time steps may be irregular; measurements at the same time (within 1e-9 s) are applied together
+(in the order given). Output times without measurements are predict-only steps.
+
+>>> import numpy as np
+>>> from fusetrack.core import Gaussian, Measurement
+>>> from fusetrack.filters import KalmanFilter
+>>> from fusetrack.motion import ConstantVelocity
+>>> from fusetrack.sensors import PositionFix
+>>> kf = KalmanFilter(ConstantVelocity(q=0.1), [PositionFix("tag", cov=0.1 * np.eye(2))])
+>>> zs = [Measurement(t, "tag", [t, 0.0]) for t in (0.0, 0.5, 1.5)]
+>>> track = run_filter(kf, Gaussian(np.zeros(4), np.eye(4)), zs, times=[2.0])
+>>> track.times
+array([0. , 0.5, 1.5, 2. ])
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..core.beliefs import Gaussian
+from ..core.errors import ConfigError, MeasurementError, invalid
+from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
+from ..core.track import Track
+
+_TIME_TOLERANCE = 1e-9
+
+
+def _steps(
+    measurements: list[Measurement], times: ArrayLike | None
+) -> list[tuple[float, list[Measurement]]]:
+    """Merge measurement groups with the extra output times (predict-only steps)."""
+    groups = list(group_by_time(measurements, tolerance=_TIME_TOLERANCE))
+    if times is None:
+        return groups
+    extra = np.atleast_1d(np.asarray(times, dtype=float))
+    if extra.ndim != 1 or not np.all(np.isfinite(extra)):
+        raise ConfigError(invalid("times", times, "a 1-D sequence of finite times (seconds)"))
+    steps: list[tuple[float, list[Measurement]]] = list(groups)
+    group_times = np.array([t for t, _ in groups])
+    for t in np.unique(extra):
+        if group_times.size and np.min(np.abs(group_times - t)) <= _TIME_TOLERANCE:
+            continue  # already an output time
+        steps.append((float(t), []))
+    steps.sort(key=lambda s: s[0])
+    # two requested times closer than the tolerance collapse into one
+    merged: list[tuple[float, list[Measurement]]] = []
+    for t, group in steps:
+        if merged and t - merged[-1][0] <= _TIME_TOLERANCE and not group:
+            continue
+        merged.append((t, group))
+    return merged
+
+
+def _batch_shape(measurements: list[Measurement]) -> tuple[int, ...]:
+    shapes = [np.shape(m.value)[:-1] for m in measurements]
+    try:
+        return tuple(np.broadcast_shapes(*shapes)) if shapes else ()
+    except ValueError:
+        raise MeasurementError(
+            invalid("measurement value batch shapes", sorted(set(shapes)), "shapes that broadcast")
+        ) from None
+
+
+def run_filter(
+    filt: Any,
+    prior: Any,
+    measurements: Iterable[Measurement | tuple[Any, ...]],
+    *,
+    rng: np.random.Generator | None = None,
+    order: Literal["reject", "reorder"] = "reject",
+    times: ArrayLike | None = None,
+    t0: float | None = None,
+) -> Track:
+    """Run ``filt`` from ``prior`` over ``measurements`` and return the filtered track.
+
+    Parameters
+    ----------
+    filt:
+        any filter with ``predict(belief, dt, rng)`` and ``update(belief, measurements, rng)``.
+        If it also has ``initialize(prior, rng[, batch_shape])`` (particle filters) and
+        ``prior`` is a :class:`~fusetrack.core.Gaussian`, the prior is turned into particles
+        with it.
+    prior:
+        the belief at time ``t0``: a Gaussian (Kalman filters; particle filters) or the
+        filter's own belief type (e.g. :class:`~fusetrack.core.Particles`). It may carry batch
+        axes; an unbatched prior is broadcast to the measurements' batch axes ``(R, m)``.
+    measurements:
+        :class:`~fusetrack.core.Measurement` objects or ``(time, sensor_id, value[, cov])``
+        tuples, in time order.
+    rng:
+        the random generator; required for filters that draw (those with ``initialize``).
+    order:
+        ``"reject"`` raises :class:`~fusetrack.core.MeasurementError` at the first timestamp
+        that goes backwards; ``"reorder"`` sorts the measurements by time (stable).
+    times:
+        extra output times; where no measurement falls the step is predict-only.
+    t0:
+        the time of ``prior``; default the first step's time (no prediction before the first
+        update). Steps before ``t0`` raise :class:`~fusetrack.core.MeasurementError`.
+
+    Returns
+    -------
+    Track
+        ``times`` ``(T,)``, ``means`` ``(T, ..., d)``, ``covariances`` ``(T, ..., d, d)`` — the
+        belief after the update at each step. ``info["stats"]`` holds how much each of
+        ``filt.stats``'s counters grew during this run.
+    """
+    if order not in ("reject", "reorder"):
+        raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
+    ms = order_by_time(as_measurements(measurements), order)
+    steps = _steps(ms, times)
+    batch = _batch_shape(ms)
+
+    is_sampler = callable(getattr(filt, "initialize", None))
+    if is_sampler and rng is None:
+        raise ConfigError(
+            invalid(
+                "rng",
+                rng,
+                f"a numpy Generator: {type(filt).__name__} draws random numbers "
+                "(pass np.random.default_rng(seed))",
+            )
+        )
+    belief = prior
+    if isinstance(prior, Gaussian):
+        if is_sampler:
+            if batch and prior.mean.ndim == 1:
+                belief = filt.initialize(prior, rng, batch_shape=batch)
+            else:
+                belief = filt.initialize(prior, rng)
+        else:
+            full = np.broadcast_shapes(prior.mean.shape[:-1], prior.cov.shape[:-2], batch)
+            d = prior.dim
+            belief = Gaussian(
+                np.broadcast_to(prior.mean, (*full, d)).copy(),
+                np.broadcast_to(prior.cov, (*full, d, d)).copy(),
+            )
+
+    stats = getattr(filt, "stats", None)
+    before = stats.as_dict() if stats is not None else {}
+
+    if t0 is not None:
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ConfigError(invalid("t0", t0, "a finite time (seconds) or None"))
+        if steps and steps[0][0] < t0 - _TIME_TOLERANCE:
+            raise MeasurementError(
+                invalid("t0", t0, f"a time <= the first step's time {steps[0][0]}")
+            )
+    t_prev = t0 if t0 is not None else (steps[0][0] if steps else 0.0)
+
+    out_t: list[float] = []
+    out_mean: list[np.ndarray] = []
+    out_cov: list[np.ndarray] = []
+    for t, group in steps:
+        dt = t - t_prev
+        if dt > _TIME_TOLERANCE:
+            belief = filt.predict(belief, dt, rng)
+            t_prev = t
+        if group:
+            belief = filt.update(belief, group, rng)
+        out_t.append(t)
+        out_mean.append(np.asarray(belief.mean))
+        out_cov.append(np.asarray(belief.cov))
+
+    info: dict[str, Any] = {"filter": type(filt).__name__}
+    if stats is not None:
+        after = stats.as_dict()
+        info["stats"] = {k: after[k] - before.get(k, 0) for k in after}
+    label = type(filt).__name__
+    if not out_t:
+        mean0 = np.asarray(belief.mean)
+        empty = np.empty((0, *mean0.shape))
+        return Track(np.empty(0), empty, np.empty((*empty.shape, mean0.shape[-1])), label, info)
+    return Track(np.array(out_t), np.stack(out_mean), np.stack(out_cov), label, info)
