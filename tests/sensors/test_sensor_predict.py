@@ -9,10 +9,18 @@ import numpy as np
 import pytest
 
 from fusetrack.core import SensorModel
-from fusetrack.sensors import AzimuthPolar, Bearing, PositionFix, Range, RangeBearing, wrap
+from fusetrack.sensors import (
+    AzimuthPolar,
+    Bearing,
+    PositionFix,
+    Range,
+    RangeBearing,
+    SensorBase,
+    wrap,
+)
 
 
-def all_sensors() -> list[SensorModel]:
+def all_sensors() -> list[SensorBase]:
     return [
         Bearing("b", [1.0, 2.0], 0.1),
         AzimuthPolar("ap", [0.0, 0.0, 1.0], 0.05, 0.08),
@@ -24,7 +32,7 @@ def all_sensors() -> list[SensorModel]:
 
 
 @pytest.mark.parametrize("sensor", all_sensors(), ids=lambda s: s.sensor_id)
-def test_every_sensor_follows_the_protocol(sensor: SensorModel) -> None:
+def test_every_sensor_follows_the_protocol(sensor: SensorBase) -> None:
     assert isinstance(sensor, SensorModel)
     assert len(sensor.angular) == sensor.dim
     assert sensor.noise_cov().shape == (sensor.dim, sensor.dim)
@@ -94,7 +102,9 @@ def test_batch_shapes() -> None:
 
 
 def test_field_of_view_and_max_range() -> None:
-    s = RangeBearing("rb", [0.0, 0.0], 0.1, 0.01, heading=math.pi / 2, fov=math.pi / 2, max_range=10.0)
+    s = RangeBearing(
+        "rb", [0.0, 0.0], 0.1, 0.01, heading=math.pi / 2, fov=math.pi / 2, max_range=10.0
+    )
     x = np.array(
         [
             [0.0, 5.0],  # dead ahead

@@ -79,6 +79,11 @@ def _symmetric_positive_definite(field_name: str, c: Array, owner: str) -> Array
     return L
 
 
+def _default_index(position_index: Any) -> bool:
+    """True for the "use the default" values of ``position_index``: ``()`` or ``None``."""
+    return position_index is None or (isinstance(position_index, tuple) and not position_index)
+
+
 @dataclass(frozen=True, eq=False)
 class SensorBase:
     """Common fields and behaviour of the fusetrack sensor models (see module docstring).
@@ -99,7 +104,8 @@ class SensorBase:
     detection_prob:
         Probability of a report for a visible target, in ``[0, 1]``.
     position_index:
-        Which state entries are the target position (default: the first ``len(position)``).
+        Which state entries are the target position; empty (the default) or None means the
+        first ``len(position)`` entries.
     """
 
     sensor_id: str
@@ -109,7 +115,7 @@ class SensorBase:
     fov: float = TWO_PI
     max_range: float = math.inf
     detection_prob: float = 1.0
-    position_index: tuple[int, ...] | None = None
+    position_index: tuple[int, ...] = ()
 
     dim: int = field(init=False, repr=False)
     angular: tuple[bool, ...] = field(init=False, repr=False)
@@ -191,7 +197,7 @@ class SensorBase:
         if self.fov < TWO_PI and pos.size < 2:
             raise self._fail("fov", self.fov, "2*pi for a sensor without an xy-plane")
 
-        if self.position_index is None:
+        if _default_index(self.position_index):
             idx = tuple(range(pos.size))
         else:
             try:

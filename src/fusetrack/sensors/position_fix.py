@@ -9,7 +9,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .base import TWO_PI, Array, SensorBase
+from .base import TWO_PI, Array, SensorBase, _default_index
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,7 +58,7 @@ class PositionFix(SensorBase):
         cov.flags.writeable = False
         self._set("cov", cov)
         self._set("_k", k)
-        if self.position_index is not None:
+        if not _default_index(self.position_index):
             try:
                 n = len(self.position_index)
             except TypeError:
