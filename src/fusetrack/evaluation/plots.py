@@ -42,7 +42,7 @@ def plot_series(
     if title:
         ax.set_title(title)
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize=8, framealpha=0.6)
     return save(fig, path)
 
 

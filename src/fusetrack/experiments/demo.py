@@ -21,14 +21,10 @@ import pandas as pd
 
 from ..core import Gaussian, Measurement
 from ..evaluation import plots
-from ..evaluation.crlb import posterior_crlb
+from ..evaluation import position_rmse_bound, posterior_crlb
 from ..evaluation.report import Claim, Outcome, RunContext
-from ..filters import (
-    BootstrapFilter,
-    ExtendedKalmanFilter,
-    UnscentedKalmanFilter,
-    run_filter,
-)
+from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
+from ..filters.particle import BootstrapFilter
 from ..motion import CoordinatedTurnRate
 from ..sensors import Bearing, PositionFix
 
@@ -80,10 +76,11 @@ class Scenario:
 
 
 def simulate(scn: Scenario, rng: np.random.Generator) -> tuple[np.ndarray, list[Measurement]]:
-    """A true trajectory ``(T, 5)`` drawn from the prior and the motion model, and its reports."""
+    """A true trajectory ``(T + 1, 5)`` (row 0: the initial state at t = 0, drawn from the prior)
+    drawn from the motion model, and the reports of every sensor at ``scn.times``."""
     motion, sensors = scn.motion(), scn.sensors()
     x = scn.prior().sample(rng)
-    truth, reports = [], []
+    truth, reports = [x], []
     for t in scn.times:
         x = motion.sample(x, scn.dt, rng)
         truth.append(x)
@@ -99,8 +96,8 @@ def simulate(scn: Scenario, rng: np.random.Generator) -> tuple[np.ndarray, list[
 
 
 def report_mask(scn: Scenario, truth: np.ndarray, reports: list[Measurement]) -> np.ndarray:
-    """``(T, S)`` booleans: which sensor reported at which step (for the bound)."""
-    index = {t: k for k, t in enumerate(np.round(scn.times, 9))}
+    """``(T + 1, S)`` booleans: which sensor reported at which step (row 0, the prior's time: none)."""
+    index = {t: k + 1 for k, t in enumerate(np.round(scn.times, 9))}
     names = list(scn.sensors())
     mask = np.zeros((len(truth), len(names)), dtype=bool)
     for m in reports:
@@ -113,6 +110,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     scn = Scenario()
     rng = np.random.default_rng(seed)
     truth, reports = simulate(scn, rng)
+    truth = truth[1:]
     motion, sensors, prior = scn.motion(), scn.sensors(), scn.prior()
     filters = {
         "EKF": ExtendedKalmanFilter(motion, sensors),
@@ -123,7 +121,9 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     }
     rows = []
     for method, filt in filters.items():
-        track = run_filter(filt, prior, reports, rng=np.random.default_rng(seed + 1), times=scn.times)
+        track = run_filter(
+            filt, prior, reports, rng=np.random.default_rng(seed + 1), times=scn.times, t0=0.0
+        )
         keep = np.isin(np.round(track.times, 9), np.round(scn.times, 9))
         est = track.means[keep]
         err = est - truth
@@ -144,8 +144,13 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
-def bound(scn: Scenario, runs: int, seed: int) -> np.ndarray:
-    """Position RMSE bound per step from the PCRB over the same trajectories and report patterns."""
+def bounds(scn: Scenario, runs: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Position RMSE bounds per step over the same trajectories and report patterns as the runs.
+
+    Returns the PCRB (information averaged over the runs, then inverted: a true bound on the
+    RMSE) and, for reference, the RMS over runs of each trajectory's own recursion (Jensen puts
+    it above the PCRB; it is not a bound, but shows what one trajectory's geometry allows).
+    """
     from ..evaluation.montecarlo import run_seed
 
     truths, masks = [], []
@@ -153,16 +158,12 @@ def bound(scn: Scenario, runs: int, seed: int) -> np.ndarray:
         truth, reports = simulate(scn, np.random.default_rng(run_seed(seed, r)))
         truths.append(truth)
         masks.append(report_mask(scn, truth, reports))
-    sensors = scn.sensors()
-    J_inv = posterior_crlb(
-        scn.motion(),
-        list(sensors.values()),
-        np.array(truths),
-        scn.dt,
-        scn.prior().cov,
-        mask=np.array(masks),
-    )
-    return np.sqrt(np.trace(J_inv[:, 0:2, 0:2], axis1=-2, axis2=-1))
+    args = (scn.motion(), list(scn.sensors().values()), np.array(truths), scn.dt, scn.prior().cov)
+    # Step 0 is the prior's time (x_0, no reports); the filters start there too (t0 = 0).
+    pcrb = position_rmse_bound(posterior_crlb(*args, mask=np.array(masks))[1:], POSITION)
+    per_run = posterior_crlb(*args, mask=np.array(masks), average=False)[:, 1:]
+    per_run_rms = np.sqrt(np.mean(position_rmse_bound(per_run, POSITION) ** 2, axis=0))
+    return pcrb, per_run_rms
 
 
 def run(ctx: RunContext) -> Outcome:
@@ -170,7 +171,7 @@ def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=100, quick=8)
     n_particles = 1000 if ctx.quick else 4000
     df = ctx.monte_carlo(run_once, [{"n_particles": n_particles}], runs)
-    pcrb = bound(scn, runs, ctx.seed)
+    pcrb, per_run_bound = bounds(scn, runs, ctx.seed)
     rmse = (
         df.groupby(["method", "step"])["sq_pos_err"].mean().pow(0.5).unstack("method").sort_index()
     )
@@ -216,11 +217,15 @@ def run(ctx: RunContext) -> Outcome:
     fig_rmse = plots.plot_series(
         ctx.figure_path("rmse_vs_time"),
         times,
-        {**{m: rmse[m].to_numpy() for m in ["EKF", "UKF", "PF"]}, "PCRB": pcrb},
+        {
+            **{m: rmse[m].to_numpy() for m in ["EKF", "UKF", "PF"]},
+            "PCRB": pcrb,
+            "per-trajectory bound (RMS)": per_run_bound,
+        },
         xlabel="time (s)",
         ylabel="position RMSE (m)",
         title=f"Position RMSE over {runs} runs",
-        styles={"PCRB": "k--"},
+        styles={"PCRB": "k--", "per-trajectory bound (RMS)": "k:"},
     )
     run0 = df[df["run"] == 0]
     truth0 = run0[run0["method"] == "EKF"][["true_x", "true_y"]].to_numpy()
@@ -242,6 +247,10 @@ def run(ctx: RunContext) -> Outcome:
     ).loc[["EKF", "UKF", "PF"]]
     print(f"\nTime-averaged over {runs} runs (PCRB position bound {bound_avg:.3f} m):")
     print(table.to_string(float_format=lambda v: f"{v:.3f}"))
+    hidden = np.array([any(a <= t < b for a, b in scn.occluded) for t in times])
+    ratio_seen = rmse.loc[~hidden].mean() / pcrb[~hidden].mean()
+    ratio_hidden = rmse.loc[hidden].mean() / pcrb[hidden].mean()
+    pf_vs_ekf = float(avg["PF"] / avg["EKF"])
     body = f"""
 ## Set-up
 
@@ -267,12 +276,20 @@ the reports each run received.
 
 ## Discussion
 
-There is no paper for the demo: its claims are what theory demands (no unbiased estimator beats
-the PCRB) and what a working set of filters should show. The bound is tightest where the camera
-sees the target and loosens during the occluded stretches, where only the wide microphone bearings
-and the sparse tag fixes remain; the filters follow the same pattern. The particle filter carries
-the non-Gaussian posterior of the bearing geometry and so is not worse than the EKF, which
-linearises each bearing about its prediction.
+There is no paper for the demo: its claims are what theory demands (no estimator beats the
+PCRB) and what a working set of filters should show. Measured here: the RMSE-to-PCRB ratio is
+{', '.join(f"{m} {ratio_seen[m]:.2f}" for m in ["EKF", "UKF", "PF"])} while the camera sees the target
+and {', '.join(f"{m} {ratio_hidden[m]:.2f}" for m in ["EKF", "UKF", "PF"])} while it is occluded
+(bound {pcrb[~hidden].mean():.2f} m versus {pcrb[hidden].mean():.2f} m). The particle filter's RMSE is
+{pf_vs_ekf:.3f} times the EKF's.
+
+Why the filters stay above the PCRB by this much: the PCRB averages the Fisher information over
+the runs before inverting it, so a few runs whose target passes close to a microphone array
+(bearing information grows as 1/range²) pull the bound down for all of them; the dotted curve
+(each trajectory's own recursion, RMS over runs) is what the geometry of a typical run allows;
+the filters' time-averaged RMSE is {', '.join(f"{m} {avg[m] / per_run_bound.mean():.2f}" for m in ["EKF", "UKF", "PF"])}
+times its time average. With the turn rate in the state and a prior that is wide in it,
+the first seconds are also non-Gaussian, which the bound does not see.
 """
     return Outcome(df, claims, body, runs)
 
