@@ -178,3 +178,12 @@ def test_singular_innovation_covariance_is_counted_not_fatal():
     post = kf.update(prior, [Measurement(0.0, "tag", [0.0, 0.0], covariance=np.zeros((2, 2)))])
     assert np.all(np.isfinite(post.mean)) and np.all(np.isfinite(post.cov))
     assert kf.stats.degenerate_steps == 1
+
+
+def test_mismatched_batch_axes_raise_a_shape_error():
+    from fusetrack.core import ShapeError
+
+    kf = KalmanFilter(ConstantVelocity(), [PositionFix("tag", cov=np.eye(2))])
+    prior = Gaussian(np.zeros((5, 4)), np.broadcast_to(np.eye(4), (5, 4, 4)))
+    with pytest.raises(ShapeError, match=r"\(5,\)"):
+        kf.update(prior, [Measurement(0.0, "tag", np.zeros((3, 2)))])

@@ -235,6 +235,16 @@ class GaussianFilter:
             checked = validate_measurement(meas, self.sensors, self.stats)
             if not checked.usable.any():
                 continue
+            try:
+                np.broadcast_shapes(checked.value.shape[:-1], mean.shape[:-1])
+            except ValueError:
+                raise ShapeError(
+                    invalid(
+                        f"value.shape (sensor {meas.sensor_id!r}, time={meas.time})",
+                        checked.value.shape,
+                        f"batch axes that broadcast with the belief's {mean.shape[:-1]}",
+                    )
+                ) from None
             mean, cov, ll = self._update_one(mean, cov, checked, want_loglik)
             if want_loglik:
                 loglik = loglik + ll
