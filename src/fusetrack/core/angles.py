@@ -2,14 +2,30 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+TWO_PI = 2.0 * math.pi
+
+
+def wrap_angle_inplace(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Wrap the float array ``a`` to ``[-pi, pi)`` in place and return it.
+
+    ``a - 2 pi round(a / 2 pi)`` (cheaper than ``np.mod``), then the few values that rounding
+    leaves on ``pi`` or just below ``-pi`` are moved inside the half-open interval.
+    """
+    a = np.asarray(a)  # a NumPy scalar becomes a writable 0-d array
+    a -= TWO_PI * np.rint(a / TWO_PI)
+    a[a < -math.pi] += TWO_PI
+    a[a >= math.pi] -= TWO_PI
+    return a
+
 
 def wrap_angle(a: ArrayLike) -> NDArray[np.float64]:
-    """Wrap angles to [-pi, pi)."""
-    a = np.asarray(a, dtype=float)
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
+    """Angles wrapped to ``[-pi, pi)`` (a new array)."""
+    return wrap_angle_inplace(np.array(a, dtype=float))
 
 
 def angle_diff(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:

@@ -21,7 +21,10 @@ Array = NDArray[np.float64]
 class MotionModel(Protocol):
     """``x_k = f(x_{k-1}, dt) + w``, ``w ~ N(0, Q(dt))``."""
 
-    dim: int
+    @property
+    def dim(self) -> int:
+        """State dimension d."""
+        ...
 
     def mean(self, x: Array, dt: float) -> Array:
         """``f(x, dt)``: the noiseless next state, ``(..., d)``."""
@@ -48,9 +51,18 @@ class MotionModel(Protocol):
 class SensorModel(Protocol):
     """``z = h(x) + v``, ``v ~ N(0, R(x))``, seen with probability ``detection_probability(x)``."""
 
-    sensor_id: str
-    dim: int
-    angular: tuple[bool, ...]
+    @property
+    def sensor_id(self) -> str: ...
+
+    @property
+    def dim(self) -> int:
+        """Measurement dimension m."""
+        ...
+
+    @property
+    def angular(self) -> tuple[bool, ...]:
+        """Which measurement components are angles (wrapped in residuals)."""
+        ...
 
     def predict(self, x: Array) -> Array:
         """``h(x)``, ``(..., m)``."""

@@ -34,11 +34,11 @@ from typing import Any, ClassVar, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..core.angles import TWO_PI, wrap_angle, wrap_angle_inplace
 from ..core.errors import ConfigError, ShapeError, check_positive, check_probability, invalid
 
 Array = NDArray[np.float64]
 
-TWO_PI = 2.0 * math.pi
 
 MIN_RANGE_SQ = 1e-18
 """Floor (m^2) on squared ranges in Jacobians: ``dh/dx`` of an angle is undefined at the sensor
@@ -46,22 +46,8 @@ position (zero range), so ``r^2`` is replaced by ``max(r^2, MIN_RANGE_SQ)`` ther
 stays finite (it is 0 exactly at the sensor, since the numerator vanishes too)."""
 
 
-def wrap_inplace(a: Array) -> Array:
-    """Wrap the float array ``a`` to ``[-pi, pi)`` in place and return it.
-
-    ``a - 2 pi round(a / 2 pi)`` (cheaper than ``np.mod``), then the few values that rounding
-    leaves on ``pi`` or just below ``-pi`` are moved inside the half-open interval.
-    """
-    a = np.asarray(a)  # a NumPy scalar (from a 1-D state) becomes a writable 0-d array
-    a -= TWO_PI * np.rint(a / TWO_PI)
-    a[a < -math.pi] += TWO_PI
-    a[a >= math.pi] -= TWO_PI
-    return a
-
-
-def wrap(a: ArrayLike) -> Array:
-    """Angles wrapped to ``[-pi, pi)`` (a new array)."""
-    return wrap_inplace(np.array(a, dtype=float))
+wrap_inplace = wrap_angle_inplace
+wrap = wrap_angle
 
 
 def _symmetric_positive_definite(field_name: str, c: Array, owner: str) -> Array:
