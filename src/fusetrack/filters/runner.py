@@ -27,7 +27,7 @@ array([0. , 0.5, 1.5, 2. ])
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from typing import Any, Literal
 
 import numpy as np
@@ -37,6 +37,7 @@ from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, MeasurementError, invalid
 from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
 from ..core.track import Track
+from .stats import validate_measurement
 
 _TIME_TOLERANCE = 1e-9
 
@@ -124,6 +125,10 @@ def run_filter(
     if order not in ("reject", "reorder"):
         raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
     ms = order_by_time(as_measurements(measurements), order)
+    sensors = getattr(filt, "sensors", None)
+    if isinstance(sensors, Mapping):  # unknown sensors and wrong sizes fail before any work
+        for m in ms:
+            validate_measurement(m, sensors)
     steps = _steps(ms, times)
     batch = _batch_shape(ms)
 
