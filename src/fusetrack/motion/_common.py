@@ -73,40 +73,52 @@ def psd_factor(cov: Array) -> Array:
         return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
     except np.linalg.LinAlgError:  # singular Q (dt = 0, q = 0, Wiener-sequence noise)
         s, v = np.linalg.eigh(cov)
-        return np.asarray(v * np.sqrt(np.clip(s, 0.0, None)), dtype=np.float64)
+        s = np.where(s > _RANK_RTOL * s.max(initial=0.0), s, 0.0)  # rounding noise is not noise
+        return np.asarray(v * np.sqrt(s), dtype=np.float64)
 
 
 def gaussian_logpdf(resid: Array, cov: Array, scale: Array | float = 0.0) -> Array:
     """``log N(resid; 0, cov)`` over the leading axes of ``resid`` ``(..., d)``.
 
-    A singular ``cov`` gives the degenerate Gaussian: the density with respect to Lebesgue measure
-    on its support (pseudo-determinant, pseudo-inverse), ``-inf`` off the support; this matches
-    ``scipy.stats.multivariate_normal.logpdf(..., allow_singular=True)``. ``scale`` (broadcast
-    against ``resid[..., 0]``) is the size of the vectors whose difference ``resid`` is, so that
-    rounding does not push a point off the support. A zero ``cov`` (a point mass) raises
-    :class:`ConfigError`.
+    The rank of ``cov`` is judged on its correlation matrix, so a positive definite ``Q`` that is
+    badly scaled (constant acceleration at small ``dt``: ``dt^5/20`` beside ``dt``) stays full
+    rank. A singular ``cov`` gives the degenerate Gaussian: the density with respect to Lebesgue
+    measure on its support (pseudo-determinant, pseudo-inverse), ``-inf`` off the support; this
+    matches ``scipy.stats.multivariate_normal.logpdf(..., allow_singular=True)``. ``scale``
+    (broadcast against ``resid[..., 0]``) is the size of the vectors whose difference ``resid``
+    is, so that rounding does not push a point off the support. A zero ``cov`` (a point mass)
+    raises :class:`ConfigError`.
     """
-    s, v = np.linalg.eigh(cov)
-    smax = float(s.max(initial=0.0))
-    keep = s > _RANK_RTOL * smax
-    if smax <= 0.0 or not keep.any():
+    d = cov.shape[-1]
+    var = np.diag(cov)
+    pos = var > 0.0
+    if not pos.any():
         raise ConfigError(
-            invalid(
-                "noise_cov(dt)",
-                "a zero matrix",
-                "a transition with noise for log_density: dt > 0 and q > 0 "
-                "(dt = 0 gives the identity transition, a point mass with no density)",
-            )
+            invalid("noise_cov", "a zero matrix", "a covariance with a nonzero variance")
         )
-    whiten = v[:, keep] / np.sqrt(s[keep])
-    maha = np.sum(np.square(resid @ whiten), axis=-1)
-    rank = int(keep.sum())
-    out = -0.5 * (rank * _LOG_2PI + float(np.sum(np.log(s[keep]))) + maha)
-    if rank < cov.shape[-1]:
-        off = np.linalg.norm(resid @ v[:, ~keep], axis=-1)
-        tol = _SUPPORT_RTOL * (math.sqrt(smax) + np.asarray(scale, dtype=float))
+    sd = np.sqrt(var[pos])
+    corr = cov[np.ix_(pos, pos)] / np.outer(sd, sd)
+    s_corr = np.linalg.eigvalsh(corr)
+    rank = int(np.sum(s_corr > _RANK_RTOL * s_corr.max()))
+    if rank == d:
+        try:
+            chol = np.linalg.cholesky(corr)
+        except np.linalg.LinAlgError:  # borderline: fall through to the eigen route
+            pass
+        else:
+            z = (resid / sd) @ np.linalg.inv(chol).T
+            logdet = 2.0 * float(np.sum(np.log(np.diag(chol))) + np.sum(np.log(sd)))
+            out = -0.5 * (d * _LOG_2PI + logdet + np.sum(np.square(z), axis=-1))
+            return np.asarray(out, dtype=np.float64)
+    s, v = np.linalg.eigh(cov)  # ascending: the last `rank` span the support
+    s_keep, v_keep, v_null = s[d - rank :], v[:, d - rank :], v[:, : d - rank]
+    maha = np.sum(np.square(resid @ (v_keep / np.sqrt(s_keep))), axis=-1)
+    out = -0.5 * (rank * _LOG_2PI + float(np.sum(np.log(s_keep))) + maha)
+    if rank < d:
+        off = np.linalg.norm(resid @ v_null, axis=-1)
+        tol = _SUPPORT_RTOL * (math.sqrt(float(s[-1])) + np.asarray(scale, dtype=float))
         out = np.where(off > tol, -np.inf, out)
-    return np.asarray(out, dtype=float)
+    return np.asarray(out, dtype=np.float64)
 
 
 class GaussianTransition:

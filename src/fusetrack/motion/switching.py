@@ -1,7 +1,8 @@
 """A set of motion models switched by a Markov chain (jump Markov / multiple-model dynamics).
 
-Bar-Shalom, Li & Kirubarajan 2001, Sec. 11.6: the mode ``r_k`` follows a Markov chain with
-``P(r_k = j | r_{k-1} = i) = transition[i, j]``; given the mode, the state moves by that model.
+Bar-Shalom, Li & Kirubarajan 2001, Ch. 11 (multiple-model approach): the mode ``r_k`` follows a
+Markov chain with ``P(r_k = j | r_{k-1} = i) = transition[i, j]``; given the mode, the state moves
+by that model.
 The chain advances once per call of :meth:`MarkovSwitching.sample_modes` (per step, whatever
 ``dt`` is).
 
@@ -35,7 +36,8 @@ class MarkovSwitching:
     """Motion models switched by a Markov chain with row-stochastic ``transition`` ``(M, M)``.
 
     Every method takes the per-row mode as an extra ``modes`` integer array that broadcasts
-    against the leading axes of ``x``; outputs have the broadcast leading shape.
+    against the leading axes of ``x``; outputs have the broadcast leading shape. ``transition``
+    (any array-like) is stored as a read-only float array with its rows renormalised.
 
     >>> from fusetrack.motion import ConstantVelocity, CoordinatedTurnRate
     >>> models = (ConstantVelocity(2), CoordinatedTurnRate())
@@ -45,7 +47,7 @@ class MarkovSwitching:
     """
 
     models: tuple[MotionModel, ...]
-    transition: Array
+    transition: ArrayLike
     dim: int = field(init=False, repr=False)
     position_index: tuple[int, ...] = field(init=False, repr=False)
     velocity_index: tuple[int, ...] | None = field(init=False, repr=False)
