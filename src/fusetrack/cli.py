@@ -11,25 +11,42 @@ from .core.errors import FusetrackError
 
 
 def _add_run_options(p: argparse.ArgumentParser, default_out: str | None) -> None:
-    p.add_argument("--quick", action="store_true", help="small run (< 1 min), every claim still checked")
+    p.add_argument(
+        "--quick", action="store_true", help="small run (< 1 min), every claim still checked"
+    )
     p.add_argument("--runs", type=int, default=None, help="Monte Carlo runs (default: the paper's)")
-    p.add_argument("--seed", type=int, default=0, help="base seed; a seed reproduces a run bit for bit")
-    p.add_argument("--engine", choices=["local", "dask"], default="local", help="where runs execute")
-    p.add_argument("--scheduler", default=None, help="dask scheduler address (default: a LocalCluster)")
-    p.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument(
+        "--seed", type=int, default=0, help="base seed; a seed reproduces a run bit for bit"
+    )
+    p.add_argument(
+        "--engine", choices=["local", "dask"], default="local", help="where runs execute"
+    )
+    p.add_argument(
+        "--scheduler", default=None, help="dask scheduler address (default: a LocalCluster)"
+    )
+    p.add_argument(
+        "--workers", type=int, default=None, help="worker processes (default: all cores)"
+    )
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     p.add_argument(
-        "--out", type=Path, required=default_out is None, default=default_out, help="output directory"
+        "--out",
+        type=Path,
+        required=default_out is None,
+        default=default_out,
+        help="output directory",
     )
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="fusetrack", description="Tracking with networks of different sensors, fused in Bayesian filters."
+        prog="fusetrack",
+        description="Tracking with networks of different sensors, fused in Bayesian filters.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("list", help="name every experiment")
-    run = sub.add_parser("run", help="run one experiment and write results.parquet, summary.json, report.md")
+    run = sub.add_parser(
+        "run", help="run one experiment and write results.parquet, summary.json, report.md"
+    )
     run.add_argument("name")
     _add_run_options(run, None)
     demo = sub.add_parser("demo", help="= fusetrack run demo")
@@ -40,18 +57,22 @@ def build_parser() -> argparse.ArgumentParser:
 def _print_summary(summary: dict, out: Path) -> None:
     claims = summary["claims"]
     held = sum(c["holds"] for c in claims)
-    print(f"\n{summary['experiment']}: {held}/{len(claims)} claims hold "
-          f"({summary['runs']} runs, {summary['seconds']:.1f} s, peak {summary['peak_memory_mb']:.0f} MiB)")
+    print(
+        f"\n{summary['experiment']}: {held}/{len(claims)} claims hold "
+        f"({summary['runs']} runs, {summary['seconds']:.1f} s, peak {summary['peak_memory_mb']:.0f} MiB)"
+    )
     for c in claims:
         ours = f"{c['ours']:.4g}" if isinstance(c["ours"], float) else c["ours"]
-        print(f"  [{'ok ' if c['holds'] else 'NO '}] {c['id']}: {c['statement']} — ours {ours}, paper {c['paper']}")
+        print(
+            f"  [{'ok ' if c['holds'] else 'NO '}] {c['id']}: {c['statement']} — ours {ours}, paper {c['paper']}"
+        )
     print(f"report: {out / 'report.md'}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    from .experiments import REGISTRY, run_experiment
     from .evaluation.report import RunContext
+    from .experiments import REGISTRY, run_experiment
 
     if args.command == "list":
         width = max(len(n) for n in REGISTRY)

@@ -21,7 +21,12 @@ def test_readme_example_runs():
 
 def test_demo_quick_end_to_end(tmp_path, capsys):
     out = tmp_path / "demo"
-    assert main(["demo", "--quick", "--runs", "3", "--workers", "1", "--no-progress", "--out", str(out)]) == 0
+    assert (
+        main(
+            ["demo", "--quick", "--runs", "3", "--workers", "1", "--no-progress", "--out", str(out)]
+        )
+        == 0
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert summary["experiment"] == "demo" and summary["runs"] == 3
     ids = {c["id"] for c in summary["claims"]}

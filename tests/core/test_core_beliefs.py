@@ -12,7 +12,9 @@ def test_gaussian_logpdf_matches_scipy():
     mean = np.array([1.0, -2.0])
     cov = np.array([[2.0, 0.3], [0.3, 0.5]])
     x = np.array([[0.0, 0.0], [1.5, -1.0]])
-    np.testing.assert_allclose(Gaussian(mean, cov).logpdf(x), multivariate_normal(mean, cov).logpdf(x))
+    np.testing.assert_allclose(
+        Gaussian(mean, cov).logpdf(x), multivariate_normal(mean, cov).logpdf(x)
+    )
 
 
 def test_gaussian_sample_moments():
@@ -23,7 +25,7 @@ def test_gaussian_sample_moments():
 
 
 def test_gaussian_rejects_mismatched_cov():
-    with pytest.raises(ShapeError, match="cov.shape"):
+    with pytest.raises(ShapeError, match=r"cov\.shape"):
         Gaussian(np.zeros(3), np.eye(2))
 
 
@@ -85,7 +87,9 @@ def test_grid_belief_moments():
 
 def test_gaussian_mixture_moment_matching():
     gm = GaussianMixture(
-        np.array([0.3, 0.7]), np.array([[0.0, 0.0], [2.0, 1.0]]), np.stack([np.eye(2), 0.5 * np.eye(2)])
+        np.array([0.3, 0.7]),
+        np.array([[0.0, 0.0], [2.0, 1.0]]),
+        np.stack([np.eye(2), 0.5 * np.eye(2)]),
     )
     s = gm.sample(np.random.default_rng(3), 300_000)
     np.testing.assert_allclose(gm.mean, [1.4, 0.7])
@@ -93,7 +97,8 @@ def test_gaussian_mixture_moment_matching():
     np.testing.assert_allclose(np.cov(s.T), gm.cov, atol=0.02)
     x = np.array([0.5, 0.5])
     direct = np.log(
-        0.3 * multivariate_normal([0, 0], np.eye(2)).pdf(x) + 0.7 * multivariate_normal([2, 1], 0.5 * np.eye(2)).pdf(x)
+        0.3 * multivariate_normal([0, 0], np.eye(2)).pdf(x)
+        + 0.7 * multivariate_normal([2, 1], 0.5 * np.eye(2)).pdf(x)
     )
     np.testing.assert_allclose(gm.logpdf(x), direct)
     with pytest.raises(ShapeError, match="summing to 1"):

@@ -29,7 +29,7 @@ def test_measurement_validates_fields():
 
 def test_order_policies():
     ms = [Measurement(1.0, "a", [0]), Measurement(0.5, "b", [0]), Measurement(2.0, "a", [0])]
-    with pytest.raises(MeasurementError, match="time=0.5"):
+    with pytest.raises(MeasurementError, match=r"time=0\.5"):
         order_by_time(ms)
     assert [m.time for m in order_by_time(ms, "reorder")] == [0.5, 1.0, 2.0]
     with pytest.raises(MeasurementError, match="policy"):
@@ -44,7 +44,7 @@ def test_group_by_time():
 
 def test_track_shapes_checked():
     Track(np.arange(3.0), np.zeros((3, 4)), np.zeros((3, 4, 4)))
-    with pytest.raises(ValueError, match="means.shape"):
+    with pytest.raises(ValueError, match=r"means\.shape"):
         Track(np.arange(3.0), np.zeros((2, 4)))
 
 

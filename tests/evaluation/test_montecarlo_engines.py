@@ -40,7 +40,9 @@ def test_engines_and_worker_counts_give_identical_rows():
     ref = run_monte_carlo(noisy_mean, CONFIGS, runs=4, seed=3, workers=1, progress=False)
     pool = run_monte_carlo(noisy_mean, CONFIGS, runs=4, seed=3, workers=2, progress=False)
     pd.testing.assert_frame_equal(ref, pool)
-    dask = run_monte_carlo(noisy_mean, CONFIGS, runs=4, seed=3, engine="dask", workers=2, progress=False)
+    dask = run_monte_carlo(
+        noisy_mean, CONFIGS, runs=4, seed=3, engine="dask", workers=2, progress=False
+    )
     pd.testing.assert_frame_equal(ref, dask)
 
 

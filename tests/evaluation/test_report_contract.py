@@ -10,8 +10,13 @@ from fusetrack.evaluation.report import Claim, Outcome, RunContext, write_output
 
 def test_write_outputs_follows_the_contract(tmp_path):
     ctx = RunContext("toy", tmp_path / "out", quick=True, seed=4)
-    df = pd.DataFrame({"run": [0, 1], "method": ["a", "b"], "rmse": [1.0, 2.0], "extra": [[1, 2], None]})
-    claims = [Claim("c1", "a beats b", "a < b", 0.5, 0.1, True), Claim("c2", "fails", 3, 4.0, 0.1, False)]
+    df = pd.DataFrame(
+        {"run": [0, 1], "method": ["a", "b"], "rmse": [1.0, 2.0], "extra": [[1, 2], None]}
+    )
+    claims = [
+        Claim("c1", "a beats b", "a < b", 0.5, 0.1, True),
+        Claim("c2", "fails", 3, 4.0, 0.1, False),
+    ]
     summary = write_outputs(ctx, Outcome(df, claims, "## Body\n\ntext", runs=2), 1.25, 100.0)
     out = tmp_path / "out"
     back = pd.read_parquet(out / "results.parquet")

@@ -33,7 +33,9 @@ def angle_diff(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     return wrap_angle(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
 
 
-def circular_mean(a: ArrayLike, weights: ArrayLike | None = None, axis: int = 0) -> NDArray[np.float64]:
+def circular_mean(
+    a: ArrayLike, weights: ArrayLike | None = None, axis: int = 0
+) -> NDArray[np.float64]:
     """Weighted circular mean ``atan2(sum w sin a, sum w cos a)`` along ``axis``."""
     a = np.asarray(a, dtype=float)
     w = np.ones_like(a) if weights is None else np.broadcast_to(np.asarray(weights, float), a.shape)

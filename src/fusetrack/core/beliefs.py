@@ -36,7 +36,9 @@ class Gaussian:
             c = c[None, None]
         d = m.shape[-1]
         if c.shape[-2:] != (d, d):
-            raise ShapeError(invalid("cov.shape", c.shape, f"(..., {d}, {d}) to match mean of size {d}"))
+            raise ShapeError(
+                invalid("cov.shape", c.shape, f"(..., {d}, {d}) to match mean of size {d}")
+            )
         object.__setattr__(self, "mean", m)
         object.__setattr__(self, "cov", c)
 
@@ -59,7 +61,7 @@ class Gaussian:
         if n is None:
             e = rng.standard_normal(self.mean.shape)
             return self.mean + np.einsum("...ij,...j->...i", L, e)
-        e = rng.standard_normal(self.mean.shape[:-1] + (n, self.dim))
+        e = rng.standard_normal((*self.mean.shape[:-1], n, self.dim))
         return self.mean[..., None, :] + np.einsum("...ij,...nj->...ni", L, e)
 
 
@@ -80,7 +82,9 @@ class Particles:
         if s.ndim < 2:
             raise ShapeError(invalid("states.shape", s.shape, "(..., N, d)"))
         if lw.shape != s.shape[:-1]:
-            raise ShapeError(invalid("log_weights.shape", lw.shape, f"{s.shape[:-1]} to match states"))
+            raise ShapeError(
+                invalid("log_weights.shape", lw.shape, f"{s.shape[:-1]} to match states")
+            )
         object.__setattr__(self, "states", s)
         object.__setattr__(self, "log_weights", lw)
 
@@ -135,7 +139,9 @@ class Particles:
     def to_gaussian(self) -> Gaussian:
         return Gaussian(self.mean, self.cov)
 
-    def resample(self, rng: np.random.Generator, scheme: str | Resampler = "systematic") -> Particles:
+    def resample(
+        self, rng: np.random.Generator, scheme: str | Resampler = "systematic"
+    ) -> Particles:
         """Equal-weight particles drawn with ``scheme`` (see :mod:`fusetrack.core.resampling`)."""
         idx = get_resampler(scheme)(self.weights, rng)
         states = np.take_along_axis(self.states, idx[..., None], axis=-2)
@@ -155,14 +161,18 @@ class GridBelief:
         lp = np.asarray(self.log_prob, float)
         shape = tuple(a.size for a in axes)
         if lp.shape != shape:
-            raise ShapeError(invalid("log_prob.shape", lp.shape, f"{shape} (one entry per grid cell)"))
+            raise ShapeError(
+                invalid("log_prob.shape", lp.shape, f"{shape} (one entry per grid cell)")
+            )
         object.__setattr__(self, "axes", axes)
         object.__setattr__(self, "log_prob", lp)
 
     @classmethod
     def uniform(cls, axes: tuple[ArrayLike, ...]) -> GridBelief:
         shape = tuple(np.asarray(a).size for a in axes)
-        return cls(tuple(np.asarray(a, float) for a in axes), np.full(shape, -np.log(np.prod(shape))))
+        return cls(
+            tuple(np.asarray(a, float) for a in axes), np.full(shape, -np.log(np.prod(shape)))
+        )
 
     @property
     def dim(self) -> int:
@@ -208,9 +218,13 @@ class GaussianMixture:
         w = np.asarray(self.weights, float)
         m = np.asarray(self.means, float)
         c = np.asarray(self.covs, float)
-        if m.ndim != 2 or w.shape != m.shape[:1] or c.shape != m.shape + (m.shape[1],):
+        if m.ndim != 2 or w.shape != m.shape[:1] or c.shape != (*m.shape, m.shape[1]):
             raise ShapeError(
-                invalid("(weights, means, covs) shapes", (w.shape, m.shape, c.shape), "(K,), (K, d), (K, d, d)")
+                invalid(
+                    "(weights, means, covs) shapes",
+                    (w.shape, m.shape, c.shape),
+                    "(K,), (K, d), (K, d, d)",
+                )
             )
         if np.any(w < 0) or not np.isclose(w.sum(), 1.0):
             raise ShapeError(invalid("weights", w, "non-negative numbers summing to 1"))
@@ -230,7 +244,9 @@ class GaussianMixture:
     def cov(self) -> NDArray[np.float64]:
         """Moment-matched covariance: within-component plus spread of the means."""
         r = self.means - self.mean
-        return _symmetrise(np.einsum("k,kij->ij", self.weights, self.covs + r[:, :, None] * r[:, None, :]))
+        return _symmetrise(
+            np.einsum("k,kij->ij", self.weights, self.covs + r[:, :, None] * r[:, None, :])
+        )
 
     def component(self, k: int) -> Gaussian:
         return Gaussian(self.means[k], self.covs[k])

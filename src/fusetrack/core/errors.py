@@ -55,7 +55,9 @@ def check_positive(field: str, value: float, *, allow_zero: bool = False) -> flo
         raise ConfigError(invalid(field, value, "a number")) from None
     ok = v >= 0 if allow_zero else v > 0
     if not (ok and v == v and v != float("inf")):
-        raise ConfigError(invalid(field, value, "a finite number " + (">= 0" if allow_zero else "> 0")))
+        raise ConfigError(
+            invalid(field, value, "a finite number " + (">= 0" if allow_zero else "> 0"))
+        )
     return v
 
 

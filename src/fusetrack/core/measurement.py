@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -35,7 +36,9 @@ class Measurement:
         try:
             t = float(self.time)
         except (TypeError, ValueError):
-            raise MeasurementError(invalid("time", self.time, "a finite number (seconds)")) from None
+            raise MeasurementError(
+                invalid("time", self.time, "a finite number (seconds)")
+            ) from None
         if not math.isfinite(t):
             raise MeasurementError(invalid("time", self.time, "a finite number (seconds)"))
         object.__setattr__(self, "time", t)
@@ -48,7 +51,9 @@ class Measurement:
             m = v.shape[-1]
             if c.shape[-2:] != (m, m):
                 raise MeasurementError(
-                    invalid("covariance", c.shape, f"shape (..., {m}, {m}) to match value of size {m}")
+                    invalid(
+                        "covariance", c.shape, f"shape (..., {m}, {m}) to match value of size {m}"
+                    )
                 )
             object.__setattr__(self, "covariance", c)
 
@@ -79,7 +84,7 @@ def order_by_time(
         return sorted(ms, key=lambda m: m.time)
     if policy != "reject":
         raise MeasurementError(invalid("policy", policy, "'reject' or 'reorder'"))
-    for prev, cur in zip(ms, ms[1:]):
+    for prev, cur in itertools.pairwise(ms):
         if cur.time < prev.time:
             raise MeasurementError(
                 f"measurement from {cur.sensor_id!r} at time={cur.time} comes after one at "

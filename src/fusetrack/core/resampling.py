@@ -21,7 +21,13 @@ Resampler = Callable[[NDArray[np.float64], np.random.Generator], NDArray[np.intp
 
 @numba.njit(cache=True, nogil=True)
 def _inverse_cdf_sorted(weights: np.ndarray, u: np.ndarray) -> np.ndarray:  # pragma: no cover - jit
-    """Ancestors for sorted uniforms ``u`` (each row ascending in [0,1)), one linear merge per row."""
+    """Ancestors for sorted uniforms ``u`` (each row ascending in [0,1)), one linear merge per row.
+
+    The cumulative sum is accumulated left to right and each partial sum divided by the total,
+    exactly as ``np.cumsum(w) / cumsum[-1]`` does, so the comparisons (and the indices) are
+    bit-identical to :func:`inverse_cdf_reference`; the last cumulative value is exactly 1, so a
+    uniform below 1 never lands on trailing zero-weight particles.
+    """
     rows, n = weights.shape
     m = u.shape[1]
     out = np.empty((rows, m), dtype=np.intp)
@@ -30,11 +36,13 @@ def _inverse_cdf_sorted(weights: np.ndarray, u: np.ndarray) -> np.ndarray:  # pr
         for i in range(n):
             total += weights[r, i]
         j = 0
-        c = weights[r, 0] / total
+        acc = weights[r, 0]
+        c = acc / total
         for k in range(m):
             while u[r, k] >= c and j < n - 1:
                 j += 1
-                c += weights[r, j] / total
+                acc += weights[r, j]
+                c = acc / total
             out[r, k] = j
     return out
 
@@ -45,7 +53,7 @@ def inverse_cdf(weights: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray
     lead = w.shape[:-1]
     w2 = w.reshape(-1, w.shape[-1])
     u2 = np.ascontiguousarray(u, dtype=np.float64).reshape(w2.shape[0], -1)
-    return _inverse_cdf_sorted(w2, u2).reshape(lead + (u2.shape[-1],))
+    return _inverse_cdf_sorted(w2, u2).reshape((*lead, u2.shape[-1]))
 
 
 def inverse_cdf_reference(weights: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.intp]:
@@ -57,14 +65,14 @@ def inverse_cdf_reference(weights: NDArray[np.float64], u: NDArray[np.float64]) 
     cdf2 = cdf.reshape(-1, w.shape[-1])
     u2 = np.asarray(u, float).reshape(cdf2.shape[0], -1)
     idx = np.stack([np.searchsorted(c, uu, side="right") for c, uu in zip(cdf2, u2)])
-    return np.minimum(idx, w.shape[-1] - 1).reshape(lead + (u2.shape[-1],))
+    return np.minimum(idx, w.shape[-1] - 1).reshape((*lead, u2.shape[-1]))
 
 
 def multinomial(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.intp]:
-    """N independent draws from the categorical distribution (sorted uniforms via exponential spacings)."""
+    """N independent categorical draws (sorted uniforms from exponential spacings)."""
     w = np.asarray(weights, float)
     n = w.shape[-1]
-    e = rng.exponential(size=w.shape[:-1] + (n + 1,))
+    e = rng.exponential(size=(*w.shape[:-1], n + 1))
     s = np.cumsum(e, axis=-1)
     u = s[..., :-1] / s[..., -1:]
     return inverse_cdf(w, u)
@@ -74,7 +82,7 @@ def stratified(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArra
     """One uniform in each stratum ``[k/N, (k+1)/N)``."""
     w = np.asarray(weights, float)
     n = w.shape[-1]
-    u = (np.arange(n) + rng.random(w.shape[:-1] + (n,))) / n
+    u = (np.arange(n) + rng.random((*w.shape[:-1], n))) / n
     return inverse_cdf(w, u)
 
 
@@ -82,7 +90,7 @@ def systematic(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArra
     """A single uniform shifted by ``k/N``: the lowest-cost and usually lowest-variance scheme."""
     w = np.asarray(weights, float)
     n = w.shape[-1]
-    u = (np.arange(n) + rng.random(w.shape[:-1] + (1,))) / n
+    u = (np.arange(n) + rng.random((*w.shape[:-1], 1))) / n
     return inverse_cdf(w, u)
 
 
@@ -105,7 +113,7 @@ def residual(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArray[
             extra = inverse_cdf(res[None, :], (s[:-1] / s[-1])[None, :])[0]
             det = np.concatenate([det, extra])
         out[r] = np.sort(det)
-    return out.reshape(lead + (n,))
+    return out.reshape((*lead, n))
 
 
 RESAMPLERS: dict[str, Resampler] = {

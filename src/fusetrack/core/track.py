@@ -45,8 +45,10 @@ class Track:
         object.__setattr__(self, "means", m)
         if self.covariances is not None:
             c = np.asarray(self.covariances, dtype=float)
-            if c.shape != m.shape + (m.shape[-1],):
-                raise ShapeError(invalid("covariances.shape", c.shape, f"{m.shape + (m.shape[-1],)}"))
+            if c.shape != (*m.shape, m.shape[-1]):
+                raise ShapeError(
+                    invalid("covariances.shape", c.shape, f"{(*m.shape, m.shape[-1])}")
+                )
             object.__setattr__(self, "covariances", c)
 
     def __len__(self) -> int:
@@ -65,7 +67,11 @@ class Track:
         if all(e.covariance is not None for e in est):
             covs = np.stack([np.asarray(e.covariance) for e in est])
         return cls(
-            np.array([e.time for e in est]), np.stack([np.asarray(e.mean) for e in est]), covs, label, info
+            np.array([e.time for e in est]),
+            np.stack([np.asarray(e.mean) for e in est]),
+            covs,
+            label,
+            info,
         )
 
     def __getitem__(self, k: int) -> Estimate:

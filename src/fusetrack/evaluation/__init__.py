@@ -55,5 +55,6 @@ __all__ = [
     "track_loss_onset",
     "track_loss_rate",
     "velocity_rmse",
+    "velocity_rmse_bound",
     "write_outputs",
 ]

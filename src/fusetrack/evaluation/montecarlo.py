@@ -27,7 +27,9 @@ ENGINES = ("local", "dask")
 
 def run_seed(base_seed: int, run: int) -> int:
     """The integer seed of Monte Carlo run ``run`` (independent streams via ``SeedSequence``)."""
-    return int(np.random.SeedSequence([int(base_seed), int(run)]).generate_state(1, np.uint64)[0] >> 1)
+    return int(
+        np.random.SeedSequence([int(base_seed), int(run)]).generate_state(1, np.uint64)[0] >> 1
+    )
 
 
 @dataclass(frozen=True)
@@ -43,7 +45,12 @@ class _Job:
         scalar_params = {k: v for k, v in self.config.items() if np.isscalar(v) or v is None}
         out = []
         for row in rows:
-            full = {"config": self.config_index, "run": self.run, "seed": self.seed, **scalar_params}
+            full = {
+                "config": self.config_index,
+                "run": self.run,
+                "seed": self.seed,
+                **scalar_params,
+            }
             full.update(row)
             out.append(full)
         return out
@@ -53,7 +60,9 @@ def _call(job: _Job) -> list[dict[str, Any]]:
     return job()
 
 
-def _jobs(fn: RunFunction, configs: Sequence[Mapping[str, Any]], runs: int, seed: int) -> list[_Job]:
+def _jobs(
+    fn: RunFunction, configs: Sequence[Mapping[str, Any]], runs: int, seed: int
+) -> list[_Job]:
     if runs < 1:
         raise ConfigError(invalid("runs", runs, "an integer >= 1"))
     if not configs:
@@ -81,8 +90,11 @@ def _local(jobs: list[_Job], workers: int, bar: Any) -> Iterator[list[dict[str, 
             yield fut.result()
 
 
-def _dask(jobs: list[_Job], workers: int, scheduler: str | None, bar: Any) -> Iterator[list[dict[str, Any]]]:
-    from distributed import Client, LocalCluster, as_completed as dask_completed
+def _dask(
+    jobs: list[_Job], workers: int, scheduler: str | None, bar: Any
+) -> Iterator[list[dict[str, Any]]]:
+    from distributed import Client, LocalCluster
+    from distributed import as_completed as dask_completed
 
     cluster = None
     if scheduler is None:

@@ -8,9 +8,9 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from numpy.typing import ArrayLike  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from numpy.typing import ArrayLike
 
 
 def save(fig: plt.Figure, path: Path) -> Path:
@@ -66,7 +66,9 @@ def plot_trajectories(
     for name, pos in sensors:
         p = np.asarray(pos)
         ax.plot(p[0], p[1], "^", ms=9)
-        ax.annotate(name, (float(p[0]), float(p[1])), textcoords="offset points", xytext=(4, 4), fontsize=8)
+        ax.annotate(
+            name, (float(p[0]), float(p[1])), textcoords="offset points", xytext=(4, 4), fontsize=8
+        )
     if area is not None:
         ax.set_xlim(area[0], area[1])
         ax.set_ylim(area[2], area[3])

@@ -129,14 +129,18 @@ def claims_table(claims: Sequence[Claim]) -> str:
     return "\n".join(lines)
 
 
-def write_outputs(ctx: RunContext, outcome: Outcome, seconds: float, memory_mb: float) -> dict[str, Any]:
+def write_outputs(
+    ctx: RunContext, outcome: Outcome, seconds: float, memory_mb: float
+) -> dict[str, Any]:
     """Write ``results.parquet``, ``summary.json`` and ``report.md`` into ``ctx.out_dir``."""
     out = ctx.out_dir
     out.mkdir(parents=True, exist_ok=True)
     df = outcome.results.copy()
     for col in df.columns:  # Parquet needs one type per column
         if df[col].dtype == object:
-            df[col] = df[col].map(lambda v: v if v is None or isinstance(v, str) else json.dumps(_jsonable(v)))
+            df[col] = df[col].map(
+                lambda v: v if v is None or isinstance(v, str) else json.dumps(_jsonable(v))
+            )
     df.to_parquet(out / "results.parquet", index=False)
     summary = {
         "experiment": ctx.name,

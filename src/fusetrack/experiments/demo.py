@@ -20,8 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..core import Gaussian, Measurement
-from ..evaluation import plots
-from ..evaluation import position_rmse_bound, posterior_crlb
+from ..evaluation import plots, position_rmse_bound, posterior_crlb
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
 from ..filters.particle import BootstrapFilter
@@ -52,7 +51,7 @@ class Scenario:
 
     @property
     def times(self) -> np.ndarray:
-        return self.dt * np.arange(1, int(round(self.duration / self.dt)) + 1)
+        return self.dt * np.arange(1, round(self.duration / self.dt) + 1)
 
     def motion(self) -> CoordinatedTurnRate:
         return CoordinatedTurnRate(q=self.q, q_omega=self.q_omega)
@@ -234,7 +233,11 @@ def run(ctx: RunContext) -> Outcome:
         ctx.figure_path("trajectory"),
         truth0,
         {m: run0[run0["method"] == m][["x", "y"]].to_numpy() for m in ["EKF", "UKF", "PF"]},
-        sensors=[(sid, s.position) for sid, s in sensors.items() if hasattr(s, "sensor_id") and sid != "tag"],
+        sensors=[
+            (sid, s.position)
+            for sid, s in sensors.items()
+            if hasattr(s, "sensor_id") and sid != "tag"
+        ],
         area=(AREA[0] - 5, AREA[1] + 5, AREA[2] - 5, AREA[3] + 5),
         title="Run 0: truth and estimates",
     )
@@ -259,7 +262,7 @@ turn rate in the state (acceleration PSD {scn.q} m²/s³, turn-rate PSD {scn.q_o
 starting from a draw of the prior (mean {list(scn.prior_mean)}, std {list(scn.prior_std)}).
 Two microphone arrays at (0, 0) and (100, 0) m report bearings with σ = 3°; a camera at (50, 62) m
 looking down the area with a 70° field of view reports bearings with σ = 0.5° except while an
-occluder hides the target ({', '.join(f'{a:.0f}–{b:.0f} s' for a, b in scn.occluded)}); a radio tag
+occluder hides the target ({", ".join(f"{a:.0f}–{b:.0f} s" for a, b in scn.occluded)}); a radio tag
 reports its position every {scn.tag_period:.0f} s with covariance {[list(r) for r in scn.tag_cov]} m².
 The EKF, UKF and bootstrap particle filter ({n_particles} particles, systematic resampling when ESS < N/2)
 share the motion model, the prior and the reports. The bound is the posterior CRLB
@@ -278,8 +281,8 @@ the reports each run received.
 
 There is no paper for the demo: its claims are what theory demands (no estimator beats the
 PCRB) and what a working set of filters should show. Measured here: the RMSE-to-PCRB ratio is
-{', '.join(f"{m} {ratio_seen[m]:.2f}" for m in ["EKF", "UKF", "PF"])} while the camera sees the target
-and {', '.join(f"{m} {ratio_hidden[m]:.2f}" for m in ["EKF", "UKF", "PF"])} while it is occluded
+{", ".join(f"{m} {ratio_seen[m]:.2f}" for m in ["EKF", "UKF", "PF"])} while the camera sees the target
+and {", ".join(f"{m} {ratio_hidden[m]:.2f}" for m in ["EKF", "UKF", "PF"])} while it is occluded
 (bound {pcrb[~hidden].mean():.2f} m versus {pcrb[hidden].mean():.2f} m). The particle filter's RMSE is
 {pf_vs_ekf:.3f} times the EKF's.
 
@@ -287,9 +290,8 @@ Why the filters stay above the PCRB by this much: the PCRB averages the Fisher i
 the runs before inverting it, so a few runs whose target passes close to a microphone array
 (bearing information grows as 1/range²) pull the bound down for all of them; the dotted curve
 (each trajectory's own recursion, RMS over runs) is what the geometry of a typical run allows;
-the filters' time-averaged RMSE is {', '.join(f"{m} {avg[m] / per_run_bound.mean():.2f}" for m in ["EKF", "UKF", "PF"])}
+the filters' time-averaged RMSE is {", ".join(f"{m} {avg[m] / per_run_bound.mean():.2f}" for m in ["EKF", "UKF", "PF"])}
 times its time average. With the turn rate in the state and a prior that is wide in it,
 the first seconds are also non-Gaussian, which the bound does not see.
 """
     return Outcome(df, claims, body, runs)
-
