@@ -8,6 +8,10 @@ from .kalman import GaussianFilter as GaussianFilter
 from .kalman import KalmanFilter as KalmanFilter
 from .kalman import SensorMoments as SensorMoments
 from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
+from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
+from .particle import BootstrapFilter as BootstrapFilter
+from .particle import ParticleFilter as ParticleFilter
+from .particle import RegularizedParticleFilter as RegularizedParticleFilter
 from .runner import run_filter as run_filter
 from .stats import FilterStats as FilterStats
 from .stats import ValidatedMeasurement as ValidatedMeasurement

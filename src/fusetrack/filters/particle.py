@@ -1,0 +1,758 @@
+"""Particle filters: bootstrap (SIR), auxiliary (Pitt & Shephard 1999) and regularised (Musso,
+Oudjane & Le Gland 2001), on one skeleton.
+
+A particle set is a :class:`~fusetrack.core.Particles` with states ``(..., N, d)`` and
+log-weights ``(..., N)``; leading axes are independent runs (Monte Carlo replications or
+targets) that the filter advances all at once. One step is
+
+``predict(particles, dt, rng)``
+    resample the runs whose effective sample size fell below ``ess_threshold * N`` (the
+    regularised filter then jitters the copies), and draw every particle's next state from the
+    motion model, ``x_k ~ p(x_k | x_{k-1})``;
+``update(particles, measurements, rng)``
+    for each measurement in turn, ``log w_i += log p(z | x_i)`` and normalise by log-sum-exp.
+
+Resampling sits at the start of ``predict`` rather than the end of ``update`` so that the
+estimate after an update (:meth:`ParticleFilter.estimate`) is taken from the weighted particles,
+which has lower variance than taking it after resampling; the sequence of particle sets is the
+usual SIR one.
+
+Measurements. Any subset of the filter's sensors may report at a step; several measurements
+are applied in sequence. A value ``(m,)`` applies to every run, ``(R, m)`` (or any leading shape
+that broadcasts to the batch) gives each run its own. Rows with NaN or infinite entries are
+skipped and counted in ``stats.skipped_measurements``; a measurement from an unknown sensor raises
+:class:`~fusetrack.core.UnknownSensorError`. A measurement's own ``covariance`` replaces the
+sensor's noise: the likelihood is then Gaussian in ``sensor.residual(z, sensor.predict(x))``.
+
+Degenerate weights. A measurement is *degenerate* for a run when its log predictive density
+under the particles, ``log sum_i w_i p(z | x_i)``, is not finite or is below
+``min_log_evidence`` (default ``log`` of the smallest normal double, about -708: every particle's
+likelihood would underflow to 0 in double precision, as happens when the measurement falls far
+outside the particle cloud). The filter never returns NaN: it adds one to
+``stats.degenerate_steps`` (once per ``update`` call), warns once per filter with
+:class:`~fusetrack.core.DegenerateWeightsWarning` and applies ``degenerate``:
+
+``"keep"`` (default)
+    keep the weights the run had before this measurement, i.e. ignore the measurement;
+``"inflate"``
+    temper the likelihood, ``log w_i + beta * log p(z | x_i)`` with ``beta = temper_factor^k``
+    for ``k = 1, 2, ...`` (for a Gaussian likelihood this inflates its covariance by
+    ``1 / beta``) until the tempered evidence is finite and above ``min_log_evidence``; a run
+    where no ``beta > 1e-300`` succeeds (every likelihood ``-inf``) falls back to ``"keep"``.
+
+Randomness. Every draw comes from ``rng``. Pass one :class:`numpy.random.Generator` to draw for
+the whole batch at once (fastest), or a sequence of generators, one per run (flattened C order
+over the batch axes), to make run ``r`` of a batch bit-identical to a separate single run driven
+by ``rng[r]``: the filter then calls the motion model, the sensors and the resampler run by
+run. ``engine="numba"`` uses the kernels of :mod:`fusetrack.filters.kernels`,
+``engine="numpy"`` their NumPy references (same draws; results agree to rounding). Both use the
+resampling schemes of :mod:`fusetrack.core.resampling`.
+
+>>> import numpy as np
+>>> from fusetrack.core import Gaussian, Measurement
+>>> from fusetrack.motion import ConstantVelocity
+>>> from fusetrack.sensors import PositionFix
+>>> gps = PositionFix("gps", cov=[[1.0]], position_index=(0,))
+>>> pf = BootstrapFilter(ConstantVelocity(ndim=1, q=0.1), [gps], n_particles=2000)
+>>> rng = np.random.default_rng(0)
+>>> p = pf.initialize(Gaussian(np.zeros(2), np.eye(2)), rng)
+>>> p = pf.update(pf.predict(p, 1.0, rng), [Measurement(1.0, "gps", [0.5])])
+>>> pf.estimate(p).mean.shape
+(2,)
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.beliefs import Gaussian, Particles
+from ..core.errors import (
+    ConfigError,
+    DegenerateWeightsWarning,
+    MeasurementError,
+    ShapeError,
+    check_positive,
+    check_probability,
+    invalid,
+)
+from ..core.measurement import Measurement
+from ..core.models import MotionModel, SensorModel
+from ..core.resampling import Resampler, get_resampler
+from . import kernels
+from .stats import FilterStats, as_sensor_map, validate_measurement
+
+Array = NDArray[np.float64]
+Rng = np.random.Generator | Sequence[np.random.Generator]
+
+LOG_TINY = math.log(np.finfo(float).tiny)
+"""``log`` of the smallest normal double (about -708.4): the default ``min_log_evidence``."""
+
+_LOG_2PI = math.log(2.0 * math.pi)
+_CACHE = "_pf_weights"  # Particles.info key: the normalised weights of those log-weights
+_PARENTS = "_apf_parents"  # Particles.info key: (parent states, dt) for the auxiliary filter
+_MAX_TEMPER = 1e-300
+
+__all__ = [
+    "LOG_TINY",
+    "AuxiliaryParticleFilter",
+    "BootstrapFilter",
+    "ParticleFilter",
+    "RegularizedParticleFilter",
+]
+
+
+class _Weights(NamedTuple):
+    """Normalised log-weights, weights and ESS of a batch, as rows ``(R, N)`` / ``(R,)``."""
+
+    lw: Array
+    w: Array
+    ess: Array
+
+
+class _Checked(NamedTuple):
+    """A usable measurement: its sensor, value rows ``(R, m)``, covariance rows or None, and
+    which runs may use it ``(R,)``."""
+
+    sensor: SensorModel
+    z: Array
+    cov: Array | None
+    usable: NDArray[np.bool_]
+
+
+class _Engine(NamedTuple):
+    update: Callable[[Array, Array], tuple[Array, Array, Array, Array]]
+    normalize: Callable[[Array], tuple[Array, Array, Array, Array]]
+    mean_cov: Callable[[Array, Array], tuple[Array, Array]]
+
+
+_ENGINES = {
+    "numba": _Engine(
+        kernels.log_weight_update, kernels.normalize_log_weights, kernels.weighted_mean_cov
+    ),
+    "numpy": _Engine(
+        kernels.log_weight_update_reference,
+        kernels.normalize_log_weights_reference,
+        kernels.weighted_mean_cov_reference,
+    ),
+}
+
+
+def _sqrt_factor(cov: Array) -> Array:
+    """``D`` with ``D D^T = cov`` (each ``(..., d, d)``): Cholesky, or ``V sqrt(L)`` if singular."""
+    try:
+        return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
+    except np.linalg.LinAlgError:
+        s, v = np.linalg.eigh(0.5 * (cov + np.swapaxes(cov, -1, -2)))
+        return np.asarray(v * np.sqrt(np.clip(s, 0.0, None))[..., None, :], dtype=np.float64)
+
+
+def _gather(states: Array, idx: NDArray[np.intp]) -> Array:
+    """``states[r, idx[r]]`` for rows ``(K, N, d)`` and ancestors ``(K, N)`` (one flat take)."""
+    k, n, d = states.shape
+    if k == 1:
+        return states[0].take(idx[0], axis=0)[None]
+    flat = idx + (np.arange(k) * n)[:, None]
+    return states.reshape(k * n, d).take(flat.ravel(), axis=0).reshape(k, idx.shape[1], d)
+
+
+class ParticleFilter:
+    """The shared skeleton of the particle filters (see the module docstring).
+
+    Parameters
+    ----------
+    motion:
+        A motion model (``sample``, ``mean``; :class:`~fusetrack.core.MotionModel`).
+    sensors:
+        A mapping ``sensor_id -> model`` or a sequence of sensor models (keyed by ``sensor_id``).
+    n_particles:
+        Particles per run, ``N``.
+    resampler:
+        ``"systematic"`` (default), ``"stratified"``, ``"residual"``, ``"multinomial"`` or a
+        callable ``(weights (K, N), rng) -> ancestors (K, N)``.
+    ess_threshold:
+        Fraction of ``N``: a run is resampled when its ESS ``< ess_threshold * N``
+        (1.0: every step with a non-uniform weighting; 0: never).
+    engine:
+        ``"numba"`` (kernels) or ``"numpy"`` (their references).
+    degenerate:
+        Recovery policy for a degenerate measurement, ``"keep"`` or ``"inflate"``.
+    temper_factor:
+        ``"inflate"`` multiplies the tempering exponent by this factor in ``(0, 1)`` per try.
+    min_log_evidence:
+        Log predictive density below which a measurement counts as degenerate.
+    """
+
+    def __init__(
+        self,
+        motion: MotionModel,
+        sensors: Mapping[str, SensorModel] | Sequence[SensorModel] | SensorModel,
+        n_particles: int = 1000,
+        resampler: str | Resampler = "systematic",
+        ess_threshold: float = 1.0,
+        engine: str = "numba",
+        *,
+        degenerate: str = "keep",
+        temper_factor: float = 0.5,
+        min_log_evidence: float = LOG_TINY,
+    ) -> None:
+        if (
+            isinstance(n_particles, bool)
+            or not isinstance(n_particles, int | np.integer)
+            or n_particles < 1
+        ):
+            raise ConfigError(invalid("n_particles", n_particles, "an integer >= 1"))
+        if engine not in _ENGINES:
+            raise ConfigError(invalid("engine", engine, f"one of {sorted(_ENGINES)}"))
+        if degenerate not in ("keep", "inflate"):
+            raise ConfigError(invalid("degenerate", degenerate, "'keep' or 'inflate'"))
+        tf = check_positive("temper_factor", temper_factor)
+        if not tf < 1.0:
+            raise ConfigError(invalid("temper_factor", temper_factor, "a number in (0, 1)"))
+        try:
+            mle = float(min_log_evidence)
+        except (TypeError, ValueError):
+            raise ConfigError(invalid("min_log_evidence", min_log_evidence, "a number")) from None
+        if math.isnan(mle):
+            raise ConfigError(invalid("min_log_evidence", min_log_evidence, "a number"))
+        self.motion = motion
+        self.sensors: dict[str, SensorModel] = as_sensor_map(sensors)
+        self.n_particles = int(n_particles)
+        self.resampler = resampler
+        self._resample: Resampler = get_resampler(resampler)
+        self.ess_threshold = check_probability("ess_threshold", ess_threshold)
+        self.engine = engine
+        self._k = _ENGINES[engine]
+        self.degenerate = degenerate
+        self.temper_factor = tf
+        self.min_log_evidence = mle
+        self.stats = FilterStats()
+        self._warned = False
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(motion={self.motion!r}, sensors={sorted(self.sensors)}, "
+            f"n_particles={self.n_particles}, resampler={self.resampler!r}, "
+            f"ess_threshold={self.ess_threshold}, engine={self.engine!r})"
+        )
+
+    # ------------------------------------------------------------------------------------------
+    # public interface
+
+    def initialize(self, prior: Gaussian, rng: Rng, batch_shape: tuple[int, ...] = ()) -> Particles:
+        """``N`` equally weighted draws from ``prior`` per run: states ``(*batch, N, d)``.
+
+        The batch is ``batch_shape`` broadcast with the prior's own leading axes.
+        """
+        mean = np.asarray(prior.mean, dtype=float)
+        d = mean.shape[-1]
+        dim = getattr(self.motion, "dim", d)
+        if d != dim:
+            raise ShapeError(
+                invalid("prior.mean.shape", mean.shape, f"(..., {dim}) for the motion model")
+            )
+        try:
+            batch = np.broadcast_shapes(mean.shape[:-1], tuple(int(b) for b in batch_shape))
+        except ValueError:
+            raise ShapeError(
+                invalid(
+                    "batch_shape",
+                    batch_shape,
+                    f"a shape that broadcasts with the prior's {mean.shape[:-1]}",
+                )
+            ) from None
+        gens = self._generators(rng, batch)
+        n = self.n_particles
+        L = _sqrt_factor(np.broadcast_to(np.asarray(prior.cov, dtype=float), (*batch, d, d)))
+        mean = np.broadcast_to(mean, (*batch, d))
+        if isinstance(gens, np.random.Generator):
+            x = gens.standard_normal((*batch, n, d)) @ np.swapaxes(L, -1, -2)
+            x += mean[..., None, :]
+        else:
+            L2, m2 = L.reshape(-1, d, d), mean.reshape(-1, d)
+            x = np.empty((len(gens), n, d))
+            for r, g in enumerate(gens):
+                x[r] = g.standard_normal((n, d)) @ L2[r].T
+                x[r] += m2[r]
+            x = x.reshape((*batch, n, d))
+        return self._particles(x, self._uniform(int(np.prod(batch, dtype=np.int64)), n))
+
+    def predict(self, particles: Particles, dt: float, rng: Rng | None = None) -> Particles:
+        """Resample runs with low ESS, then draw ``x_k ~ p(x_k | x_{k-1})`` for each particle."""
+        gens = self._generators(rng, particles.batch_shape)
+        W = self._weights(particles)
+        states, W = self._maybe_resample(particles.states, W, gens)
+        return self._particles(self._sample_motion(states, dt, gens), W)
+
+    def update(
+        self,
+        particles: Particles,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: Rng | None = None,
+    ) -> Particles:
+        """Weight by each usable measurement in turn (``log w += log p(z | x)``, normalised)."""
+        checked = self._check_measurements(measurements, particles.batch_shape)
+        W = self._weights(particles)
+        if not checked:
+            return particles
+        W, degenerate = self._reweight(particles.states, W, checked, rng)
+        self._note_degenerate(degenerate)
+        return self._particles(particles.states, W)
+
+    def estimate(self, particles: Particles) -> Gaussian:
+        """Weighted mean ``(..., d)`` and covariance ``(..., d, d)`` of the particles."""
+        W = self._weights(particles)
+        s = particles.states
+        n, d = s.shape[-2:]
+        mean, cov = self._k.mean_cov(s.reshape(-1, n, d), W.w)
+        lead = particles.batch_shape
+        return Gaussian(mean.reshape((*lead, d)), cov.reshape((*lead, d, d)))
+
+    def weights(self, particles: Particles) -> Array:
+        """Normalised weights ``(..., N)`` (cached: no ``exp`` when they came from this filter)."""
+        return self._weights(particles).w.reshape(particles.log_weights.shape)
+
+    def effective_sample_size(self, particles: Particles) -> Array:
+        """``1 / sum_i w_i^2`` per run, ``(...)``."""
+        return self._weights(particles).ess.reshape(particles.batch_shape)
+
+    # ------------------------------------------------------------------------------------------
+    # weights and their cache
+
+    def _particles(self, states: Array, W: _Weights, **info: Any) -> Particles:
+        lw = W.lw.reshape(states.shape[:-1])
+        return Particles(states, lw, {_CACHE: (lw, W), **info})
+
+    def _weights(self, particles: Particles) -> _Weights:
+        """Normalised rows of ``particles``' weights, from the cache when it matches."""
+        cached = particles.info.get(_CACHE)
+        if cached is not None and cached[0] is particles.log_weights:
+            W: _Weights = cached[1]
+            return W
+        n = particles.n
+        lw, w, lse, ess = self._k.normalize(particles.log_weights.reshape(-1, n))
+        bad = ~np.isfinite(lse)
+        if bad.any():
+            raise ConfigError(
+                invalid(
+                    "particles.log_weights",
+                    "a run whose weights are all zero (or +inf)",
+                    "at least one finite log-weight per run",
+                )
+            )
+        return _Weights(lw, w, ess)
+
+    @staticmethod
+    def _uniform(rows: int, n: int) -> _Weights:
+        return _Weights(
+            np.full((rows, n), -math.log(n)), np.full((rows, n), 1.0 / n), np.full(rows, float(n))
+        )
+
+    # ------------------------------------------------------------------------------------------
+    # randomness: one generator for the batch, or one per run
+
+    @staticmethod
+    def _generators(
+        rng: Rng | None, batch: tuple[int, ...]
+    ) -> np.random.Generator | list[np.random.Generator]:
+        if isinstance(rng, np.random.Generator):
+            return rng
+        runs = int(np.prod(batch, dtype=np.int64))
+        valid = f"a numpy.random.Generator or a sequence of {runs} of them (one per run)"
+        if rng is None or isinstance(rng, str | bytes) or not isinstance(rng, Sequence):
+            raise ConfigError(invalid("rng", rng, valid))
+        gens = list(rng)
+        if len(gens) != runs or not all(isinstance(g, np.random.Generator) for g in gens):
+            raise ConfigError(invalid("rng", f"a sequence of {len(gens)} items", valid))
+        return gens
+
+    def _sample_motion(
+        self, states: Array, dt: float, gens: np.random.Generator | list[np.random.Generator]
+    ) -> Array:
+        if isinstance(gens, np.random.Generator):
+            return np.asarray(self.motion.sample(states, dt, gens), dtype=float)
+        n, d = states.shape[-2:]
+        s2 = states.reshape(-1, n, d)
+        out = np.empty_like(s2)
+        for r, g in enumerate(gens):
+            out[r] = self.motion.sample(s2[r], dt, g)
+        return out.reshape(states.shape)
+
+    def _motion_mean(self, states: Array, dt: float, per_run: bool) -> Array:
+        if not per_run:
+            return np.asarray(self.motion.mean(states, dt), dtype=float)
+        n, d = states.shape[-2:]
+        s2 = states.reshape(-1, n, d)
+        return np.stack([np.asarray(self.motion.mean(s, dt), dtype=float) for s in s2]).reshape(
+            states.shape
+        )
+
+    def _ancestors(
+        self,
+        w: Array,
+        rows: NDArray[np.intp],
+        gens: np.random.Generator | list[np.random.Generator],
+    ) -> NDArray[np.intp]:
+        """Ancestor indices ``(len(rows), N)`` for the given rows of the weights ``(R, N)``."""
+        if isinstance(gens, np.random.Generator):
+            sub = w if rows.size == w.shape[0] else w[rows]
+            return np.asarray(self._resample(sub, gens), dtype=np.intp)
+        return np.stack([np.asarray(self._resample(w[r], gens[r]), dtype=np.intp) for r in rows])
+
+    # ------------------------------------------------------------------------------------------
+    # resampling (the regularised filter adds its jitter in _regularize)
+
+    def _maybe_resample(
+        self, states: Array, W: _Weights, gens: np.random.Generator | list[np.random.Generator]
+    ) -> tuple[Array, _Weights]:
+        n, d = states.shape[-2:]
+        need = W.ess < self.ess_threshold * n
+        if not need.any():
+            return states, W
+        self.stats.resample_count += 1
+        rows = np.flatnonzero(need)
+        s2 = states.reshape(-1, n, d)
+        new = _gather(s2[rows] if rows.size < s2.shape[0] else s2, self._ancestors(W.w, rows, gens))
+        new = self._regularize(s2, W.w, new, rows, gens)
+        if rows.size == s2.shape[0]:
+            return new.reshape(states.shape), self._uniform(rows.size, n)
+        out = s2.copy()
+        out[rows] = new
+        lw, w, ess = W.lw.copy(), W.w.copy(), W.ess.copy()
+        lw[rows], w[rows], ess[rows] = -math.log(n), 1.0 / n, float(n)
+        return out.reshape(states.shape), _Weights(lw, w, ess)
+
+    def _regularize(
+        self,
+        states: Array,
+        w: Array,
+        resampled: Array,
+        rows: NDArray[np.intp],
+        gens: np.random.Generator | list[np.random.Generator],
+    ) -> Array:
+        """Hook after resampling ``rows`` of ``states`` ``(R, N, d)`` (weights ``w``) into
+        ``resampled`` ``(len(rows), N, d)``; the bootstrap filter returns the copies as they are."""
+        return resampled
+
+    # ------------------------------------------------------------------------------------------
+    # measurements
+
+    def _check_measurements(
+        self, measurements: Sequence[Measurement] | Measurement, batch: tuple[int, ...]
+    ) -> list[_Checked]:
+        """Validate every measurement; keep those with a usable run, as rows ``(R, ...)``."""
+        ms = [measurements] if isinstance(measurements, Measurement) else list(measurements)
+        runs = int(np.prod(batch, dtype=np.int64))
+        out: list[_Checked] = []
+        for m in ms:
+            if not isinstance(m, Measurement):
+                raise MeasurementError(
+                    invalid("measurements", m, "a sequence of fusetrack Measurement")
+                )
+            v = validate_measurement(m, self.sensors, self.stats)
+            lead = v.value.shape[:-1]
+            if not _broadcasts(lead, batch) or np.broadcast_shapes(lead, batch) != batch:
+                raise MeasurementError(
+                    invalid(
+                        f"value.shape (sensor {m.sensor_id!r}, time={m.time})",
+                        v.value.shape,
+                        f"(m,) or batch axes {batch} followed by m (the particles' runs)",
+                    )
+                )
+            usable = np.broadcast_to(v.usable, batch).reshape(runs)
+            if not usable.any():
+                continue
+            mdim = v.value.shape[-1]
+            z = np.broadcast_to(v.value, (*batch, mdim)).reshape(runs, mdim)
+            cov = None
+            if v.covariance is not None:
+                clead = v.covariance.shape[:-2]
+                if not _broadcasts(clead, batch) or np.broadcast_shapes(clead, batch) != batch:
+                    raise MeasurementError(
+                        invalid(
+                            f"covariance.shape (sensor {m.sensor_id!r}, time={m.time})",
+                            v.covariance.shape,
+                            f"(m, m) or batch axes {batch} followed by (m, m)",
+                        )
+                    )
+                cov = np.broadcast_to(v.covariance, (*batch, mdim, mdim)).reshape(runs, mdim, mdim)
+            if not usable.all():  # fill unusable rows with a usable one: no NaN reaches the models
+                first = int(np.argmax(usable))
+                z = np.where(usable[:, None], z, z[first])
+                if cov is not None:
+                    cov = np.where(usable[:, None, None], cov, cov[first])
+            out.append(_Checked(v.sensor, z, cov, usable))
+        return out
+
+    def _loglik(self, c: _Checked, states: Array, per_run: bool) -> Array:
+        """``log p(z | x_i)`` for every particle, as a writable array of rows ``(R, N)``."""
+        n, d = states.shape[-2:]
+        s2 = states.reshape(-1, n, d)
+        rows = s2.shape[0]
+        z, cov = c.z, c.cov
+        if per_run:  # the very calls a single run makes, one run at a time
+            out = np.empty((rows, n))
+            for r in range(rows):
+                out[r] = _sensor_loglik(
+                    c.sensor, z[r][None, :], None if cov is None else cov[r], s2[r]
+                )
+            return out
+        if rows == 1 or (np.all(z == z[0]) and (cov is None or np.all(cov == cov[0]))):
+            ll = _sensor_loglik(c.sensor, z[0][None, :], None if cov is None else cov[0], states)
+        else:  # each run its own value: insert the particle axis, z[:, None, :]
+            ll = _sensor_loglik(c.sensor, z[:, None, :], cov, s2)
+        if ll.size != rows * n:
+            return np.array(np.broadcast_to(ll, states.shape[:-1]).reshape(rows, n))
+        ll = ll.reshape(rows, n)
+        return ll if ll.flags.writeable else ll.copy()
+
+    def _reweight(
+        self,
+        states: Array,
+        W: _Weights,
+        checked: list[_Checked],
+        rng: Rng | None,
+        subtract: list[Array] | None = None,
+    ) -> tuple[_Weights, bool]:
+        """Apply the measurements in sequence; ``subtract[k]`` (auxiliary filter) is removed from
+        measurement ``k``'s log-likelihood. Returns the new weights and whether any recovered."""
+        per_run = rng is not None and not isinstance(rng, np.random.Generator)
+        degenerate = False
+        for k, c in enumerate(checked):
+            ll = self._loglik(c, states, per_run)
+            if subtract is not None:
+                with np.errstate(invalid="ignore"):
+                    ll = ll - subtract[k]
+            lw, w, lse, ess = self._k.update(W.lw, ll)
+            ok = np.isfinite(lse) & (lse >= self.min_log_evidence)
+            bad = c.usable & ~ok
+            keep = ~c.usable
+            if bad.any():
+                degenerate = True
+                keep = keep | bad
+                if self.degenerate == "inflate":
+                    keep &= ~self._temper(W, ll, bad, lw, w, ess)
+            if keep.any():
+                lw[keep], w[keep], ess[keep] = W.lw[keep], W.w[keep], W.ess[keep]
+            W = _Weights(lw, w, ess)
+        return W, degenerate
+
+    def _temper(
+        self, W: _Weights, ll: Array, bad: NDArray[np.bool_], lw: Array, w: Array, ess: Array
+    ) -> NDArray[np.bool_]:
+        """Policy ``"inflate"``: temper ``ll`` on the ``bad`` rows, writing recovered rows into
+        ``lw, w, ess``; returns the mask of recovered rows."""
+        recovered = np.zeros_like(bad)
+        rows = np.flatnonzero(bad)
+        lw0, ll0 = W.lw[rows], ll[rows]
+        # Tempering cannot help a run whose likelihoods are all -inf, or one with +inf.
+        finite = np.any(np.isfinite(ll0) & np.isfinite(lw0), axis=-1)
+        hope = finite & ~np.any(ll0 == np.inf, axis=-1)
+        rows, lw0, ll0 = rows[hope], lw0[hope], ll0[hope]
+        beta = 1.0
+        while rows.size and beta > _MAX_TEMPER:
+            beta *= self.temper_factor
+            with np.errstate(invalid="ignore"):
+                t_lw, t_w, t_lse, t_ess = self._k.update(lw0, beta * ll0)
+            ok = np.isfinite(t_lse) & (t_lse >= self.min_log_evidence)
+            if ok.any():
+                done = rows[ok]
+                lw[done], w[done], ess[done] = t_lw[ok], t_w[ok], t_ess[ok]
+                recovered[done] = True
+                rows, lw0, ll0 = rows[~ok], lw0[~ok], ll0[~ok]
+        return recovered
+
+    def _note_degenerate(self, degenerate: bool) -> None:
+        if not degenerate:
+            return
+        self.stats.degenerate_steps += 1
+        if not self._warned:
+            self._warned = True
+            warnings.warn(
+                f"{type(self).__name__}: every particle's likelihood vanished for a measurement "
+                f"(log evidence not finite or below min_log_evidence={self.min_log_evidence:.1f}); "
+                f"recovered with degenerate={self.degenerate!r}. Counted in "
+                "stats.degenerate_steps; this warning is shown once per filter.",
+                DegenerateWeightsWarning,
+                stacklevel=3,
+            )
+
+
+def _sensor_loglik(sensor: SensorModel, z: Array, cov: Array | None, x: Array) -> Array:
+    """``sensor.log_likelihood(z, x)``, or, with a measurement covariance ``(m, m)`` or
+    ``(R, m, m)``, the Gaussian log density of ``sensor.residual(z, sensor.predict(x))``."""
+    if cov is None:
+        return np.asarray(sensor.log_likelihood(z, x), dtype=float)
+    r = sensor.residual(z, sensor.predict(x))  # (..., N, m)
+    try:
+        L = np.linalg.cholesky(cov)
+    except np.linalg.LinAlgError:
+        raise MeasurementError(
+            invalid(
+                f"covariance (sensor {sensor.sensor_id!r})",
+                cov.tolist(),
+                "a positive definite matrix",
+            )
+        ) from None
+    u = r @ np.swapaxes(np.linalg.inv(L), -1, -2)  # L^-1 r for each particle
+    logdet = 2.0 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+    maha = np.einsum("...i,...i->...", u, u)
+    return np.asarray(
+        -0.5 * (maha + np.asarray(logdet)[..., None] + r.shape[-1] * _LOG_2PI), dtype=float
+    )
+
+
+def _broadcasts(a: tuple[int, ...], b: tuple[int, ...]) -> bool:
+    try:
+        np.broadcast_shapes(a, b)
+    except ValueError:
+        return False
+    return True
+
+
+class BootstrapFilter(ParticleFilter):
+    """The bootstrap (SIR) particle filter: the motion model is the proposal and the
+    likelihood the weight (Gordon, Salmond & Smith 1993). Everything is the shared skeleton,
+    :class:`ParticleFilter`; see the module docstring for the step, the measurement rules, the
+    degeneracy policy and the randomness contract."""
+
+
+class RegularizedParticleFilter(ParticleFilter):
+    """Post-regularised particle filter (Musso, Oudjane & Le Gland 2001).
+
+    After resampling a run, every copy is moved by a draw from the Gaussian kernel,
+    ``x_i <- x_i + h D eps_i``, ``eps_i ~ N(0, I)``, where ``D D^T = S`` is the Cholesky factor of
+    the weighted covariance ``S`` of the particles before resampling and ``h`` is the optimal
+    bandwidth for a Gaussian kernel and a Gaussian density,
+    ``h_opt = (4 / (N (d + 2)))^(1 / (d + 4))`` (Musso et al. 2001, Sec. 12.2.2), multiplied by
+    ``bandwidth_scale``. The jitter restores diversity lost to resampling (sample impoverishment
+    with little process noise) at the price of a slightly wider posterior. A singular ``S`` uses
+    its symmetric square root instead of Cholesky. Everything else is :class:`ParticleFilter`.
+    """
+
+    def __init__(self, *args: Any, bandwidth_scale: float = 1.0, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.bandwidth_scale = check_positive("bandwidth_scale", bandwidth_scale, allow_zero=True)
+
+    def bandwidth(self, n: int, d: int) -> float:
+        """``bandwidth_scale * (4 / (N (d + 2)))^(1 / (d + 4))``."""
+        # Musso, Oudjane & Le Gland 2001, h_opt for the Gaussian kernel
+        return self.bandwidth_scale * (4.0 / (n * (d + 2))) ** (1.0 / (d + 4))
+
+    def _regularize(
+        self,
+        states: Array,
+        w: Array,
+        resampled: Array,
+        rows: NDArray[np.intp],
+        gens: np.random.Generator | list[np.random.Generator],
+    ) -> Array:
+        k, n, d = resampled.shape
+        h = self.bandwidth(n, d)
+        if h == 0.0:
+            return resampled
+        sub_s = states if rows.size == states.shape[0] else states[rows]
+        sub_w = w if rows.size == w.shape[0] else w[rows]
+        _, cov = self._k.mean_cov(sub_s, sub_w)
+        D = _sqrt_factor(cov) * h  # (K, d, d)
+        if isinstance(gens, np.random.Generator):
+            eps = gens.standard_normal((k, n, d))
+            resampled += eps @ np.swapaxes(D, -1, -2) if k > 1 else eps[0] @ D[0].T
+        else:
+            for j, r in enumerate(rows):
+                resampled[j] += gens[r].standard_normal((n, d)) @ D[j].T
+        return resampled
+
+
+class AuxiliaryParticleFilter(ParticleFilter):
+    """Auxiliary particle filter (Pitt & Shephard 1999), as a predict/update pair.
+
+    ``predict`` draws every particle's child as the bootstrap filter does (so the predicted set is
+    a valid prior when no measurement follows) and remembers the parents and ``dt``; it does not
+    resample. ``update`` with usable measurements then:
+
+    1. first stage: ``lambda_i ∝ w_i p(z | mu_i)`` with ``mu_i = motion.mean(x_{k-1}^i, dt)``
+       (the likelihood of all of the step's measurements at the predicted mean;
+       Pitt & Shephard 1999, Eq. 8 with the "point" choice ``mu = E[x_k | x_{k-1}]``);
+    2. resamples ancestors ``a_j ~ lambda`` (in the runs whose first-stage ESS is below
+       ``ess_threshold * N``) and draws fresh children ``x_k^j ~ p(. | x_{k-1}^{a_j})`` — this
+       second propagation replaces the one ``predict`` made;
+    3. second stage: ``w_j ∝ p(z | x_k^j) / p(z | mu_{a_j})``, one measurement at a time with the
+       degeneracy rules of :class:`ParticleFilter`.
+
+    A run not resampled keeps its predicted children and ends with ``w_i p(z | x_k^i)``, the
+    bootstrap weight. ``update`` without a preceding ``predict`` (or with no usable
+    measurement) is the bootstrap update. If the first stage is degenerate for a run (every
+    ``p(z | mu_i)`` vanishes), that run selects by its previous weights.
+    """
+
+    def predict(self, particles: Particles, dt: float, rng: Rng | None = None) -> Particles:
+        """Draw every child (no resampling) and remember the parents for :meth:`update`."""
+        gens = self._generators(rng, particles.batch_shape)
+        W = self._weights(particles)
+        children = self._sample_motion(particles.states, dt, gens)
+        return self._particles(children, W, **{_PARENTS: (particles.states, dt)})
+
+    def update(
+        self,
+        particles: Particles,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: Rng | None = None,
+    ) -> Particles:
+        """First-stage selection at the predicted means, fresh children, second-stage weights."""
+        checked = self._check_measurements(measurements, particles.batch_shape)
+        stash = particles.info.get(_PARENTS)
+        if not checked:
+            return particles
+        W = self._weights(particles)
+        if stash is None:
+            W2, degenerate = self._reweight(particles.states, W, checked, rng)
+            self._note_degenerate(degenerate)
+            return self._particles(particles.states, W2)
+        parents, dt = stash
+        per_run = rng is not None and not isinstance(rng, np.random.Generator)
+        n, d = parents.shape[-2:]
+        # 1. first stage at mu_i = f(x_{k-1}^i)  (Pitt & Shephard 1999, Eq. 8)
+        mu = self._motion_mean(parents, dt, per_run)
+        lmu = []
+        for c in checked:
+            l_k = self._loglik(c, mu, per_run)
+            l_k[~c.usable] = 0.0
+            lmu.append(l_k)
+        total = lmu[0] if len(lmu) == 1 else np.sum(lmu, axis=0)
+        lam_lw, lam_w, lse, lam_ess = self._k.update(W.lw, total)
+        bad = ~(np.isfinite(lse) & (lse >= self.min_log_evidence))
+        degenerate = bool(bad.any())
+        if degenerate:  # select by the previous weights; nothing to correct in stage two
+            lam_lw[bad], lam_w[bad], lam_ess[bad] = W.lw[bad], W.w[bad], W.ess[bad]
+            for l_k in lmu:
+                l_k[bad] = 0.0
+        lam = _Weights(lam_lw, lam_w, lam_ess)
+        # 2. resample ancestors by lambda and draw fresh children
+        need = lam.ess < self.ess_threshold * n
+        children = particles.states
+        if need.any():
+            gens = self._generators(rng, particles.batch_shape)
+            self.stats.resample_count += 1
+            rows = np.flatnonzero(need)
+            p2 = parents.reshape(-1, n, d)
+            idx = np.broadcast_to(np.arange(n), (p2.shape[0], n)).copy()
+            idx[rows] = self._ancestors(lam.w, rows, gens)
+            new_parents = _gather(p2, idx).reshape(parents.shape)
+            children = self._sample_motion(new_parents, dt, gens)
+            lmu = [np.take_along_axis(l_k, idx, axis=-1) for l_k in lmu]
+            if rows.size == p2.shape[0]:
+                lam = self._uniform(rows.size, n)
+            else:
+                lw, w, ess = lam.lw.copy(), lam.w.copy(), lam.ess.copy()
+                lw[rows], w[rows], ess[rows] = -math.log(n), 1.0 / n, float(n)
+                lam = _Weights(lw, w, ess)
+        # 3. second stage: p(z | x_k^j) / p(z | mu_{a_j})
+        W2, degenerate2 = self._reweight(children, lam, checked, rng, subtract=lmu)
+        self._note_degenerate(degenerate or degenerate2)
+        return self._particles(children, W2)
