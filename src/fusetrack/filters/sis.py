@@ -1,0 +1,265 @@
+"""Sequential importance sampling with a pluggable proposal (Zhai 2007, Sec. 2.1-2.2, App. A).
+
+One step of :class:`ProposalParticleFilter` is the thesis's loop, shared by every filter of the
+dissertation (bootstrap, PF-SP-PEKF, Galerkin and grid proposals, MCMC moves):
+
+1. draw ``x_t^i ~ q(x_t | x_{t-1}^i, z_t)`` from the proposal;
+2. weight (Zhai 2007, Eq. 13) ``log w^i = log p(z_t | x_t^i) + log p(x_t^i | x_{t-1}^i) - log q(x_t^i)``
+   (the previous weights are equal: every step resamples); with the transition prior as proposal
+   the last two terms cancel and ``w^i = p(z_t | x_t^i)``;
+3. normalise in the log domain, resample (systematic by default), optionally move each particle
+   with an MCMC kernel that leaves ``p(z_t | x) p(x | x_{t-1}^{a_i})`` invariant (Algorithms 8-10);
+4. output the mean of the resampled particles and hand it back to the proposal ("feedback").
+
+Pairing (spec Sec. 2.1): when the proposal ignores the particle's own past, Eq. 13 pairs new
+particle i with resampled ancestor i ("paired", the thesis's literal weight). ``transition=
+"marginal"`` uses ``(1/N) sum_j p(x_t^i | x_{t-1}^j)`` instead (O(N^2), the marginal-proposal weight).
+
+Shapes: particles ``(..., N, d)``; leading axes are independent runs advanced together. A
+step's measurements are a sequence aligned with ``sensors``: each entry ``(m,)`` or ``(..., m)``
+or ``None``; entries with NaN are skipped and counted.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Literal, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.special import logsumexp
+
+from ..core.beliefs import Gaussian
+from ..core.errors import ConfigError, check_positive, invalid
+from ..core.models import MotionModel, SensorModel
+from ..core.resampling import get_resampler
+from .stats import FilterStats
+
+Array = NDArray[np.float64]
+Zs = Sequence[Array | None]
+
+
+@dataclass
+class SISStats(FilterStats):
+    """:class:`FilterStats` plus the counters the proposals and moves of this module keep."""
+
+    repaired_channels: int = 0  # EKF channels whose covariance was not PD and was repaired
+    dropped_channels: int = 0  # EKF channels with non-finite values, reset from the estimate
+    grid_too_small: int = 0  # grid proposals whose window cut off probability mass
+    moves_proposed: int = 0
+    moves_accepted: int = 0
+    zero_acceptance_steps: int = 0  # steps where an MCMC move accepted nothing
+
+    def reset(self) -> None:
+        for k in self.as_dict():
+            setattr(self, k, 0)
+
+    @property
+    def acceptance_rate(self) -> float:
+        return self.moves_accepted / self.moves_proposed if self.moves_proposed else float("nan")
+
+
+class LogLikelihood:
+    """``log p(z_t | x)`` summed over the sensors that reported (finite values) at one step."""
+
+    def __init__(self, sensors: Sequence[SensorModel], zs: Zs, stats: FilterStats | None = None):
+        if len(zs) != len(sensors):
+            raise ConfigError(
+                invalid("measurements", f"{len(zs)} entries", f"{len(sensors)} (one per sensor)")
+            )
+        self.items: list[tuple[SensorModel, Array]] = []
+        for s, z in zip(sensors, zs):
+            if z is None:
+                continue
+            za = np.asarray(z, dtype=float)
+            if za.ndim == 0:
+                za = za[None]
+            if not np.all(np.isfinite(za)):
+                if stats is not None:
+                    stats.skipped_measurements += 1
+                continue
+            self.items.append((s, za))
+
+    def __call__(self, x: Array) -> Array:
+        """``(..., N)`` for particles ``(..., N, d)``."""
+        out = np.zeros(x.shape[:-1])
+        for s, z in self.items:
+            out = out + s.log_likelihood(np.expand_dims(z, -2), x)
+        return out
+
+    def __bool__(self) -> bool:
+        return bool(self.items)
+
+
+class Proposal(Protocol):
+    """``q(x_t | x_{t-1}, z_t)``: draws particles and returns their log proposal density."""
+
+    def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> Any: ...
+
+    def draw(
+        self, state: Any, prev: Array, zs: Zs, dt: float, rng: np.random.Generator, filt: Any
+    ) -> tuple[Array, Array | None, Any]:
+        """``(x (..., N, d), log q (..., N) or None for the transition prior, new state)``."""
+        ...
+
+    def feedback(self, state: Any, particles: Array, estimate: Array, filt: Any) -> Any: ...
+
+
+@dataclass(frozen=True)
+class PriorProposal:
+    """The transition prior ``p(x_t | x_{t-1})``: the bootstrap filter / condensation."""
+
+    def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> None:
+        return None
+
+    def draw(
+        self, state: Any, prev: Array, zs: Zs, dt: float, rng: np.random.Generator, filt: Any
+    ) -> tuple[Array, None, None]:
+        return filt.motion.sample(prev, dt, rng), None, None
+
+    def feedback(self, state: Any, particles: Array, estimate: Array, filt: Any) -> None:
+        return None
+
+
+class Move(Protocol):
+    """An MCMC kernel applied after resampling (Zhai 2007, Algorithms 8-10)."""
+
+    def __call__(
+        self,
+        x: Array,
+        parents: Array,
+        loglik: Callable[[Array], Array],
+        dt: float,
+        rng: np.random.Generator,
+        filt: Any,
+    ) -> Array: ...
+
+
+@dataclass(frozen=True)
+class SISState:
+    """Equally weighted particles ``(..., N, d)``, the proposal's state and the estimate."""
+
+    particles: Array
+    estimate: Array
+    proposal: Any = None
+    info: dict[str, Any] = field(default_factory=dict)
+
+
+class ProposalParticleFilter:
+    """SIS with proposal ``proposal``, resampling every step, optional MCMC ``move``.
+
+    >>> from fusetrack.motion.benchmark import ScalarBenchmark
+    >>> from fusetrack.sensors.power import Power
+    >>> pf = ProposalParticleFilter(ScalarBenchmark(), [Power("z", 3)], n_particles=100)
+    >>> rng = np.random.default_rng(0)
+    >>> s = pf.initialize(Gaussian(np.zeros(1), np.eye(1)), rng)
+    >>> s = pf.step(s, [np.array([8.0])], 1.0, rng)
+    >>> bool(abs(s.estimate[0] - 2.0) < 0.2)
+    True
+    """
+
+    def __init__(
+        self,
+        motion: MotionModel,
+        sensors: Sequence[SensorModel] | SensorModel,
+        proposal: Proposal | None = None,
+        n_particles: int = 200,
+        *,
+        resampler: str | Callable[..., Any] = "systematic",
+        move: Move | None = None,
+        transition: Literal["paired", "marginal"] = "paired",
+    ) -> None:
+        self.motion = motion
+        self.sensors: list[SensorModel] = (
+            [sensors] if hasattr(sensors, "sensor_id") else list(sensors)  # type: ignore[arg-type]
+        )
+        self.proposal: Proposal = proposal if proposal is not None else PriorProposal()
+        if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 1:
+            raise ConfigError(invalid("n_particles", n_particles, "an integer >= 1"))
+        self.n_particles = int(n_particles)
+        self.resample = get_resampler(resampler)
+        self.move = move
+        if transition not in ("paired", "marginal"):
+            raise ConfigError(invalid("transition", transition, "'paired' or 'marginal'"))
+        self.transition = transition
+        self.stats = SISStats()
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(proposal={type(self.proposal).__name__}, "
+            f"n_particles={self.n_particles}, move={type(self.move).__name__ if self.move else None})"
+        )
+
+    def initialize(
+        self, prior: Gaussian, rng: np.random.Generator, batch_shape: tuple[int, ...] = ()
+    ) -> SISState:
+        """Particles drawn from ``prior``, shape ``(*batch_shape, N, d)``."""
+        mean, cov = np.asarray(prior.mean, float), np.asarray(prior.cov, float)
+        g = np.linalg.cholesky(cov + 1e-300 * np.eye(len(mean)))
+        x = mean + rng.standard_normal((*batch_shape, self.n_particles, len(mean))) @ g.T
+        return SISState(
+            x,
+            np.broadcast_to(mean, (*batch_shape, len(mean))).copy(),
+            self.proposal.initialize(prior, x, rng),
+        )
+
+    def log_transition(self, x: Array, prev: Array, dt: float) -> Array:
+        """``log p(x^i | x_{t-1}^i)`` (paired) or ``log (1/N) sum_j p(x^i | x_{t-1}^j)``."""
+        if self.transition == "paired":
+            return np.asarray(self.motion.log_density(x, prev, dt))
+        lp = self.motion.log_density(x[..., :, None, :], prev[..., None, :, :], dt)
+        return np.asarray(logsumexp(lp, axis=-1) - np.log(prev.shape[-2]))
+
+    def step(self, state: SISState, zs: Zs, dt: float, rng: np.random.Generator) -> SISState:
+        """One predict-weight-resample(-move) step; returns the new equally weighted set."""
+        check_positive("dt", dt)
+        prev = state.particles
+        loglik = LogLikelihood(self.sensors, zs, self.stats)
+        x, log_q, pstate = self.proposal.draw(state.proposal, prev, zs, dt, rng, self)
+        if log_q is None:
+            log_w = loglik(x) if loglik else np.zeros(x.shape[:-1])
+        else:
+            log_w = loglik(x) + self.log_transition(x, prev, dt) - log_q
+        log_w = np.where(np.isnan(log_w), -np.inf, log_w)
+        top = np.max(log_w, axis=-1, keepdims=True)
+        bad = ~np.isfinite(top)
+        if np.any(bad):  # every weight vanished in some run: keep them equal, say so
+            self.stats.degenerate_steps += 1
+            log_w = np.where(bad, 0.0, log_w)
+            top = np.where(bad, 0.0, top)
+        w = np.exp(log_w - top)
+        w /= w.sum(axis=-1, keepdims=True)
+        idx = self.resample(w, rng)
+        self.stats.resample_count += 1
+        x_res = np.take_along_axis(x, idx[..., None], axis=-2)
+        if self.move is not None and loglik:
+            parents = np.take_along_axis(prev, idx[..., None], axis=-2)
+            x_res = self.move(x_res, parents, loglik, dt, rng, self)
+        est = x_res.mean(axis=-2)
+        pstate = self.proposal.feedback(pstate, x_res, est, self)
+        return replace(state, particles=x_res, estimate=est, proposal=pstate)
+
+
+def run_sis(
+    filt: ProposalParticleFilter,
+    prior: Gaussian,
+    measurements: Sequence[Zs],
+    dt: float,
+    rng: np.random.Generator,
+    batch_shape: tuple[int, ...] = (),
+    *,
+    keep: Callable[[SISState], Any] | None = None,
+) -> tuple[Array, list[Any]]:
+    """Run ``filt`` over ``measurements`` (one sensor-aligned sequence per step).
+
+    Returns the estimates ``(T, *batch_shape, d)`` and, if ``keep`` is given, ``keep(state)`` per step.
+    """
+    state = filt.initialize(prior, rng, batch_shape)
+    out, kept = [], []
+    for zs in measurements:
+        state = filt.step(state, zs, dt, rng)
+        out.append(state.estimate)
+        if keep is not None:
+            kept.append(keep(state))
+    return np.array(out), kept
