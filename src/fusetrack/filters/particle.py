@@ -372,15 +372,22 @@ class ParticleFilter:
         return gens
 
     def _sample_motion(
-        self, states: Array, dt: float, gens: np.random.Generator | list[np.random.Generator]
+        self,
+        states: Array,
+        dt: float,
+        gens: np.random.Generator | list[np.random.Generator],
+        rows: NDArray[np.intp] | None = None,
     ) -> Array:
+        """A draw of the next state of every particle; with per-run generators, row ``j`` of
+        ``states`` belongs to run ``rows[j]`` (default: row ``j`` is run ``j``)."""
         if isinstance(gens, np.random.Generator):
             return np.asarray(self.motion.sample(states, dt, gens), dtype=float)
         n, d = states.shape[-2:]
         s2 = states.reshape(-1, n, d)
+        runs = range(s2.shape[0]) if rows is None else rows
         out = np.empty_like(s2)
-        for r, g in enumerate(gens):
-            out[r] = self.motion.sample(s2[r], dt, g)
+        for j, r in enumerate(runs):
+            out[j] = self.motion.sample(s2[j], dt, gens[r])
         return out.reshape(states.shape)
 
     def _motion_mean(self, states: Array, dt: float, per_run: bool) -> Array:
@@ -607,6 +614,15 @@ def _sensor_loglik(sensor: SensorModel, z: Array, cov: Array | None, x: Array) -
     )
 
 
+def _take_rows(values: Array, rows: NDArray[np.intp], idx: NDArray[np.intp]) -> Array:
+    """``values`` ``(R, N)`` with ``values[rows[j]]`` replaced by ``values[rows[j], idx[j]]``."""
+    if rows.size == values.shape[0]:
+        return np.take_along_axis(values, idx, axis=-1)
+    out = values.copy()
+    out[rows] = np.take_along_axis(values[rows], idx, axis=-1)
+    return out
+
+
 def _broadcasts(a: tuple[int, ...], b: tuple[int, ...]) -> bool:
     try:
         np.broadcast_shapes(a, b)
@@ -724,7 +740,9 @@ class AuxiliaryParticleFilter(ParticleFilter):
             l_k = self._loglik(c, mu, per_run)
             l_k[~c.usable] = 0.0
             lmu.append(l_k)
-        total = lmu[0] if len(lmu) == 1 else np.sum(lmu, axis=0)
+        total = lmu[0] if len(lmu) == 1 else lmu[0] + lmu[1]
+        for l_k in lmu[2:]:
+            total += l_k
         lam_lw, lam_w, lse, lam_ess = self._k.update(W.lw, total)
         bad = ~(np.isfinite(lse) & (lse >= self.min_log_evidence))
         degenerate = bool(bad.any())
@@ -740,15 +758,18 @@ class AuxiliaryParticleFilter(ParticleFilter):
             gens = self._generators(rng, particles.batch_shape)
             self.stats.resample_count += 1
             rows = np.flatnonzero(need)
+            everyone = rows.size == need.size
             p2 = parents.reshape(-1, n, d)
-            idx = np.broadcast_to(np.arange(n), (p2.shape[0], n)).copy()
-            idx[rows] = self._ancestors(lam.w, rows, gens)
-            new_parents = _gather(p2, idx).reshape(parents.shape)
-            children = self._sample_motion(new_parents, dt, gens)
-            lmu = [np.take_along_axis(l_k, idx, axis=-1) for l_k in lmu]
-            if rows.size == p2.shape[0]:
+            a = self._ancestors(lam.w, rows, gens)
+            fresh = self._sample_motion(_gather(p2 if everyone else p2[rows], a), dt, gens, rows)
+            lmu = [_take_rows(l_k, rows, a) for l_k in lmu]
+            if everyone:
+                children = fresh.reshape(parents.shape)
                 lam = self._uniform(rows.size, n)
-            else:
+            else:  # runs not resampled keep their predicted children and first-stage weights
+                c2 = particles.states.reshape(-1, n, d).copy()
+                c2[rows] = fresh
+                children = c2.reshape(parents.shape)
                 lw, w, ess = lam.lw.copy(), lam.w.copy(), lam.ess.copy()
                 lw[rows], w[rows], ess[rows] = -math.log(n), 1.0 / n, float(n)
                 lam = _Weights(lw, w, ess)
