@@ -33,6 +33,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "EKF, UKF and particle filter against the posterior CRLB",
             "fusetrack",
         ),
+        ExperimentInfo(
+            "zhai2007-scalar",
+            "zhai2007_scalar:run",
+            "Zhai 2007 E1 (Tables 2-3): EKF, bootstrap and PF-SP-PEKF on the scalar benchmark",
+            "Zhai 2007 (seed 001)",
+        ),
     ]
 }
 
