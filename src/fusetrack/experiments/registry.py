@@ -39,6 +39,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 E1 (Tables 2-3): EKF, bootstrap and PF-SP-PEKF on the scalar benchmark",
             "Zhai 2007 (seed 001)",
         ),
+        ExperimentInfo(
+            "zhai2007-mcmc",
+            "zhai2007_mcmc:run",
+            "Zhai 2007 E19 (Table 15): particle filters with MH, random-walk and independence moves",
+            "Zhai 2007 (seed 001)",
+        ),
     ]
 }
 
