@@ -25,3 +25,5 @@ __all__ = [
     "kinematic_noise",
     "kinematic_transition",
 ]
+
+from .walking_person import WalkingPerson as WalkingPerson

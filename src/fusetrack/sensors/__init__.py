@@ -26,3 +26,10 @@ __all__ = [
     "SensorBase",
     "wrap",
 ]
+
+# Nott 2009 (issue 7): the camera that sees a person on the floor, a simulated NFER radio tag
+from . import camera_geometry as camera_geometry
+from .homography_camera import HomographyCamera as HomographyCamera
+from .nfer_tag import NferTagSimulator as NferTagSimulator
+from .nfer_tag import fit_position_fix as fit_position_fix
+from .stacked import StackedSensor as StackedSensor

@@ -1,0 +1,153 @@
+"""Statistical background subtraction with brightness and chromaticity distortion
+(Horprasert, Harwood & Davis 1999; Nott 2009, Sec. 4.1).
+
+Every pixel ``i`` of the empty scene is modelled by the 4-tuple ``<mu_i, sigma_i, a_i, b_i>``:
+the mean and standard deviation of its colour over ``N`` training frames, and the spread of its
+brightness and chromaticity distortions. For a colour ``I`` (per channel ``c``)::
+
+    alpha_i = sum_c I_c mu_c / sigma_c^2  /  sum_c (mu_c / sigma_c)^2        brightness distortion
+    CD_i    = sqrt(sum_c ((I_c - alpha_i mu_c) / sigma_c)^2)                 chromaticity distortion
+    a_i     = RMS over training of (alpha_i - 1),   b_i = RMS of CD_i
+
+A new pixel is normalised, ``alpha^ = (alpha - 1) / a``, ``CD^ = CD / b``, and classified::
+
+    F (foreground)  CD^ > tau_CD  or  alpha < alpha_lo   (too dark to be a shadow)
+    B (background)  tau_a2 < alpha^ < tau_a1
+    S (shadow)      alpha^ < 0           (same chromaticity, darker)
+    H (highlight)   otherwise            (same chromaticity, brighter)
+
+The thresholds come from a detection rate ``r``: ``tau_CD`` and ``(tau_a2, tau_a1)`` are chosen
+so that a fraction ``r`` of the training samples is background ("the classification threshold is
+set based on confidence level so that the static background does not get classified as
+foreground", Nott 2009, Sec. 4.1). The foreground mask is ``F`` only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ...core.errors import ConfigError, ShapeError, invalid
+
+BACKGROUND, FOREGROUND, SHADOW, HIGHLIGHT = 0, 1, 2, 3
+_MAX_THRESHOLD_SAMPLES = 4_000_000
+
+
+def _distortions(
+    frames: NDArray[np.float32], model: HorprasertModel | _Stats
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """Brightness ``alpha`` and chromaticity ``CD`` of frames ``(..., H, W, 3)`` against the model."""
+    alpha = np.einsum("...c,...c->...", frames, model.mu_over_var) * model.inv_denom
+    diff = (frames - alpha[..., None] * model.mu) * model.inv_sigma
+    cd = np.sqrt(np.einsum("...c,...c->...", diff, diff))
+    return alpha, cd
+
+
+@dataclass(frozen=True)
+class _Stats:
+    mu: NDArray[np.float32]
+    inv_sigma: NDArray[np.float32]
+    mu_over_var: NDArray[np.float32]
+    inv_denom: NDArray[np.float32]
+
+
+@dataclass(frozen=True)
+class HorprasertModel:
+    """A trained background model; :meth:`classify` labels a frame, :meth:`foreground` masks it."""
+
+    mu: NDArray[np.float32]
+    inv_sigma: NDArray[np.float32]
+    mu_over_var: NDArray[np.float32]
+    inv_denom: NDArray[np.float32]
+    inv_a: NDArray[np.float32]
+    inv_b: NDArray[np.float32]
+    tau_cd: float
+    tau_a1: float
+    tau_a2: float
+    alpha_lo: float
+
+    @classmethod
+    def train(
+        cls,
+        frames: ArrayLike,
+        *,
+        detection_rate: float = 0.9999,
+        sigma_min: float = 1.0,
+        alpha_lo: float = 0.5,
+        floor: float = 1e-3,
+        rng: np.random.Generator | None = None,
+    ) -> HorprasertModel:
+        """Fit ``<mu, sigma, a, b>`` and the thresholds on ``N >= 2`` frames ``(N, H, W, 3)`` of the empty scene."""
+        f = np.asarray(frames, dtype=np.float32)
+        if f.ndim != 4 or f.shape[-1] != 3 or f.shape[0] < 2:
+            raise ShapeError(
+                invalid("frames.shape", f.shape, "(N, H, W, 3) colour frames with N >= 2")
+            )
+        if not 0.5 < detection_rate < 1.0:
+            raise ConfigError(invalid("detection_rate", detection_rate, "a fraction in (0.5, 1)"))
+        mu = f.mean(0)
+        sigma = np.maximum(f.std(0), np.float32(sigma_min))
+        inv_sigma = (1.0 / sigma).astype(np.float32)
+        mu_over_var = (mu * inv_sigma**2).astype(np.float32)
+        denom = np.einsum("...c,...c->...", mu * inv_sigma, mu * inv_sigma)
+        inv_denom = (1.0 / np.maximum(denom, 1e-6)).astype(np.float32)
+        stats = _Stats(mu, inv_sigma, mu_over_var, inv_denom)
+        alpha, cd = _distortions(f, stats)
+        a = np.maximum(np.sqrt(np.mean((alpha - 1.0) ** 2, axis=0)), floor).astype(np.float32)
+        b = np.maximum(np.sqrt(np.mean(cd**2, axis=0)), floor).astype(np.float32)
+        a_hat = ((alpha - 1.0) / a).ravel()
+        cd_hat = (cd / b).ravel()
+        if a_hat.size > _MAX_THRESHOLD_SAMPLES:  # thresholds from a random subset: same quantiles
+            g = rng if rng is not None else np.random.default_rng(0)
+            keep = g.choice(a_hat.size, _MAX_THRESHOLD_SAMPLES, replace=False)
+            a_hat, cd_hat = a_hat[keep], cd_hat[keep]
+        tail = 1.0 - detection_rate
+        tau_cd = float(np.quantile(cd_hat, detection_rate))
+        tau_a2, tau_a1 = (float(v) for v in np.quantile(a_hat, [tail / 2, 1 - tail / 2]))
+        return cls(
+            mu,
+            inv_sigma,
+            mu_over_var,
+            inv_denom,
+            (1.0 / a).astype(np.float32),
+            (1.0 / b).astype(np.float32),
+            tau_cd,
+            tau_a1,
+            tau_a2,
+            float(alpha_lo),
+        )
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (int(self.mu.shape[0]), int(self.mu.shape[1]))
+
+    def _check(self, frame: ArrayLike) -> NDArray[np.float32]:
+        f = np.asarray(frame, dtype=np.float32)
+        if f.shape[-3:] != (*self.shape, 3):
+            raise ShapeError(
+                invalid("frame.shape", f.shape, f"(..., {self.shape[0]}, {self.shape[1]}, 3)")
+            )
+        return f
+
+    def classify(self, frame: ArrayLike) -> NDArray[np.uint8]:
+        """Per-pixel class ``(..., H, W)``: BACKGROUND 0, FOREGROUND 1, SHADOW 2, HIGHLIGHT 3."""
+        f = self._check(frame)
+        alpha, cd = _distortions(f, self)
+        a_hat = (alpha - 1.0) * self.inv_a
+        cd_hat = cd * self.inv_b
+        out = np.full(alpha.shape, HIGHLIGHT, dtype=np.uint8)
+        out[a_hat < 0] = SHADOW
+        out[(a_hat > self.tau_a2) & (a_hat < self.tau_a1)] = BACKGROUND
+        out[(cd_hat > self.tau_cd) | (alpha < self.alpha_lo)] = FOREGROUND
+        return out
+
+    def foreground(self, frame: ArrayLike) -> NDArray[np.bool_]:
+        """The foreground mask ``(..., H, W)`` (class F only; shadows and highlights are background)."""
+        f = self._check(frame)
+        alpha, cd = _distortions(f, self)
+        return np.asarray((cd * self.inv_b > self.tau_cd) | (alpha < self.alpha_lo))
+
+
+__all__ = ["BACKGROUND", "FOREGROUND", "HIGHLIGHT", "SHADOW", "HorprasertModel"]
