@@ -45,6 +45,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 E19 (Table 15): particle filters with MH, random-walk and independence moves",
             "Zhai 2007 (seed 001)",
         ),
+        ExperimentInfo(
+            "lee2009-projected-planes",
+            "lee2009_projected_planes:run",
+            "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
+            "Lee 2009 (seed 000)",
+        ),
     ]
 }
 
