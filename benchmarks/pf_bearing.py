@@ -349,6 +349,20 @@ def _fmt_time(t: float | None, est: float | None) -> str:
     return f"{t * 1e3:.3f} ms" if t < 1 else f"{t:.3f} s"
 
 
+def _profile(lib: str, scn: Scenario, n: int, args: argparse.Namespace) -> None:
+    import cProfile
+    import pstats
+
+    runner = RUNNERS[lib](scn, n)
+    _timed_run(runner, args.seed + 10_000, min(WARMUP_STEPS, args.steps))
+    prof = cProfile.Profile()
+    prof.enable()
+    runner.run(args.seed, args.steps)  # type: ignore[attr-defined]
+    prof.disable()
+    print(f"\n{lib}, N = {n:,}, {args.steps} steps")
+    pstats.Stats(prof, stream=sys.stdout).sort_stats("tottime").print_stats(25)
+
+
 def _versions(libs: list[str]) -> str:
     import importlib.metadata as md
 
@@ -402,6 +416,12 @@ def main(argv: list[str] | None = None) -> int:
         help="seed of the filters' random draws (the scenario is fixed)",
     )
     ap.add_argument("--json", action="store_true", help="one JSON object per N instead of a table")
+    ap.add_argument(
+        "--profile",
+        choices=LIBS,
+        help="instead of timing: cProfile one run of this library at each N (after a warm-up)\n"
+        "and print the 25 functions with the most internal time",
+    )
     args = ap.parse_args(argv)
     if args.steps < 1 or args.repeats < 1:
         ap.error("--steps and --repeats must be >= 1")
@@ -417,6 +437,10 @@ def main(argv: list[str] | None = None) -> int:
             f"budget {args.budget}s/step\n{_versions(args.libs)}; {os.cpu_count()} cores; "
             f"load average at start {os.getloadavg()[0]:.2f}"
         )
+    if args.profile:
+        for n in args.N:
+            _profile(args.profile, scn, n, args)
+        return 0
     last: dict[str, tuple[int, float]] = {}  # lib -> (N, seconds per step) of the last measured N
     for n in args.N:
         res: dict[str, dict[str, float | None]] = {}
