@@ -1,0 +1,95 @@
+"""SP-PEKF bank and PF-SP-PEKF (Zhai 2007, Ch. 3) against the Kalman filter on linear models."""
+
+import numpy as np
+import pytest
+
+from fusetrack.core import Gaussian, Measurement
+from fusetrack.filters import KalmanFilter
+from fusetrack.filters.sis import ProposalParticleFilter, run_sis
+from fusetrack.filters.sp_pekf import BankState, SPPEKFBank, SPPEKFProposal, repair_covariance
+from fusetrack.motion import ConstantVelocity
+from fusetrack.sensors import PositionFix
+
+
+def _linear():
+    motion = ConstantVelocity(ndim=1, q=0.5)
+    sensor = PositionFix("p", cov=[[0.8]], position_index=(0,))
+    prior = Gaussian(np.array([1.0, -0.5]), np.diag([2.0, 0.7]))
+    return motion, sensor, prior
+
+
+def test_every_channel_is_the_kalman_filter_on_a_linear_model():
+    """Linear f, h: x_n + x_r follows the KF exactly whatever the nominal noise (Eqs. 18-27)."""
+    motion, sensor, prior = _linear()
+    bank = SPPEKFBank(motion, [sensor], n_channels=5)
+    rng = np.random.default_rng(3)
+    nominal = prior.mean + rng.standard_normal((5, 2))  # arbitrary partition of the same mean
+    state = BankState(
+        nominal,
+        prior.mean - nominal,
+        np.broadcast_to(prior.cov, (5, 2, 2)).copy(),
+        np.zeros(5),
+        prior.mean,
+        prior.cov,
+    )
+    kf = KalmanFilter(motion, [sensor])
+    belief = prior
+    for k, z in enumerate([1.3, 0.2, -0.8, 2.5]):
+        state = bank.step(state, [np.array([z])], 1.0, rng)
+        belief = kf.update(kf.predict(belief, 1.0), [Measurement(float(k), "p", [z])])
+        np.testing.assert_allclose(
+            state.nominal + state.resid, np.tile(belief.mean, (5, 1)), atol=1e-9
+        )
+        np.testing.assert_allclose(state.cov[0], belief.cov, atol=1e-9)
+        np.testing.assert_allclose(state.total_cov, belief.cov, atol=1e-9)  # channels agree
+        np.testing.assert_allclose(np.exp(state.log_psi), 0.2, atol=1e-12)
+
+
+def test_pf_sp_pekf_mean_converges_to_the_kalman_mean():
+    """The proposal changes only the variance, not the posterior: 400 runs, mean error < 4 s.e."""
+    motion, sensor, prior = _linear()
+    rng = np.random.default_rng(0)
+    zs = [[np.array([z])] for z in (0.9, 1.4, 0.3, -0.2, 0.6)]
+    kf = KalmanFilter(motion, [sensor])
+    belief = prior
+    for k, (z,) in enumerate(zs):
+        belief = kf.update(kf.predict(belief, 1.0), [Measurement(float(k), "p", z)])
+    pf = ProposalParticleFilter(motion, [sensor], SPPEKFProposal(n_channels=10), n_particles=300)
+    est, _ = run_sis(pf, prior, zs, 1.0, rng, batch_shape=(400,))
+    final = est[-1]
+    err = final.mean(axis=0) - belief.mean
+    se = final.std(axis=0) / np.sqrt(len(final))
+    assert np.all(np.abs(err) < 4 * se + 1e-3), (err, se)
+    # and each run is close to the KF mean (proposal weights are correct, not just unbiased)
+    assert np.sqrt(np.mean((final - belief.mean) ** 2, axis=0))[0] < 0.25 * np.sqrt(
+        belief.cov[0, 0]
+    )
+
+
+def test_a_non_positive_definite_channel_is_repaired_and_counted():
+    bad = np.array([[[1.0, 2.0], [2.0, 1.0]], [[2.0, 0.0], [0.0, 1.0]]])
+    fixed, mask = repair_covariance(bad)
+    assert mask.tolist() == [True, False]
+    assert np.all(np.linalg.eigvalsh(fixed) > 0)
+    np.testing.assert_array_equal(fixed[1], bad[1])
+
+
+def test_a_channel_with_nan_is_dropped_not_propagated():
+    motion, sensor, prior = _linear()
+    bank = SPPEKFBank(motion, [sensor], n_channels=3)
+    rng = np.random.default_rng(1)
+    state = bank.initialize(prior, rng)
+    resid = state.resid.copy()
+    resid[1] = np.nan
+    state = BankState(state.nominal, resid, state.cov, state.log_psi, state.mean, state.total_cov)
+    out = bank.step(state, [np.array([0.5])], 1.0, rng)
+    assert bank.stats.dropped_channels == 1
+    assert np.all(np.isfinite(out.mean)) and np.all(np.isfinite(out.total_cov))
+    assert np.exp(out.log_psi[1]) < 1e-200
+
+
+@pytest.mark.parametrize("n_channels", [0, 2.5, True])
+def test_bank_refuses_bad_channel_counts(n_channels):
+    motion, sensor, _ = _linear()
+    with pytest.raises(ValueError, match="n_channels"):
+        SPPEKFBank(motion, [sensor], n_channels=n_channels)
