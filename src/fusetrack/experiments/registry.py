@@ -51,6 +51,27 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
             "Lee 2009 (seed 000)",
         ),
+        ExperimentInfo(
+            "nott2009-simulation",
+            "nott2009_simulation:run",
+            "Nott 2009, Figs. 5.1-5.4: camera + radio tag EKF in simulation (S1-S4), occlusion "
+            "sweep, irregular tag rates, tag clock offsets",
+            "Nott 2009 (M.S. thesis, Univ. of Kentucky)",
+        ),
+        ExperimentInfo(
+            "nott2009-radio-accuracy",
+            "nott2009_radio:run",
+            "Nott 2009, Table 5.1: radio tag accuracy at six test points, and the simulated tag "
+            "tuned to it",
+            "Nott 2009 (M.S. thesis, Univ. of Kentucky)",
+        ),
+        ExperimentInfo(
+            "nott2009-video",
+            "nott2009_video:run",
+            "Nott 2009, Sec. 5.2: the whole chain on rendered video (homographies, background "
+            "subtraction, occlusion detection, joint tracking through occlusions)",
+            "Nott 2009 (M.S. thesis, Univ. of Kentucky)",
+        ),
     ]
 }
 
