@@ -113,7 +113,9 @@ class ManeuverTurn(GaussianTransition):
         )
         speed2 = vx * vx + vy * vy
         moving = speed2 > _MIN_SPEED**2
-        k = np.where(moving, -self.direction * self.a_m / np.maximum(speed2, 1e-300) ** 1.5, 0.0)
+        k = np.where(
+            moving, -self.direction * self.a_m / np.maximum(speed2, _MIN_SPEED**2) ** 1.5, 0.0
+        )
         domega = np.stack([k * vx, k * vy], axis=-1)  # dOmega/d[vx, vy]  (Eqs. 60-63)
         jac = np.zeros((*xa.shape[:-1], 4, 4))
         jac[..., 0, 0] = jac[..., 1, 1] = 1.0
