@@ -46,6 +46,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 (seed 001)",
         ),
         ExperimentInfo(
+            "zhai2007-multiple-model",
+            "zhai2007_multiple_model:run",
+            "Zhai 2007 E5-E8 (Figs 25-30): regime transitions, turn models, MM-bootstrap, multi-sensor MMPF",
+            "Zhai 2007 (seed 001)",
+        ),
+        ExperimentInfo(
             "lee2009-projected-planes",
             "lee2009_projected_planes:run",
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
