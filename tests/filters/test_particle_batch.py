@@ -122,7 +122,7 @@ def test_rng_is_required_and_checked():
     with pytest.raises(ConfigError, match="2 of them"):
         pf.predict(p, 1.0, [np.random.default_rng(0)])
     with pytest.raises(ConfigError, match="rng"):
-        pf.predict(p, 1.0, 42)  # type: ignore[arg-type]
+        pf.predict(p, 1.0, 42)
 
 
 def test_uncached_particles_are_normalised_first():

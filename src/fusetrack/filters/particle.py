@@ -126,18 +126,23 @@ class _Checked(NamedTuple):
 
 
 class _Engine(NamedTuple):
+    add: Callable[..., tuple[Array, Array]]
+    normalize: Callable[..., tuple[Array, Array, Array, Array]]
     update: Callable[[Array, Array], tuple[Array, Array, Array, Array]]
-    normalize: Callable[[Array], tuple[Array, Array, Array, Array]]
     mean_cov: Callable[[Array, Array], tuple[Array, Array]]
 
 
 _ENGINES = {
     "numba": _Engine(
-        kernels.log_weight_update, kernels.normalize_log_weights, kernels.weighted_mean_cov
+        kernels.add_log_likelihood,
+        kernels.normalize_log_weights,
+        kernels.log_weight_update,
+        kernels.weighted_mean_cov,
     ),
     "numpy": _Engine(
-        kernels.log_weight_update_reference,
+        kernels.add_log_likelihood_reference,
         kernels.normalize_log_weights_reference,
+        kernels.log_weight_update_reference,
         kernels.weighted_mean_cov_reference,
     ),
 }
@@ -527,14 +532,46 @@ class ParticleFilter:
         subtract: list[Array] | None = None,
     ) -> tuple[_Weights, bool]:
         """Apply the measurements in sequence; ``subtract[k]`` (auxiliary filter) is removed from
-        measurement ``k``'s log-likelihood. Returns the new weights and whether any recovered."""
+        measurement ``k``'s log-likelihood. Returns the new weights and whether any recovered.
+
+        Fast path: the log-likelihoods are summed into one buffer and normalised once (one
+        ``exp`` per particle however many measurements). Measurement ``k`` cannot be degenerate
+        when ``max_i A_k,i - U_{k-1} >= min_log_evidence``, where ``A_k`` is the running sum and
+        ``U_{k-1}`` an upper bound of ``logsumexp(A_{k-1})`` (0 for the normalised prior, then
+        ``max A + log N``), because the evidence ``logsumexp(A_k) - logsumexp(A_{k-1})`` is at
+        least that. If the bound cannot vouch for every measurement of every run, the exact
+        sequential update (:meth:`_reweight_exact`) runs instead.
+        """
         per_run = rng is not None and not isinstance(rng, np.random.Generator)
-        degenerate = False
+        lls = []
         for k, c in enumerate(checked):
             ll = self._loglik(c, states, per_run)
             if subtract is not None:
                 with np.errstate(invalid="ignore"):
                     ll = ll - subtract[k]
+            if not c.usable.all():
+                ll[~c.usable] = 0.0  # a skipped row leaves that run's weights alone
+            lls.append(ll)
+        log_n = math.log(W.lw.shape[-1])
+        bound = np.zeros(W.lw.shape[0])
+        acc: Array | None = None
+        rowmax = bound
+        for c, ll in zip(checked, lls):
+            acc, rowmax = self._k.add(W.lw if acc is None else acc, ll, out=acc)
+            with np.errstate(invalid="ignore"):
+                safe = np.isfinite(rowmax) & (rowmax - bound >= self.min_log_evidence)
+            if not np.all(safe | ~c.usable):
+                return self._reweight_exact(W, checked, lls)
+            bound = np.where(c.usable, rowmax + log_n, bound)
+        lw, w, _, ess = self._k.normalize(acc, rowmax, overwrite=True)
+        return _Weights(lw, w, ess), False
+
+    def _reweight_exact(
+        self, W: _Weights, checked: list[_Checked], lls: list[Array]
+    ) -> tuple[_Weights, bool]:
+        """One measurement at a time, each normalised and checked for degeneracy."""
+        degenerate = False
+        for c, ll in zip(checked, lls):
             lw, w, lse, ess = self._k.update(W.lw, ll)
             ok = np.isfinite(lse) & (lse >= self.min_log_evidence)
             bad = c.usable & ~ok
