@@ -25,7 +25,7 @@ def _check_update(lw, ll):
     return got
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=80, deadline=None)
 @given(
     lw=arrays(np.float64, st.tuples(st.integers(1, 3), st.integers(1, 50)), elements=LOGW),
     scale=st.floats(0.0, 1e4),

@@ -13,7 +13,7 @@ from fusetrack.core.resampling import inverse_cdf, inverse_cdf_reference
 
 SCHEMES = ["multinomial", "stratified", "systematic", "residual"]
 N = 8
-REPS = 20_000
+REPS = 10_000
 # Weights with a zero, a dominant particle, and values whose N*w_i are not integers.
 W = np.array([0.31, 0.0, 0.02, 0.17, 0.065, 0.2, 0.11, 0.125])
 
