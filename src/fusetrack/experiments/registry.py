@@ -52,6 +52,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 (seed 001)",
         ),
         ExperimentInfo(
+            "zhai2007-bearings",
+            "zhai2007_bearings:run",
+            "Zhai 2007 E2-E3 (Figs 10-12): bearings-only EKF, bootstrap and PF-SP-PEKF",
+            "Zhai 2007 (seed 001)",
+        ),
+        ExperimentInfo(
             "lee2009-projected-planes",
             "lee2009_projected_planes:run",
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
