@@ -1,0 +1,241 @@
+"""The rooms and camera layouts of Ercan et al. 2013 (spec §7) and user scenes from YAML files.
+
+The paper shows its layouts only as pictures (Figs. 5, 11, 13b); the coordinates here are the
+spec's reconstruction (§7.1-7.3). A :class:`Scene` bundles a room, its cameras, the fixed
+camera order of the paper, the occluder diameter and the walking speed and noise, in the scene's
+own units (simulation "units" or inches).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...core.errors import ConfigError, invalid
+from ...sensors.perspective_camera import CameraArray, ring_of_cameras
+from ...world.geometry import Array, rectangle
+from ...world.room import Room, l_shaped_room, square_room
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything fixed about one setting."""
+
+    name: str
+    room: Room
+    cameras: CameraArray
+    fixed_order: tuple[int, ...]  # 0-based camera indices, the paper's preselected list
+    diameter: float = 3.33
+    speed: float = 1.0
+    motion_noise: float = 0.33
+    prior_q: float = 3.0  # process noise of the occluder-prior Kalman filters (units^2/step)
+    object_path: Array | None = None  # scripted object positions (lab), or None: a walker
+
+    def __post_init__(self) -> None:
+        n = len(self.cameras)
+        if sorted(set(self.fixed_order)) != sorted(self.fixed_order) or any(
+            not 0 <= i < n for i in self.fixed_order
+        ):
+            raise ConfigError(
+                invalid(
+                    "fixed_order",
+                    [i + 1 for i in self.fixed_order],
+                    f"distinct camera numbers in 1..{n}",
+                )
+            )
+        centres_blocked = ~self.room.free(self.cameras.positions)
+        if np.any(centres_blocked):
+            bad = [self.cameras.ids[i] for i in np.flatnonzero(centres_blocked)]
+            raise ConfigError(
+                invalid(
+                    "camera position",
+                    bad,
+                    "cameras inside the room, not in a wall or static occluder",
+                )
+            )
+        probe = self.room.sample_free(np.random.default_rng(12345), 4000)
+        sees = self.cameras.in_fov(probe[:, None, :]) & ~self.room.sight_blocked(
+            self.cameras.positions[None, :, :], probe[:, None, :]
+        )
+        blind = ~np.any(sees, axis=0)
+        if np.any(blind):
+            bad = [self.cameras.ids[i] for i in np.flatnonzero(blind)]
+            raise ConfigError(
+                invalid(
+                    "camera view",
+                    bad,
+                    "cameras whose field of view contains part of the free floor",
+                )
+            )
+
+
+SIM_NOISE = {"sigma_theta": 0.01, "sigma_pos": 1.0, "sigma_read": 2.0}
+LAB_NOISE = {"sigma_theta": 0.068, "sigma_pos": 1.0, "sigma_read": 2.0}
+
+
+def square_scene(static_occluder: bool = True) -> Scene:
+    """Fig. 5: 100 x 100 room, 8 cameras (corners odd, walls even), 90 deg FOV (spec §7.1)."""
+    occ = [rectangle(35, 65, 40, 60)] if static_occluder else []
+    room = square_room(100.0, occ, "square" if static_occluder else "square-open")
+    pos = [(0, 0), (50, 0), (100, 0), (100, 50), (100, 100), (50, 100), (0, 100), (0, 50)]
+    yaws = [45, 90, 135, 180, 225, 270, 315, 0]
+    cams = ring_of_cameras(pos, yaws, 90.0, **SIM_NOISE)
+    order = tuple(i - 1 for i in (1, 7, 5, 3, 2, 4, 6, 8))
+    return Scene(room.name, room, cams, order)
+
+
+def l_scene() -> Scene:
+    """Fig. 11: the L-shaped room with 12 cameras (spec §7.2)."""
+    room = l_shaped_room(200.0)
+    pos = [
+        (0, 0), (100, 0), (200, 0), (200, 50), (200, 100), (150, 100),
+        (100, 100), (100, 150), (100, 200), (50, 200), (0, 200), (0, 100),
+    ]  # fmt: skip
+    yaws = [45, 90, 135, 180, 225, 270, 225, 180, 225, 270, 315, 0]
+    cams = ring_of_cameras(pos, yaws, 90.0, **SIM_NOISE)
+    order = tuple(i - 1 for i in (1, 4, 7, 10, 8, 12, 3, 5, 2, 6, 11, 9))
+    return Scene("L-shaped", room, cams, order)
+
+
+LAB_SIZE = (264.0, 228.0)  # 22 ft x 19 ft in inches
+
+
+def lab_path(steps: int = 200, a: float = 120.0, b: float = 98.0) -> Array:
+    """The object's closed path in the lab replica: an ellipse about the room centre, one lap in
+    ``steps`` steps; ``a^2 + b^2 = 4 * 77.5^2`` gives the paper's RMSE_max = 77.5 in (spec §7.3)."""
+    t = 2 * math.pi * np.arange(steps + 1) / steps
+    cx, cy = LAB_SIZE[0] / 2, LAB_SIZE[1] / 2
+    return np.column_stack([cx + a * np.cos(t), cy + b * np.sin(t)])
+
+
+def lab_scene() -> Scene:
+    """Fig. 13(b) replica: 22' x 19' room, 16 cameras (4 a wall) aimed at the centre, 47 deg FOV,
+    one 24 x 24 in virtual static occluder (spec §7.3). Units: inches."""
+    w, h = LAB_SIZE
+    occ = rectangle(78, 102, 138, 162)
+    room = Room(rectangle(0, w, 0, h), (occ,), "lab")
+    fr = (1 / 8, 3 / 8, 5 / 8, 7 / 8)
+    inset = 3.0
+    pos = (
+        [(w * f, inset) for f in fr]
+        + [(w - inset, h * f) for f in fr]
+        + [(w * (1 - f), h - inset) for f in fr]
+        + [(inset, h * (1 - f)) for f in fr]
+    )
+    c = np.array([w / 2, h / 2])
+    yaws = [math.degrees(math.atan2(c[1] - y, c[0] - x)) for x, y in pos]
+    cams = ring_of_cameras(pos, yaws, 47.0, **LAB_NOISE)
+    order = tuple(i - 1 for i in (1, 13, 9, 5, 3, 8, 11, 16, 6))
+    return Scene(
+        "lab",
+        room,
+        cams,
+        order,
+        diameter=12.0,
+        speed=3.6,
+        motion_noise=1.2,
+        prior_q=39.0,
+        object_path=lab_path(),
+    )
+
+
+SCENES = {
+    "square": lambda: square_scene(True),
+    "square-open": lambda: square_scene(False),
+    "L": l_scene,
+    "lab": lab_scene,
+}
+
+
+def get_scene(name: str) -> Scene:
+    try:
+        return SCENES[name]()
+    except KeyError:
+        raise ConfigError(
+            invalid("scene", name, f"one of {sorted(SCENES)} or a YAML file")
+        ) from None
+
+
+def scene_from_mapping(spec: Mapping[str, Any], name: str = "custom") -> Scene:
+    """A scene from a mapping (the YAML format of ``--config``)::
+
+    room: [[0, 0], [120, 0], [120, 80], [0, 80]]     # floor polygon
+    static_occluders: [[[50, 30], [70, 30], [70, 50], [50, 50]]]
+    cameras:                                          # position, yaw (deg), optional fov (deg)
+      - {position: [0, 0], yaw: 30}
+      - {position: [120, 80], yaw: 210, fov: 60}
+    fov: 90                                           # default field of view (deg)
+    noise: {sigma_theta: 0.01, sigma_pos: 1.0, sigma_read: 2.0}
+    fixed_order: [1, 2]                               # 1-based, default 1..N
+    occluder_diameter: 3.33
+    speed: 1.0
+    motion_noise: 0.33
+    """
+    if not isinstance(spec, Mapping):
+        raise ConfigError(invalid("config", type(spec).__name__, "a mapping with room and cameras"))
+    for key in ("room", "cameras"):
+        if key not in spec:
+            raise ConfigError(invalid(f"config.{key}", None, "present"))
+    room = Room(
+        np.asarray(spec["room"], float),
+        tuple(np.asarray(o, float) for o in spec.get("static_occluders", [])),
+        name,
+    )
+    cams_spec = spec["cameras"]
+    if not isinstance(cams_spec, list) or not cams_spec:
+        raise ConfigError(
+            invalid("config.cameras", cams_spec, "a non-empty list of {position, yaw}")
+        )
+    default_fov = float(spec.get("fov", 90.0))
+    noise = {**SIM_NOISE, **dict(spec.get("noise", {}))}
+    arrays = []
+    for i, c in enumerate(cams_spec):
+        if not isinstance(c, Mapping) or "position" not in c or "yaw" not in c:
+            raise ConfigError(
+                invalid(f"config.cameras[{i}]", c, "{position: [x, y], yaw: degrees}")
+            )
+        arrays.append(
+            ring_of_cameras(
+                [c["position"]], [c["yaw"]], float(c.get("fov", default_fov)), **noise, inset=0.0
+            )
+        )
+    cams = CameraArray(
+        np.concatenate([a.positions for a in arrays]),
+        np.concatenate([a.yaws for a in arrays]),
+        np.concatenate([a.fovs for a in arrays]),
+        np.concatenate([a.focals for a in arrays]),
+        np.concatenate([a.sigma_theta for a in arrays]),
+        np.concatenate([a.sigma_pos for a in arrays]),
+        np.concatenate([a.sigma_read for a in arrays]),
+        tuple(f"cam{i + 1}" for i in range(len(arrays))),
+    )
+    order = tuple(int(i) - 1 for i in spec.get("fixed_order", range(1, len(arrays) + 1)))
+    return Scene(
+        name,
+        room,
+        cams,
+        order,
+        diameter=float(spec.get("occluder_diameter", 3.33)),
+        speed=float(spec.get("speed", 1.0)),
+        motion_noise=float(spec.get("motion_noise", 0.33)),
+        prior_q=float(spec.get("prior_q", 3.0)),
+    )
+
+
+def load_scene(path: str | Path) -> Scene:
+    """A scene from a YAML file (see :func:`scene_from_mapping`)."""
+    import yaml
+
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(invalid("config", str(p), "an existing YAML file"))
+    try:
+        spec = yaml.safe_load(p.read_text())
+    except yaml.YAMLError as err:
+        raise ConfigError(invalid("config", str(p), f"valid YAML ({err})")) from None
+    return scene_from_mapping(spec, p.stem)

@@ -1,0 +1,240 @@
+"""Which k cameras to query: the LMMSE metric of Ercan et al. 2013 (Sec. 5) and the rules compared.
+
+The metric of a subset S is the mean squared error of the best *linear* estimate of the object's
+position from the readings of S (Kailath et al. 2000),
+
+    MSE(S) = Tr(Sigma_x - Sigma_Zx' Sigma_Z^-1 Sigma_Zx),
+
+with every moment a weighted average over the predicted particle cloud. An occluded camera is
+modelled as returning its expected value (Eq. 10), which scales the moments by the probabilities
+that cameras see the object, ``P{eta_i = 1}`` and ``P{eta_i = 1, eta_j = 1}`` (Secs. 4.2-4.3 and
+5.1). Two camera models give the moments:
+
+* perspective (Eqs. 11-13): ``z_i = f_i h_i/d_i + v_i`` with the noise of Eq. 2;
+* weak perspective (Eqs. 14-16): ``z~_i = a_i' x + v~_i``, ``a_i = [sin theta_i, -cos theta_i]``,
+  ``var(v~_i) = (s_th^2 + s_read^2/f_i^2) d_i(mu_x)^2 + s_pos^2``.
+
+Choices where the paper is silent (spec §8 items 13-14): ``h/d`` is clipped to the image bounds
+``+-tan(fov/2)`` (it explodes for particles beside or behind a camera), the expected noise
+variance ``E_x var(v_i | x)`` is taken over the particles in the camera's field of view, and
+``Sigma_Z`` is inverted with a pseudo-inverse (a camera that sees no particle contributes
+nothing). Every moment for all N cameras is computed once per selection epoch; a subset's MSE
+then costs a k x k solve, so greedy (Algorithm 2) and brute force share the same numbers.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..core.errors import ConfigError, ShapeError, invalid
+from ..sensors.perspective_camera import MIN_DEPTH, CameraArray
+from ..world.geometry import Array
+from ..world.occlusion import OccluderPriors, disks_block, occlusion_probability
+from ..world.room import Room
+
+CameraModel = Literal["perspective", "weak"]
+SELECTION_METHODS = ("greedy", "brute", "fixed", "random", "closest", "all")
+
+
+@dataclass(frozen=True)
+class SelectionMoments:
+    """The moments every subset's MSE is built from (all N cameras)."""
+
+    mu_x: Array  # (2,)
+    sigma_x: Array  # (2, 2)
+    p_visible: Array  # (N,) P{eta_i = 1}
+    p_both: Array  # (N, N) P{eta_i = 1, eta_j = 1}, diagonal = p_visible
+    cov_zx: dict[str, Array]  # model -> (N, 2)
+    cov_z: dict[str, Array]  # model -> (N, N)
+
+    @property
+    def n_cameras(self) -> int:
+        return len(self.p_visible)
+
+
+def visibility_probabilities(
+    cameras: CameraArray,
+    room: Room,
+    x: Array,
+    w: Array,
+    occluders: OccluderPriors | ArrayLike | None,
+    diameter: float,
+    prior_mode: str,
+) -> tuple[Array, Array]:
+    """``P{eta_i = 1}`` ``(N,)`` and ``P{eta_i = 1, eta_j = 1}`` ``(N, N)`` over the particle cloud.
+
+    ``sum_l w_l P{...| u_l}``, with the conditional probabilities of Eq. 8 (``Q = {i}`` or
+    ``{i, j}``) on the cameras assigned to each particle, or the deterministic visibility of the
+    extreme priors (Sec. 6.1).
+    """
+    n = len(cameras)
+    assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
+    if prior_mode == "gaussian":
+        if not isinstance(occluders, OccluderPriors):
+            raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
+        q = occlusion_probability(cameras.positions, x, occluders, diameter)  # (N, L, M)
+        wa = w[None, :] * assigned  # (N, L)
+        p1 = np.sum(wa * np.prod(np.clip(1 - q, 0, 1), axis=-1), axis=1)
+        p2 = np.empty((n, n))
+        for i in range(n):
+            joint = np.prod(np.clip(1 - q[i][None] - q, 0, 1), axis=-1)  # (N, L)
+            p2[i] = np.sum(wa[i][None, :] * assigned * joint, axis=1)
+        p2 = 0.5 * (p2 + p2.T)
+        np.fill_diagonal(p2, p1)
+        return p1, p2
+    if prior_mode == "perfect":
+        centres = occluders.mean if isinstance(occluders, OccluderPriors) else occluders
+        centres = np.zeros((0, 2)) if centres is None else np.asarray(centres, float).reshape(-1, 2)
+        vis = assigned & ~disks_block(cameras.positions, x, centres, diameter)
+    elif prior_mode == "none":
+        vis = assigned
+    else:
+        raise ConfigError(invalid("prior_mode", prior_mode, "'gaussian', 'perfect' or 'none'"))
+    vw = vis * w[None, :]
+    return vw.sum(axis=1), vw @ vis.T.astype(float)
+
+
+def selection_moments(
+    cameras: CameraArray,
+    room: Room,
+    x: ArrayLike,
+    w: ArrayLike,
+    occluders: OccluderPriors | ArrayLike | None,
+    diameter: float,
+    prior_mode: str = "gaussian",
+    models: Sequence[str] = ("perspective", "weak"),
+) -> SelectionMoments:
+    """Moments of the LMMSE metric from the predicted cloud ``x (L, 2)``, weights ``w (L,)``."""
+    x = np.asarray(x, float)[:, :2]
+    w = np.asarray(w, float)
+    if w.shape != (len(x),):
+        raise ShapeError(invalid("w.shape", w.shape, f"({len(x)},)"))
+    w = w / w.sum()
+    mu = w @ x
+    dx = x - mu
+    sigma_x = (dx * w[:, None]).T @ dx
+    p1, p2 = visibility_probabilities(cameras, room, x, w, occluders, diameter, prior_mode)
+    cov_zx: dict[str, Array] = {}
+    cov_z: dict[str, Array] = {}
+    f = cameras.focals
+    if "perspective" in models:
+        d, h = cameras.depth_lateral(x[:, None, :])  # (L, N)
+        bound = np.tan(cameras.fovs / 2)
+        r = np.clip(h / np.where(np.abs(d) > MIN_DEPTH, d, MIN_DEPTH), -bound, bound)
+        e_z = f * (w @ r)  # Eq. 11
+        cov_zx["perspective"] = (p1 * f)[:, None] * (r * w[:, None]).T @ dx  # Eq. 12
+        rr = (r * w[:, None]).T @ r
+        in_view = cameras.in_fov(x[:, None, :])
+        var = cameras.noise_var(x[:, None, :])
+        wv = w[:, None] * in_view
+        mass = wv.sum(axis=0)
+        centre_var = cameras.noise_var(mu[None, :])
+        sig2 = np.where(
+            mass > 0, np.sum(wv * var, axis=0) / np.where(mass > 0, mass, 1), centre_var
+        )
+        cov_z["perspective"] = p2 * (
+            np.outer(f, f) * rr - np.outer(e_z, e_z) + np.diag(sig2)
+        )  # Eq. 13
+    if "weak" in models:
+        a = cameras.normals  # (N, 2)
+        d_bar, _ = cameras.depth_lateral(mu[None, :])
+        d_bar = np.maximum(np.abs(d_bar), MIN_DEPTH)
+        var_t = (
+            cameras.sigma_theta**2 + cameras.sigma_read**2 / f**2
+        ) * d_bar**2 + cameras.sigma_pos**2  # Eq. 14
+        cov_zx["weak"] = p1[:, None] * (a @ sigma_x)  # Eq. 15
+        cov_z["weak"] = p2 * (a @ sigma_x @ a.T + np.diag(var_t))  # Eq. 16
+    return SelectionMoments(mu, sigma_x, p1, p2, cov_zx, cov_z)
+
+
+def subset_mse(moments: SelectionMoments, subsets: ArrayLike, model: str = "perspective") -> Array:
+    """``MSE(S) = Tr(Sigma_x - Sigma_Zx' Sigma_Z^+ Sigma_Zx)`` for each row of ``subsets (B, k)``."""
+    if model not in moments.cov_z:
+        raise ConfigError(invalid("model", model, f"one of {sorted(moments.cov_z)}"))
+    s = np.asarray(subsets, dtype=np.intp)
+    if s.ndim == 1:
+        s = s[None, :]
+    trace = float(np.trace(moments.sigma_x))
+    if s.shape[1] == 0:
+        return np.full(len(s), trace)
+    czx = moments.cov_zx[model][s]  # (B, k, 2)
+    cz = moments.cov_z[model][s[:, :, None], s[:, None, :]]  # (B, k, k)
+    scale = np.maximum(np.abs(cz).max(axis=(1, 2), keepdims=True), 1e-300)
+    inv = np.linalg.pinv(cz / scale, rcond=1e-10, hermitian=True) / scale
+    gain = np.einsum("bki,bkl,blj->bij", czx, inv, czx)
+    return np.asarray(trace - np.trace(gain, axis1=1, axis2=2))
+
+
+def _check_k(k: int, n: int) -> int:
+    if not (isinstance(k, int | np.integer) and 1 <= k <= n):
+        raise ConfigError(invalid("k", k, f"an integer number of cameras in [1, {n}]"))
+    return int(k)
+
+
+def greedy_selection(moments: SelectionMoments, k: int, model: str = "perspective") -> list[int]:
+    """Ercan et al. 2013, Algorithm 2: add the camera that lowers the MSE most, k times.
+
+    Ties go to the lowest camera index (strict ``<`` of the algorithm).
+    """
+    n = moments.n_cameras
+    k = _check_k(k, n)
+    chosen: list[int] = []
+    for _ in range(k):
+        rest = [i for i in range(n) if i not in chosen]
+        trials = np.array([[*chosen, i] for i in rest], dtype=np.intp)
+        e = subset_mse(moments, trials, model)
+        chosen.append(rest[int(np.argmin(e))])
+    return sorted(chosen)
+
+
+def brute_force_selection(
+    moments: SelectionMoments, k: int, model: str = "perspective", chunk: int = 4096
+) -> list[int]:
+    """The k-subset with the smallest MSE among all ``C(N, k)`` (first in lexicographic order on ties)."""
+    n = moments.n_cameras
+    k = _check_k(k, n)
+    best, best_e = None, math.inf
+    combos = itertools.combinations(range(n), k)
+    while True:
+        block = np.array(list(itertools.islice(combos, chunk)), dtype=np.intp)
+        if len(block) == 0:
+            break
+        e = subset_mse(moments, block, model)
+        j = int(np.argmin(e))
+        if e[j] < best_e:
+            best, best_e = block[j].tolist(), float(e[j])
+    assert best is not None
+    return best
+
+
+def fixed_selection(order: Sequence[int], k: int) -> list[int]:
+    """The first k cameras of a preselected list (0-based indices)."""
+    k = _check_k(k, len(order))
+    return sorted(int(i) for i in order[:k])
+
+
+def random_selection(n: int, k: int, rng: np.random.Generator) -> list[int]:
+    """A uniform random k-subset (drawn afresh at every selection epoch, spec §8 item 26)."""
+    k = _check_k(k, n)
+    return sorted(rng.choice(n, size=k, replace=False).tolist())
+
+
+def closest_selection(positions: Array, target: Array, k: int) -> list[int]:
+    """The k cameras nearest the predicted mean position (ties: lowest index)."""
+    k = _check_k(k, len(positions))
+    dist = np.hypot(*(np.asarray(positions, float) - np.asarray(target, float)).T)
+    return sorted(np.argsort(dist, kind="stable")[:k].tolist())
+
+
+def information_form_mse(sigma_x: Array, normals: Array, noise_var: Array) -> float:
+    """``Tr((Sigma_x^-1 + sum_i a_i a_i' / var_i)^-1)``: the weak-perspective MSE when every
+    camera surely sees the object (spec C10; equal to Eqs. 15-16 with all P{eta} = 1)."""
+    info = np.linalg.inv(sigma_x) + (normals / noise_var[:, None]).T @ normals
+    return float(np.trace(np.linalg.inv(info)))

@@ -1,0 +1,112 @@
+"""Random-waypoint particle dynamics with three regimes (Ercan et al. 2013, Sec. 4.1, Eq. 5).
+
+State of a particle: ``u = [x, y, tau_x, tau_y, s]`` (position, destination, speed). Each step a
+regime is drawn: move toward the destination (MTD) with probability ``beta``, change destination
+(CD) with probability ``lambda``, wait (W) otherwise, where ``(beta, lambda) = (0.9, 0.05)`` while
+the destination is not reached and ``(0.05, 0.9)`` once it is (``|tau - x| < s``). Then
+
+    MTD: x <- x + s (tau - x)/|tau - x| + v,  v ~ N(0, sigma_v^2 I)      # Ercan et al. 2013, Eq. 5
+         s <- (1 - phi) s + phi |x_new - x_old|,  phi = 0.7
+    CD:  tau <- uniform over the room, then one MTD step
+    W:   nothing changes.
+
+A move that would leave the room or enter a static occluder is rejected (the particle stays;
+spec §8 item 17). ``mean`` is the point ``kappa = E[u(t) | u(t-1)]`` of the auxiliary filter's first
+stage: the noise-free MTD step, or no move once the destination is reached (spec §8 item 6).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.errors import ConfigError, check_positive, check_probability, invalid
+
+Array = NDArray[np.float64]
+DestinationSampler = Callable[[np.random.Generator, int], Array]
+FreeTest = Callable[[Array], NDArray[np.bool_]]
+
+
+@dataclass(frozen=True)
+class WaypointRegimeDynamics:
+    """The tracker's transition density ``f(u(t) | u(t-1))`` of Sec. 4.1 (vectorised over particles)."""
+
+    sigma_v: float = 0.33
+    phi: float = 0.7
+    beta_moving: float = 0.9
+    lambda_moving: float = 0.05
+    beta_reached: float = 0.05
+    lambda_reached: float = 0.9
+    dim: int = 5
+    position_index: tuple[int, ...] = (0, 1)
+
+    def __post_init__(self) -> None:
+        check_positive("sigma_v", self.sigma_v, allow_zero=True)
+        check_probability("phi", self.phi)
+        for b, lam, name in (
+            (self.beta_moving, self.lambda_moving, "moving"),
+            (self.beta_reached, self.lambda_reached, "reached"),
+        ):
+            check_probability(f"beta_{name}", b)
+            check_probability(f"lambda_{name}", lam)
+            if b + lam > 1 + 1e-12:
+                raise ConfigError(invalid(f"beta_{name} + lambda_{name}", b + lam, "<= 1"))
+
+    def initial(
+        self, n: int, rng: np.random.Generator, sample_free: DestinationSampler, speed: float
+    ) -> Array:
+        """``n`` particles: positions and destinations uniform, speed ``speed`` (spec §8 item 16)."""
+        u = np.empty((n, 5))
+        u[:, :2] = sample_free(rng, n)
+        u[:, 2:4] = sample_free(rng, n)
+        u[:, 4] = speed
+        return u
+
+    @staticmethod
+    def _direction(u: Array) -> tuple[Array, Array]:
+        to = u[:, 2:4] - u[:, :2]
+        dist = np.hypot(to[:, 0], to[:, 1])
+        safe = np.where(dist > 0, dist, 1.0)
+        return to / safe[:, None], dist
+
+    def mean(self, u: Array) -> Array:
+        """``kappa``: the noise-free MTD step, or stay once the destination is reached."""
+        direction, dist = self._direction(u)
+        reached = dist < u[:, 4]
+        out = u.copy()
+        out[:, :2] += np.where(reached, 0.0, u[:, 4])[:, None] * direction
+        return out
+
+    def sample(
+        self,
+        u: Array,
+        rng: np.random.Generator,
+        sample_free: DestinationSampler,
+        free: FreeTest | None = None,
+    ) -> Array:
+        """Draw ``u(t) ~ f(u | u(t-1))`` for every particle (Sec. 4.1)."""
+        n = len(u)
+        out = u.copy()
+        _, dist = self._direction(u)
+        reached = dist < u[:, 4]
+        beta = np.where(reached, self.beta_reached, self.beta_moving)
+        lam = np.where(reached, self.lambda_reached, self.lambda_moving)
+        r = rng.random(n)
+        mtd = r < beta
+        cd = (r >= beta) & (r < beta + lam)
+        if cd.any():
+            out[cd, 2:4] = sample_free(rng, int(cd.sum()))
+        move = mtd | cd
+        noise = self.sigma_v * rng.standard_normal((n, 2))
+        direction, _ = self._direction(out)
+        step = out[:, 4:5] * direction + noise
+        new = out[:, :2] + step
+        if free is not None:
+            move &= free(new)
+        out[move, :2] = new[move]
+        travelled = np.hypot(step[:, 0], step[:, 1])
+        out[move, 4] = (1 - self.phi) * out[move, 4] + self.phi * travelled[move]
+        return out

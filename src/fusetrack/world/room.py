@@ -1,0 +1,164 @@
+"""Rooms: a floor polygon, static occluders (polygons known exactly) and line-of-sight tests.
+
+The line of sight from a camera to a point is blocked when the segment between them crosses a
+wall of the room (only possible in a non-convex room, e.g. the L-shaped room of Ercan et al.
+2013, Sec. 6.2) or a static occluder, or when the point lies inside a static occluder.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core.errors import ConfigError, invalid
+from .geometry import (
+    Array,
+    as_polygon,
+    is_convex,
+    points_in_polygon,
+    rectangle,
+    segments_cross_polygon,
+    signed_area,
+)
+from .occlusion_kernels import segments_cross_edges_kernel
+
+
+@dataclass(frozen=True)
+class Room:
+    """A floor polygon with static occluders inside it.
+
+    ``boundary``: vertices ``(n, 2)`` of a simple polygon (any orientation; stored anticlockwise).
+    ``static_occluders``: simple polygons that block sight and cannot be walked through; each
+    must lie inside the room.
+    """
+
+    boundary: Array
+    static_occluders: tuple[Array, ...] = ()
+    name: str = "room"
+    convex: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        b = as_polygon(self.boundary, "room.boundary")
+        occ = tuple(
+            as_polygon(o, f"room.static_occluders[{i}]")
+            for i, o in enumerate(self.static_occluders)
+        )
+        for i, o in enumerate(occ):
+            if not np.all(points_in_polygon(o, b)):
+                raise ConfigError(
+                    invalid(f"room.static_occluders[{i}]", o.tolist(), "a polygon inside the room")
+                )
+        object.__setattr__(self, "boundary", b)
+        object.__setattr__(self, "static_occluders", occ)
+        object.__setattr__(self, "convex", is_convex(b))
+
+    @property
+    def bounding_box(self) -> tuple[float, float, float, float]:
+        """``(xmin, xmax, ymin, ymax)``."""
+        lo, hi = self.boundary.min(axis=0), self.boundary.max(axis=0)
+        return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+
+    @property
+    def center(self) -> Array:
+        """Centre of the bounding box: where a tracker with no information puts an object."""
+        x0, x1, y0, y1 = self.bounding_box
+        return np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+
+    @property
+    def free_area(self) -> float:
+        return signed_area(self.boundary) - sum(signed_area(o) for o in self.static_occluders)
+
+    def inside(self, points: ArrayLike) -> NDArray[np.bool_]:
+        """Inside the floor polygon (static occluders ignored)."""
+        return points_in_polygon(points, self.boundary)
+
+    def in_static_occluder(self, points: ArrayLike) -> NDArray[np.bool_]:
+        p = np.asarray(points, dtype=float)
+        out = np.zeros(p.shape[:-1], dtype=bool)
+        for o in self.static_occluders:
+            out |= points_in_polygon(p, o)
+        return out
+
+    def free(self, points: ArrayLike) -> NDArray[np.bool_]:
+        """Inside the room and outside every static occluder: where objects may stand."""
+        return self.inside(points) & ~self.in_static_occluder(points)
+
+    def sight_blocked(self, viewer: ArrayLike, points: ArrayLike) -> NDArray[np.bool_]:
+        """True where walls or static occluders block the segment ``viewer -> points``.
+
+        Both arguments broadcast (``(..., 2)``). A point inside a static occluder is blocked.
+        """
+        v = np.asarray(viewer, dtype=float)
+        p = np.asarray(points, dtype=float)
+        blocked = np.zeros(np.broadcast_shapes(v.shape, p.shape)[:-1], dtype=bool)
+        if not self.convex:
+            blocked |= segments_cross_polygon(v, p, self.boundary)
+        for o in self.static_occluders:
+            blocked |= segments_cross_polygon(v, p, o)
+            blocked |= points_in_polygon(p, o)
+        return blocked
+
+    def sight_blocked_grid(self, viewers: ArrayLike, points: ArrayLike) -> NDArray[np.bool_]:
+        """``(K, L)`` :meth:`sight_blocked` for every viewer ``(K, 2)`` and point ``(L, 2)`` (Numba)."""
+        v = np.ascontiguousarray(np.asarray(viewers, float).reshape(-1, 2))
+        p = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 2))
+        ea, eb = self._blocking_edges
+        blocked = (
+            segments_cross_edges_kernel(v, p, ea, eb)
+            if len(ea)
+            else np.zeros((len(v), len(p)), bool)
+        )
+        if self.static_occluders:
+            blocked |= self.in_static_occluder(p)[None, :]
+        return np.asarray(blocked)
+
+    @property
+    def _blocking_edges(self) -> tuple[Array, Array]:
+        polys = ([] if self.convex else [self.boundary]) + list(self.static_occluders)
+        if not polys:
+            return np.zeros((0, 2)), np.zeros((0, 2))
+        a = np.concatenate([p for p in polys])
+        b = np.concatenate([np.concatenate([p[1:], p[:1]]) for p in polys])
+        return np.ascontiguousarray(a), np.ascontiguousarray(b)
+
+    def segment_free(self, start: ArrayLike, end: ArrayLike) -> NDArray[np.bool_]:
+        """True where an object can walk straight from ``start`` to ``end``."""
+        return ~self.sight_blocked(start, end) & self.free(end)
+
+    def sample_free(self, rng: np.random.Generator, n: int) -> Array:
+        """``n`` points uniform over the free floor (rejection from the bounding box)."""
+        x0, x1, y0, y1 = self.bounding_box
+        box = (x1 - x0) * (y1 - y0)
+        accept = max(self.free_area / box, 1e-3)
+        out = np.empty((0, 2))
+        for _ in range(1000):
+            m = int(1.3 * (n - len(out)) / accept) + 8
+            cand = np.column_stack([rng.uniform(x0, x1, m), rng.uniform(y0, y1, m)])
+            out = np.concatenate([out, cand[self.free(cand)]])
+            if len(out) >= n:
+                return out[:n]
+        raise ConfigError(
+            invalid("room", self.name, "a room with free floor area")
+        )  # pragma: no cover
+
+
+def square_room(
+    side: float = 100.0, static_occluders: Sequence[ArrayLike] = (), name: str = "square"
+) -> Room:
+    """Square room ``[0, side]^2`` (Ercan et al. 2013, Sec. 6.1: side 100 units)."""
+    return Room(
+        rectangle(0, side, 0, side), tuple(np.asarray(o, float) for o in static_occluders), name
+    )
+
+
+def l_shaped_room(size: float = 200.0) -> Room:
+    """The L-shaped room of Fig. 11 (spec default): a ``size`` square minus its upper-right quarter."""
+    h = size / 2
+    return Room(
+        np.array([[0, 0], [size, 0], [size, h], [h, h], [h, size], [0, size]], dtype=float),
+        (),
+        "L-shaped",
+    )

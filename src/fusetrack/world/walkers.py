@@ -1,0 +1,114 @@
+"""People walking between random waypoints, going around each other (Ercan et al. 2013, Sec. 6).
+
+The data-generating motion of the tracked object and of every moving occluder (procedure
+``move_objects``): each walker heads for a destination at a constant speed ``s`` with white
+Gaussian noise,
+
+    x(t) = x(t-1) + s (tau - x(t-1)) / |tau - x(t-1)| + v(t),  v ~ N(0, sigma^2 I)   # Eq. 5 form
+
+and picks a new destination, uniform over the free floor and reachable in a straight line, when
+it has arrived (distance < s) or when its next step would leave the room or enter a static
+occluder (spec §8 items 19-21). Walkers go around each other instead of colliding: a step that
+would bring a walker's centre within ``D`` of another one is turned by +-15, +-30, ..., +-90
+degrees, and a walker that finds no free heading stands still for one step (spec §8 item 20).
+All walkers move at once (each tests its step against the others' current positions).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.errors import check_positive
+from .geometry import Array
+from .room import Room
+
+_TURNS = np.deg2rad(np.array([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75, 90, -90], float))
+
+
+@dataclass(frozen=True)
+class WaypointWalkers:
+    """Random-waypoint walkers of diameter ``diameter`` in ``room``; the first may be the object."""
+
+    room: Room
+    speed: float = 1.0
+    noise: float = 0.33
+    diameter: float = 3.33
+    avoid: bool = True
+
+    def __post_init__(self) -> None:
+        check_positive("speed", self.speed)
+        check_positive("noise", self.noise, allow_zero=True)
+        check_positive("diameter", self.diameter, allow_zero=True)
+
+    def initial(self, n: int, rng: np.random.Generator) -> tuple[Array, Array]:
+        """Positions and destinations ``(n, 2)``: uniform over the free floor, no two closer than D."""
+        pos = np.empty((0, 2))
+        for _ in range(200):
+            cand = self.room.sample_free(rng, max(2 * (n - len(pos)), 4))
+            for c in cand:
+                if len(pos) >= n:
+                    break
+                if len(pos) == 0 or np.min(np.hypot(*(pos - c).T)) >= self.diameter:
+                    pos = np.vstack([pos, c])
+            if len(pos) >= n:
+                break
+        dest = self._destinations(pos, rng)
+        return pos, dest
+
+    def _destinations(self, pos: Array, rng: np.random.Generator) -> Array:
+        """A destination for each walker, uniform over the free floor and in straight sight."""
+        dest = self.room.sample_free(rng, len(pos))
+        if self.room.convex and not self.room.static_occluders:
+            return dest
+        todo = ~self.room.segment_free(pos, dest)
+        for _ in range(100):
+            if not todo.any():
+                break
+            dest[todo] = self.room.sample_free(rng, int(todo.sum()))
+            todo[todo] = ~self.room.segment_free(pos[todo], dest[todo])
+        return dest
+
+    def step(self, pos: Array, dest: Array, rng: np.random.Generator) -> tuple[Array, Array]:
+        """One time step for every walker; returns new positions and destinations."""
+        n = len(pos)
+        dest = dest.copy()
+        noise = self.noise * rng.standard_normal((n, 2))
+        to_dest = dest - pos
+        dist = np.hypot(to_dest[:, 0], to_dest[:, 1])
+        heading = np.arctan2(to_dest[:, 1], to_dest[:, 0])
+        cand, ok = self._candidates(pos, heading, noise)
+        change = (dist < self.speed) | ~ok[:, 0]
+        if change.any():  # CD regime: a new destination, then an MTD step towards it
+            dest[change] = self._destinations(pos[change], rng)
+            d = dest[change] - pos[change]
+            cand[change], ok[change] = self._candidates(
+                pos[change], np.arctan2(d[:, 1], d[:, 0]), noise[change]
+            )
+        if self.avoid and n > 1:
+            diff = cand[:, :, None, :] - pos[None, None, :, :]
+            gap2 = np.einsum("ntmk,ntmk->ntm", diff, diff)  # (n, T, n)
+            gap2[np.arange(n), :, np.arange(n)] = np.inf
+            ok &= np.all(gap2 >= self.diameter**2, axis=-1)
+        first = np.argmax(ok, axis=1)
+        found = ok[np.arange(n), first]
+        new = np.where(found[:, None], cand[np.arange(n), first], pos)
+        return new, dest
+
+    def _candidates(self, pos: Array, heading: Array, noise: Array) -> tuple[Array, Array]:
+        """Steps straight on and turned away by growing angles ``(n, T, 2)``, and which are free."""
+        ang = heading[:, None] + _TURNS[None, :]
+        cand = pos[:, None, :] + self.speed * np.stack([np.cos(ang), np.sin(ang)], -1)
+        cand += noise[:, None, :]
+        return cand, self.room.segment_free(pos[:, None, :], cand)
+
+    def trajectory(self, n: int, steps: int, rng: np.random.Generator) -> Array:
+        """Positions ``(steps + 1, n, 2)``; row 0 is the start."""
+        pos, dest = self.initial(n, rng)
+        out = np.empty((steps + 1, n, 2))
+        out[0] = pos
+        for t in range(1, steps + 1):
+            pos, dest = self.step(pos, dest, rng)
+            out[t] = pos
+        return out
