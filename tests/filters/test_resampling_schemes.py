@@ -104,3 +104,15 @@ def test_trailing_zero_weights_are_never_selected():
     idx = inverse_cdf(w, np.ascontiguousarray(u))
     assert idx[0].max() == 3 and idx[1].max() == 2
     np.testing.assert_array_equal(idx, inverse_cdf_reference(w, u))
+
+
+def test_systematic_equals_inverse_cdf_of_shifted_grid():
+    """The fused systematic merge gives the indices of the explicit ``u_k = (k + u0) / N``."""
+    rng = np.random.default_rng(6)
+    w = rng.random((4, 1001)) ** 3
+    w[:, 500:520] = 0.0
+    idx = get_resampler("systematic")(w, np.random.default_rng(7))
+    u0 = np.random.default_rng(7).random((4, 1))
+    u = (np.arange(1001) + u0) / 1001
+    np.testing.assert_array_equal(idx, inverse_cdf_reference(w, u))
+    np.testing.assert_array_equal(idx, inverse_cdf(w, u))

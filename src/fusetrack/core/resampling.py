@@ -47,6 +47,29 @@ def _inverse_cdf_sorted(weights: np.ndarray, u: np.ndarray) -> np.ndarray:  # pr
     return out
 
 
+@numba.njit(cache=True, nogil=True)
+def _systematic_sorted(weights: np.ndarray, u0: np.ndarray) -> np.ndarray:  # pragma: no cover - jit
+    """:func:`_inverse_cdf_sorted` with ``u_k = (k + u0[r]) / n`` made on the fly (no array of
+    uniforms); the same floating-point operations as ``(np.arange(n) + u0) / n``."""
+    rows, n = weights.shape
+    out = np.empty((rows, n), dtype=np.intp)
+    for r in range(rows):
+        total = 0.0
+        for i in range(n):
+            total += weights[r, i]
+        j = 0
+        acc = weights[r, 0]
+        c = acc / total
+        for k in range(n):
+            u = (k + u0[r]) / n
+            while u >= c and j < n - 1:
+                j += 1
+                acc += weights[r, j]
+                c = acc / total
+            out[r, k] = j
+    return out
+
+
 def inverse_cdf(weights: NDArray[np.float64], u: NDArray[np.float64]) -> NDArray[np.intp]:
     """Indices ``i`` with ``cdf[i-1] <= u < cdf[i]`` for sorted uniforms ``u`` (Numba merge)."""
     w = np.ascontiguousarray(weights, dtype=np.float64)
@@ -88,10 +111,10 @@ def stratified(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArra
 
 def systematic(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.intp]:
     """A single uniform shifted by ``k/N``: the lowest-cost and usually lowest-variance scheme."""
-    w = np.asarray(weights, float)
-    n = w.shape[-1]
-    u = (np.arange(n) + rng.random((*w.shape[:-1], 1))) / n
-    return inverse_cdf(w, u)
+    w = np.ascontiguousarray(weights, dtype=np.float64)
+    u0 = rng.random((*w.shape[:-1], 1))  # u_k = (k + u0) / N, made inside the merge
+    w2 = w.reshape(-1, w.shape[-1])
+    return _systematic_sorted(w2, u0.reshape(-1)).reshape(w.shape)
 
 
 def residual(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.intp]:
