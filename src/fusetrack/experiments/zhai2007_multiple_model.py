@@ -250,7 +250,7 @@ def run(ctx: RunContext) -> Outcome:
         Claim(
             "C9_stationary",
             "the shares after 20 steps equal the stationary distribution of Pi_A",
-            [round(v, 4) for v in stat],
+            [round(float(v), 4) for v in stat],
             [round(float(v), 4) for v in last],
             "±0.015 each",
             bool(np.all(np.abs(last - stat) <= 0.015)),
