@@ -108,4 +108,5 @@ def test_particle_covariance_matches_kalman():
     np.testing.assert_allclose(est.cov, g.cov, rtol=0.1, atol=0.02 * np.max(np.diag(g.cov)))
     # the estimate equals the core Particles moments
     np.testing.assert_allclose(est.mean, p.mean, rtol=1e-10)
+    np.testing.assert_array_equal(pf.mean(p), est.mean)
     np.testing.assert_allclose(est.cov, p.cov, rtol=1e-8, atol=1e-12)

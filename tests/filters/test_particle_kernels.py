@@ -89,6 +89,8 @@ def test_kernels_match_references_on_shapes(shape):
     m, c = K.weighted_mean_cov(x, w)
     m_ref, c_ref = K.weighted_mean_cov_reference(x, w)
     np.testing.assert_allclose(m, m_ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(K.weighted_mean(x, w), m)  # the same first pass
+    np.testing.assert_allclose(K.weighted_mean_reference(x, w), m_ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(c, c_ref, rtol=1e-10, atol=1e-14)
     np.testing.assert_allclose(
         K.effective_sample_size(w), K.effective_sample_size_reference(w), rtol=1e-12

@@ -14,6 +14,7 @@ quantities with array operations and agree to rounding (about 1e-15 relative), n
 * :func:`normalize_log_weights` -- ``exp`` once, log-sum-exp, normalised log-weights and
   weights, ESS. Its ``exp`` is NumPy's SIMD one, shared by both engines (see
   ``_exp_shifted``); the sums and the normalisation are Numba loops.
+* :func:`weighted_mean` -- weighted mean (one pass);
 * :func:`weighted_mean_cov` -- weighted mean and covariance (two passes: the mean, then the
   centred second moment, which is stable however far the cloud is from the origin).
 * :func:`effective_sample_size` -- ``(sum w)^2 / sum w^2`` from weights (normalised first, so
@@ -52,8 +53,10 @@ __all__ = [
     "log_weight_update_reference",
     "normalize_log_weights",
     "normalize_log_weights_reference",
+    "weighted_mean",
     "weighted_mean_cov",
     "weighted_mean_cov_reference",
+    "weighted_mean_reference",
 ]
 
 
@@ -283,14 +286,12 @@ def effective_sample_size_reference(weights: ArrayLike) -> Array:
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
-def _mean_cov_rows(x, w, mean, cov):  # pragma: no cover - jit
+def _mean_rows(x, w, mean, sw):  # pragma: no cover - jit
+    """``sw[r] = sum_i w_ri`` and ``mean[r] = sum_i w_ri x_ri / sw[r]``."""
     rows, n, d = x.shape
     part = np.empty(d)
-    dev = np.empty(d)
-    cpart = np.empty((d, d))
     for r in range(rows):
-        # pass 1: sum w and sum w x
-        sw = 0.0
+        total = 0.0
         for k in range(d):
             mean[r, k] = 0.0
         for lo in range(0, n, CHUNK):
@@ -301,11 +302,22 @@ def _mean_cov_rows(x, w, mean, cov):  # pragma: no cover - jit
                 pw += wi
                 for k in range(d):
                     part[k] += wi * x[r, i, k]
-            sw += pw
+            total += pw
             for k in range(d):
                 mean[r, k] += part[k]
         for k in range(d):
-            mean[r, k] /= sw
+            mean[r, k] /= total
+        sw[r] = total
+
+
+@numba.njit(cache=True, fastmath=False, nogil=True)
+def _mean_cov_rows(x, w, mean, cov):  # pragma: no cover - jit
+    rows, n, d = x.shape
+    sw = np.empty(rows)
+    _mean_rows(x, w, mean, sw)  # pass 1: the mean
+    dev = np.empty(d)
+    cpart = np.empty((d, d))
+    for r in range(rows):
         # pass 2: sum w (x - mean)(x - mean)^T, lower triangle
         for a in range(d):
             for b in range(d):
@@ -325,9 +337,33 @@ def _mean_cov_rows(x, w, mean, cov):  # pragma: no cover - jit
                     cov[r, a, b] += cpart[a, b]
         for a in range(d):
             for b in range(a + 1):
-                c = cov[r, a, b] / sw
+                c = cov[r, a, b] / sw[r]
                 cov[r, a, b] = c
                 cov[r, b, a] = c
+
+
+def _states_weights(states: ArrayLike, weights: ArrayLike) -> tuple[Array, Array, tuple[int, ...]]:
+    x = np.ascontiguousarray(states, dtype=np.float64)
+    if x.ndim < 2:
+        raise ValueError(f"states.shape={x.shape} is invalid: expected (..., N, d)")
+    lead, (n, d) = x.shape[:-2], x.shape[-2:]
+    w = np.ascontiguousarray(np.broadcast_to(np.asarray(weights, dtype=np.float64), (*lead, n)))
+    return x.reshape(-1, n, d), w.reshape(-1, n), lead
+
+
+def weighted_mean(states: ArrayLike, weights: ArrayLike) -> Array:
+    """Weighted mean ``(..., d)`` of ``states`` ``(..., N, d)`` (weights need not sum to one)."""
+    x3, w2, lead = _states_weights(states, weights)
+    mean = np.empty((x3.shape[0], x3.shape[2]))
+    _mean_rows(x3, w2, mean, np.empty(x3.shape[0]))
+    return mean.reshape((*lead, x3.shape[2]))
+
+
+def weighted_mean_reference(states: ArrayLike, weights: ArrayLike) -> Array:
+    """NumPy reference for :func:`weighted_mean`."""
+    w = np.asarray(weights, dtype=float)
+    w = w / w.sum(axis=-1, keepdims=True)
+    return np.asarray(np.einsum("...n,...nd->...d", w, np.asarray(states, dtype=float)))
 
 
 def weighted_mean_cov(states: ArrayLike, weights: ArrayLike) -> tuple[Array, Array]:
@@ -336,15 +372,11 @@ def weighted_mean_cov(states: ArrayLike, weights: ArrayLike) -> tuple[Array, Arr
     ``weights`` ``(..., N)`` need not sum to one (they are divided by their sum). The covariance
     is the weighted second moment about the mean, ``sum_i w_i (x_i - m)(x_i - m)^T / sum_i w_i``.
     """
-    x = np.ascontiguousarray(states, dtype=np.float64)
-    if x.ndim < 2:
-        raise ValueError(f"states.shape={x.shape} is invalid: expected (..., N, d)")
-    lead, (n, d) = x.shape[:-2], x.shape[-2:]
-    w = np.ascontiguousarray(np.broadcast_to(np.asarray(weights, dtype=np.float64), (*lead, n)))
-    x3 = x.reshape(-1, n, d)
+    x3, w2, lead = _states_weights(states, weights)
+    d = x3.shape[2]
     mean = np.empty((x3.shape[0], d))
     cov = np.empty((x3.shape[0], d, d))
-    _mean_cov_rows(x3, w.reshape(-1, n), mean, cov)
+    _mean_cov_rows(x3, w2, mean, cov)
     return mean.reshape((*lead, d)), cov.reshape((*lead, d, d))
 
 

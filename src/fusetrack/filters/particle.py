@@ -129,6 +129,7 @@ class _Engine(NamedTuple):
     add: Callable[..., tuple[Array, Array]]
     normalize: Callable[..., tuple[Array, Array, Array, Array]]
     update: Callable[[Array, Array], tuple[Array, Array, Array, Array]]
+    mean: Callable[[Array, Array], Array]
     mean_cov: Callable[[Array, Array], tuple[Array, Array]]
 
 
@@ -137,12 +138,14 @@ _ENGINES = {
         kernels.add_log_likelihood,
         kernels.normalize_log_weights,
         kernels.log_weight_update,
+        kernels.weighted_mean,
         kernels.weighted_mean_cov,
     ),
     "numpy": _Engine(
         kernels.add_log_likelihood_reference,
         kernels.normalize_log_weights_reference,
         kernels.log_weight_update_reference,
+        kernels.weighted_mean_reference,
         kernels.weighted_mean_cov_reference,
     ),
 }
@@ -317,6 +320,13 @@ class ParticleFilter:
         mean, cov = self._k.mean_cov(s.reshape(-1, n, d), W.w)
         lead = particles.batch_shape
         return Gaussian(mean.reshape((*lead, d)), cov.reshape((*lead, d, d)))
+
+    def mean(self, particles: Particles) -> Array:
+        """Weighted mean ``(..., d)`` only (one pass; cheaper than :meth:`estimate`)."""
+        W = self._weights(particles)
+        s = particles.states
+        n, d = s.shape[-2:]
+        return self._k.mean(s.reshape(-1, n, d), W.w).reshape((*particles.batch_shape, d))
 
     def weights(self, particles: Particles) -> Array:
         """Normalised weights ``(..., N)`` (cached: no ``exp`` when they came from this filter)."""
