@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import gc
 import json
-import math
 import os
 import statistics
 import sys
@@ -304,43 +303,60 @@ def _timed_run(runner: object, seed: int, steps: int) -> tuple[float, Array]:
 
 
 def measure(
-    lib: str,
     scn: Scenario,
     n: int,
     args: argparse.Namespace,
-    estimate: float | None,
-    first: bool,
-) -> dict[str, float | None]:
-    """Median seconds per step, the RMSE of the first timed run (``None`` when skipped), the
-    estimated seconds per step and the number of timed runs."""
-    if estimate is not None and estimate > args.budget:
-        return {"seconds_per_step": None, "rmse": None, "estimate": estimate, "runs": 0}
-    runner = RUNNERS[lib](scn, n)
+    last: dict[str, tuple[int, float]],
+) -> dict[str, dict[str, float | None]]:
+    """Time every library of ``args.libs`` at ``n`` particles.
+
+    Per library: median seconds per step (``None`` when skipped), the RMSE of its first timed
+    run, the estimated seconds per step and the number of timed runs. ``last`` maps a library
+    to ``(N, seconds per step)`` of its previous N and is updated. The timed runs go round-robin
+    over the libraries (run 1 of each, then run 2 of each, ...), so that a change of load on
+    the machine during the measurement hits every library alike.
+    """
+    res: dict[str, dict[str, float | None]] = {}
+    runners: dict[str, object] = {}
+    runs: dict[str, int] = {}
     warm_steps = min(WARMUP_STEPS, args.steps)
-    # Warm-up: JIT compilation, caches, page faults. A library's first warm-up may include
-    # compile time, so when it looks over budget it gets a second one.
-    t_warm, _ = _timed_run(runner, args.seed + 10_000, warm_steps)
-    if first and t_warm / warm_steps > args.budget:
-        t_warm, _ = _timed_run(runner, args.seed + 10_001, warm_steps)
-    est_step = t_warm / warm_steps
-    if est_step > args.budget:
-        return {"seconds_per_step": None, "rmse": None, "estimate": est_step, "runs": 0}
-    # Fewer timed runs when they would take longer than --max-seconds together (at least one).
-    runs = max(1, min(args.repeats, int(args.max_seconds // (est_step * args.steps))))
-    times, rmse = [], math.nan
-    for r in range(runs):
-        elapsed, est = _timed_run(runner, args.seed + r, args.steps)
-        times.append(elapsed / args.steps)
-        if r == 0:
-            rmse = position_rmse(est, scn.truth[1 : args.steps + 1, :2])
-    del runner
+    for lib in args.libs:
+        prev = last.get(lib)
+        est_step = prev[1] * n / prev[0] if prev is not None else None
+        if est_step is None or est_step <= args.budget:
+            runner = RUNNERS[lib](scn, n)
+            # Warm-up: JIT compilation, caches, page faults. A library's first warm-up may
+            # include compile time, so when it looks over budget it gets a second one.
+            t_warm, _ = _timed_run(runner, args.seed + 10_000, warm_steps)
+            if prev is None and t_warm / warm_steps > args.budget:
+                t_warm, _ = _timed_run(runner, args.seed + 10_001, warm_steps)
+            est_step = t_warm / warm_steps
+            if est_step <= args.budget:
+                runners[lib] = runner
+                # Fewer timed runs when they would take longer than --max-seconds together.
+                runs[lib] = max(
+                    1, min(args.repeats, int(args.max_seconds // (est_step * args.steps)))
+                )
+            else:
+                del runner
+        res[lib] = {"seconds_per_step": None, "rmse": None, "estimate": est_step, "runs": 0}
+        last[lib] = (n, float(est_step))  # a skipped library stays skipped at larger N
+    times: dict[str, list[float]] = {lib: [] for lib in runners}
+    for r in range(max(runs.values(), default=0)):
+        for lib, runner in runners.items():
+            if r >= runs[lib]:
+                continue
+            elapsed, est = _timed_run(runner, args.seed + r, args.steps)
+            times[lib].append(elapsed / args.steps)
+            if r == 0:
+                res[lib]["rmse"] = position_rmse(est, scn.truth[1 : args.steps + 1, :2])
+    for lib in runners:
+        t = statistics.median(times[lib])
+        res[lib]["seconds_per_step"], res[lib]["runs"] = t, runs[lib]
+        last[lib] = (n, t)
+    runners.clear()
     gc.collect()
-    return {
-        "seconds_per_step": statistics.median(times),
-        "rmse": rmse,
-        "estimate": est_step,
-        "runs": runs,
-    }
+    return res
 
 
 def _fmt_time(t: float | None, est: float | None) -> str:
@@ -443,16 +459,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     last: dict[str, tuple[int, float]] = {}  # lib -> (N, seconds per step) of the last measured N
     for n in args.N:
-        res: dict[str, dict[str, float | None]] = {}
-        for lib in args.libs:
-            prev = last.get(lib)
-            extrapolated = prev[1] * n / prev[0] if prev is not None else None
-            res[lib] = measure(lib, scn, n, args, extrapolated, first=prev is None)
-            t = res[lib]["seconds_per_step"]
-            if t is not None:
-                last[lib] = (n, t)
-            else:  # remember the estimate so larger N are skipped without a warm-up
-                last[lib] = (n, float(res[lib]["estimate"]))  # type: ignore[arg-type]
+        res = measure(scn, n, args, last)
         if args.json:
             print(
                 json.dumps(
