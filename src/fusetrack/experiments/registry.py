@@ -84,6 +84,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "subtraction, occlusion detection, joint tracking through occlusions)",
             "Nott 2009 (M.S. thesis, Univ. of Kentucky)",
         ),
+        ExperimentInfo(
+            "lee2009-detection-fusion",
+            "lee2009_detection_fusion:run",
+            "Lee 2009 Ch. 4: quality-weighted camera detection fusion with a dynamic prior",
+            "Lee 2009 (seed 000)",
+        ),
     ]
 }
 
