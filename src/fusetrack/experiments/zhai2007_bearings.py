@@ -92,6 +92,9 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         "bootstrap equal time": ProposalParticleFilter(
             motion, [sensor], n_particles=int(config["n_equal"])
         ),
+        "PF-SP-PEKF marginal": ProposalParticleFilter(
+            motion, [sensor], SPPEKFProposal(20), n_particles=n, transition="marginal"
+        ),
     }
     for k, (name, f) in enumerate(pfs.items()):
         est, secs, _ = timed_sis(f, prior, zs, dt, np.random.default_rng([seed, k]))
