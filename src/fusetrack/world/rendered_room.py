@@ -271,11 +271,14 @@ class RoomRenderer:
             for world, colour, _hand in self._body_polygons(people[i], k):
                 self._fill(img, world, tuple(float(c) for c in colour))
                 self._fill(label, world, i)
-        noisy = img + rng.normal(0.0, self.noise_sigma, img.shape).astype(np.float32)
+        noisy = img + np.float32(self.noise_sigma) * rng.standard_normal(
+            img.shape, dtype=np.float32
+        )
         image = np.clip(np.rint(noisy), 0, 255).astype(np.uint8)
-        xy = np.array([p.walk.xy[k] for p in people])
+        xy = np.array([p.walk.xy[k] for p in people]).reshape(-1, 2)
+        heights = np.array([p.height for p in people], float)
         foot = cam.project(np.column_stack([xy, np.zeros(len(people))]))
-        head = cam.project(np.column_stack([xy, [p.height for p in people]]))
+        head = cam.project(np.column_stack([xy, heights]))
         visible = [full[i] & (label == i) for i in range(len(people))]
         t = float(people[0].walk.times[k]) if people else float(k)
         return Frame(k, t, image, full, visible, foot, head, xy)
