@@ -90,6 +90,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 Ch. 4: quality-weighted camera detection fusion with a dynamic prior",
             "Lee 2009 (seed 000)",
         ),
+        ExperimentInfo(
+            "lee2009-robot-navigation",
+            "lee2009_robot_navigation:run",
+            "Lee 2009 Sec. 5.2.2: potential-field robot navigation, aligned-obstacle collision, fix and escape",
+            "Lee 2009 (seed 000)",
+        ),
     ]
 }
 
