@@ -15,20 +15,17 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.signal import butter, sosfilt
+from scipy.signal import butter, lfilter, sosfilt
 
 SPEED_OF_SOUND = 343.0
 
 
 def pink_noise(shape: tuple[int, ...], rng: np.random.Generator) -> NDArray[np.float64]:
-    """Unit-variance 1/f noise along the last axis (white noise shaped in the frequency domain)."""
-    n = shape[-1]
-    spec = np.fft.rfft(rng.standard_normal(shape), axis=-1)
-    f = np.arange(spec.shape[-1], dtype=float)
-    f[0] = 1.0
-    spec = spec / np.sqrt(f)
-    spec[..., 0] = 0.0
-    x = np.fft.irfft(spec, n=n, axis=-1)
+    """Unit-variance 1/f noise along the last axis: white noise through P. Kellet's 3-pole
+    pinking filter (within ±0.05 dB of 1/f above 10 Hz at 44.1 kHz; a 1/f-like slope here)."""
+    b = [0.049922035, -0.095993537, 0.050612699, -0.004408786]
+    a = [1.0, -2.494956002, 2.017265875, -0.522189400]
+    x = lfilter(b, a, rng.standard_normal(shape), axis=-1)
     return x / np.maximum(x.std(axis=-1, keepdims=True), 1e-12)
 
 
@@ -91,15 +88,17 @@ def propagate(
     e = np.asarray(emission, float)
     t = np.asarray(times, float)
     m = np.atleast_2d(np.asarray(mics, float))
-    out = np.empty((m.shape[0], t.size))
     src_now = source_path(t)
     dim = min(src_now.shape[-1], m.shape[-1])
-    for i, mic in enumerate(m):
-        r = np.linalg.norm(src_now[:, :dim] - mic[:dim], axis=-1)
-        tau = t - r / c
-        r = np.linalg.norm(source_path(tau)[:, :dim] - mic[:dim], axis=-1)
-        tau = t - r / c
-        out[i] = np.interp(tau * fs, np.arange(e.size), e, left=0.0, right=0.0) / np.maximum(
-            r, min_distance
-        )
-    return out
+    mic = m[:, None, :dim]
+    r = np.sqrt(((src_now[None, :, :dim] - mic) ** 2).sum(-1))  # (M, L)
+    # one fixed-point step: the source position at the retarded time (mean over the mics)
+    tau_centre = t - r.mean(axis=0) / c
+    r = np.sqrt(((source_path(tau_centre)[None, :, :dim] - mic) ** 2).sum(-1))
+    u = (t[None, :] - r / c) * fs
+    i0 = np.floor(u).astype(np.int64)
+    frac = u - i0
+    ok = (i0 >= 0) & (i0 + 1 < e.size)
+    i0 = np.clip(i0, 0, e.size - 2)
+    out = (1 - frac) * e[i0] + frac * e[i0 + 1]  # fractional delay: linear interpolation
+    return np.where(ok, out, 0.0) / np.maximum(r, min_distance)
