@@ -10,7 +10,14 @@ targets) that the filter advances all at once. One step is
     regularised filter then jitters the copies), and draw every particle's next state from the
     motion model, ``x_k ~ p(x_k | x_{k-1})``;
 ``update(particles, measurements, rng)``
-    for each measurement in turn, ``log w_i += log p(z | x_i)`` and normalise by log-sum-exp.
+    for each measurement in turn, ``log w_i += log p(z | x_i)``; normalise by log-sum-exp.
+
+Estimates: :meth:`ParticleFilter.estimate` (weighted mean and covariance, a Gaussian) and
+:meth:`ParticleFilter.mean` (mean only, one pass). The particle sets a filter returns carry their
+normalised weights in ``info``, so neither recomputes an ``exp``; the log-likelihoods of all the
+measurements of an update are summed and normalised once (the degeneracy rules below still hold
+per measurement: a cheap bound vouches for each, and the exact one-at-a-time update runs when it
+cannot).
 
 Resampling sits at the start of ``predict`` rather than the end of ``update`` so that the
 estimate after an update (:meth:`ParticleFilter.estimate`) is taken from the weighted particles,
@@ -44,9 +51,16 @@ Randomness. Every draw comes from ``rng``. Pass one :class:`numpy.random.Generat
 the whole batch at once (fastest), or a sequence of generators, one per run (flattened C order
 over the batch axes), to make run ``r`` of a batch bit-identical to a separate single run driven
 by ``rng[r]``: the filter then calls the motion model, the sensors and the resampler run by
-run. ``engine="numba"`` uses the kernels of :mod:`fusetrack.filters.kernels`,
-``engine="numpy"`` their NumPy references (same draws; results agree to rounding). Both use the
-resampling schemes of :mod:`fusetrack.core.resampling`.
+run (pass the same sequence to ``update``, which the auxiliary filter draws in, and which then
+also evaluates the likelihoods run by run). With one generator a batch is statistically, not
+bitwise, equivalent to separate runs. ``engine="numba"`` uses the kernels of
+:mod:`fusetrack.filters.kernels`, ``engine="numpy"`` their NumPy references (same draws; results
+agree to rounding, about 1e-15). Both use the resampling schemes of
+:mod:`fusetrack.core.resampling`.
+
+Counters (``filter.stats``, a :class:`~fusetrack.filters.stats.FilterStats`):
+``skipped_measurements`` (one per skipped row), ``degenerate_steps`` (one per ``update`` that
+recovered, however many runs) and ``resample_count`` (one per step that resampled any run).
 
 >>> import numpy as np
 >>> from fusetrack.core import Gaussian, Measurement
@@ -305,10 +319,9 @@ class ParticleFilter:
     ) -> Particles:
         """Weight by each usable measurement in turn (``log w += log p(z | x)``, normalised)."""
         checked = self._check_measurements(measurements, particles.batch_shape)
-        W = self._weights(particles)
         if not checked:
             return particles
-        W, degenerate = self._reweight(particles.states, W, checked, rng)
+        W, degenerate = self._reweight(particles.states, self._weights(particles), checked, rng)
         self._note_degenerate(degenerate)
         return self._particles(particles.states, W)
 
@@ -691,9 +704,9 @@ class RegularizedParticleFilter(ParticleFilter):
     After resampling a run, every copy is moved by a draw from the Gaussian kernel,
     ``x_i <- x_i + h D eps_i``, ``eps_i ~ N(0, I)``, where ``D D^T = S`` is the Cholesky factor of
     the weighted covariance ``S`` of the particles before resampling and ``h`` is the optimal
-    bandwidth for a Gaussian kernel and a Gaussian density,
-    ``h_opt = (4 / (N (d + 2)))^(1 / (d + 4))`` (Musso et al. 2001, Sec. 12.2.2), multiplied by
-    ``bandwidth_scale``. The jitter restores diversity lost to resampling (sample impoverishment
+    bandwidth for a Gaussian kernel and a Gaussian density (Musso et al. 2001:
+    ``h_opt = A N^(-1/(d+4))``, ``A = (4 / (d + 2))^(1/(d+4))``), i.e.
+    ``h_opt = (4 / (N (d + 2)))^(1 / (d + 4))``, times ``bandwidth_scale``. The jitter restores diversity lost to resampling (sample impoverishment
     with little process noise) at the price of a slightly wider posterior. A singular ``S`` uses
     its symmetric square root instead of Cholesky. Everything else is :class:`ParticleFilter`.
     """
@@ -741,7 +754,7 @@ class AuxiliaryParticleFilter(ParticleFilter):
 
     1. first stage: ``lambda_i ∝ w_i p(z | mu_i)`` with ``mu_i = motion.mean(x_{k-1}^i, dt)``
        (the likelihood of all of the step's measurements at the predicted mean;
-       Pitt & Shephard 1999, Eq. 8 with the "point" choice ``mu = E[x_k | x_{k-1}]``);
+       Pitt & Shephard 1999, the auxiliary weights with ``mu = E[x_k | x_{k-1}]``);
     2. resamples ancestors ``a_j ~ lambda`` (in the runs whose first-stage ESS is below
        ``ess_threshold * N``) and draws fresh children ``x_k^j ~ p(. | x_{k-1}^{a_j})`` — this
        second propagation replaces the one ``predict`` made;
@@ -780,7 +793,7 @@ class AuxiliaryParticleFilter(ParticleFilter):
         parents, dt = stash
         per_run = rng is not None and not isinstance(rng, np.random.Generator)
         n, d = parents.shape[-2:]
-        # 1. first stage at mu_i = f(x_{k-1}^i)  (Pitt & Shephard 1999, Eq. 8)
+        # 1. first stage at mu_i = f(x_{k-1}^i) (Pitt & Shephard 1999, first-stage weights)
         mu = self._motion_mean(parents, dt, per_run)
         lmu = []
         for c in checked:
