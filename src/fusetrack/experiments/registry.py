@@ -96,6 +96,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 Sec. 5.2.2: potential-field robot navigation, aligned-obstacle collision, fix and escape",
             "Lee 2009 (seed 000)",
         ),
+        ExperimentInfo(
+            "kushwaha2010-sbe",
+            "kushwaha2010_sbe:run",
+            "Kushwaha 2010 Ch. III (Figs 17-22): grid SBE, eight audio/video fusion approaches on simulated vehicle passes",
+            "Kushwaha 2010 Ch. III (seed 003)",
+        ),
     ]
 }
 
