@@ -102,6 +102,54 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. III (Figs 17-22): grid SBE, eight audio/video fusion approaches on simulated vehicle passes",
             "Kushwaha 2010 Ch. III (seed 003)",
         ),
+        ExperimentInfo(
+            "ercan2013-occlusion-probability",
+            "ercan2013.occlusion_probability:run",
+            "Ercan 2013 E0 (App. C, Fig. 17): Eq. 7 occlusion probability against Monte Carlo; p(eta|u) sums to one",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
+            "ercan2013-cameras",
+            "ercan2013.cameras:run",
+            "Ercan 2013 E1 (Figs. 5-6): tracker RMSE vs number of cameras for three occluder-prior accuracies",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
+            "ercan2013-prior-accuracy",
+            "ercan2013.prior_accuracy:run",
+            "Ercan 2013 E2 (Fig. 7): tracker RMSE vs occluder-prior RMSE; the 2.34x and 1.94x gains, the 3.72 crossing",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
+            "ercan2013-tradeoff",
+            "ercan2013.tradeoff:run",
+            "Ercan 2013 E3 (Fig. 8): cameras vs occluder-prior accuracy needed for RMSE_tr = 3",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
+            "ercan2013-occluders",
+            "ercan2013.occluders:run",
+            "Ercan 2013 E4 (Fig. 9): tracker RMSE vs number of moving occluders, perfect vs no priors",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
+            "ercan2013-likelihood-cost",
+            "ercan2013.likelihood_cost:run",
+            "Ercan 2013 E5 (Fig. 10): CPU time of the occlusion-aware likelihood vs number of cameras",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
+            "ercan2013-selection",
+            "ercan2013.selection:run",
+            "Ercan 2013 E6 (Figs. 11-12): greedy, brute-force and heuristic camera selection in the L-shaped room",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
+            "ercan2013-lab",
+            "ercan2013.lab:run",
+            "Ercan 2013 E7-E8 (Figs. 13-15): lab replica, fixed subsets vs prior accuracy and selection methods",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
     ]
 }
 
