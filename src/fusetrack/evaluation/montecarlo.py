@@ -16,6 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
+from threadpoolctl import threadpool_limits
 from tqdm.auto import tqdm
 
 from ..core.errors import ConfigError, invalid
@@ -41,7 +42,10 @@ class _Job:
     seed: int
 
     def __call__(self) -> list[dict[str, Any]]:
-        rows = self.fn(self.config, self.seed)
+        # One BLAS thread per run: runs are the parallel unit, and threaded BLAS on the small
+        # (N, d) @ (d, d) products of a filter only oversubscribes the cores.
+        with threadpool_limits(limits=1):
+            rows = self.fn(self.config, self.seed)
         scalar_params = {k: v for k, v in self.config.items() if np.isscalar(v) or v is None}
         out = []
         for row in rows:
