@@ -64,7 +64,9 @@ class Layout:
     def sensor_ids(self) -> tuple[str, ...]:
         return tuple(a[0] for a in self.audio) + tuple(v[0] for v in self.video)
 
-    def subset(self, audio: tuple[str, ...] | None = None, video: tuple[str, ...] | None = None) -> Layout:
+    def subset(
+        self, audio: tuple[str, ...] | None = None, video: tuple[str, ...] | None = None
+    ) -> Layout:
         return replace(
             self,
             audio=tuple(a for a in self.audio if audio is None or a[0] in audio),
@@ -188,10 +190,16 @@ def fusion_input(
     take the closest packet per sensor at each 4 Hz tick."""
     ids = sorted({p.sensor_id for p in rec.packets})
     shift = {k: float(rng.choice([-1.0, 1.0]) * sync_offset) for k in ids}
-    lengths = {k: (36 if k.startswith("A") else 160) for k in ids if sensors is None or k in sensors}
+    lengths = {
+        k: (36 if k.startswith("A") else 160) for k in ids if sensors is None or k in sensors
+    }
     sched = FusionScheduler(lengths, max_offset=DT)
     keep = rng.random(len(rec.packets)) >= packet_loss
-    packets = [replace(p, timestamp=p.timestamp + shift[p.sensor_id]) for p, k in zip(rec.packets, keep) if k]
+    packets = [
+        replace(p, timestamp=p.timestamp + shift[p.sensor_id])
+        for p, k in zip(rec.packets, keep)
+        if k
+    ]
     taken = []
     k = 0
     for t in rec.ticks:
@@ -216,28 +224,28 @@ class SensorGeometry:
     in_fov: NDArray[np.bool_] | None = None
 
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=64)
+def _geometry(kind: str, x: float, y: float, heading: float, grid: GridSpec) -> SensorGeometry:
+    lo, hi, inside = cell_arcs((x, y), heading, grid.centres, grid.cell / 2)
+    if kind == "audio":
+        return SensorGeometry("audio", audio_w=arc_mean_matrix(AngularSampling.beams(36), lo, hi))
+    mid = 0.5 * (lo + hi)
+    return SensorGeometry("video", lo=lo, hi=hi, in_fov=(np.abs(mid) <= CAMERA_FOV / 2) & ~inside)
+
+
 def sensor_geometry(layout: Layout) -> dict[str, SensorGeometry]:
-    centres = layout.grid.centres
-    half = layout.grid.cell / 2
-    out = {}
-    beams = AngularSampling.beams(36)
-    for sid, x, y, heading in layout.audio:
-        lo, hi, _ = cell_arcs((x, y), heading, centres, half)
-        out[sid] = SensorGeometry("audio", audio_w=arc_mean_matrix(beams, lo, hi))
-    for sid, x, y, yaw in layout.video:
-        lo, hi, inside = cell_arcs((x, y), yaw, centres, half)
-        mid = 0.5 * (lo + hi)
-        out[sid] = SensorGeometry(
-            "video", lo=lo, hi=hi, in_fov=(np.abs(mid) <= CAMERA_FOV / 2) & ~inside
-        )
+    """Per-sensor cell arcs (and the audio arc-mean matrices), computed once per sensor pose."""
+    out = {sid: _geometry("audio", x, y, h, layout.grid) for sid, x, y, h in layout.audio}
+    out |= {sid: _geometry("video", x, y, h, layout.grid) for sid, x, y, h in layout.video}
     return out
 
 
 VIDEO_ANGLES = AngularSampling.camera_bins(CAMERA_FOV, 160).angles
 
 
-def sensor_likelihood(geo: SensorGeometry, values: NDArray[np.float64]) -> tuple[NDArray[np.float64], float] | None:
+def sensor_likelihood(
+    geo: SensorGeometry, values: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], float] | None:
     """Per-cell likelihood (unit sum, floored) and quality q_k = max λ̃ (Kushwaha 2010, Eqs. 31–32);
     None when the sensor detects nothing (a camera with an empty mixture)."""
     v = np.asarray(values, float)
@@ -271,7 +279,9 @@ def tick_likelihoods(layout: Layout, taken: dict[str, Packet]) -> SensorLikeliho
         rows.append(res[0])
         qual.append(res[1])
         mods.append(geo[sid].kind)
-    return SensorLikelihoods(np.array(rows).reshape(-1, layout.grid.size), np.array(qual), tuple(mods))
+    return SensorLikelihoods(
+        np.array(rows).reshape(-1, layout.grid.size), np.array(qual), tuple(mods)
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -388,7 +398,12 @@ def simulate_recording(
 
     packets.sort(key=lambda p: p.arrival)
     return Recording(
-        packets, list(vehicles), t_start, t_end, np.array(residuals), _audio_threshold(layout, config, rng)
+        packets,
+        list(vehicles),
+        t_start,
+        t_end,
+        np.array(residuals),
+        _audio_threshold(layout, config, rng),
     )
 
 
@@ -427,6 +442,7 @@ def run_sbe(
     start: int = 0,
     sensors: tuple[str, ...] | None = None,
     fin: FusionInput | None = None,
+    prior: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Posterior means ``(T, 2)`` and det Σ ``(T,)`` of one SBE approach (NaN before ``start``).
 
@@ -441,11 +457,32 @@ def run_sbe(
         lik = liks[k]
         if sensors is not None and fin is not None:
             lik = tick_likelihoods(layout.subset(*_split(sensors)), fin.taken[k])
+        if k == start and prior is not None:
+            # Kushwaha 2010: the prior is initialised from the audio detection at track start;
+            # the first step then only predicts (δ = 3 m) and updates.
+            tracker.initialize(prior)
         m, c = tracker.step(lik.select(modalities))
         means[k] = m
         dets[k] = np.linalg.det(c)
     return means, dets
 
 
+def audio_prior(
+    lik: SensorLikelihoods, taken: dict[str, Packet], threshold: float, layout: Layout
+) -> NDArray[np.float64]:
+    """Normalised product of the audio likelihoods of the nodes above the threshold (uniform if
+    fewer than two; spec 003 §2.5 step 5)."""
+    from ..filters.grid import fuse_product
+
+    audio = [sid for sid, *_ in layout.audio if sid in taken]
+    rows = [i for i, m in enumerate(lik.modality) if m == "audio"]
+    above = [r for r, sid in zip(rows, audio) if taken[sid].values.max() > threshold]
+    if len(above) < 2:
+        return layout.grid.uniform()
+    return fuse_product(lik.values[above])
+
+
 def _split(sensors: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    return tuple(s for s in sensors if s.startswith("A")), tuple(s for s in sensors if s.startswith("V"))
+    return tuple(s for s in sensors if s.startswith("A")), tuple(
+        s for s in sensors if s.startswith("V")
+    )

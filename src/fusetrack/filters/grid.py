@@ -242,12 +242,20 @@ class GridTracker:
     architecture: Architecture = "centralized"
     motion: DirectionalMotion = field(default_factory=DirectionalMotion)
     first_delta: float = 3.0
+    max_step: float = 5.0  # |v| per step is clipped here (20 m/s at 4 Hz)
     hybrid_alpha: float = 0.5
     hybrid_divide_prior: bool = False
     prob: NDArray[np.float64] | None = None
     velocity: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
     estimates: list[NDArray[np.float64]] = field(default_factory=list)
     covariances: list[NDArray[np.float64]] = field(default_factory=list)
+
+    def initialize(self, prior: ArrayLike) -> None:
+        """Start from a given prior (Kushwaha 2010: from the audio detections at track start)."""
+        p = np.asarray(prior, float).ravel()
+        if p.shape != (self.grid.size,) or not p.sum() > 0:
+            raise ShapeError(invalid("prior", p.shape, f"({self.grid.size},) with positive mass"))
+        self.prob = p / p.sum()
 
     def step(self, lik: SensorLikelihoods) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         if self.prob is None:
@@ -268,7 +276,9 @@ class GridTracker:
         mean, cov = self.grid.mean_cov(self.prob)
         if self.estimates:
             step = mean - self.estimates[-1]
-            self.velocity = step if len(self.estimates) == 1 else 0.5 * self.velocity + 0.5 * step
+            v = step if len(self.estimates) == 1 else 0.5 * self.velocity + 0.5 * step
+            speed = float(np.hypot(*v))
+            self.velocity = v if speed <= self.max_step else v * (self.max_step / speed)
         self.estimates.append(mean)
         self.covariances.append(cov)
         return mean, cov
