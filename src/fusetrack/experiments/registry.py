@@ -150,6 +150,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Ercan 2013 E7-E8 (Figs. 13-15): lab replica, fixed subsets vs prior accuracy and selection methods",
             "Ercan, El Gamal, Guibas 2013 (seed 002)",
         ),
+        ExperimentInfo(
+            "kushwaha2010-mcmcda",
+            "kushwaha2010_mcmcda:run",
+            "Kushwaha 2010 Ch. III (Tables 8-9, Figs 24-25): online MCMCDA on fused-likelihood peaks, single vehicles",
+            "Kushwaha 2010 Ch. III (seed 003)",
+        ),
     ]
 }
 
