@@ -29,6 +29,7 @@ window are committed to their track, and track identities persist through the ov
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -112,15 +113,16 @@ class MCMCDA:
         p = np.diag([c.obs_std**2, c.obs_std**2, c.init_speed_std**2, c.init_speed_std**2])
         ll = 0.0
         states = [(track[0][0], x.copy())]
-        for prev, cur in zip(track[:-1], track[1:]):
+        for prev, cur in itertools.pairwise(track):
             for _ in range(cur[0] - prev[0]):
                 x = f1 @ x
                 p = f1 @ p @ f1.T + q1
             y = self.observations[cur[0]][cur[1]]
             s = p[:2, :2] + r
             innov = y - x[:2]
-            sinv = np.linalg.inv(s)
-            ll += -0.5 * (innov @ sinv @ innov) - 0.5 * np.log(np.linalg.det(2 * np.pi * s))
+            det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
+            sinv = np.array([[s[1, 1], -s[0, 1]], [-s[1, 0], s[0, 0]]]) / det
+            ll += -0.5 * float(innov @ sinv @ innov) - np.log(2 * np.pi) - 0.5 * np.log(det)
             k = p[:, :2] @ sinv
             x = x + k @ innov
             p = p - k @ p[:2, :]
