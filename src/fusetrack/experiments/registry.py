@@ -156,6 +156,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. III (Tables 8-9, Figs 24-25): online MCMCDA on fused-likelihood peaks, single vehicles",
             "Kushwaha 2010 Ch. III (seed 003)",
         ),
+        ExperimentInfo(
+            "kushwaha2010-crossing",
+            "kushwaha2010_crossing:run",
+            "Kushwaha 2010 Ch. III (Fig. 26): three vehicles, two crossing, video-only MCMCDA",
+            "Kushwaha 2010 Ch. III (seed 003)",
+        ),
     ]
 }
 
