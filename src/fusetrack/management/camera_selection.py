@@ -37,6 +37,7 @@ from ..core.errors import ConfigError, ShapeError, invalid
 from ..sensors.perspective_camera import MIN_DEPTH, CameraArray
 from ..world.geometry import Array
 from ..world.occlusion import OccluderPriors, disks_block, occlusion_probability
+from ..world.occlusion_kernels import pair_visibility_kernel
 from ..world.room import Room
 
 CameraModel = Literal["perspective", "weak"]
@@ -80,14 +81,7 @@ def visibility_probabilities(
         if not isinstance(occluders, OccluderPriors):
             raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
         q = occlusion_probability(cameras.positions, x, occluders, diameter)  # (N, L, M)
-        wa = w[None, :] * assigned  # (N, L)
-        p1 = np.sum(wa * np.prod(np.clip(1 - q, 0, 1), axis=-1), axis=1)
-        p2 = np.empty((n, n))
-        for i in range(n):
-            joint = np.prod(np.clip(1 - q[i][None] - q, 0, 1), axis=-1)  # (N, L)
-            p2[i] = np.sum(wa[i][None, :] * assigned * joint, axis=1)
-        p2 = 0.5 * (p2 + p2.T)
-        np.fill_diagonal(p2, p1)
+        p1, p2 = pair_visibility_kernel(q, np.ascontiguousarray(assigned), np.ascontiguousarray(w))
         return p1, p2
     if prior_mode == "perfect":
         centres = occluders.mean if isinstance(occluders, OccluderPriors) else occluders

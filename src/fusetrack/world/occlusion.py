@@ -232,7 +232,7 @@ def all_visible_probability(q: Array, cameras: NDArray[np.bool_] | None = None) 
 
 
 def pattern_probability(
-    q: Array, eta: ArrayLike, assigned: NDArray[np.bool_] | None = None
+    q: Array, eta: ArrayLike, assigned: NDArray[np.bool_] | None = None, clamp: bool = True
 ) -> Array:
     """``p(eta | u)`` for each particle: Ercan et al. 2013, Eq. 9 with the partition of Sec. 4.3.
 
@@ -245,8 +245,10 @@ def pattern_probability(
 
         p = sum_{B subset O} (-1)^|B| prod_j clamp(1 - sum_{i in V u B} q_ij)
 
-    (the closed form of the recursion Eq. 9). The result is clamped to [0, 1] (spec §8 item 8).
-    Numba kernel; :func:`pattern_probability_reference` is the NumPy reference.
+    (the closed form of the recursion Eq. 9). The result is clamped to [0, 1] (spec §8 item 8);
+    with ``clamp=False`` it is returned as computed, and then sums to exactly 1 over all 2^K
+    patterns (the inclusion-exclusion identity; the approximations of Eq. 8 can make single
+    patterns slightly negative, which clamping removes at the price of that identity). Numba kernel; :func:`pattern_probability_reference` is the NumPy reference.
     """
     eta = np.asarray(eta, bool)
     K, L = q.shape[0], q.shape[1]
@@ -255,13 +257,13 @@ def pattern_probability(
     A = np.ones((K, L), dtype=bool) if assigned is None else np.asarray(assigned, bool)
     return np.asarray(
         pattern_probability_kernel(
-            np.ascontiguousarray(q, dtype=float), eta, np.ascontiguousarray(A)
+            np.ascontiguousarray(q, dtype=float), eta, np.ascontiguousarray(A), clamp
         )
     )
 
 
 def pattern_probability_reference(
-    q: Array, eta: ArrayLike, assigned: NDArray[np.bool_] | None = None
+    q: Array, eta: ArrayLike, assigned: NDArray[np.bool_] | None = None, clamp: bool = True
 ) -> Array:
     """NumPy reference of :func:`pattern_probability` (loops over subsets, vectorised over particles)."""
     eta = np.asarray(eta, bool)
@@ -282,4 +284,4 @@ def pattern_probability_reference(
                 continue
             s = s_v[mask] + q[idx][:, mask].sum(axis=0) if idx else s_v[mask]
             p[mask] += sign * np.prod(np.clip(1.0 - s, 0.0, 1.0), axis=-1)
-    return np.asarray(np.clip(p, 0.0, 1.0))
+    return np.asarray(np.clip(p, 0.0, 1.0)) if clamp else p

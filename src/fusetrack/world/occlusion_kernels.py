@@ -3,7 +3,7 @@
 Same formulas as the NumPy references there (the tests compare them), written as loops so that
 (camera, particle, occluder) triples far from each other are skipped cheaply: an occluder whose
 prior puts the ray more than ``CUTOFF`` standard deviations away contributes q = 0 (the exact
-value is below 1e-9), and the normal CDF uses a one-exponential erfc (relative error < 1.2e-7). This makes the likelihood for L = 1000 particles, 8 cameras and 40
+value is below 1e-9), and the normal CDF is a table lookup with linear interpolation (error < 2e-8). This makes the likelihood for L = 1000 particles, 8 cameras and 40
 occluders take about a millisecond instead of tens.
 """
 
@@ -57,6 +57,33 @@ def _phi(t: float) -> float:  # pragma: no cover - jit
     return 0.5 * _erfc(-t * _SQRT1_2)
 
 
+_TABLE_HALF_WIDTH = 8.5
+_TABLE_SIZE = 1 << 14
+_TABLE_STEP = 2 * _TABLE_HALF_WIDTH / (_TABLE_SIZE - 1)
+_PHI_TABLE = np.array(
+    [
+        0.5 * math.erfc(-(-_TABLE_HALF_WIDTH + i * _TABLE_STEP) * _SQRT1_2)
+        for i in range(_TABLE_SIZE)
+    ]
+)
+"""Standard normal CDF on a grid over [-8.5, 8.5]; linear interpolation errs by < 2e-8."""
+
+
+@numba.njit(cache=True, inline="always")
+def _phi_fast(t: float) -> float:  # pragma: no cover - jit
+    """Standard normal CDF by table lookup and linear interpolation (|error| < 2e-8)."""
+    if t <= -_TABLE_HALF_WIDTH:
+        return 0.0
+    if t >= _TABLE_HALF_WIDTH:
+        return 1.0
+    pos = (t + _TABLE_HALF_WIDTH) / _TABLE_STEP
+    k = int(pos)
+    if k >= _TABLE_SIZE - 1:
+        return 1.0
+    frac = pos - k
+    return _PHI_TABLE[k] + frac * (_PHI_TABLE[k + 1] - _PHI_TABLE[k])
+
+
 @numba.njit(cache=True, nogil=True)
 def occlusion_probability_kernel(
     cams: np.ndarray, x: np.ndarray, mu: np.ndarray, cov: np.ndarray, diameter: float
@@ -73,8 +100,17 @@ def occlusion_probability_kernel(
         p11[j] = cov[j, 1, 1] / det
         p12[j] = -cov[j, 0, 1] / det
         p22[j] = cov[j, 0, 0] / det
+    m1 = np.empty(M)
+    m2 = np.empty(M)
+    pm1 = np.empty(M)
+    pm2 = np.empty(M)
     for i in range(K):
         cx, cy = cams[i, 0], cams[i, 1]
+        for j in range(M):
+            m1[j] = mu[j, 0] - cx
+            m2[j] = mu[j, 1] - cy
+            pm1[j] = p11[j] * m1[j] + p12[j] * m2[j]
+            pm2[j] = p12[j] * m1[j] + p22[j] * m2[j]
         for l in range(L):
             rx, ry = x[l, 0] - cx, x[l, 1] - cy
             r = math.sqrt(rx * rx + ry * ry)
@@ -82,21 +118,18 @@ def occlusion_probability_kernel(
                 continue
             u1, u2 = rx / r, ry / r
             for j in range(M):
-                m1, m2 = mu[j, 0] - cx, mu[j, 1] - cy
-                phi = -u2 * m1 + u1 * m2
+                phi = -u2 * m1[j] + u1 * m2[j]
                 sp2 = cov[j, 0, 0] * u2 * u2 - 2.0 * cov[j, 0, 1] * u1 * u2 + cov[j, 1, 1] * u1 * u1
-                sp = math.sqrt(sp2)
-                if abs(phi) - half > CUTOFF * sp:
+                if (abs(phi) - half) ** 2 > CUTOFF * CUTOFF * sp2 and abs(phi) > half:
                     continue
-                across = _phi((half - phi) / sp) - _phi((-half - phi) / sp)
+                isp = 1.0 / math.sqrt(sp2)
+                across = _phi_fast((half - phi) * isp) - _phi_fast((-half - phi) * isp)
                 if across < 1e-9:
                     continue
                 a = p11[j] * u1 * u1 + 2.0 * p12[j] * u1 * u2 + p22[j] * u2 * u2
-                s_a = 1.0 / math.sqrt(a)
-                m_a = (u1 * (p11[j] * m1 + p12[j] * m2) + u2 * (p12[j] * m1 + p22[j] * m2)) / a
-                if m_a + CUTOFF * s_a < 0.0 or m_a - CUTOFF * s_a > r:
-                    continue
-                along = _phi((r - m_a) / s_a) - _phi(-m_a / s_a)
+                isa = math.sqrt(a)
+                m_a = (u1 * pm1[j] + u2 * pm2[j]) / a
+                along = _phi_fast((r - m_a) * isa) - _phi_fast(-m_a * isa)
                 v = along * across
                 out[i, l, j] = min(max(v, 0.0), 1.0)
     return out
@@ -104,7 +137,7 @@ def occlusion_probability_kernel(
 
 @numba.njit(cache=True, nogil=True)
 def pattern_probability_kernel(
-    q: np.ndarray, eta: np.ndarray, assigned: np.ndarray
+    q: np.ndarray, eta: np.ndarray, assigned: np.ndarray, clamp: bool = True
 ) -> np.ndarray:  # pragma: no cover - jit
     """p(eta | u) per particle: Eq. 8 and the inclusion-exclusion of Eq. 9 on assigned cameras."""
     K, L, M = q.shape
@@ -150,7 +183,7 @@ def pattern_probability_kernel(
                 if f < 1.0:
                     prod *= f
             total += sign * prod
-        p[l] = min(max(total, 0.0), 1.0)
+        p[l] = min(max(total, 0.0), 1.0) if clamp else total
     return p
 
 
@@ -203,3 +236,38 @@ def segments_cross_edges_kernel(
                     out[i, l] = True
                     break
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def pair_visibility_kernel(
+    q: np.ndarray, assigned: np.ndarray, w: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
+    """P{eta_i = 1} and P{eta_i = 1, eta_j = 1} averaged over weighted particles (Eq. 8, Q = {i, j})."""
+    N, L, M = q.shape
+    p1 = np.zeros(N)
+    p2 = np.zeros((N, N))
+    for l in range(L):
+        for i in range(N):
+            if not assigned[i, l]:
+                continue
+            prod = 1.0
+            for j in range(M):
+                f = 1.0 - q[i, l, j]
+                prod *= f if f > 0.0 else 0.0
+            p1[i] += w[l] * prod
+            for k in range(i + 1, N):
+                if not assigned[k, l]:
+                    continue
+                prod = 1.0
+                for j in range(M):
+                    f = 1.0 - q[i, l, j] - q[k, l, j]
+                    if f <= 0.0:
+                        prod = 0.0
+                        break
+                    prod *= f
+                p2[i, k] += w[l] * prod
+    for i in range(N):
+        p2[i, i] = p1[i]
+        for k in range(i + 1, N):
+            p2[k, i] = p2[i, k]
+    return p1, p2

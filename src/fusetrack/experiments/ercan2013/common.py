@@ -1,0 +1,146 @@
+"""What the Ercan et al. 2013 experiments share: run sizes, summaries, plots of rooms and curves."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.patches import Circle, Polygon, Wedge
+
+from ...evaluation.report import RunContext
+from .scenes import Scene
+
+PAPER = "Ercan, El Gamal, Guibas 2013, ACM TOSN 9(2) 16"
+
+
+def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[str, int]:
+    """Steps, particles and burn-in: the paper's (no burn-in) or a quick run's."""
+    if ctx.quick:
+        return {"steps": 250, "particles": 300, "burn_in": 25}
+    return {"steps": steps, "particles": particles, "burn_in": 0}
+
+
+def mean_std(df: pd.DataFrame, by: Sequence[str], value: str = "rmse_tr") -> pd.DataFrame:
+    """Mean, standard deviation (ddof 1; 0 for one run) and count of ``value`` per group."""
+    g = df.groupby(list(by))[value]
+    out = pd.DataFrame({"mean": g.mean(), "std": g.std(ddof=1).fillna(0.0), "runs": g.count()})
+    return out.reset_index()
+
+
+def curve_plot(
+    path: Path,
+    table: pd.DataFrame,
+    x: str,
+    series: str,
+    *,
+    xlabel: str,
+    ylabel: str,
+    title: str,
+    hlines: Mapping[str, float] | None = None,
+    diagonal: bool = False,
+    labels: Mapping[Any, str] | None = None,
+) -> Path:
+    """Mean +- one standard deviation of each series against ``x`` (the paper's error-bar plots)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for i, (key, grp) in enumerate(table.groupby(series, sort=False)):
+        grp = grp.sort_values(x)
+        off = (i - 1) * 0.04 * (grp[x].max() - grp[x].min() if len(grp) > 1 else 1)
+        ax.errorbar(
+            grp[x] + off,
+            grp["mean"],
+            yerr=grp["std"],
+            marker="o",
+            ms=4,
+            capsize=3,
+            label=(labels or {}).get(key, str(key)),
+        )
+    for name, y in (hlines or {}).items():
+        ax.axhline(y, ls=":", color="k", lw=1)
+        ax.annotate(name, (ax.get_xlim()[0], y), va="bottom", fontsize=8)
+    if diagonal:
+        lim = max(table[x].max(), table["mean"].max())
+        ax.plot([0, lim], [0, lim], "k:", lw=1, label="y = x")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def room_plot(
+    path: Path,
+    scene: Scene,
+    *,
+    title: str,
+    occluders: np.ndarray | None = None,
+    obj: np.ndarray | None = None,
+    truth: np.ndarray | None = None,
+    estimate: np.ndarray | None = None,
+    fov_length: float | None = None,
+) -> Path:
+    """The room, its cameras with numbered field-of-view wedges, occluders, object and track."""
+    fig, ax = plt.subplots(figsize=(6.0, 6.0))
+    room = scene.room
+    ax.add_patch(Polygon(room.boundary, closed=True, fill=False, lw=2))
+    for o in room.static_occluders:
+        ax.add_patch(Polygon(o, closed=True, color="k"))
+    x0, x1, y0, y1 = room.bounding_box
+    reach = fov_length or 0.18 * max(x1 - x0, y1 - y0)
+    cams = scene.cameras
+    for i in range(len(cams)):
+        c = cams.positions[i]
+        yaw, half = np.degrees(cams.yaws[i]), np.degrees(cams.fovs[i]) / 2
+        ax.add_patch(Wedge(c, reach, yaw - half, yaw + half, alpha=0.12, color="tab:blue"))
+        ax.plot(*c, "s", color="tab:blue", ms=6)
+        ax.annotate(str(i + 1), c, textcoords="offset points", xytext=(4, 4), fontsize=9)
+    if occluders is not None:
+        for p in occluders:
+            ax.add_patch(Circle(p, scene.diameter / 2, color="tab:gray", alpha=0.8))
+    if truth is not None:
+        ax.plot(truth[:, 0], truth[:, 1], "-", color="tab:green", lw=1.2, label="object path")
+    if estimate is not None:
+        ax.plot(estimate[:, 0], estimate[:, 1], "-", color="tab:red", lw=0.8, label="estimate")
+    if obj is not None:
+        ax.plot(*obj, "*", color="tab:red", ms=12, label="object")
+    pad = 0.05 * max(x1 - x0, y1 - y0)
+    ax.set_xlim(x0 - pad, x1 + pad)
+    ax.set_ylim(y0 - pad, y1 + pad)
+    ax.set_aspect("equal")
+    ax.set_title(title)
+    if truth is not None or obj is not None:
+        ax.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def md(df: pd.DataFrame, floatfmt: str = ".3g") -> str:
+    return str(df.to_markdown(index=False, floatfmt=floatfmt))
+
+
+def fmt(v: float, digits: int = 3) -> str:
+    return f"{v:.{digits}g}" if np.isfinite(v) else "n/a"
+
+
+def interpolate_crossing(x: np.ndarray, y: np.ndarray, target: float) -> float:
+    """First ``x`` where the piecewise-linear ``y(x)`` reaches ``target`` (NaN if it never does)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    for i in range(len(x) - 1):
+        lo, hi = y[i] - target, y[i + 1] - target
+        if lo == 0:
+            return float(x[i])
+        if lo * hi < 0:
+            return float(x[i] + (x[i + 1] - x[i]) * lo / (lo - hi))
+    return float(x[-1]) if len(x) and y[-1] == target else float("nan")
