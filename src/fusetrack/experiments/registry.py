@@ -162,6 +162,18 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. III (Fig. 26): three vehicles, two crossing, video-only MCMCDA",
             "Kushwaha 2010 Ch. III (seed 003)",
         ),
+        ExperimentInfo(
+            "lee2009-camera-triggering",
+            "lee2009_camera_triggering:run",
+            "Lee 2009 Ch. 3: acoustic multi-object tracking with periodic or triggered camera cooperation",
+            "Lee 2009 (seed 000)",
+        ),
+        ExperimentInfo(
+            "kushwaha2010-beamformer",
+            "kushwaha2010_beamformer:run",
+            "Kushwaha 2010 Ch. III (Fig. 11): beamformer DOA error against range, speech-like source",
+            "Kushwaha 2010 Ch. III (seed 003)",
+        ),
     ]
 }
 
