@@ -174,6 +174,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. III (Fig. 11): beamformer DOA error against range, speech-like source",
             "Kushwaha 2010 Ch. III (seed 003)",
         ),
+        ExperimentInfo(
+            "kushwaha2010-timesync",
+            "kushwaha2010_timesync:run",
+            "Kushwaha 2010 Ch. III: residual time-synchronisation error and tracking error against injected clock offsets",
+            "Kushwaha 2010 Ch. III (seed 003)",
+        ),
     ]
 }
 
