@@ -153,7 +153,6 @@ def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=9, quick=2)
     n_mc = 150 if ctx.quick else 600
     df = ctx.monte_carlo(run_once, [{"n_mc": n_mc}], runs, desc="passes")
-    ok = df[df.success]
     t8 = {}
     for key, sel in [
         ("sum", df.fusion == "sum"),
