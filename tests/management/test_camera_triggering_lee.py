@@ -1,0 +1,123 @@
+"""Lee 2009 Ch. 3: each trigger on constructed configurations (Figs. 3-8, 3-10, 3-11, 3-13; C10)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from fusetrack.core.errors import ConfigError, MeasurementError
+from fusetrack.filters.multi_model_pf import MultiModelBearingPF, turn_models
+from fusetrack.management.camera_triggering import (
+    CooperationPolicy,
+    bearing_gate_trigger,
+    count_trigger,
+    ellipse_trigger,
+    run_cooperation,
+)
+from fusetrack.sensors.unlabelled_bearings import merge_close, simulate_bearings
+
+D = math.pi / 180
+S = (0.0, 0.0)
+
+
+def test_count_trigger_catches_merge_entry_exit_silence():
+    assert count_trigger(1, 2)  # two objects merged into one bearing / one silent / one left
+    assert count_trigger(3, 2)  # a new object
+    assert not count_trigger(2, 2)
+
+
+def test_gate_catches_what_count_misses():
+    """Fig. 3-8(b)-(f): one object leaves and another appears at once -- the count stays equal,
+    but the tracked object's estimate has no bearing within 2 sigma."""
+    sigma = math.sqrt(3) * D
+    est = np.array([10.0, 10.0])  # bearing 45 deg
+    z = np.array([80 * D, 10 * D])  # bearings of the two objects now present
+    assert not count_trigger(len(z), 2)
+    assert bearing_gate_trigger(est, S, z, sigma)
+    assert not bearing_gate_trigger(est, S, np.array([46 * D, 10 * D]), sigma)
+    assert bearing_gate_trigger(est, S, np.array([]), sigma)  # no bearing at all
+
+
+def test_ellipse_catches_what_gate_misses():
+    """Fig. 3-11/3-13: the estimate sits on a bearing (the gate passes) but away from every
+    model's particle cloud (a deviated estimate averaged between two clouds)."""
+    rng = np.random.default_rng(0)
+    cloud_a = np.array([10.0, 10.0]) + 0.1 * rng.standard_normal((500, 2))
+    cloud_b = np.array([20.0, 20.0]) + 0.1 * rng.standard_normal((500, 2))
+    est = np.array([15.0, 15.0])  # on the 45 deg bearing, between the clouds
+    assert not bearing_gate_trigger(est, S, np.array([45 * D]), math.sqrt(3) * D)
+    assert ellipse_trigger(est, np.stack([cloud_a, cloud_b]))
+    assert not ellipse_trigger(np.array([10.05, 10.0]), np.stack([cloud_a, cloud_b]))
+
+
+def test_merge_and_unlabelled_bearings():
+    m = merge_close(np.array([10 * D, 11 * D, 50 * D]), 2 * D)
+    assert sorted(m) == pytest.approx([10.5 * D, 50 * D])
+    rng = np.random.default_rng(0)
+    z = simulate_bearings(np.array([[1, 0.0], [0, 1.0]]), np.array([True, False]), S, 0.0, rng)
+    assert z == pytest.approx([0.0])
+
+
+def test_filter_bad_input_and_no_bearing():
+    f = MultiModelBearingPF(turn_models(1.0, 0.01), S, 0.03, 50)
+    rng = np.random.default_rng(0)
+    p = f.initialize(np.array([10, 10, 0.1, 0]), np.array([0.1, 0.1, 0.01, 0.01]), rng)
+    p2, st = f.step(p, np.array([]), 1.0, rng)  # silence: prediction only
+    assert np.all(np.isfinite(st.estimate)) and p2.shape == p.shape
+    _, st = f.step(p, np.array([math.pi]), 1.0, rng)  # bearing far away: weights tiny, not NaN
+    assert np.all(np.isfinite(st.estimate))
+    with pytest.raises(MeasurementError):
+        f.step(p, np.array([np.nan]), 1.0, rng)
+    with pytest.raises(ConfigError):
+        MultiModelBearingPF(turn_models(1.0, 0.01), S, 0.0)
+    with pytest.raises(ConfigError):
+        CooperationPolicy(period=0)
+
+
+def test_triggered_cooperation_beats_none_and_camera_silence_is_survived():
+    T = 60
+    truth = np.zeros((T, 2, 4))
+    truth[0] = [[20, 5, -0.2, 0.2], [5, 20, 0.2, -0.1]]
+    for k in range(1, T):
+        truth[k] = truth[k - 1]
+        truth[k, :, :2] += truth[k - 1, :, 2:]
+    present = np.ones((T, 2), bool)
+    present[40:, 1] = False  # object 2 leaves
+    kw = {"models": turn_models(1.0, 0.01), "dt": 1.0, "n_particles": 100}
+    none = run_cooperation(
+        truth,
+        present,
+        present,
+        S,
+        math.sqrt(3) * D,
+        CooperationPolicy(),
+        np.random.default_rng(1),
+        **kw,
+    )
+    trig = run_cooperation(
+        truth,
+        present,
+        present,
+        S,
+        math.sqrt(3) * D,
+        CooperationPolicy.triggering(),
+        np.random.default_rng(1),
+        **kw,
+    )
+    err = lambda r: np.nanmean(np.sum((r.estimates[..., :2] - truth[..., :2]) ** 2, -1))  # noqa: E731
+    assert err(trig) < err(none)
+    assert (
+        not trig.tracked[45, 1] and trig.fired[40, 0]
+    )  # the departure fired (3.14), track dropped
+    dead = run_cooperation(
+        truth,
+        present,
+        present,
+        S,
+        math.sqrt(3) * D,
+        CooperationPolicy.triggering(),
+        np.random.default_rng(1),
+        camera_available=np.zeros(T, bool),
+        **kw,
+    )
+    assert not dead.camera_updates.any() and np.isfinite(dead.estimates[dead.tracked]).all()
