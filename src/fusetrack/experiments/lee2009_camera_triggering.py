@@ -245,7 +245,7 @@ def run(ctx: RunContext) -> Outcome:
         for p in ["none", "trigger", *ablations] + [f"periodic {t}" for t in tv_grid]
     ]
     n35 = 100 if quick else 500
-    runs35 = ctx.n_runs(full=100, quick=1)
+    runs35 = ctx.n_runs(full=20, quick=1) if ctx.runs is None else max(1, ctx.runs // 5)
     room = [
         {"part": "E3.5", "sensor": s, "cooperation": c, "n_particles": n35}
         for s in SENSORS_35
