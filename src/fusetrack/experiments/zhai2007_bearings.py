@@ -121,7 +121,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=100, quick=8)
-    n_equal = 600  # bootstrap particles costing about PF-SP-PEKF(200) here (measured; see report)
+    n_equal = 1000  # bootstrap particles costing about PF-SP-PEKF(200) here (see seconds/run)
     df = ctx.monte_carlo(
         run_once,
         [{"scenario": s, "n_particles": 200, "n_equal": n_equal} for s in ("E2", "E3")],

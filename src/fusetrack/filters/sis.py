@@ -100,7 +100,12 @@ class Proposal(Protocol):
     def draw(
         self, state: Any, prev: Array, zs: Zs, dt: float, rng: np.random.Generator, filt: Any
     ) -> tuple[Array, Array | None, Any]:
-        """``(x (..., N, d), log q (..., N) or None for the transition prior, new state)``."""
+        """``(x (..., N, d), log q (..., N) or None for the transition prior, new state)``.
+
+        A proposal with ``returns_log_ratio = True`` returns ``log p(x | z_{1:t-1}) - log q(x)``
+        (the predictive density of the previous particle set over the proposal) instead of
+        ``log q``; the filter then adds only the likelihood.
+        """
         ...
 
     def feedback(self, state: Any, particles: Array, estimate: Array, filt: Any) -> Any: ...
@@ -219,6 +224,9 @@ class ProposalParticleFilter:
         x, log_q, pstate = self.proposal.draw(state.proposal, prev, zs, dt, rng, self)
         if log_q is None:
             log_w = loglik(x) if loglik else np.zeros(x.shape[:-1])
+        elif getattr(self.proposal, "returns_log_ratio", False):
+            # the proposal already returned log(p(x_t | z_{1:t-1}) / q(x_t)) (exact marginal weight)
+            log_w = (loglik(x) if loglik else 0.0) + log_q
         else:
             log_w = loglik(x) + self.log_transition(x, prev, dt) - log_q
         log_w = np.where(np.isnan(log_w), -np.inf, log_w)
