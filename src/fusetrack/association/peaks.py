@@ -41,10 +41,14 @@ def likelihood_peaks(
         smooth >= max(rel_threshold * top, abs_threshold)
     )
     idx = np.argwhere(is_max)
-    idx = idx[np.argsort(-smooth[is_max])][:max_peaks]
+    idx = idx[np.argsort(-smooth[is_max], kind="stable")]
     h = neighbourhood // 2
+    kept: list[tuple[int, int]] = []
+    for i, j in idx:  # a flat top gives several equal maxima: keep one per neighbourhood
+        if len(kept) < max_peaks and all(max(abs(i - a), abs(j - b)) > h for a, b in kept):
+            kept.append((int(i), int(j)))
     out = []
-    for i, j in idx:
+    for i, j in kept:
         i0, i1 = max(0, i - h), min(xs.size, i + h + 1)
         j0, j1 = max(0, j - h), min(ys.size, j + h + 1)
         w = lk[i0:i1, j0:j1]

@@ -1,0 +1,62 @@
+"""Online MCMCDA recovers known tracks from clean synthetic detections; peak extraction."""
+
+import numpy as np
+import pytest
+
+from fusetrack.association.mcmcda import MCMCDA, MCMCDAConfig
+from fusetrack.association.peaks import likelihood_peaks
+from fusetrack.core.errors import ConfigError
+
+
+def test_two_crossing_targets_with_clutter_are_recovered():
+    rng = np.random.default_rng(0)
+    starts = [np.array([2.0, 8.0]), np.array([33.0, 12.0])]
+    vels = [np.array([10.0, 0.5]), np.array([-10.0, -0.5])]
+    tracker = MCMCDA(MCMCDAConfig(n_mc=300), rng=np.random.default_rng(1))
+    steps = 14
+    for t in range(steps):
+        obs = [
+            p + v * 0.25 * t + rng.normal(0, 0.3, 2)
+            for p, v in zip(starts, vels)
+            if rng.random() < 0.95
+        ]
+        if t % 4 == 1:
+            obs.append(rng.uniform([0, 0], [35, 20]))
+        tracker.step(np.array(obs).reshape(-1, 2))
+    tracker.finish()
+    tracks = tracker.tracks()
+    long_tracks = {k: v for k, v in tracks.items() if len(v[0]) >= steps - 2}
+    assert len(long_tracks) == 2
+    for times, pos in long_tracks.values():
+        truths = [s + v * 0.25 * times[:, None] for s, v in zip(starts, vels)]
+        err = min(np.linalg.norm(pos - tr, axis=1).mean() for tr in truths)
+        assert err < 0.6
+    assert tracker.accepted > 0
+
+
+def test_scores_prefer_the_true_association():
+    tracker = MCMCDA(MCMCDAConfig())
+    for t in range(4):
+        tracker.observations.append(np.array([[1.0 + 2.5 * t, 5.0], [30.0 - 2.5 * t, 15.0]]))
+    good = tuple((t, 0) for t in range(4))
+    bad = ((0, 0), (1, 1), (2, 0), (3, 1))
+    assert tracker.track_score(good, 3) > 0 > tracker.track_score(bad, 3)
+
+
+def test_config_validation():
+    with pytest.raises(ConfigError, match="p_detect"):
+        MCMCDAConfig(p_detect=1.5)
+
+
+def test_likelihood_peaks_centroids():
+    x = np.arange(40) * 0.5 + 0.25
+    y = np.arange(20) * 0.5 + 0.25
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    lk = np.exp(-((xx - 5.0) ** 2 + (yy - 4.0) ** 2) / 0.5) + 0.6 * np.exp(
+        -((xx - 15.0) ** 2 + (yy - 6.0) ** 2) / 0.5
+    )
+    peaks = likelihood_peaks(lk, x, y)
+    assert peaks.shape == (2, 2)
+    assert peaks[0] == pytest.approx([5.0, 4.0], abs=0.1)
+    assert peaks[1] == pytest.approx([15.0, 6.0], abs=0.1)
+    assert likelihood_peaks(np.zeros((40, 20)), x, y).shape == (0, 2)
