@@ -58,6 +58,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 (seed 001)",
         ),
         ExperimentInfo(
+            "zhai2007-galerkin",
+            "zhai2007_galerkin:run",
+            "Zhai 2007 E13 (Table 9, Figs 45-47): Galerkin-projection PF vs bootstrap, bearings-only",
+            "Zhai 2007 (seed 001)",
+        ),
+        ExperimentInfo(
             "lee2009-projected-planes",
             "lee2009_projected_planes:run",
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
@@ -179,6 +185,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "kushwaha2010_timesync:run",
             "Kushwaha 2010 Ch. III: residual time-synchronisation error and tracking error against injected clock offsets",
             "Kushwaha 2010 Ch. III (seed 003)",
+        ),
+        ExperimentInfo(
+            "lee2009-rfid-camera",
+            "lee2009_rfid_camera:run",
+            "Lee 2009 Sec. 5.2.3: RFID virtual sensors refined by two cameras",
+            "Lee 2009 (seed 000)",
         ),
     ]
 }
