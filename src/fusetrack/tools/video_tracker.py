@@ -160,23 +160,38 @@ class VideoRadioTracker:
             raise ConfigError("the background model is not trained: call train_background first")
         return self.background.foreground(image)
 
+    def detect(self, image: NDArray[np.uint8]) -> list[Blob]:
+        """Background subtraction and blobs of one frame."""
+        return find_blobs(
+            self.foreground(image), min_area=self.cfg.min_area, merge_gap=self.cfg.merge_gap
+        )
+
     def run(
         self,
         frames: Iterable[tuple[int, float, NDArray[np.uint8]]],
         radio: NDArray[np.float64],
         others: NDArray[np.float64] | None = None,
     ) -> Iterator[FrameResult]:
-        """Track through ``frames`` ``(index, time, RGB image)``.
+        """Track through ``frames`` ``(index, time, RGB image)``; see :meth:`track`."""
+        return self.track(((k, t, self.detect(image)) for k, t, image in frames), radio, others)
+
+    def track(
+        self,
+        detections: Iterable[tuple[int, float, list[Blob]]],
+        radio: NDArray[np.float64],
+        others: NDArray[np.float64] | None = None,
+    ) -> Iterator[FrameResult]:
+        """Track through per-frame blobs ``(index, time, blobs)``.
 
         ``radio`` ``(n, 3)`` = (time, x, y) fixes of the subject's tag, in time order, on the video's
         clock; ``others`` ``(n, 4)`` = (time, x, y, tag number) for every other tag (they only count
         people in view).
         """
         radio = np.asarray(radio, float).reshape(-1, 3)
-        others = np.zeros((0, 3)) if others is None else np.asarray(others, float).reshape(-1, 4)
+        others = np.zeros((0, 4)) if others is None else np.asarray(others, float).reshape(-1, 4)
         r = 0
         last_fix = np.full(2, np.nan)
-        for k, t, image in frames:
+        for k, t, blobs in detections:
             while r < len(radio) and radio[r, 0] <= t + 1e-9:
                 tr, zx, zy = radio[r]
                 if self.belief is None:
@@ -186,8 +201,6 @@ class VideoRadioTracker:
                 self.belief = self.filter.update(self.belief, [Measurement(tr, "tag", [zx, zy])])
                 last_fix = np.array([zx, zy])
                 r += 1
-            mask = self.foreground(image)
-            blobs = find_blobs(mask, min_area=self.cfg.min_area, merge_gap=self.cfg.merge_gap)
             if self.belief is None and blobs:  # no radio fix yet: start from the largest blob
                 self._start(back_project(self.cfg.foot_homography, np.array(blobs[0].foot)), t)
             if self.belief is None:

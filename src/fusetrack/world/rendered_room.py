@@ -143,7 +143,7 @@ class RoomRenderer:
         self, person: Person, k: int
     ) -> list[tuple[Array, tuple[int, int, int], bool]]:
         """World polygons (n, 3) of the person's parts at frame ``k`` with colours; the flag marks
-        the separate hand (not part of the person's silhouette ground truth)."""
+        the separate hand (part of the person's silhouette, but a blob of its own)."""
         x, y = person.walk.xy[k]
         t = person.walk.times[k]
         H, W = person.height, person.width
@@ -244,9 +244,8 @@ class RoomRenderer:
         drawables: list[tuple[float, int]] = []
         for i, person in enumerate(people):
             m = np.zeros((h, w), np.uint8)
-            for world, _, hand in self._body_polygons(person, k):
-                if not hand:
-                    self._fill(m, world, 1)
+            for world, _, _hand in self._body_polygons(person, k):
+                self._fill(m, world, 1)
             full.append(m.astype(bool))
             x, y = person.walk.xy[k]
             drawables.append((float(cam.depth(np.array([x, y, 0.0]))), i))

@@ -178,16 +178,8 @@ def calibrate_from_checkerboard(
         (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4),
     )
     obj = _board_points(pattern, square, origin)
-    # OpenCV may list the corners from either end; choose the order that agrees with a DLT fit
-    img_pts = corners.reshape(-1, 2).astype(np.float64)
-    best = None
-    for cand in (img_pts, img_pts[::-1]):
-        H, _ = dlt(obj[:, :2], cand)
-        err = reprojection_errors(H, obj[:, :2], cand).mean()
-        if best is None or err < best[0]:
-            best = (err, cand)
-    assert best is not None
-    img_pts = best[1]
+    cols, rows = pattern
+    grid = corners.reshape(rows, cols, 2).astype(np.float64)
     h, w = gray.shape
     k0 = np.array([[max(h, w), 0, w / 2.0], [0, max(h, w), h / 2.0], [0, 0, 1.0]])
     flags = (
@@ -199,11 +191,32 @@ def calibrate_from_checkerboard(
         | cv2.CALIB_FIX_K2
         | cv2.CALIB_FIX_K3
     )
-    rms, K, _dist, rvecs, tvecs = cv2.calibrateCamera(
-        [obj.astype(np.float32)], [img_pts.astype(np.float32)], (w, h), k0, np.zeros(5), flags=flags
-    )
-    R, _ = cv2.Rodrigues(rvecs[0])
-    t = tvecs[0].ravel()
+    # OpenCV may list the corners starting from any corner of the board; of the four orders,
+    # the right one puts the camera above the floor (Z up) with the smallest reprojection error
+    best = None
+    for flip_r in (False, True):
+        for flip_c in (False, True):
+            g = grid[::-1] if flip_r else grid
+            g = g[:, ::-1] if flip_c else g
+            img_pts = g.reshape(-1, 2)
+            rms, K, _dist, rvecs, tvecs = cv2.calibrateCamera(
+                [obj.astype(np.float32)],
+                [img_pts.astype(np.float32)],
+                (w, h),
+                k0.copy(),
+                np.zeros(5),
+                flags=flags,
+            )
+            R, _ = cv2.Rodrigues(rvecs[0])
+            t = tvecs[0].ravel()
+            centre = -R.T @ t
+            # the origin corner is the board's corner nearest the camera on its left
+            key = (-img_pts[0, 1] + 0.25 * img_pts[0, 0], rms)
+            if centre[2] > 0 and (best is None or key < best[0]):
+                best = (key, K, R, t)
+    if best is None:
+        raise DegenerateGeometryError("no corner order puts the camera above the checkerboard")
+    (_, rms), K, R, t = best
     H = K @ np.column_stack([R[:, 0], R[:, 1], t])
     return CheckerboardCalibration(K, R, t, H / H[2, 2], float(rms))
 
