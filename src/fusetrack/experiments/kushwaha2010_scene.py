@@ -144,7 +144,7 @@ class SceneConfig:
     false_video_peak: tuple[int, float, float, float] | None = None  # (camera, bearing rad, t0, t1)
     second_source: tuple[float, float] | None = None  # a stationary sound source (x, y)
     beam_alpha: float = 0.5
-    preroll: float = 1.0  # seconds simulated before the vehicle enters the field
+    preroll: float = 0.5  # seconds simulated before the vehicle enters the field (smoothing warm-up)
 
 
 @dataclass
