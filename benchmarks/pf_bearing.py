@@ -82,7 +82,7 @@ class FusetrackPF:
         for k in range(steps):
             p = filt.predict(p, self.dt, rng)
             p = filt.update(p, self.measurements[k], rng)
-            est[k] = p.mean[:2]
+            est[k] = filt.mean(p)[:2]  # weighted mean (cached weights, one pass)
         return est
 
 
