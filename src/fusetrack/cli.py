@@ -1,4 +1,4 @@
-"""``fusetrack`` command line: ``list``, ``run NAME`` and ``demo``."""
+"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo`` and ``track-video``."""
 
 from __future__ import annotations
 
@@ -51,6 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_options(run, None)
     demo = sub.add_parser("demo", help="= fusetrack run demo")
     _add_run_options(demo, "out/demo")
+    from .tools.track_video_args import add_parser as add_track_video
+
+    add_track_video(sub)
     return parser
 
 
@@ -74,6 +77,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     from .evaluation.report import RunContext
     from .experiments import REGISTRY, run_experiment
 
+    if args.command == "track-video":
+        from .tools.track_video import main as track_video_main
+
+        try:
+            return track_video_main(args)
+        except FusetrackError as err:
+            print(f"fusetrack: error: {err}", file=sys.stderr)
+            return 2
     if args.command == "list":
         width = max(len(n) for n in REGISTRY)
         for name, info in REGISTRY.items():

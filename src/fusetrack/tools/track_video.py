@@ -1,0 +1,408 @@
+"""``fusetrack track-video VIDEO --radio TAGS.csv --calibration CAMERA.yaml --out DIR``.
+
+Runs the joint visual and wireless tracker of Nott (2009) (:mod:`fusetrack.tools.video_tracker`)
+on a video file and a radio-tag log a user brings, and writes into ``DIR``:
+
+* ``tracks.csv`` and ``tracks.parquet`` -- one row per frame: floor estimate (m), its image point
+  (px), the blob's foot point, the latest radio fix, the occlusion decision and its reason;
+* ``annotated.mp4`` -- the video with the foot point (green), the radio fix (blue), the estimate
+  (red cross) and occlusion marks;
+* ``floorplan.png`` -- estimate and radio fixes on the floor; ``summary.json``.
+
+Inputs:
+
+* ``TAGS.csv``: columns ``time`` (s), ``tag`` (id), ``x``, ``y`` (floor metres), in time order.
+* ``CAMERA.yaml``: ``foot_homography`` (3x3, floor -> image; required), ``head_homography``
+  (3x3, optional), ``tag_cov`` (2x2 m^2, default diag(0.36, 0.16)), ``sigma_px`` (default 1),
+  ``fps`` (default: the video's), ``video_start`` (time of frame 0 on the tag log's clock, s,
+  default 0), ``subject_tag`` (default: the first tag in the log), ``background_frames`` (how many
+  leading frames show the empty scene, default 30), ``min_area`` (px, default 150).
+
+The tag log's clock may be off: ``--clock-offset S`` says the log is ``S`` seconds late
+(subtracted from its times). Every input is checked before any output is written; outputs are
+written to a temporary folder and moved into ``DIR`` only when the run succeeds.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from ..core.errors import ConfigError, FusetrackError, MeasurementError, invalid
+from .video_tracker import FrameResult, TrackerConfig, VideoRadioTracker
+
+REQUIRED_COLUMNS = ("time", "tag", "x", "y")
+
+
+class InputError(FusetrackError, ValueError):
+    """A video, tag log or calibration file that cannot be used."""
+
+
+@dataclass
+class VideoInfo:
+    path: Path
+    fps: float
+    n_frames: int
+    width: int
+    height: int
+
+
+def open_video(path: Path) -> VideoInfo:
+    """Check that ``path`` is a readable, non-empty video and return its properties."""
+    import cv2
+
+    if not path.is_file():
+        raise InputError(invalid("video", str(path), "an existing video file"))
+    cap = cv2.VideoCapture(str(path))
+    try:
+        ok, frame = cap.read()
+        if not cap.isOpened() or not ok or frame is None:
+            raise InputError(
+                invalid(
+                    "video", str(path), "a video file OpenCV can decode with at least one frame"
+                )
+            )
+        fps = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+        n = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+        return VideoInfo(path, fps, n, frame.shape[1], frame.shape[0])
+    finally:
+        cap.release()
+
+
+def read_frames(path: Path) -> Iterator[NDArray[np.uint8]]:
+    """RGB frames of a video."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(path))
+    try:
+        while True:
+            ok, frame = cap.read()
+            if not ok:
+                return
+            yield cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
+    finally:
+        cap.release()
+
+
+def read_calibration(path: Path) -> dict[str, Any]:
+    import yaml
+
+    if not path.is_file():
+        raise InputError(invalid("calibration", str(path), "an existing YAML file"))
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as e:
+        raise InputError(f"calibration={str(path)!r} is not valid YAML: {e}") from None
+    if not isinstance(data, dict) or "foot_homography" not in data:
+        raise InputError(
+            invalid("calibration", str(path), "a YAML mapping with a 3x3 foot_homography")
+        )
+    try:
+        hf = np.asarray(data["foot_homography"], float)
+    except (TypeError, ValueError):
+        raise InputError(
+            invalid("foot_homography", data["foot_homography"], "a 3x3 matrix of numbers")
+        ) from None
+    if hf.shape != (3, 3):
+        raise InputError(invalid("foot_homography", data["foot_homography"], "a 3x3 matrix"))
+    return data
+
+
+def read_radio(
+    path: Path, *, clock_offset: float, video_start: float, duration: float
+) -> pd.DataFrame:
+    """The tag log, checked: required columns, numbers, time order, overlap with the video.
+
+    Returns columns ``t`` (seconds on the video clock: ``time - clock_offset - video_start``),
+    ``tag`` (str), ``x``, ``y``; rows outside the video are dropped.
+    """
+    if not path.is_file():
+        raise InputError(invalid("radio", str(path), "an existing CSV file"))
+    try:
+        df = pd.read_csv(path)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
+        raise InputError(f"radio={str(path)!r} is not a readable CSV file: {e}") from None
+    missing = [c for c in REQUIRED_COLUMNS if c not in df.columns]
+    if missing:
+        raise InputError(
+            f"radio={str(path)!r} lacks the column(s) {missing}: expected columns {list(REQUIRED_COLUMNS)} "
+            f"(found {list(df.columns)})"
+        )
+    for c in ("time", "x", "y"):
+        vals = pd.to_numeric(df[c], errors="coerce")
+        bad = vals.isna() & df[c].notna()
+        if bad.any():
+            row = int(np.flatnonzero(bad.to_numpy())[0])
+            raise InputError(
+                invalid(f"radio column {c!r} at data row {row + 1}", df[c].iloc[row], "a number")
+            )
+        df[c] = vals
+    if df.empty:
+        raise InputError(invalid("radio", str(path), "at least one tag fix"))
+    t = df["time"].to_numpy(float)
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise MeasurementError(
+            f"radio={str(path)!r}: time={t[i]} at data row {i + 1} comes after time={t[i - 1]}: "
+            "the tag log must be in time order"
+        )
+    out = pd.DataFrame(
+        {
+            "t": t - clock_offset - video_start,
+            "tag": df["tag"].astype(str),
+            "x": df["x"],
+            "y": df["y"],
+        }
+    ).dropna()
+    inside = (out["t"] >= -1.0) & (out["t"] <= duration + 1.0)
+    if not inside.any():
+        raise MeasurementError(
+            f"radio={str(path)!r}: no tag fix falls inside the video (tag times {t.min():.3f}..{t.max():.3f} s, "
+            f"video {video_start + clock_offset:.3f}..{video_start + clock_offset + duration:.3f} s on the tag clock): "
+            "check video_start in the calibration and --clock-offset"
+        )
+    return out[inside].reset_index(drop=True)
+
+
+def _annotate(
+    image: NDArray[np.uint8], r: FrameResult | None, radio_px: NDArray[np.float64] | None
+) -> NDArray[np.uint8]:
+    import cv2
+
+    out = cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
+    if r is None:
+        return out
+    if r.box is not None:
+        u0, v0, u1, v1 = r.box
+        cv2.rectangle(out, (u0, v0), (u1, v1), (0, 200, 0), 1)
+    if np.isfinite(r.foot_u):
+        cv2.circle(out, (round(r.foot_u), round(r.foot_v)), 4, (0, 200, 0), 2)
+    if radio_px is not None and np.all(np.isfinite(radio_px)):
+        cv2.circle(out, (round(radio_px[0]), round(radio_px[1])), 6, (255, 80, 0), 2)
+    if np.isfinite(r.u):
+        cv2.drawMarker(out, (round(r.u), round(r.v)), (0, 0, 255), cv2.MARKER_CROSS, 14, 2)
+    label = f"frame {r.frame}  t={r.time:.2f}s"
+    if r.occluded:
+        label += f"  OCCLUDED ({r.reason})"
+        cv2.rectangle(out, (0, 0), (out.shape[1] - 1, out.shape[0] - 1), (0, 0, 255), 4)
+    cv2.putText(out, label, (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1, cv2.LINE_AA)
+    return out
+
+
+def track_video(
+    video: Path,
+    radio: Path,
+    calibration: Path,
+    out: Path,
+    *,
+    clock_offset: float = 0.0,
+    progress: bool | None = None,
+    drop_frames: tuple[int, int] | None = None,
+) -> dict[str, Any]:
+    """Run the chain and write the outputs (see the module docstring); returns the summary."""
+    import cv2
+    from tqdm import tqdm
+
+    from ..sensors.camera_geometry import apply_homography
+
+    start = time.perf_counter()
+    info = open_video(Path(video))
+    cal = read_calibration(Path(calibration))
+    fps = float(cal.get("fps") or info.fps)
+    if not fps > 0:
+        raise InputError(
+            invalid("fps", fps, "a frame rate > 0 (the video has none: set fps in the calibration)")
+        )
+    n_bg = int(cal.get("background_frames", 30))
+    if n_bg < 2:
+        raise InputError(invalid("background_frames", n_bg, "an integer >= 2"))
+    n_frames = info.n_frames if info.n_frames > 0 else 10**9
+    if n_frames <= n_bg:
+        raise InputError(
+            invalid(
+                "video length",
+                info.n_frames,
+                f"more than background_frames={n_bg} frames (the leading frames must show the empty scene)",
+            )
+        )
+    try:
+        cfg = TrackerConfig(
+            foot_homography=np.asarray(cal["foot_homography"], float),
+            head_homography=np.asarray(cal["head_homography"], float)
+            if cal.get("head_homography") is not None
+            else None,
+            tag_cov=np.asarray(cal.get("tag_cov", [[0.36, 0.0], [0.0, 0.16]]), float),
+            sigma_px=float(cal.get("sigma_px", 1.0)),
+            image_size=(info.width, info.height),
+            min_area=int(cal.get("min_area", 150)),
+            drop_frames=drop_frames,
+        )
+        tracker = VideoRadioTracker(cfg)
+    except ConfigError as e:
+        raise InputError(f"calibration={str(calibration)!r}: {e}") from None
+    video_start = float(cal.get("video_start", 0.0))
+    log = read_radio(
+        Path(radio), clock_offset=clock_offset, video_start=video_start, duration=n_frames / fps
+    )
+    subject = str(cal.get("subject_tag", log["tag"].iloc[0]))
+    if subject not in set(log["tag"]):
+        raise InputError(
+            invalid("subject_tag", subject, f"one of the tags in the log {sorted(set(log['tag']))}")
+        )
+    mine = log[log["tag"] == subject]
+    tag_ids = {t: i for i, t in enumerate(sorted(set(log["tag"]) - {subject}))}
+    others = log[log["tag"] != subject]
+    other_arr = np.column_stack(
+        [others[["t", "x", "y"]].to_numpy(float), others["tag"].map(tag_ids).to_numpy(float)]
+    )
+
+    frames = read_frames(Path(video))
+    background = []
+    for _ in range(n_bg):
+        f = next(frames, None)
+        if f is None:
+            break
+        background.append(f)
+    if len(background) < n_bg:
+        raise InputError(
+            invalid("video length", len(background), f"more than background_frames={n_bg} frames")
+        )
+    tracker.train_background(np.stack(background))
+
+    tmp = Path(
+        tempfile.mkdtemp(prefix=f".{Path(out).name}.partial-", dir=Path(out).absolute().parent)
+    )
+    try:
+        writer = cv2.VideoWriter(
+            str(tmp / "annotated.mp4"),
+            cv2.VideoWriter_fourcc(*"mp4v"),
+            fps,
+            (info.width, info.height),
+        )
+        rows: list[dict[str, Any]] = []
+        total = max(info.n_frames - n_bg, 0) or None
+        bar = tqdm(total=total, desc="track-video", unit="frame", disable=(progress is False))
+        buffered: list[tuple[int, float, NDArray[np.uint8]]] = []
+
+        def feed() -> Iterator[tuple[int, float, NDArray[np.uint8]]]:
+            for k, image in enumerate(frames, start=n_bg):
+                item = (k, k / fps, image)
+                buffered.append(item)
+                yield item
+
+        radio_arr = mine[["t", "x", "y"]].to_numpy(float)
+        done: set[int] = set()
+        for r in tracker.run(feed(), radio_arr, other_arr if len(other_arr) else None):
+            while buffered and buffered[0][0] <= r.frame:
+                k, _t, image = buffered.pop(0)
+                res = r if k == r.frame else None
+                px = (
+                    apply_homography(cfg.foot_homography, np.array([r.radio_x, r.radio_y]))
+                    if res
+                    else None
+                )
+                writer.write(_annotate(image, res, px))
+                bar.update()
+            rows.append(r.as_row())
+            done.add(r.frame)
+        for _k, _t, image in buffered:
+            writer.write(_annotate(image, None, None))
+        writer.release()
+        bar.close()
+        if not rows:
+            raise InputError(
+                "the subject was never located: no tag fix of tag "
+                f"{subject!r} during the video and no foreground blob to start from"
+            )
+        df = pd.DataFrame(rows)
+        if not df["updated_visual"].any():
+            raise InputError(
+                f"the subject (tag {subject!r}) never appears in the video: no foreground blob matched it in "
+                f"{len(df)} frames (check that the first {n_bg} frames show the empty scene and that the "
+                "foot_homography maps the floor into this image)"
+            )
+        df.to_csv(tmp / "tracks.csv", index=False)
+        df.to_parquet(tmp / "tracks.parquet", index=False)
+        _floorplan(tmp / "floorplan.png", df, mine)
+        summary = {
+            "video": str(video),
+            "frames": int(len(df) + n_bg),
+            "background_frames": n_bg,
+            "fps": fps,
+            "tracked_frames": len(df),
+            "visual_updates": int(df["updated_visual"].sum()),
+            "occluded_frames": int(df["occluded"].sum()),
+            "radio_fixes": len(mine),
+            "subject_tag": subject,
+            "clock_offset": clock_offset,
+            "seconds": round(time.perf_counter() - start, 3),
+        }
+        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        for f in tmp.iterdir():
+            shutil.move(str(f), out / f.name)
+        return summary
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _floorplan(path: Path, df: pd.DataFrame, radio: pd.DataFrame) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 6))
+    ax.plot(radio["x"], radio["y"], "b.", ms=4, label="radio fixes")
+    ax.plot(df["x"], df["y"], "r-", lw=1.5, label="estimate")
+    occ = df[df["occluded"]]
+    ax.plot(occ["x"], occ["y"], "kx", ms=4, label="occluded frames")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(args: Any) -> int:
+    drop = None
+    if args.drop_frames:
+        try:
+            a, b = (int(v) for v in str(args.drop_frames).split(":"))
+            drop = (a, b)
+        except ValueError:
+            raise InputError(
+                invalid("--drop-frames", args.drop_frames, "A:B with integers A <= B")
+            ) from None
+    summary = track_video(
+        args.video,
+        args.radio,
+        args.calibration,
+        args.out,
+        clock_offset=args.clock_offset,
+        progress=False if args.no_progress else None,
+        drop_frames=drop,
+    )
+    print(
+        f"track-video: {summary['tracked_frames']} frames tracked, {summary['visual_updates']} visual updates, "
+        f"{summary['occluded_frames']} occluded; outputs in {args.out}"
+    )
+    return 0
+
+
+__all__ = ["InputError", "main", "track_video"]
