@@ -9,9 +9,12 @@ One step, for particles ``u_l(t-1)`` with weights ``w_l(t-1)`` and a likelihood 
 
 Algorithm 1 prints ``f(Z | kappa_l)`` in step 4; the parent's point ``kappa_{pi_l}`` is right
 (standard ASIR, Pitt & Shephard 1999; spec §8 item 5). The likelihood can vanish for every particle
-(hard consistency constraints); then the first stage is skipped (weights ``w(t-1)``), and if the
-second stage vanishes too the particles are drawn afresh over the room (spec §8 item 7). Both
-events are counted in :class:`ASIRStats`; weights never become NaN.
+(hard consistency constraints); then the first stage is skipped (weights ``w(t-1)``). If the
+second stage vanishes too, the spec (§8 item 7) draws the particles afresh over the room; that
+throws away a cloud that is usually only slightly off (a narrow occluder shadow no particle fell
+in), so here the step's readings are ignored instead (predicted particles, equal weights), and
+the cloud is drawn afresh only after ``patience`` such steps in a row. All three events are
+counted in :class:`ASIRStats`; weights never become NaN.
 """
 
 from __future__ import annotations
@@ -37,7 +40,9 @@ class ASIRStats:
 
     steps: int = 0
     first_stage_fallbacks: int = 0
+    ignored_steps: int = 0
     reinitialisations: int = 0
+    consecutive_ignored: int = 0
 
 
 def _normalise(log_w: Array) -> Array:
@@ -54,6 +59,7 @@ class WaypointASIR:
     dynamics: WaypointRegimeDynamics = field(default_factory=WaypointRegimeDynamics)
     n_particles: int = 1000
     initial_speed: float = 1.0
+    patience: int = 5
     stats: ASIRStats = field(default_factory=ASIRStats)
 
     def __post_init__(self) -> None:
@@ -91,8 +97,14 @@ class WaypointASIR:
         denom = log_l1[parents]
         log_w2 = log_l2 - np.where(np.isfinite(denom), denom, 0.0)
         if not np.any(np.isfinite(log_w2)):
-            self.stats.reinitialisations += 1
-            return self.initialize(rng)
+            self.stats.ignored_steps += 1
+            self.stats.consecutive_ignored += 1
+            if self.stats.consecutive_ignored >= self.patience:
+                self.stats.reinitialisations += 1
+                self.stats.consecutive_ignored = 0
+                return self.initialize(rng)
+            return self.propagate(u, rng), w
+        self.stats.consecutive_ignored = 0
         return new, _normalise(log_w2)
 
     @staticmethod

@@ -75,7 +75,7 @@ def visibility_probabilities(
     ``{i, j}``) on the cameras assigned to each particle, or the deterministic visibility of the
     extreme priors (Sec. 6.1).
     """
-    n = len(cameras)
+    len(cameras)
     assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
     if prior_mode == "gaussian":
         if not isinstance(occluders, OccluderPriors):

@@ -23,7 +23,7 @@ PAPER = "Ercan, El Gamal, Guibas 2013, ACM TOSN 9(2) 16"
 def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[str, int]:
     """Steps, particles and burn-in: the paper's (no burn-in) or a quick run's."""
     if ctx.quick:
-        return {"steps": 250, "particles": 300, "burn_in": 25}
+        return {"steps": 150, "particles": 600, "burn_in": 15}
     return {"steps": steps, "particles": particles, "burn_in": 0}
 
 

@@ -201,6 +201,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         else 0.0,
         "readings_per_step": n_seen / steps,
         "fallbacks": asir.stats.first_stage_fallbacks,
+        "ignored_steps": asir.stats.ignored_steps,
         "reinitialisations": asir.stats.reinitialisations,
     }
     if gaps:

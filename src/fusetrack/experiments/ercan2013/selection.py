@@ -1,0 +1,230 @@
+"""E6 (Ercan et al. 2013, Sec. 6.2, Figs. 11-12): camera selection in the L-shaped room.
+
+12 cameras, M = 40, no static occluder, RMSE_occ ~ 11.5, a new subset of k cameras every T = 5
+steps. Methods: greedy (Algorithm 2) and brute force, each with the perspective (Eqs. 10-13) and
+weak-perspective (Eqs. 14-16) metric; the fixed list {1, 4, 7, 10, 8, 12, 3, 5, 2, 6, 11, 9};
+a random k-subset; the k cameras closest to the predicted mean; and all 12 cameras (dotted line).
+
+With ``--config my_room.yaml`` (see :func:`.scenes.scene_from_mapping`) the same comparison runs
+in the user's room, and the report shows the room, its cameras and one tracked run.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...evaluation.report import Claim, Outcome, RunContext
+from .common import curve_plot, fmt, md, mean_std, room_plot, sizes
+from .scenes import Scene, l_scene, load_scene
+from .simulation import run_tracking
+
+SIGMA_PSI = (
+    31.0  # random-walk Kalman priors with RMSE_occ ~ 11.5 in the L room (measured in the report)
+)
+METHODS = {
+    "greedy-perspective": ("greedy", "perspective"),
+    "greedy-weak": ("greedy", "weak"),
+    "brute-perspective": ("brute", "perspective"),
+    "brute-weak": ("brute", "weak"),
+    "fixed": ("fixed", "perspective"),
+    "random": ("random", "perspective"),
+    "closest": ("closest", "perspective"),
+}
+
+
+def _configs(
+    scene: Scene | None, ks: list[int], size: dict[str, int], m: int
+) -> list[dict[str, Any]]:
+    base: dict[str, Any] = {
+        "n_occluders": m,
+        "prior": "gaussian",
+        "sigma_psi": SIGMA_PSI,
+        "period": 5,
+        **size,
+    }
+    base.update({"scene_obj": scene} if scene is not None else {"scene": "L"})
+    out = [
+        {
+            **base,
+            "method": meth,
+            "model": model,
+            "k": k,
+            "label": name,
+            "metric_gap": meth == "greedy",
+        }
+        for k in ks
+        for name, (meth, model) in METHODS.items()
+    ]
+    out.append({**base, "method": "all", "k": 1, "label": "all"})
+    return out
+
+
+def run(ctx: RunContext) -> Outcome:
+    size = sizes(ctx)
+    runs = ctx.n_runs(full=10, quick=2)
+    cfg_path = ctx.extra.get("config")
+    scene = load_scene(cfg_path) if cfg_path else None
+    shown = scene or l_scene()
+    n = len(shown.cameras)
+    ks = [k for k in ([2, 6] if ctx.quick else [2, 3, 4, 5, 6]) if k < n] or [max(1, n - 1)]
+    m = 40 if scene is None else int(ctx.extra.get("occluders", 20))
+    df = ctx.monte_carlo(run_tracking, _configs(scene, ks, size, m), runs, desc="E6 selection")
+    df = df.drop(columns=[c for c in ("scene_obj",) if c in df.columns])
+    table = mean_std(df[df["label"] != "all"], ["label", "k"])
+    all_row = df[df["label"] == "all"]["rmse_tr"]
+    all_mean, all_std = (
+        float(all_row.mean()),
+        float(all_row.std(ddof=1)) if len(all_row) > 1 else 0.0,
+    )
+    piv = table.pivot(index="k", columns="label", values="mean")
+    sd = table.pivot(index="k", columns="label", values="std")
+    avg = piv.mean()
+    claims = []
+    for model in ("perspective", "weak"):
+        g, b = f"greedy-{model}", f"brute-{model}"
+        gap = float((piv[g] - piv[b]).abs().max())
+        spread = float(np.maximum(sd[g], sd[b]).mean())
+        claims.append(
+            Claim(
+                f"C8_greedy_close_to_brute_{model}",
+                f"{model} metric: greedy within one std of brute force at every k (largest |mean difference| / mean std)",
+                "< 1",
+                gap / max(spread, 1e-12),
+                "< 1",
+                gap < spread,
+            )
+        )
+    for h in ("closest", "random", "fixed"):
+        claims.append(
+            Claim(
+                f"C8_greedy_beats_{h}",
+                f"greedy (perspective) beats {h} (mean RMSE_tr over k, {h} / greedy)",
+                "> 1",
+                float(avg[h] / avg["greedy-perspective"]),
+                "> 1",
+                avg[h] > avg["greedy-perspective"],
+            )
+        )
+    k0 = min(ks)
+    claims.append(
+        Claim(
+            "C8_fixed_worst",
+            f"the fixed list is the worst method at k = {k0} (its mean RMSE_tr / the worst other method's)",
+            ">= 1",
+            float(piv.loc[k0, "fixed"] / piv.loc[k0].drop("fixed").max()),
+            ">= 1",
+            piv.loc[k0, "fixed"] >= piv.loc[k0].drop("fixed").max(),
+        )
+    )
+    weak_gap = float(
+        (
+            (piv["greedy-weak"] - piv["greedy-perspective"]).abs()
+            / np.maximum(sd["greedy-perspective"], 1e-12)
+        ).max()
+    )
+    claims.append(
+        Claim(
+            "C8_weak_within_std",
+            "greedy with the weak-perspective metric is within one std of the perspective one (largest |diff| / std)",
+            "< 1",
+            weak_gap,
+            "< 1",
+            weak_gap < 1,
+        )
+    )
+    kmax = max(ks)
+    g6, s6 = float(piv.loc[kmax, "greedy-perspective"]), float(sd.loc[kmax, "greedy-perspective"])
+    claims.append(
+        Claim(
+            "C8_six_like_all",
+            f"greedy with k = {kmax} matches all {n} cameras (mean difference / larger std)",
+            "<= 1",
+            (g6 - all_mean) / max(s6, all_std, 1e-12),
+            "<= 1",
+            g6 - all_mean <= max(s6, all_std),
+        )
+    )
+    ratio = float(df.loc[df["method"] == "greedy", "greedy_over_brute_mse"].mean())
+    same = float(df.loc[df["method"] == "greedy", "greedy_equals_brute"].mean())
+    claims.append(
+        Claim(
+            "C9_greedy_metric",
+            "greedy's subset MSE / brute force's (mean over selection epochs)",
+            "~1",
+            ratio,
+            "<= 1.05",
+            ratio <= 1.05,
+        )
+    )
+    t = df.groupby(["method", "k"])["selection_ms_per_epoch"].mean()
+    tg, tb = float(t[("greedy", kmax)]), float(t[("brute", kmax)])
+    claims.append(
+        Claim(
+            "C9_greedy_cheaper",
+            f"greedy selection is cheaper than brute force at k = {kmax} (brute / greedy time per epoch)",
+            "> 1",
+            tb / max(tg, 1e-12),
+            "> 1",
+            tb > tg,
+        )
+    )
+    curve_plot(
+        ctx.figure_path("fig12_selection"),
+        table,
+        "k",
+        "label",
+        xlabel="number of selected cameras k",
+        ylabel="RMSE_tr (units)",
+        title=f"Fig. 12: {shown.name} room, M = {m}, T = 5, {runs} runs x {size['steps']} steps",
+        hlines={f"all {n} cameras = {all_mean:.2f}": all_mean},
+    )
+    rep_cfg = {
+        **_configs(scene, [kmax], {**size, "steps": min(size["steps"], 400)}, m)[0],
+        "trace": True,
+        "metric_gap": False,
+    }
+    trace = run_tracking(rep_cfg, ctx.seed)[0]
+    room_plot(
+        ctx.figure_path("fig11_room"),
+        shown,
+        title=f"Fig. 11: {shown.name} room, {n} cameras; greedy k = {kmax}, one run",
+        truth=np.array(trace["trace_true"]),
+        estimate=np.array(trace["trace_est"]),
+    )
+    rmse_occ = float(df["rmse_occ"].mean())
+    rmse_max = float(df["rmse_max"].mean())
+    wide = piv.reset_index()
+    timing = t.unstack("method").reset_index()
+    report = f"""
+## Setup
+
+{"User scene from `" + str(cfg_path) + "`" if cfg_path else "L-shaped room of spec §7.2 (the paper gives only a picture)"}, {n} cameras, M = {m}, D = {shown.diameter:g},
+Gaussian occluder priors with RMSE_occ = {fmt(rmse_occ)} (paper 11.5), selection every 5 steps, {runs} runs x
+{size["steps"]} steps, L = {size["particles"]}. RMSE_max = {fmt(rmse_max)} (paper 47.9).
+
+![Fig. 11](fig11_room.png)
+
+## Fig. 12: mean RMSE_tr per method and k (paper: curves only)
+
+{md(wide)}
+
+All {n} cameras: {fmt(all_mean)} +- {fmt(all_std)}.
+
+![Fig. 12](fig12_selection.png)
+
+Greedy picked the brute-force subset in {100 * same:.0f}% of the selection epochs; its subset MSE was on average
+{fmt(ratio, 4)} times the optimum. Selection time per epoch (ms):
+
+{md(timing)}
+
+## Differences and their causes
+
+* Room and camera coordinates are reconstructed (spec §7.2); RMSE_max = {fmt(rmse_max)} against the paper's 47.9
+  supports the reconstruction's size.
+* The perspective metric clips h/d to the image bounds and averages the noise over the particles in view (the
+  paper leaves both open, spec §8 item 13); the weak-perspective metric is as printed.
+* With few runs, differences between the good methods are within the run-to-run spread, as in the paper.
+"""
+    return Outcome(df, claims, report, runs=runs)
