@@ -27,6 +27,7 @@ class Jump:
     level: float
     q: float = 0.01
     dim: int = 1
+    position_index: tuple = (0,)
 
     def mean(self, x, dt):
         return np.full(np.shape(x), self.level)
@@ -79,6 +80,31 @@ def test_model_probabilities_match_the_exact_hmm_filter(proposal):
         batch_shape=(20,),
     )
     np.testing.assert_allclose(probs.mean(axis=1), exact, atol=0.02)
+
+
+def test_discretisation_mmpf_matches_the_exact_hmm_filter():
+    """Algorithm 7 (regime cells, marginal weights) gives the same regime posterior."""
+    levels = (-1.0, 0.0, 1.5)
+    pi = np.array([[0.8, 0.1, 0.1], [0.2, 0.7, 0.1], [0.2, 0.1, 0.7]])
+    sensor = PositionFix("p", cov=[[0.3]], position_index=(0,))
+    zs = [0.1, -0.9, 1.2, 0.7]
+    ll = np.array([[-0.5 * (z - c) ** 2 / 0.31 for c in levels] for z in zs])
+    exact = hmm_filter(pi, ll, np.full(3, 1 / 3))
+    probs = []
+    for r in range(8):
+        mm = MultipleModelParticleFilter(
+            [Jump(c) for c in levels], pi, [sensor], 600, proposal="cells"
+        )
+        probs.append(
+            run_mm(
+                mm,
+                Gaussian(np.zeros(1), np.eye(1)),
+                [[np.array([z])] for z in zs],
+                1.0,
+                np.random.default_rng(r),
+            )[1]
+        )
+    np.testing.assert_allclose(np.mean(probs, axis=0), exact, atol=0.04)
 
 
 def test_bad_transition_matrices_are_refused():

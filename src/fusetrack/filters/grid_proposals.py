@@ -66,11 +66,18 @@ def _gauss_logpdf(diff: Array, cov: Array) -> Array:
 
 
 def complete_from_ancestors(
-    p: Array, prev: Array, motion: Any, dt: float, rng: np.random.Generator
+    p: Array,
+    prev: Array,
+    motion: Any,
+    dt: float,
+    rng: np.random.Generator,
+    log_ancestor_weight: Array | None = None,
 ) -> tuple[Array, Array]:
     """Full states for positions ``p (N, k)`` and ``log p̂(p)`` (the predictive position density).
 
-    Ancestor ``j ∝ N(p; f(x^j)_pos, Q_pp)``, then ``x_rest ~ N(f(x^j)_rest + K (p - f(x^j)_pos), S)``.
+    Ancestor ``j ∝ a_j N(p; f(x^j)_pos, Q_pp)``, then ``x_rest ~ N(f(x^j)_rest + K (p - f(x^j)_pos), S)``;
+    ``p̂(p) = (1/N) sum_j a_j N(p; f(x^j)_pos, Q_pp)`` with ``log a_j = log_ancestor_weight``
+    (default 0; a regime's transition probability from the ancestor's regime in the MM filter).
     """
     n, d = prev.shape
     pos, rest = _split(motion, d)
@@ -78,6 +85,8 @@ def complete_from_ancestors(
     Q = np.asarray(motion.noise_cov(dt), float)
     Qpp = Q[np.ix_(pos, pos)]
     lp = _gauss_logpdf(p[:, None, :] - m[None, :, pos], Qpp)  # (N_new, N_prev)
+    if log_ancestor_weight is not None:
+        lp = lp + log_ancestor_weight[None, :]
     log_pred = logsumexp(lp, axis=1) - np.log(n)
     g = rng.gumbel(size=lp.shape)
     anc = np.argmax(lp + g, axis=1)  # categorical ∝ exp(lp) (Gumbel-max)
@@ -90,6 +99,20 @@ def complete_from_ancestors(
         mr = m[anc][:, rest] + (p - m[anc][:, pos]) @ K.T
         x[:, rest] = mr + rng.standard_normal((len(p), len(rest))) @ np.linalg.cholesky(S).T
     return x, np.asarray(log_pred)
+
+
+def sample_cells(
+    centres: Array, w: Array, delta: Array, n: int, rng: np.random.Generator
+) -> tuple[Array, Array]:
+    """``n`` positions: cell ``j ∝ w_j`` then uniform in its box of side ``delta`` around
+    ``centres[j]``; returns them and ``log q(p)``, ``q(p) = sum_j w_j U_j(p)`` (boxes may overlap)."""
+    cdf = np.cumsum(w)
+    cdf[-1] = 1.0
+    idx = np.minimum(np.searchsorted(cdf, rng.random(n), side="right"), len(w) - 1)
+    p = centres[idx] + (rng.random((n, centres.shape[1])) - 0.5) * delta
+    inside = np.all(np.abs(p[:, None, :] - centres[None, :, :]) <= delta / 2 + 1e-12, axis=-1)
+    q = inside.astype(float) @ w / float(np.prod(delta))
+    return p, np.log(q)
 
 
 def _grid_states(centres: Array, fill: Array, pos: list[int]) -> Array:
@@ -261,15 +284,9 @@ class DiscretisationProposal:
     ) -> tuple[Array, Array, None]:
         centre, w, delta = self.cells(prev, zs, dt, filt)
         pos, _ = _split(filt.motion, prev.shape[1])
-        n = prev.shape[0]
-        cdf = np.cumsum(w)
-        cdf[-1] = 1.0
-        idx = np.minimum(np.searchsorted(cdf, rng.random(n), side="right"), len(w) - 1)
-        p = centre[idx][:, pos] + (rng.random((n, len(pos))) - 0.5) * delta
-        inside = np.all(np.abs(p[:, None, :] - centre[None, :, pos]) <= delta / 2 + 1e-12, axis=-1)
-        q = inside.astype(float) @ w / float(np.prod(delta))  # q(p) = sum_j W_j U_j(p)
+        p, log_q = sample_cells(centre[:, pos], w, delta, prev.shape[0], rng)
         x, log_pred = complete_from_ancestors(p, prev, filt.motion, dt, rng)
-        return x, log_pred - np.log(q), None
+        return x, log_pred - log_q, None
 
     def feedback(self, state: Any, particles: Array, estimate: Array, filt: Any) -> None:
         return None

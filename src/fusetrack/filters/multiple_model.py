@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from types import SimpleNamespace
 from typing import Literal
 
 import numpy as np
@@ -31,6 +32,7 @@ from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, invalid
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
+from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
 from .sis import Array, LogLikelihood, SISStats, Zs
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
 
@@ -75,6 +77,8 @@ class PaddedModel:
     inner: MotionModel
     acc_var: float = 1e-4
     dim: int = 6
+    position_index: tuple[int, ...] = (0, 1)
+    velocity_index: tuple[int, ...] | None = (2, 3)
 
     def mean(self, x: Array, dt: float) -> Array:
         out = np.zeros(x.shape)
@@ -139,7 +143,7 @@ class MultipleModelParticleFilter:
         sensors: Sequence[SensorModel] | SensorModel,
         n_particles: int = 1000,
         *,
-        proposal: Literal["prior", "sp-pekf"] = "prior",
+        proposal: Literal["prior", "sp-pekf", "cells"] = "prior",
         n_channels: int = 10,
         resampler: str = "systematic",
         initial_probs: ArrayLike | None = None,
@@ -157,8 +161,9 @@ class MultipleModelParticleFilter:
         if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 1:
             raise ConfigError(invalid("n_particles", n_particles, "an integer >= 1"))
         self.n_particles = int(n_particles)
-        if proposal not in ("prior", "sp-pekf"):
-            raise ConfigError(invalid("proposal", proposal, "'prior' or 'sp-pekf'"))
+        if proposal not in ("prior", "sp-pekf", "cells"):
+            raise ConfigError(invalid("proposal", proposal, "'prior', 'sp-pekf' or 'cells'"))
+        self.cell_proposal = DiscretisationProposal()
         self.proposal = proposal
         self.resample = get_resampler(resampler)
         m = len(self.models)
@@ -193,6 +198,30 @@ class MultipleModelParticleFilter:
         m = len(self.models)
         return np.asarray((modes[..., None] == np.arange(m)).mean(axis=-2), dtype=np.float64)
 
+    def _from_cells(
+        self,
+        r: int,
+        prev: Array,
+        prev_modes: IntArray,
+        n_r: int,
+        zs: Zs,
+        dt: float,
+        rng: np.random.Generator,
+    ) -> tuple[Array, Array]:
+        """Discretisation MMPF (Algorithm 7): ``n_r`` particles from regime r's cells (Eq. 84),
+        with log weight ``log p̂(p, r) - log q(p, r)`` (likelihood added by the caller)."""
+        if prev.ndim != 2:
+            raise ConfigError(invalid("batch_shape", prev.shape[:-2], "() for proposal='cells'"))
+        model = self.models[r]
+        view = SimpleNamespace(motion=model, sensors=self.sensors, stats=self.stats)
+        centre, w, delta = self.cell_proposal.cells(prev, zs, dt, view)
+        pos = list(model.position_index)  # type: ignore[attr-defined]
+        p, log_q = sample_cells(centre[:, pos], w, delta, n_r, rng)
+        log_a = np.log(np.maximum(self.transition[prev_modes, r], 1e-300))
+        x, log_pred = complete_from_ancestors(p, prev, model, dt, rng, log_a)
+        n = prev.shape[0]
+        return x, log_pred - (log_q + np.log(n_r / n))
+
     def step(self, state: MMState, zs: Zs, dt: float, rng: np.random.Generator) -> MMState:
         prev = state.particles
         modes = sample_regimes(state.modes, self.transition, rng)  # Eq. 47
@@ -202,6 +231,12 @@ class MultipleModelParticleFilter:
         banks = list(state.banks)
         for r, model in enumerate(self.models):
             sel = modes == r
+            if self.proposal == "cells":
+                if np.any(sel):
+                    x[sel], log_w[sel] = self._from_cells(
+                        r, prev, state.modes, int(sel.sum()), zs, dt, rng
+                    )
+                continue
             if self.proposal == "prior":
                 if np.any(sel):
                     x[sel] = model.sample(prev[sel], dt, rng)
