@@ -192,6 +192,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 Sec. 5.2.3: RFID virtual sensors refined by two cameras",
             "Lee 2009 (seed 000)",
         ),
+        ExperimentInfo(
+            "lee2009-face-matching",
+            "lee2009_face_matching:run",
+            "Lee 2009 Sec. 5.2.1: multi-view colour-histogram face matching and walking direction",
+            "Lee 2009 (seed 000)",
+        ),
     ]
 }
 
