@@ -64,6 +64,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 (seed 001)",
         ),
         ExperimentInfo(
+            "zhai2007-discretisation",
+            "zhai2007_discretisation:run",
+            "Zhai 2007 E15-E17 (Figs 50-72): discretisation PF and discretisation MMPF",
+            "Zhai 2007 (seed 001)",
+        ),
+        ExperimentInfo(
             "lee2009-projected-planes",
             "lee2009_projected_planes:run",
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
