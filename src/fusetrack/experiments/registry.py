@@ -204,6 +204,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 Sec. 5.2.1: multi-view colour-histogram face matching and walking direction",
             "Lee 2009 (seed 000)",
         ),
+        ExperimentInfo(
+            "lee2009-network-traffic",
+            "lee2009_network_traffic:run",
+            "Lee 2009 Sec. 5.2.3: network delay of router-based vs server-based visual compensation",
+            "Lee 2009 (seed 000)",
+        ),
     ]
 }
 
