@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -20,8 +21,16 @@ from .scenes import Scene
 PAPER = "Ercan, El Gamal, Guibas 2013, ACM TOSN 9(2) 16"
 
 
+def smoke() -> bool:
+    """Tiny sizes for the end-to-end tests (environment variable ``FUSETRACK_SMOKE=1``): the same
+    code paths and output files in seconds; the numbers mean nothing."""
+    return os.environ.get("FUSETRACK_SMOKE", "") not in ("", "0")
+
+
 def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[str, int]:
     """Steps, particles and burn-in: the paper's (no burn-in) or a quick run's."""
+    if smoke():
+        return {"steps": 20, "particles": 80, "burn_in": 2}
     if ctx.quick:
         return {"steps": 150, "particles": 600, "burn_in": 15}
     return {"steps": steps, "particles": particles, "burn_in": 0}

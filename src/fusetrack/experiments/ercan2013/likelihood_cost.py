@@ -15,13 +15,13 @@ import pandas as pd
 from ...evaluation.montecarlo import run_seed
 from ...evaluation.report import Claim, Outcome, RunContext
 from .cameras import SIGMA_PSI
-from .common import curve_plot, md, mean_std
+from .common import curve_plot, md, mean_std, smoke
 from .simulation import run_tracking
 
 
 def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=3, quick=1)
-    steps, particles = (60, 1000) if ctx.quick else (400, 1000)
+    steps, particles = (8, 100) if smoke() else ((60, 1000) if ctx.quick else (400, 1000))
     ks = [1, 2, 4, 8] if ctx.quick else list(range(1, 9))
     rows = []
     run_tracking({"steps": 3, "particles": 50, "k": 2}, 0)  # compile the kernels before timing

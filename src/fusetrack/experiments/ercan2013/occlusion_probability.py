@@ -28,7 +28,7 @@ from ...world.occlusion import (
     occlusion_probability_eq7,
     pattern_probability,
 )
-from .common import fmt, md
+from .common import fmt, md, smoke
 
 DIAMETER, SIGMA = 3.33, 2.0
 
@@ -118,8 +118,8 @@ def pmf_sums(
 
 
 def run(ctx: RunContext) -> Outcome:
-    n_points = 2000 if ctx.quick else 16000
-    n_mc = 10_000 if ctx.quick else 40_000
+    n_points = 200 if smoke() else (2000 if ctx.quick else 16000)
+    n_mc = 2_000 if smoke() else (10_000 if ctx.quick else 40_000)
     rng = np.random.default_rng([ctx.seed, 17])
     rows: list[dict[str, Any]] = []
     results = {}
@@ -152,7 +152,7 @@ def run(ctx: RunContext) -> Outcome:
         ]
     )
     form_gap = float(np.max(np.abs(q_kernel - q_printed)))
-    trials = 40 if ctx.quick else 200
+    trials = 4 if smoke() else (40 if ctx.quick else 200)
     pmf_gap, pmf_gap_clamped, pmf_lowest = pmf_sums(rng, trials, DIAMETER, 60.0)
     hard_gap, hard_gap_clamped, hard_lowest = pmf_sums(rng, trials, 8.0, 400.0)
 

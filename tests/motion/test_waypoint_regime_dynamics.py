@@ -1,0 +1,64 @@
+"""The waypoint-regime particle dynamics of Ercan et al. 2013 (Sec. 4.1, Eq. 5)."""
+
+import numpy as np
+import pytest
+
+from fusetrack.core.errors import ConfigError
+from fusetrack.motion.waypoint_regime import WaypointRegimeDynamics
+
+
+def far_particles(n):
+    u = np.zeros((n, 5))
+    u[:, 2:4] = [100.0, 0.0]  # destination far to the east
+    u[:, 4] = 1.0
+    return u
+
+
+def sampler(rng, n):
+    return rng.uniform(0, 100, (n, 2))
+
+
+def test_regime_probabilities_and_step_length_when_moving():
+    dyn = WaypointRegimeDynamics(sigma_v=0.0)
+    u = far_particles(20000)
+    new = dyn.sample(u, np.random.default_rng(0), sampler)
+    moved = np.hypot(*(new[:, :2] - u[:, :2]).T)
+    changed = np.any(new[:, 2:4] != u[:, 2:4], axis=1)
+    assert np.mean(moved == 0) == pytest.approx(0.05, abs=0.01)  # wait
+    assert np.mean(changed) == pytest.approx(0.05, abs=0.01)  # change destination
+    mtd = ~changed & (moved > 0)
+    assert np.allclose(new[mtd, :2], [1.0, 0.0])  # one speed-length step toward the destination
+    assert np.allclose(moved[moved > 0], 1.0)
+    assert np.allclose(new[mtd, 4], 1.0)  # s = 0.3 s + 0.7 |step|
+
+
+def test_reached_destination_mostly_changes_it():
+    dyn = WaypointRegimeDynamics()
+    u = far_particles(20000)
+    u[:, 2:4] = [0.5, 0.0]  # within one speed of the destination
+    new = dyn.sample(u, np.random.default_rng(1), sampler)
+    assert np.mean(np.any(new[:, 2:4] != u[:, 2:4], axis=1)) == pytest.approx(0.9, abs=0.01)
+
+
+def test_speed_update_and_mean_point():
+    dyn = WaypointRegimeDynamics(sigma_v=0.33)
+    u = far_particles(5)
+    u[:, 4] = 2.0
+    kappa = dyn.mean(u)
+    assert np.allclose(kappa[:, :2], [2.0, 0.0]) and np.allclose(kappa[:, 2:], u[:, 2:])
+    u[:, 2:4] = [1.0, 0.0]  # reached: kappa stays
+    assert np.allclose(dyn.mean(u)[:, :2], 0.0)
+
+
+def test_moves_out_of_free_space_are_rejected():
+    dyn = WaypointRegimeDynamics(sigma_v=0.0, beta_moving=1.0, lambda_moving=0.0)
+    u = far_particles(10)
+    new = dyn.sample(u, np.random.default_rng(2), sampler, free=lambda p: p[:, 0] < 0.5)
+    assert np.allclose(new[:, :2], 0.0)
+
+
+def test_invalid_regime_probabilities():
+    with pytest.raises(ConfigError):
+        WaypointRegimeDynamics(beta_moving=0.9, lambda_moving=0.2)
+    with pytest.raises(ConfigError):
+        WaypointRegimeDynamics(sigma_v=-1.0)

@@ -1,0 +1,67 @@
+"""Rooms and polygons for the Ercan 2013 camera network: validation, containment, line of sight."""
+
+import numpy as np
+import pytest
+
+from fusetrack.core.errors import ConfigError
+from fusetrack.world.geometry import as_polygon, points_in_polygon, segments_cross_polygon
+from fusetrack.world.room import Room, l_shaped_room, square_room
+
+
+def test_polygon_orientation_and_closing_vertex():
+    cw = [[0, 0], [0, 1], [1, 1], [1, 0], [0, 0]]
+    v = as_polygon(cw)
+    assert v.shape == (4, 2)
+    assert 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1]) > 0
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        [[0, 0], [1, 1], [1, 0], [0, 1]],  # bow tie: edges cross
+        [[0, 0], [1, 0]],  # too few vertices
+        [[0, 0], [1, 0], [2, 0]],  # zero area
+        [[0, 0], [1, 0], [np.nan, 1]],
+    ],
+)
+def test_non_simple_or_degenerate_polygon_is_rejected(bad):
+    with pytest.raises(ConfigError, match="room.boundary"):
+        Room(np.array(bad, float))
+
+
+def test_static_occluder_outside_room_is_rejected():
+    with pytest.raises(ConfigError, match="static_occluders"):
+        square_room(10, [[[20, 20], [30, 20], [30, 30]]])
+
+
+def test_points_in_l_room_and_sight_through_the_reflex_corner():
+    room = l_shaped_room(200)
+    inside = points_in_polygon(
+        np.array([[50, 50], [150, 50], [50, 150], [150, 150]]), room.boundary
+    )
+    assert inside.tolist() == [True, True, True, False]
+    # from the lower-right arm to the upper-left arm the segment leaves the room
+    assert room.sight_blocked([190, 60], [60, 190])
+    assert not room.sight_blocked([10, 10], [60, 190])
+    grid = room.sight_blocked_grid(
+        np.array([[190.0, 60.0], [10.0, 10.0]]), np.array([[60.0, 190.0]])
+    )
+    assert grid[:, 0].tolist() == [True, False]
+
+
+def test_static_occluder_blocks_and_touching_is_not_crossing():
+    room = square_room(100, [[[40, 40], [60, 40], [60, 60], [40, 60]]])
+    assert room.sight_blocked([0, 50], [100, 50])
+    assert not room.sight_blocked([0, 10], [100, 10])
+    assert room.sight_blocked([0, 0], [50, 50])  # a point inside the occluder is hidden
+    # a segment that only touches a vertex does not cross
+    assert not segments_cross_polygon(
+        np.array([0.0, 80.0]), np.array([80.0, 0.0]), room.static_occluders[0]
+    )
+
+
+def test_sample_free_avoids_occluders():
+    room = square_room(100, [[[10, 10], [90, 10], [90, 90], [10, 90]]])
+    pts = room.sample_free(np.random.default_rng(0), 500)
+    assert pts.shape == (500, 2)
+    assert room.free(pts).all()
