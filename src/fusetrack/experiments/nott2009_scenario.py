@@ -127,12 +127,13 @@ def simulate_measurements(
     else:
         period = 1.0 / cfg.rfid_rate
         tau = np.arange(0.0, t[-1] + 1e-9, period)
-        tau = np.clip(tau + cfg.rfid_jitter * rng.standard_normal(tau.size), 0.0, t[-1])
-        tau.sort()
+        noise = rng.standard_normal((tau.size, 2))  # drawn first: jitter 0 at the frame rate = grid
+        if cfg.rfid_jitter > 0:
+            tau = np.sort(np.clip(tau + cfg.rfid_jitter * rng.standard_normal(tau.size), 0.0, t[-1]))
         # true position at the tag's sampling instant: the frame before, moved on with its velocity
-        k = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, cfg.n_steps - 1)
+        k = np.clip(np.searchsorted(t, tau + 1e-9, side="right") - 1, 0, cfg.n_steps - 1)
         p = truth[k, :2] + truth[k, 4:6] * (tau - t[k])[:, None]
-        z = p + sig * rng.standard_normal(p.shape)
+        z = p + sig * noise
         stamps = np.clip(tau + cfg.clock_offset, 0.0, None)
         tags = [Measurement(float(s), "tag", zz) for s, zz in zip(stamps, z)]
     return tags, cams
