@@ -13,7 +13,7 @@ Parts (spec 000, Sec. 5.5):
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import matplotlib
@@ -40,7 +40,7 @@ PAPER_TV_TRIG = 4.55
 
 
 def piecewise_truth(
-    x0: np.ndarray, schedule: list[list[tuple[float, float, float]]], dt: float, steps: int
+    x0: np.ndarray, schedule: Sequence[Sequence[tuple[float, float, float]]], dt: float, steps: int
 ) -> np.ndarray:
     """``(steps, O, 4)``: object ``o`` follows ``schedule[o]`` = [(t_start, t_end, alpha)] (alpha 0 = CV)."""
     out = np.zeros((steps, len(x0), 4))
@@ -361,7 +361,7 @@ def run(ctx: RunContext) -> Outcome:
     )
     # ---- C11 (E3.5)
     e35 = df[(df.part == "E3.5") & (df.object == "trigger_series")]
-    prob = {}
+    prob: dict[tuple[str, bool], np.ndarray] = {}
     for (s, c), g in e35.groupby(["sensor", "cooperation"]):
         series = np.array([np.asarray(v, float) for v in g["fired_series"]])
         prob[(s, bool(c))] = series.mean(axis=0)
@@ -444,9 +444,9 @@ def run(ctx: RunContext) -> Outcome:
     fig, ax = plt.subplots(figsize=(8, 4.8))
     for o in range(3):
         ax.plot(tr35[:, o, 0], tr35[:, o, 1], label=f"O{o + 1}")
-    for name, p in {**SENSORS_35, **CAMERAS_35}.items():
-        ax.plot(*p, "k^" if name.startswith("A") else "bs")
-        ax.annotate(name, p)
+    for name, pos in {**SENSORS_35, **CAMERAS_35}.items():
+        ax.plot(*pos, "k^" if name.startswith("A") else "bs")
+        ax.annotate(name, pos)
     ax.set_xlim(0, ROOM[0])
     ax.set_ylim(0, ROOM[1])
     ax.set_aspect("equal")

@@ -39,7 +39,7 @@ PM = PF = 0.2
 SIGMA2 = 1.0
 
 # (name, detected cameras' global positions (None = miss), g_pred, printed W, g, P1, Y)
-CASES = {
+CASES: dict[str, tuple[list[Any], tuple[float, float], dict[str, Any]]] = {
     "case1": (
         [None, (5.2, 5.2), (4.9, 5.0)],
         (5.0, 5.0),
@@ -148,7 +148,7 @@ def run_sequence(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         present = n < n_present
         if present:
             pos = pos + vel + 0.01 * rng.standard_normal(2)
-        dets: list[Array | None] = []
+        dets: list[Any] = []
         for h in hs:
             if present and rng.random() > PM:
                 dets.append(to_image(h, pos) + pixel_sigma * rng.standard_normal(2))
@@ -158,10 +158,11 @@ def run_sequence(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                 dets.append(None)
         frames.append((present, pos.copy(), dets))
     rows = []
-    for method, kw in (
+    variants: tuple[tuple[str, dict[str, Any]], ...] = (
         ("quality + dynamic prior", {}),
         ("Chair-Varshney (no quality, no prior)", {"use_quality": False, "use_prior": False}),
-    ):
+    )
+    for method, kw in variants:
         fusion = DetectionFusion(hs, PM, PF, SIGMA2, **kw)
         covered = accepted_false = raw_covered = 0
         err = []
@@ -242,7 +243,7 @@ def run(ctx: RunContext) -> Outcome:
     rng = np.random.default_rng([ctx.seed, 41])
     s2 = np.round(np.arange(0.005, 5.0001, 0.01 if ctx.quick else 0.005), 4)
     curves: dict[tuple[str, int], Array] = {}
-    thr_rows = []
+    thr_rows: list[dict[str, Any]] = []
     for term in ("logW", "logit"):
         for n in range(1, 6):
             p = p_g1(n, s2, trials, rng, term)
@@ -282,20 +283,20 @@ def run(ctx: RunContext) -> Outcome:
             monotone,
         )
     )
-    t50 = {
+    t50_by_term: dict[str, list[float]] = {
         term: [
             float(thr[(thr.quality_term == term) & (thr["N(S_E1)"] == n)]["sigma2 P=0.5"].iloc[0])
             for n in range(1, 6)
         ]
         for term in ("logW", "logit")
     }
-    grows = {term: bool(np.all(np.diff(v) > 0)) for term, v in t50.items()}
+    grows = {term: bool(np.all(np.diff(v) > 0)) for term, v in t50_by_term.items()}
     claims.append(
         Claim(
             "C14_more_cameras_tolerate_more",
             "sigma_xy^2 at which P(G1) = 0.5 grows with N(S_E1) (logW; logit)",
             [FIG43_PAPER[n][1] for n in range(1, 6)],
-            {term: [round(v, 3) for v in vals] for term, vals in t50.items()},
+            {term: [round(v, 3) for v in vals] for term, vals in t50_by_term.items()},
             "increasing in N",
             grows["logW"] and grows["logit"],
         )
@@ -310,7 +311,7 @@ def run(ctx: RunContext) -> Outcome:
             "C14_thresholds",
             "Fig. 4-3(b) P=0.5 thresholds within 25 % (logW; the spec found them irreproducible)",
             [FIG43_PAPER[n][1] for n in range(1, 6)],
-            t50["logW"],
+            t50_by_term["logW"],
             f"{sum(close)} of 5 within",
             all(close),
         )

@@ -14,7 +14,7 @@ from ..evaluation.plots import save
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..management.network_traffic import PROTOCOLS, NetworkConfig, simulate_traffic
 
-SCENARIOS = {
+SCENARIOS: dict[str, dict[str, Any]] = {
     "S1": {"routers_with_objects": (1,), "camera_routers": (2, 4)},
     "S2": {"routers_with_objects": (1, 2, 3, 4, 5), "camera_routers": (2, 4)},
     "S3": {"routers_with_objects": (1, 2, 3, 4, 5), "camera_routers": (5, 5)},

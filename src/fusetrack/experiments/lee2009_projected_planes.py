@@ -570,7 +570,7 @@ def run(ctx: RunContext) -> Outcome:
         figs.append(save(fig, ctx.figure_path(f"scenario_{name}")))
 
     # ---- Report body
-    def table_md(ours: pd.DataFrame, paper: dict[str, tuple[float, ...]]) -> str:
+    def table_md(ours: pd.DataFrame, paper: Mapping[str, tuple[float, ...]]) -> str:
         lines = [
             "| RMSE (m) | paper equal | ours equal | paper weighted | ours weighted |",
             "|---|---|---|---|---|",
@@ -587,7 +587,7 @@ def run(ctx: RunContext) -> Outcome:
     bound_rows = []
     for name in SCENARIOS:
         b = bounds[name]
-        row = {"scenario": name}
+        row: dict[str, Any] = {"scenario": name}
         for c in AXES:
             for key in (f"{c}|PPS", f"{c}|3-D"):
                 row[key] = float(b[key].mean())

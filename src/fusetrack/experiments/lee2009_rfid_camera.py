@@ -61,7 +61,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     readers = readers_grid(n, float(config["radius_scale"]))
     regions = virtual_sensors(readers, ROOM, 0.05)
     cams = WallCameraPair(ROOM, f=800.0, pixel_sigma=float(config["pixel_sigma"]))
-    sq = {"coarse": [], "refined (Eq. 5.39)": [], "refined (Eq. 5.40)": []}
+    sq: dict[str, list[float]] = {"coarse": [], "refined (Eq. 5.39)": [], "refined (Eq. 5.40)": []}
     uncovered = 0
     for p in trajectory(rng):
         det = frozenset(r.reader_id for r in readers if r.detect(p, rng))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import matplotlib
 
@@ -23,7 +24,7 @@ def run(ctx: RunContext) -> Outcome:
     u = np.array([1.0, 1.0]) / math.sqrt(2.0)
     forces = {p: float(fld.total(np.array(p)) @ u) for p in PAPER_FORCES}
     delta = fld.zero_force_distance()
-    variants = {
+    variants: dict[str, dict[str, Any]] = {
         "standard field": {},
         "modified (Eq. 5.24)": {"modified": True},
         "modified + escape": {"modified": True, "escape": True},

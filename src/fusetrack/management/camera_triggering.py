@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -90,8 +91,8 @@ class CooperationPolicy:
         )
 
     @classmethod
-    def triggering(cls, **kw: bool) -> CooperationPolicy:
-        return cls(count=True, gate=True, ellipse=True, **kw)  # type: ignore[arg-type]
+    def triggering(cls, **kw: Any) -> CooperationPolicy:
+        return cls(count=True, gate=True, ellipse=True, **kw)
 
 
 @dataclass
@@ -221,9 +222,9 @@ def run_cooperation(
                 elif not present[k, o] and o in parts:
                     del parts[o]
                     est.pop(o, None)
-        for o, e in est.items():
+        for o, e_o in est.items():
             if o in parts:
-                res.estimates[k, o] = e
+                res.estimates[k, o] = e_o
                 res.tracked[k, o] = True
         n_tracked_prev = len(parts)
     res.degenerate_steps = filt.degenerate_steps

@@ -31,6 +31,7 @@ import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 
 from ..core.errors import ConfigError, invalid
 
@@ -199,7 +200,7 @@ def simulate_traffic(cfg: NetworkConfig) -> dict[str, float]:
                         f"R{r}",
                         rec * tracked[r],
                         t,
-                        lambda te, r=r: router_done(r, te),
+                        partial(router_done, r),
                     )
 
         def router_check(r: int, t: float, state=state, tracked=tracked, server=server) -> None:
@@ -212,7 +213,7 @@ def simulate_traffic(cfg: NetworkConfig) -> dict[str, float]:
                         "srv",
                         rec * tracked[r],
                         t,
-                        lambda te, r=r: router_done(r, te),
+                        partial(router_done, r),
                     )
             elif st["acoustic"] == 3:
                 st["acoustic"] = -1
