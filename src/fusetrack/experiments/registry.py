@@ -70,6 +70,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 (seed 001)",
         ),
         ExperimentInfo(
+            "zhai2007-sensor-network",
+            "zhai2007_sensor_network:run",
+            "Zhai 2007 E4 (Table 5, Figs 15-24): CPF-SP vs centralised bootstrap on an acoustic sensor network",
+            "Zhai 2007 (seed 001)",
+        ),
+        ExperimentInfo(
             "lee2009-projected-planes",
             "lee2009_projected_planes:run",
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
