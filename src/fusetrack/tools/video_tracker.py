@@ -58,6 +58,7 @@ class TrackerConfig:
     min_area: int = 150
     merge_gap: int | None = 10
     use_gating: bool = True
+    width_rule: bool = True
     drop_frames: tuple[int, int] | None = (
         None  # visual updates skipped on frames [a, b] (inclusive)
     )
@@ -237,12 +238,15 @@ class VideoRadioTracker:
         if self.cfg.head_homography is not None:
             head = apply_homography(self.cfg.head_homography, x[:2])
             height = float(pred[1] - head[1])
+        # the person's width in pixels at the foot: w times the image scale along the floor x axis
+        width = float(abs(x[3]) * np.hypot(D[0, 0], D[1, 0]))
         dec = detect_occlusion(
             blobs,
             n_tags,
             predicted_foot=pred[:2],
             innovation_cov=S + 4.0 * np.eye(2),  # + blob extraction error (2 px)
             predicted_height=height,
+            predicted_width=width if self.cfg.width_rule else None,
             use_gating=self.cfg.use_gating,
         )
         dropped = (

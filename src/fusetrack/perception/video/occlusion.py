@@ -7,7 +7,9 @@ identified by the wireless tracker." Counting only works if one person is one bl
 who walks behind a wall (the blob vanishes while the count of other blobs may still match), hence
 the gating rule added here: the subject is also occluded when no blob's bottom point falls
 inside the gate around the predicted foot pixel, or when the gated blob is much shorter than the
-predicted person (< ``min_height_ratio`` of the predicted head-to-foot height).
+predicted person (< ``min_height_ratio`` of the predicted head-to-foot height, the spec's rule)
+or much narrower (< ``min_width_ratio`` of the predicted width: a person half behind the edge
+of a wall still has a foot, but not the right one).
 """
 
 from __future__ import annotations
@@ -58,8 +60,10 @@ def detect_occlusion(
     predicted_foot: ArrayLike | None = None,
     innovation_cov: ArrayLike | None = None,
     predicted_height: float | None = None,
+    predicted_width: float | None = None,
     gate: float = 13.8155,  # chi-square, 2 dof, 0.999
     min_height_ratio: float = 0.6,
+    min_width_ratio: float = 0.8,
     use_gating: bool = True,
 ) -> OcclusionDecision:
     """Decide whether the subject is occluded and pick its blob (see the module docstring).
@@ -80,6 +84,9 @@ def detect_occlusion(
         return OcclusionDecision(True, "no blob in the gate", None, n_b, n_tags)
     if predicted_height is not None and blob.height < min_height_ratio * predicted_height:
         return OcclusionDecision(True, "blob shorter than the person", None, n_b, n_tags)
+    width = blob.box[2] - blob.box[0] + 1
+    if predicted_width is not None and width < min_width_ratio * predicted_width:
+        return OcclusionDecision(True, "blob narrower than the person", None, n_b, n_tags)
     return OcclusionDecision(False, "visible", blob, n_b, n_tags)
 
 
