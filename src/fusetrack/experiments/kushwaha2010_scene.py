@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -144,7 +145,9 @@ class SceneConfig:
     false_video_peak: tuple[int, float, float, float] | None = None  # (camera, bearing rad, t0, t1)
     second_source: tuple[float, float] | None = None  # a stationary sound source (x, y)
     beam_alpha: float = 0.5
-    preroll: float = 0.5  # seconds simulated before the vehicle enters the field (smoothing warm-up)
+    preroll: float = (
+        0.5  # seconds simulated before the vehicle enters the field (smoothing warm-up)
+    )
 
 
 @dataclass
@@ -443,14 +446,15 @@ def run_sbe(
     sensors: tuple[str, ...] | None = None,
     fin: FusionInput | None = None,
     prior: NDArray[np.float64] | None = None,
+    delta: float = 1.5,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Posterior means ``(T, 2)`` and det Σ ``(T,)`` of one SBE approach (NaN before ``start``).
 
     ``sensors`` restricts the fusion to a subset (needs ``fin`` to know which row is which)."""
-    from ..filters.grid import GridTracker
+    from ..filters.grid import DirectionalMotion, GridTracker
 
     modalities, fusion, arch = VARIANTS[variant]
-    tracker = GridTracker(layout.grid, fusion, arch)  # type: ignore[arg-type]
+    tracker = GridTracker(layout.grid, fusion, arch, DirectionalMotion(delta))  # type: ignore[arg-type]
     means = np.full((len(liks), 2), np.nan)
     dets = np.full(len(liks), np.nan)
     for k in range(start, len(liks)):
@@ -486,3 +490,55 @@ def _split(sensors: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
     return tuple(s for s in sensors if s.startswith("A")), tuple(
         s for s in sensors if s.startswith("V")
     )
+
+
+def bearing_detections(
+    layout: Layout, taken: dict[str, Packet], modalities: tuple[str, ...]
+) -> list[Any]:
+    """The same reports as :func:`tick_likelihoods`, for the grid-free particle back end."""
+    from ..filters.detection_pf import BearingDetection
+
+    out = []
+    beams = AngularSampling.beams(36)
+    if "audio" in modalities:
+        for sid, x, y, h in layout.audio:
+            if sid in taken:
+                out.append(BearingDetection((x, y), h, sampling=beams, values=taken[sid].values))
+    if "video" in modalities:
+        for sid, x, y, h in layout.video:
+            if sid in taken:
+                mix = fit_angle_mixture(taken[sid].values, VIDEO_ANGLES, min_mass=20.0)
+                if not mix.empty:
+                    out.append(
+                        BearingDetection(
+                            (x, y), h, mixture=(mix.weights, mix.means, mix.sigmas), fov=CAMERA_FOV
+                        )
+                    )
+    return out
+
+
+def run_particle_backend(
+    layout: Layout,
+    fin: FusionInput,
+    variant: str,
+    start: int,
+    prior: NDArray[np.float64],
+    rng: np.random.Generator,
+    n_particles: int = 2000,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Posterior means ``(T, 2)`` and det Σ of the particle back end (product fusion)."""
+    from ..filters.detection_pf import DetectionParticleFilter
+    from ..motion import ConstantVelocity
+
+    modalities = VARIANTS[variant][0]
+    pf = DetectionParticleFilter(ConstantVelocity(ndim=2, q=4.0), n_particles)
+    cells = rng.choice(layout.grid.size, n_particles, p=prior / prior.sum())
+    jitter = rng.uniform(-0.5, 0.5, (n_particles, 2)) * layout.grid.cell
+    pf.initialize(layout.grid.centres[cells] + jitter, 8.0, rng)
+    means = np.full((len(fin.taken), 2), np.nan)
+    dets = np.full(len(fin.taken), np.nan)
+    for k in range(start, len(fin.taken)):
+        m, c = pf.step(DT, bearing_detections(layout, fin.taken[k], modalities), rng)
+        means[k] = m
+        dets[k] = np.linalg.det(c)
+    return means, dets
