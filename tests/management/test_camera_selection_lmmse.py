@@ -56,7 +56,7 @@ def test_mse_never_increases_when_a_camera_is_added(model):
     for _ in range(40):
         k = int(rng.integers(1, 7))
         s = rng.choice(8, size=k, replace=False)
-        extra = [i for i in range(8) if i not in s][0]
+        extra = next(i for i in range(8) if i not in s)
         a = subset_mse(mom, s, model)[0]
         b = subset_mse(mom, np.append(s, extra), model)[0]
         assert b <= a + 1e-9 * max(1.0, a)

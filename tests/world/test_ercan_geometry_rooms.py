@@ -25,7 +25,7 @@ def test_polygon_orientation_and_closing_vertex():
     ],
 )
 def test_non_simple_or_degenerate_polygon_is_rejected(bad):
-    with pytest.raises(ConfigError, match="room.boundary"):
+    with pytest.raises(ConfigError, match=r"room\.boundary"):
         Room(np.array(bad, float))
 
 

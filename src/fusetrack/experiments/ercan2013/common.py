@@ -30,7 +30,7 @@ def smoke() -> bool:
 def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[str, int]:
     """Steps, particles and burn-in: the paper's (no burn-in) or a quick run's."""
     if smoke():
-        return {"steps": 20, "particles": 80, "burn_in": 2}
+        return {"steps": 10, "particles": 50, "burn_in": 2}
     if ctx.quick:
         return {"steps": 150, "particles": 600, "burn_in": 15}
     return {"steps": steps, "particles": particles, "burn_in": 0}

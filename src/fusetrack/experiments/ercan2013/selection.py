@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, md, mean_std, room_plot, sizes
+from .common import curve_plot, fmt, md, mean_std, room_plot, sizes, smoke
 from .scenes import Scene, l_scene, load_scene
 from .simulation import run_tracking
 
@@ -63,6 +63,8 @@ def _configs(
 
 def run(ctx: RunContext) -> Outcome:
     size = sizes(ctx)
+    if ctx.quick and not smoke():  # 15 configurations: shorter tracks keep --quick near a minute
+        size = {"steps": 100, "particles": 400, "burn_in": 10}
     runs = ctx.n_runs(full=10, quick=2)
     cfg_path = ctx.extra.get("config")
     scene = load_scene(cfg_path) if cfg_path else None
