@@ -13,8 +13,8 @@ from ...evaluation.report import Claim, Outcome, RunContext
 from .common import curve_plot, md, mean_std, sizes
 from .simulation import run_tracking
 
-M_FULL = (0, 5, 10, 20, 40, 60, 80, 100, 150, 200)
-M_QUICK = (0, 20, 60, 150)
+M_FULL = (0, 5, 10, 20, 40, 60, 80, 100, 150, 200, 300)
+M_QUICK = (0, 20, 60, 300)
 
 
 def run(ctx: RunContext) -> Outcome:

@@ -1,0 +1,120 @@
+"""Speed of the Ercan et al. 2013 building blocks (issue 4, "Speed and scale").
+
+* the occlusion-aware likelihood (Eqs. 6-9) for L particles, k cameras and M moving occluders
+  with Gaussian priors, in the square room with its static occluder (default L = 1000, k = 8,
+  M = 40), against the NumPy reference of the occlusion probabilities and pattern recursion;
+* one greedy selection of k of the 12 cameras of the L-shaped room (default k = 6), including
+  the moments (P{eta}, Sigma_Z, Sigma_Zx) from L predicted particles, for both metrics, and the
+  brute-force search over all C(12, k) subsets for comparison.
+
+    python benchmarks/ercan2013_speed.py [--particles 1000] [--cameras 8] [--occluders 40]
+        [--select 6] [--repeats 5] [--json]
+
+Median wall time over ``--repeats`` calls after one warm-up call (Numba compile excluded).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from fusetrack.experiments.ercan2013.scenes import l_scene, square_scene
+from fusetrack.filters.occlusion_likelihood import OcclusionAwareLikelihood
+from fusetrack.management.camera_selection import (
+    brute_force_selection,
+    greedy_selection,
+    selection_moments,
+)
+from fusetrack.world.occlusion import (
+    OccluderPriors,
+    occlusion_probability_reference,
+    pattern_probability_reference,
+)
+
+
+def timed(fn: Callable[[], object], repeats: int) -> float:
+    fn()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--particles", type=int, default=1000)
+    ap.add_argument("--cameras", type=int, default=8)
+    ap.add_argument("--occluders", type=int, default=40)
+    ap.add_argument("--select", type=int, default=6)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args()
+    rng = np.random.default_rng(0)
+
+    sq = square_scene(True)
+    cams = np.arange(min(a.cameras, len(sq.cameras)))
+    truth = sq.room.sample_free(rng, 1)[0]
+    x = truth + 2.0 * rng.standard_normal((a.particles, 2))
+    pri = OccluderPriors(
+        sq.room.sample_free(rng, a.occluders),
+        np.broadcast_to(16.0 * np.eye(2), (a.occluders, 2, 2)),
+    )
+    z = sq.cameras.subset(cams).image_coordinate(truth[None, :])
+    z[rng.random(len(cams)) < 0.4] = np.nan  # some cameras occluded
+    lik = OcclusionAwareLikelihood(sq.cameras, sq.room, 3.33, "gaussian")
+    t_lik = timed(lambda: lik.log_likelihood(z, cams, x, pri), a.repeats)
+
+    def reference() -> None:
+        eta = np.isfinite(z)
+        assigned = lik.assigned(cams, x)
+        q = occlusion_probability_reference(sq.cameras.positions[cams], x, pri, 3.33)
+        pattern_probability_reference(q, eta, assigned)
+
+    t_ref = timed(reference, max(1, a.repeats // 2))
+
+    ls = l_scene()
+    centre = ls.room.sample_free(rng, 1)[0]
+    xs = centre + 8.0 * rng.standard_normal((a.particles, 2))
+    w = np.full(a.particles, 1.0 / a.particles)
+    pri_l = OccluderPriors(
+        ls.room.sample_free(rng, a.occluders),
+        np.broadcast_to(60.0 * np.eye(2), (a.occluders, 2, 2)),
+    )
+    out: dict[str, object] = {
+        "particles": a.particles,
+        "cameras": len(cams),
+        "occluders": a.occluders,
+        "likelihood_ms": 1e3 * t_lik,
+        "likelihood_numpy_reference_ms": 1e3 * t_ref,
+    }
+    for model in ("perspective", "weak"):
+        mom_t = timed(
+            lambda m=model: selection_moments(
+                ls.cameras, ls.room, xs, w, pri_l, 3.33, "gaussian", (m,)
+            ),
+            a.repeats,
+        )
+        mom = selection_moments(ls.cameras, ls.room, xs, w, pri_l, 3.33, "gaussian", (model,))
+        out[f"moments_{model}_ms"] = 1e3 * mom_t
+        out[f"greedy_{model}_ms"] = 1e3 * timed(
+            lambda m=model: greedy_selection(mom, a.select, m), a.repeats
+        )
+        out[f"brute_{model}_ms"] = 1e3 * timed(
+            lambda m=model: brute_force_selection(mom, a.select, m), a.repeats
+        )
+    if a.json:
+        print(json.dumps(out))
+    else:
+        for k, v in out.items():
+            print(f"{k:32s} {v:.3f}" if isinstance(v, float) else f"{k:32s} {v}")
+
+
+if __name__ == "__main__":
+    main()
