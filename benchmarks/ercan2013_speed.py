@@ -104,10 +104,10 @@ def main() -> None:
         mom = selection_moments(ls.cameras, ls.room, xs, w, pri_l, 3.33, "gaussian", (model,))
         out[f"moments_{model}_ms"] = 1e3 * mom_t
         out[f"greedy_{model}_ms"] = 1e3 * timed(
-            lambda m=model: greedy_selection(mom, a.select, m), a.repeats
+            lambda m=model, mm=mom: greedy_selection(mm, a.select, m), a.repeats
         )
         out[f"brute_{model}_ms"] = 1e3 * timed(
-            lambda m=model: brute_force_selection(mom, a.select, m), a.repeats
+            lambda m=model, mm=mom: brute_force_selection(mm, a.select, m), a.repeats
         )
     if a.json:
         print(json.dumps(out))
