@@ -223,7 +223,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 def run(ctx: RunContext) -> Outcome:
     quick = ctx.quick
-    n_part = 150 if quick else 500
+    n_part = 100 if quick else 500
     runs = ctx.n_runs(full=100, quick=2)
     variances = [0.0, 0.5, 1.5, 5.0]
     tv_grid = [1, 5, 20] if quick else [1, 2, 3, 4, 5, 6, 8, 10, 20, 50, 100]
@@ -244,7 +244,7 @@ def run(ctx: RunContext) -> Outcome:
         {"part": "E3.4", "policy": p, "n_particles": n_part}
         for p in ["none", "trigger", *ablations] + [f"periodic {t}" for t in tv_grid]
     ]
-    n35 = 100 if quick else 500
+    n35 = 50 if quick else 500
     runs35 = ctx.n_runs(full=20, quick=1) if ctx.runs is None else max(1, ctx.runs // 5)
     room = [
         {"part": "E3.5", "sensor": s, "cooperation": c, "n_particles": n35}

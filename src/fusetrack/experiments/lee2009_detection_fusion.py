@@ -239,9 +239,9 @@ def run(ctx: RunContext) -> Outcome:
     )
 
     # ---- E4.1 (C14)
-    trials = 2000 if ctx.quick else 10_000
+    trials = 1000 if ctx.quick else 10_000
     rng = np.random.default_rng([ctx.seed, 41])
-    s2 = np.round(np.arange(0.005, 5.0001, 0.01 if ctx.quick else 0.005), 4)
+    s2 = np.round(np.arange(0.005, 5.0001, 0.02 if ctx.quick else 0.005), 4)
     curves: dict[tuple[str, int], Array] = {}
     thr_rows: list[dict[str, Any]] = []
     for term in ("logW", "logit"):
