@@ -65,7 +65,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
             if ok.sum() >= 2:
                 cost[i, j] = np.linalg.norm(pos[ok] - truth[times[ok], i], axis=1).mean()
     rows_i, cols_j = linear_sum_assignment(cost)
-    rows = []
+    rows: list[dict[str, Any]] = []
     audio_obs = observations(layout, liks, ("audio",), "product")
     gap = np.abs(truth[:, 0, 0] - truth[:, 2, 0])
     crossing = gap < 4.0

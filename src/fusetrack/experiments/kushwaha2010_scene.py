@@ -107,7 +107,7 @@ class VehiclePass:
         """The engine (the acoustic source) sits 1.5 m ahead of the centre of mass."""
         c = self.centre(t)
         c[..., 0] += 1.5 * np.sign(self.speed)
-        z = np.full(c.shape[:-1] + (1,), ENGINE_HEIGHT)
+        z = np.full((*c.shape[:-1], 1), ENGINE_HEIGHT)
         return np.concatenate([c, z], axis=-1)
 
     def box(self, t: float) -> Vehicle:

@@ -57,11 +57,11 @@ class GridSpec:
 
     @property
     def x(self) -> NDArray[np.float64]:
-        return self.x0 + self.cell * (np.arange(self.shape[0]) + 0.5)
+        return np.asarray(self.x0 + self.cell * (np.arange(self.shape[0]) + 0.5), dtype=np.float64)
 
     @property
     def y(self) -> NDArray[np.float64]:
-        return self.y0 + self.cell * (np.arange(self.shape[1]) + 0.5)
+        return np.asarray(self.y0 + self.cell * (np.arange(self.shape[1]) + 0.5), dtype=np.float64)
 
     @property
     def centres(self) -> NDArray[np.float64]:

@@ -37,7 +37,8 @@ def detection_from_mask(mask: ArrayLike, bins: ArrayLike, n_bins: int = 160) -> 
         raise ShapeError(
             invalid("mask.shape", f.shape, f"(rows, {b.size}) matching the column bins")
         )
-    return np.bincount(b, weights=(f > 0).sum(axis=0).astype(float), minlength=n_bins)
+    counts = np.bincount(b, weights=(f > 0).sum(axis=0).astype(float), minlength=n_bins)
+    return np.asarray(counts, dtype=np.float64)
 
 
 @dataclass
@@ -141,7 +142,7 @@ class VideoDetector:
     @property
     def bin_angles(self) -> NDArray[np.float64]:
         step = self.fov / self.n_bins
-        return -self.fov / 2 + step * (np.arange(self.n_bins) + 0.5)
+        return np.asarray(-self.fov / 2 + step * (np.arange(self.n_bins) + 0.5), dtype=np.float64)
 
     def learn_background(self, frame: NDArray[np.uint8]) -> None:
         """Feed a target-free frame (warm-up) without producing a detection."""

@@ -64,7 +64,7 @@ class AngularSampling:
 
     @property
     def angles(self) -> NDArray[np.float64]:
-        return self.start + self.step * np.arange(self.size)
+        return np.asarray(self.start + self.step * np.arange(self.size), dtype=np.float64)
 
     def check(self, values: ArrayLike, field: str = "detection function") -> NDArray[np.float64]:
         v = np.asarray(values, float)
@@ -102,7 +102,10 @@ def cell_arcs(
     "[0, 2π] if the sensor lies inside the cell") and ``inside`` is True.
     """
     c = np.asarray(centres, float).reshape(-1, 2)
-    hx, hy = (half_size, half_size) if np.isscalar(half_size) else half_size  # type: ignore[misc]
+    if isinstance(half_size, tuple):
+        hx, hy = float(half_size[0]), float(half_size[1])
+    else:
+        hx = hy = float(half_size)
     s = np.asarray(sensor_xy, float)[:2]
     offsets = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
     v = c[:, None, :] + offsets[None] - s  # (n, 4, 2)
