@@ -49,6 +49,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("name")
     _add_run_options(run, None)
+    run.add_argument(
+        "--config",
+        type=Path,
+        default=None,
+        help="experiment-specific YAML file (e.g. your room and cameras for ercan2013-selection)",
+    )
     demo = sub.add_parser("demo", help="= fusetrack run demo")
     _add_run_options(demo, "out/demo")
     from .tools.track_video_args import add_parser as add_track_video
@@ -102,6 +108,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             scheduler=args.scheduler,
             workers=args.workers,
             progress=False if args.no_progress else None,
+            extra={"config": str(args.config)} if getattr(args, "config", None) else {},
         )
         summary = run_experiment(ctx)
     except FusetrackError as err:
