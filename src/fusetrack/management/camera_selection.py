@@ -28,7 +28,7 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -106,11 +106,11 @@ def selection_moments(
     models: Sequence[str] = ("perspective", "weak"),
 ) -> SelectionMoments:
     """Moments of the LMMSE metric from the predicted cloud ``x (L, 2)``, weights ``w (L,)``."""
-    x = np.asarray(x, float)[:, :2]
-    w = np.asarray(w, float)
-    if w.shape != (len(x),):
-        raise ShapeError(invalid("w.shape", w.shape, f"({len(x)},)"))
-    w = w / w.sum()
+    x = cast(Array, np.asarray(x, float)[:, :2])
+    w_in = np.asarray(w, float)
+    if w_in.shape != (len(x),):
+        raise ShapeError(invalid("w.shape", w_in.shape, f"({len(x)},)"))
+    w = cast(Array, w_in / w_in.sum())
     mu = w @ x
     dx = x - mu
     sigma_x = (dx * w[:, None]).T @ dx

@@ -11,6 +11,8 @@ other, do not cross. A camera standing exactly on a wall therefore does not bloc
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -90,7 +92,7 @@ def _segments_touch(p1: Array, p2: Array, q1: Array, q2: Array) -> bool:
     if ((d1 > 0) != (d2 > 0)) and ((d3 > 0) != (d4 > 0)) and d1 * d2 < 0 and d3 * d4 < 0:
         return True
 
-    def on(a: Array, b: Array, c: Array, d: float) -> bool:
+    def on(a: Array, b: Array, c: Array, d: Any) -> bool:
         return (
             abs(d) < 1e-12
             and min(a[0], b[0]) - 1e-12 <= c[0] <= max(a[0], b[0]) + 1e-12

@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core.errors import check_positive
 from .geometry import Array
@@ -96,7 +97,9 @@ class WaypointWalkers:
         new = np.where(found[:, None], cand[np.arange(n), first], pos)
         return new, dest
 
-    def _candidates(self, pos: Array, heading: Array, noise: Array) -> tuple[Array, Array]:
+    def _candidates(
+        self, pos: Array, heading: Array, noise: Array
+    ) -> tuple[Array, NDArray[np.bool_]]:
         """Steps straight on and turned away by growing angles ``(n, T, 2)``, and which are free."""
         ang = heading[:, None] + _TURNS[None, :]
         cand = pos[:, None, :] + self.speed * np.stack([np.cos(ang), np.sin(ang)], -1)

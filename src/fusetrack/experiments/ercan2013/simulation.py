@@ -178,7 +178,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         z = z_all[t, selected]
         n_seen += int(np.isfinite(z).sum())
 
-        def loglik(x: Array, z: Array = z, sel: Array = selected, occl: Any = occluders) -> Array:
+        def loglik(x: Array, z: Array = z, sel: Any = selected, occl: Any = occluders) -> Array:
             nonlocal lik_time
             t1 = time.perf_counter()
             out = likelihood.log_likelihood(z, sel, x, occl)
