@@ -177,12 +177,31 @@ class SPPEKFBank:
         )  # Eq. 30
         return BankState(nominal, resid, P, np.log(np.maximum(psi, 1e-300)), mean, cov)
 
-    def feedback(self, state: BankState, estimate: Array) -> BankState:
-        """Re-partition every channel at the particle estimate: ``x_r = x_PF - x_n`` (Alg. 1)."""
+    def feedback(
+        self, state: BankState, estimate: Array, mode: str = "residual", cov: Array | None = None
+    ) -> BankState:
+        """Re-partition every channel at the particle estimate.
+
+        ``mode="residual"`` (Algorithm 1 as printed): ``x_r = x_PF - x_n``, the nominal keeps its
+        own random trajectory. ``"nominal"``: ``x_n = x_PF``, ``x_r = 0`` -- the channels are then
+        linearised at the estimate instead of at nominals that drift freely (an option, not the
+        thesis's). ``cov`` (optional) replaces the channels' residual covariance.
+        """
+        est = np.asarray(estimate)[..., None, :]
+        new_cov = (
+            state.cov
+            if cov is None
+            else np.broadcast_to(cov[..., None, :, :], state.cov.shape).copy()
+        )
+        if mode == "nominal":
+            nominal = np.broadcast_to(est, state.nominal.shape).copy()
+            return BankState(
+                nominal, np.zeros_like(nominal), new_cov, state.log_psi, state.mean, state.total_cov
+            )
         return BankState(
             state.nominal,
-            np.asarray(estimate)[..., None, :] - state.nominal,
-            state.cov,
+            est - state.nominal,
+            new_cov,
             state.log_psi,
             state.mean,
             state.total_cov,
@@ -221,6 +240,7 @@ class SPPEKFProposal:
     inflation: float = 1.0
     feedback_on: bool = True
     memoryless: bool = True
+    repartition: str = "residual"  # "residual" (as printed) or "nominal" (see SPPEKFBank.feedback)
 
     def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> BankState:
         self._prior = prior
@@ -260,4 +280,4 @@ class SPPEKFProposal:
     ) -> BankState:
         if not self.feedback_on:
             return state
-        return self._bank(filt).feedback(state, estimate)
+        return self._bank(filt).feedback(state, estimate, self.repartition)
