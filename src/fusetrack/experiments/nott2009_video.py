@@ -210,7 +210,9 @@ def _render_checkerboard(renderer: RoomRenderer, rng: np.random.Generator) -> np
                 [[x0, y0, 0], [x0 + 0.5, y0, 0], [x0 + 0.5, y0 + 0.5, 0], [x0, y0 + 0.5, 0]]
             )
             fill(sq, (20.0, 20.0, 20.0) if (i + j) % 2 == 0 else (235.0, 235.0, 235.0))
-    img = cv2.resize(big, (cam.width, cam.height), interpolation=cv2.INTER_AREA)
+    img = np.asarray(
+        cv2.resize(big, (cam.width, cam.height), interpolation=cv2.INTER_AREA), np.float32
+    )
     noisy = img + 2.0 * rng.standard_normal(img.shape).astype(np.float32)
     return np.clip(np.rint(noisy), 0, 255).astype(np.uint8)
 
@@ -230,7 +232,12 @@ def _people(scene: str, n: int = 90) -> tuple[list[Person], bool]:
 def _tracker(config: Mapping[str, Any], tag: NferTagSimulator, **kw: Any) -> VideoRadioTracker:
     Hf, Hh = _true_homographies()
     return VideoRadioTracker(
-        TrackerConfig(foot_homography=Hf, head_homography=Hh, tag_cov=tag.position_fix().cov, **kw)
+        TrackerConfig(
+            foot_homography=Hf,
+            head_homography=Hh,
+            tag_cov=np.asarray(tag.position_fix().cov, float),
+            **kw,
+        )
     )
 
 
@@ -448,7 +455,7 @@ def run(ctx: RunContext) -> Outcome:
     n_frames = 66 if ctx.quick else 90
     train_fps = 3.0 if ctx.quick else 5.0
     cfgs = [
-        {"scene": s, "n_bg": n_bg, "train_fps": train_fps}
+        {"scene": s, "n_bg": n_bg, "train_fps": train_fps, "quick": ctx.quick, "n_frames": n_frames}
         for s in ("training", "single", "crossing", "wall")
     ]
     df = ctx.monte_carlo(run_once, cfgs, runs)

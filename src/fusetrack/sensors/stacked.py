@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -41,30 +42,32 @@ class StackedSensor:
     def _split(self, z: ArrayLike) -> list[Array]:
         return np.split(np.asarray(z, float), self._cuts, axis=-1)
 
-    def predict(self, x: ArrayLike) -> Array:
+    def predict(self, x: Any) -> Array:
         return np.concatenate([p.predict(x) for p in self.parts], axis=-1)
 
-    def jacobian(self, x: ArrayLike) -> Array:
+    def jacobian(self, x: Any) -> Array:
         return np.concatenate([p.jacobian(x) for p in self.parts], axis=-2)
 
-    def noise_cov(self, x: ArrayLike | None = None) -> Array:
-        return np.asarray(block_diag(*[np.asarray(p.noise_cov(x), float) for p in self.parts]))
+    def noise_cov(self, x: Any = None) -> Array:
+        return np.asarray(
+            block_diag(*[np.asarray(p.noise_cov(x), dtype=np.float64) for p in self.parts])
+        )
 
     def residual(self, z: ArrayLike, z_pred: ArrayLike) -> Array:
         zs, ps = self._split(z), self._split(z_pred)
         return np.concatenate([p.residual(a, b) for p, a, b in zip(self.parts, zs, ps)], axis=-1)
 
-    def log_likelihood(self, z: ArrayLike, x: ArrayLike) -> Array:
+    def log_likelihood(self, z: ArrayLike, x: Any) -> Array:
         zs = self._split(z)
         return np.sum([p.log_likelihood(a, x) for p, a in zip(self.parts, zs)], axis=0)
 
-    def simulate(self, x: ArrayLike, rng: np.random.Generator) -> Array:
+    def simulate(self, x: Any, rng: np.random.Generator) -> Array:
         return np.concatenate([p.simulate(x, rng) for p in self.parts], axis=-1)
 
-    def fisher_information(self, x: ArrayLike) -> Array:
+    def fisher_information(self, x: Any) -> Array:
         return np.sum([p.fisher_information(x) for p in self.parts], axis=0)
 
-    def detection_probability(self, x: ArrayLike) -> Array:
+    def detection_probability(self, x: Any) -> Array:
         return np.prod([p.detection_probability(x) for p in self.parts], axis=0)
 
 

@@ -52,7 +52,7 @@ def write_recording(
     cal = {
         "foot_homography": ground_homography(P).tolist(),
         "head_homography": plane_homography(P, person.height).tolist(),
-        "tag_cov": tag.position_fix().cov.tolist(),
+        "tag_cov": np.asarray(tag.position_fix().cov).tolist(),
         "sigma_px": 1.0,
         "fps": fps,
         "background_frames": n_empty,

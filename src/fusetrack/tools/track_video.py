@@ -89,7 +89,7 @@ def read_frames(path: Path) -> Iterator[NDArray[np.uint8]]:
             ok, frame = cap.read()
             if not ok:
                 return
-            yield cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
+            yield np.asarray(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB), dtype=np.uint8)
     finally:
         cap.release()
 
@@ -180,7 +180,7 @@ def _annotate(
 ) -> NDArray[np.uint8]:
     import cv2
 
-    out = cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
+    out = np.asarray(cv2.cvtColor(image, cv2.COLOR_RGB2BGR), dtype=np.uint8)
     if r is None:
         return out
     if r.box is not None:
@@ -286,7 +286,7 @@ def track_video(
     try:
         writer = cv2.VideoWriter(
             str(tmp / "annotated.mp4"),
-            cv2.VideoWriter_fourcc(*"mp4v"),
+            cv2.VideoWriter.fourcc(*"mp4v"),
             fps,
             (info.width, info.height),
         )
@@ -349,10 +349,10 @@ def track_video(
             "seconds": round(time.perf_counter() - start, 3),
         }
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-        out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
-        for f in tmp.iterdir():
-            shutil.move(str(f), out / f.name)
+        dest = Path(out)
+        dest.mkdir(parents=True, exist_ok=True)
+        for item in tmp.iterdir():
+            shutil.move(str(item), dest / item.name)
         return summary
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

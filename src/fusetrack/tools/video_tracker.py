@@ -199,7 +199,9 @@ class VideoRadioTracker:
                     self._start(np.array([zx, zy]), tr)
                 self._predict_to(tr)
                 assert self.belief is not None
-                self.belief = self.filter.update(self.belief, [Measurement(tr, "tag", [zx, zy])])
+                self.belief = self.filter.update(
+                    self.belief, [Measurement(tr, "tag", np.array([zx, zy]))]
+                )
                 last_fix = np.array([zx, zy])
                 r += 1
             if self.belief is None and blobs:  # no radio fix yet: start from the largest blob

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import cv2
 import numpy as np
@@ -217,9 +218,7 @@ class RoomRenderer:
             out.append((world, colour, hand))
         return out
 
-    def _fill(
-        self, img: NDArray[np.uint8] | NDArray[np.float32], world: Array, value: object
-    ) -> None:
+    def _fill(self, img: NDArray[Any], world: Array, value: Any) -> None:
         pix = self.camera.project(world)
         pts = np.round(pix * 16).astype(np.int32).reshape(-1, 1, 2)
         cv2.fillPoly(img, [pts], value, lineType=cv2.LINE_8, shift=4)
@@ -304,7 +303,7 @@ def write_video(
     n = 0
     for im in images:
         if writer is None:
-            fourcc = cv2.VideoWriter_fourcc(*("FFV1" if str(path).endswith(".avi") else "mp4v"))
+            fourcc = cv2.VideoWriter.fourcc(*("FFV1" if str(path).endswith(".avi") else "mp4v"))
             writer = cv2.VideoWriter(str(path), fourcc, fps, (im.shape[1], im.shape[0]))
             if not writer.isOpened():
                 raise OSError(f"cannot open a video writer for {path}")

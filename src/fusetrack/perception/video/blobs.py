@@ -55,9 +55,9 @@ def clean_mask(mask: ArrayLike, open_size: int = 3, close_size: int = 7) -> NDAr
         _CLOSE if close_size == 7 else cv2.getStructuringElement(cv2.MORPH_RECT, (close_size,) * 2)
     )
     if open_size > 1:
-        m8 = cv2.morphologyEx(m8, cv2.MORPH_OPEN, k_open)
+        m8 = np.asarray(cv2.morphologyEx(m8, cv2.MORPH_OPEN, k_open), dtype=np.uint8)
     if close_size > 1:
-        m8 = cv2.morphologyEx(m8, cv2.MORPH_CLOSE, k_close)
+        m8 = np.asarray(cv2.morphologyEx(m8, cv2.MORPH_CLOSE, k_close), dtype=np.uint8)
     return m8
 
 
@@ -94,7 +94,8 @@ def find_blobs(
             boxes.append(((k,), (x, y, x + w - 1, y + h - 1)))
     if merge_gap is not None:
         boxes = merge_fragments(boxes, merge_gap)
-    blobs = [_blob(labels, members, box, band) for members, box in boxes]
+    lab = np.asarray(labels, dtype=np.int32)
+    blobs = [_blob(lab, members, box, band) for members, box in boxes]
     return sorted(blobs, key=lambda b: -b.area)
 
 

@@ -218,7 +218,8 @@ def calibrate_from_checkerboard(
         raise DegenerateGeometryError("no corner order puts the camera above the checkerboard")
     (_, rms), K, R, t = best
     H = K @ np.column_stack([R[:, 0], R[:, 1], t])
-    return CheckerboardCalibration(K, R, t, H / H[2, 2], float(rms))
+    K64, R64, t64 = (np.asarray(a, dtype=np.float64) for a in (K, R, t))
+    return CheckerboardCalibration(K64, R64, t64, np.asarray(H / H[2, 2], np.float64), float(rms))
 
 
 def _board_points(pattern: tuple[int, int], square: float, origin: ArrayLike) -> Array:

@@ -209,6 +209,7 @@ class HorprasertModel:
             object.__setattr__(
                 self, "_kernel_args", (k, np.ascontiguousarray(self.inv_sigma), m, thr2)
             )
+        assert self._kernel_args is not None
         k, inv_s, m, thr2 = self._kernel_args
         return _foreground_kernel(np.ascontiguousarray(f), k, inv_s, m, thr2, float(self.alpha_lo))
 
