@@ -186,20 +186,21 @@ def fusion_input(
     packet_loss: float = 0.02,
     sync_offset: float = 0.0,
     sensors: tuple[str, ...] | None = None,
+    layout: Layout | None = None,
 ) -> FusionInput:
     """Run the fusion node's intake on a recording: drop packets with probability ``packet_loss``
     (paper: "less than 2% packet loss"), shift every node's timestamps by ±``sync_offset``
     (an unsynchronised node; random sign per node), fill the ring buffers in arrival order and
     take the closest packet per sensor at each 4 Hz tick."""
-    ids = sorted({p.sensor_id for p in rec.packets})
+    lay = layout or default_layout()
+    ids = lay.sensor_ids  # the fusion node knows its sensors; anything else is "unknown"
     shift = {k: float(rng.choice([-1.0, 1.0]) * sync_offset) for k in ids}
-    lengths = {
-        k: (36 if k.startswith("A") else 160) for k in ids if sensors is None or k in sensors
-    }
+    lengths = {a[0]: 36 for a in lay.audio} | {v[0]: 160 for v in lay.video}
+    lengths = {k: n for k, n in lengths.items() if sensors is None or k in sensors}
     sched = FusionScheduler(lengths, max_offset=DT)
     keep = rng.random(len(rec.packets)) >= packet_loss
     packets = [
-        replace(p, timestamp=p.timestamp + shift[p.sensor_id])
+        replace(p, timestamp=p.timestamp + shift.get(p.sensor_id, 0.0))
         for p, k in zip(rec.packets, keep)
         if k
     ]
@@ -207,7 +208,7 @@ def fusion_input(
     k = 0
     for t in rec.ticks:
         while k < len(packets) and packets[k].arrival <= t + LATENCY_ALLOWANCE:
-            if packets[k].sensor_id in lengths:
+            if sensors is None or packets[k].sensor_id in sensors:
                 sched.receive(packets[k])
             k += 1
         taken.append(sched.take(float(t)))
