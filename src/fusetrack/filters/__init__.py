@@ -3,6 +3,10 @@
 One import per line, re-exported with ``as``: add new filters by adding lines.
 """
 
+from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
+from .grid import GridSpec as GridSpec
+from .grid import GridTracker as GridTracker
+from .grid import SensorLikelihoods as SensorLikelihoods
 from .kalman import ExtendedKalmanFilter as ExtendedKalmanFilter
 from .kalman import GaussianFilter as GaussianFilter
 from .kalman import KalmanFilter as KalmanFilter
