@@ -21,3 +21,5 @@ from .stats import FilterStats as FilterStats
 from .stats import ValidatedMeasurement as ValidatedMeasurement
 from .stats import as_sensor_map as as_sensor_map
 from .stats import validate_measurement as validate_measurement
+from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
+from .waypoint_asir import WaypointASIR as WaypointASIR

@@ -36,3 +36,5 @@ from .homography_camera import HomographyCamera as HomographyCamera
 from .nfer_tag import NferTagSimulator as NferTagSimulator
 from .nfer_tag import fit_position_fix as fit_position_fix
 from .stacked import StackedSensor as StackedSensor
+from .perspective_camera import CameraArray as CameraArray
+from .perspective_camera import PerspectiveCamera as PerspectiveCamera

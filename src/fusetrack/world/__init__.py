@@ -3,3 +3,12 @@
 from .clocks import HopTranslation as HopTranslation
 from .clocks import NodeClock as NodeClock
 from .clocks import RbsDomain as RbsDomain
+from .occluder_priors import RandomWalkPriorFilter as RandomWalkPriorFilter
+from .occlusion import OccluderPriors as OccluderPriors
+from .occlusion import disks_block as disks_block
+from .occlusion import occlusion_probability as occlusion_probability
+from .occlusion import pattern_probability as pattern_probability
+from .room import Room as Room
+from .room import l_shaped_room as l_shaped_room
+from .room import square_room as square_room
+from .walkers import WaypointWalkers as WaypointWalkers
