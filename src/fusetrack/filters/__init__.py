@@ -12,6 +12,7 @@ from .kalman import GaussianFilter as GaussianFilter
 from .kalman import KalmanFilter as KalmanFilter
 from .kalman import SensorMoments as SensorMoments
 from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
+from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
@@ -21,5 +22,4 @@ from .stats import FilterStats as FilterStats
 from .stats import ValidatedMeasurement as ValidatedMeasurement
 from .stats import as_sensor_map as as_sensor_map
 from .stats import validate_measurement as validate_measurement
-from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .waypoint_asir import WaypointASIR as WaypointASIR

@@ -27,4 +27,4 @@ __all__ = [
 ]
 
 from .walking_person import WalkingPerson as WalkingPerson
-from .waypoint_regime import WaypointRegimeDynamics as WaypointRegimeDynamics  # noqa: E402  (Ercan 2013)
+from .waypoint_regime import WaypointRegimeDynamics as WaypointRegimeDynamics
