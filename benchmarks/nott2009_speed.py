@@ -1,0 +1,62 @@
+"""Speed of the Nott 2009 chain against the targets of issue 7.
+
+1. Video front end on 640x480 frames of the rendered room: Horprasert background subtraction
+   (fused Numba kernel) + clean-up + connected components + fragment merging. Target >= 25 fps.
+   The NumPy reference of the same classifier is timed beside it.
+2. Joint EKF for many people at once (batched over people, one NumPy call per step): predict,
+   radio-tag update and camera (foot point) update per frame. Target: 1000 people at >= 25 fps.
+
+    python benchmarks/nott2009_speed.py [--frames 60] [--people 1000] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+from fusetrack.experiments.nott2009_video import ekf_step_time
+from fusetrack.perception.video import HorprasertModel, find_blobs
+from fusetrack.world.rendered_room import Person, RoomRenderer
+from fusetrack.world.walks import crossing_walks
+
+
+def front_end_fps(n_frames: int) -> dict[str, float]:
+    rng = np.random.default_rng(0)
+    renderer = RoomRenderer()
+    model = HorprasertModel.train(renderer.empty_frames(60, rng))
+    a, b = crossing_walks(15.0, n_frames)
+    frames = [f.image for f in renderer.frames([Person(a), Person(b)], rng)]
+    find_blobs(model.foreground(frames[0]))  # compile
+    tic = time.process_time()
+    for f in frames:
+        find_blobs(model.foreground(f))
+    fast = len(frames) / (time.process_time() - tic)
+    tic = time.process_time()
+    for f in frames[:10]:
+        find_blobs(model.foreground_reference(f))
+    ref = 10 / (time.process_time() - tic)
+    return {"front_end_fps": fast, "front_end_numpy_reference_fps": ref}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=60)
+    ap.add_argument("--people", type=int, default=1000)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    out = front_end_fps(args.frames)
+    out["ekf_people"] = args.people
+    out["ekf_fps"] = 1.0 / ekf_step_time(args.people)
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return
+    print(f"front end (Numba kernel):   {out['front_end_fps']:7.1f} frames/s  (target >= 25)")
+    print(f"front end (NumPy reference):{out['front_end_numpy_reference_fps']:7.1f} frames/s")
+    print(f"joint EKF, {args.people} people:    {out['ekf_fps']:7.1f} frames/s  (target >= 25)")
+
+
+if __name__ == "__main__":
+    main()
