@@ -216,6 +216,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 Sec. 5.2.3: network delay of router-based vs server-based visual compensation",
             "Lee 2009 (seed 000)",
         ),
+        ExperimentInfo(
+            "lee2009-projected-planes-audio",
+            "lee2009_projected_planes_audio:run",
+            "Beyond Lee 2009 Ch. 2: PPS on azimuth/polar angles estimated from simulated sound (MUSIC)",
+            "Lee 2009 (seed 000)",
+        ),
     ]
 }
 
