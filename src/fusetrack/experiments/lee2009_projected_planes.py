@@ -622,12 +622,14 @@ Table 2.2 (yz filter mismatched):
 The yz filter's own y, z RMSE in the mismatched case (Fig. 2-5): y {yz_alone["y"]:.3f}, z {yz_alone["z"]:.3f} m.
 
 **Differences.** The paper's equal-weight y error of 17.3 m in Table 2.2 means its mismatched yz
-filter diverged. Ours does not: with alpha = 0.01 m/s^2 the turn's acceleration is small, a
-constant-velocity filter with process noise follows it, and a bearings-only plane filter can
-match every bearing by sliding along the unobservable range, so a wrong model costs little
-likelihood. The weight sums then separate the two filters only mildly and the weighted y error
-is only {ratio22:.2f} times smaller than the equal one (paper {17.3250 / 0.6243:.1f}). The
-absolute RMSEs depend on the process noise and the initial uncertainty, which the text does not give.
+filter diverged far. Ours drifts less (its own y RMSE {yz_alone["y"]:.2f} m): with alpha = 0.01 m/s^2
+the turn's acceleration is small, and a bearings-only plane filter can match every bearing by
+sliding along the unobservable range, so a wrong model costs little likelihood. The weight sums
+then separate the two filters only mildly and the weighted y error is only {ratio22:.2f} times
+smaller than the equal one (paper {17.3250 / 0.6243:.1f}). In Table 2.1 our y error is larger than the
+paper's and x, z smaller: y is shared by the xy filter, whose y axis only knows the turn through
+the last fused estimate. The absolute RMSEs depend on the process noise and the initial
+uncertainty, which the text does not give.
 
 ![combining, table 2.1]({figs[0].name})
 
