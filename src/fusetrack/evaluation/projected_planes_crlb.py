@@ -7,10 +7,13 @@ garbled Eq. 2.41) and ``R`` the projected variance of the plane (scalar) or ``di
 
 Two departures from the text, both needed for a finite bound:
 
-* The text starts from ``J_0 = 0``. A static bearing sensor cannot observe scale, so the true
-  state is then an exact null vector of every ``J_n`` and no bound exists; we start from the
-  prior information ``J_0 = P_0^-1`` (``sigma_pos``, ``sigma_vel`` per axis), the same for every
-  plane and for 3-D, matching "the initial state is given".
+* The text starts from ``J_0 = 0``. A static bearing sensor cannot observe scale when the motion
+  is linear in the state (constant velocity, or the text's state-dependent linear form of the
+  constant-acceleration model), so the true state is then a null vector of every ``J_n`` and no
+  bound exists; we start from the prior information ``J_0 = P_0^-1`` (``sigma_pos``,
+  ``sigma_vel`` per axis), the same for every plane and for 3-D, matching "the initial state is
+  given". (With a known nonzero acceleration and the true, affine transition, scale is in fact
+  weakly observable and the bound stays finite even with a vanishing prior; the tests show both.)
 * ``F`` is the Jacobian of the true (deterministic) transition. For the additive
   constant-acceleration map that is the constant-velocity matrix; the text instead uses its
   state-dependent linear form ``[[1, A T^2/(2V) + T], [0, A T/V + 1]]`` (Eq. 2.15), available as
