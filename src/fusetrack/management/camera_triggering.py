@@ -131,9 +131,10 @@ def run_cooperation(
 
     ``truth`` ``(T, O, 4)``; ``present`` ``(T, O)``: the object is in the sensor's range (the
     cameras see it); ``audible`` ``(T, O)``: it emits a bearing (present and not silent).
-    At step 0 the cameras localise every present object. Without camera use
-    (``oracle_births`` defaults to True then) objects are started from a noisy camera-like fix
-    when they appear and dropped when they leave, so that the acoustic-only error is defined.
+    At step 0 the cameras localise every present object. When the policy cannot discover objects
+    (no cameras, or neither the count trigger nor a period; ``oracle_births`` defaults to True
+    then) objects are started from a noisy camera-like fix when they appear and dropped when
+    they leave, so that errors are defined and comparable.
     ``camera_available`` ``(T,)`` False: the cameras do not answer at that step (request lost).
     ``known_initial_velocity``: filters started at step 0 or by an oracle birth begin at the
     true velocity (the text's "initial state given"); camera-started filters never know it.
@@ -144,7 +145,10 @@ def run_cooperation(
     audible = np.asarray(audible, bool) & present
     if present.shape != (T, O) or audible.shape != (T, O):
         raise ConfigError(invalid("present/audible shape", present.shape, f"({T}, {O})"))
-    births = (not policy.uses_cameras) if oracle_births is None else oracle_births
+    # A policy that can never look for new objects (no count trigger, no period) gets them from
+    # an oracle, so that its other conditions are compared on the same objects.
+    can_discover = policy.apply_fixes and (policy.count or policy.period is not None)
+    births = (not can_discover) if oracle_births is None else oracle_births
     answer = np.ones(T, bool) if camera_available is None else np.asarray(camera_available, bool)
     filt = MultiModelBearingPF(models, sensor, sigma_filter or sigma, n_particles)
     parts: dict[int, Array] = {}
