@@ -13,6 +13,8 @@ fixed, random, closest, all), ``model`` (perspective, weak), ``period`` T, ``ste
 
 from __future__ import annotations
 
+import hashlib
+import pickle
 import time
 from collections.abc import Mapping
 from typing import Any
@@ -71,6 +73,24 @@ def _resolve(config: Mapping[str, Any]) -> tuple[dict[str, Any], Scene]:
     return cfg, scene
 
 
+_WORLDS: dict[tuple[str, int, int, int], tuple[Array, Array, Array]] = {}
+_WORLD_CACHE_SIZE = 8
+
+
+def world_and_readings(
+    scene: Scene, n_occluders: int, steps: int, seed: int
+) -> tuple[Array, Array, Array]:
+    """:func:`simulate_world` and :func:`camera_readings`, remembered per process: configurations
+    that share a seed share the world (common random numbers), so it is simulated once."""
+    key = (hashlib.sha1(pickle.dumps(scene)).hexdigest(), n_occluders, steps, seed)
+    if key not in _WORLDS:
+        if len(_WORLDS) >= _WORLD_CACHE_SIZE:
+            _WORLDS.pop(next(iter(_WORLDS)))
+        obj, occ = simulate_world(scene, n_occluders, steps, seed)
+        _WORLDS[key] = (obj, occ, camera_readings(scene, obj, occ, seed))
+    return _WORLDS[key]
+
+
 def simulate_world(scene: Scene, n_occluders: int, steps: int, seed: int) -> tuple[Array, Array]:
     """True object positions ``(steps + 1, 2)`` and occluder positions ``(steps + 1, M, 2)``."""
     rng = np.random.default_rng([seed, 0])
@@ -109,8 +129,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     """One run of Algorithm 3; one row with the run's RMSEs, costs and counters."""
     cfg, scene = _resolve(config)
     steps, m = int(cfg["steps"]), int(cfg["n_occluders"])
-    obj, occ = simulate_world(scene, m, steps, seed)
-    z_all = camera_readings(scene, obj, occ, seed)
+    obj, occ, z_all = world_and_readings(scene, m, steps, seed)
     center = scene.room.center
     prior = cfg["prior"]
     if prior == "gaussian":
