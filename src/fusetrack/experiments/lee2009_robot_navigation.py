@@ -130,7 +130,7 @@ def run(ctx: RunContext) -> Outcome:
 
 Signed total force along the diagonal (negative = towards the origin): paper {list(PAPER_FORCES.values())},
 ours {[round(v, 3) for v in forces.values()]}. Zero-force point at distance delta = {delta:.4f} from the
-obstacle (the text prints 1.27, i.e. sqrt 2 x 0.9 from the rounded 8.9; the exact value is 1.284), below
+obstacle (the text prints 1.27, i.e. sqrt 2 x 0.9 from the rounded 8.9; the exact value is {delta:.3f}), below
 the step sqrt 2, so the aligned robot steps onto the obstacle.
 
 {ev}
