@@ -121,3 +121,13 @@ def test_triggered_cooperation_beats_none_and_camera_silence_is_survived():
         **kw,
     )
     assert not dead.camera_updates.any() and np.isfinite(dead.estimates[dead.tracked]).all()
+
+
+def test_fast_bank_propagation_equals_each_models_map():
+    models = turn_models(0.7, 0.0)
+    f = MultiModelBearingPF(models, S, 0.03, 64)
+    p = np.random.default_rng(0).standard_normal((64, 4))
+    p[0, 2:] = 0.0  # a particle at rest: every model is constant velocity there
+    fast = f._propagate(p, 0.5, np.random.default_rng(1))
+    slow = np.stack([m.mean(p, 0.5) for m in models])
+    assert np.allclose(fast, slow, atol=1e-12)
