@@ -71,7 +71,10 @@ class OccluderPriors:
             )
         if not np.allclose(cov, np.swapaxes(cov, -1, -2), atol=1e-9):
             raise ConfigError(invalid("occluder cov", cov.tolist(), "symmetric 2x2 matrices"))
-        if len(mu):
+        diagonal = bool(np.all(cov[:, 0, 1] == 0) and np.all(cov[:, 1, 0] == 0))
+        if len(mu) and diagonal and np.all(cov[:, [0, 1], [0, 1]] >= MIN_PRIOR_VARIANCE):
+            pass  # already valid (the Kalman priors): keep it exactly, so kernels see it isotropic
+        elif len(mu):
             vals, vecs = np.linalg.eigh(cov)
             scale = np.maximum(1.0, np.abs(vals).max(axis=-1, keepdims=True))
             if np.any(vals < -1e-9 * scale):

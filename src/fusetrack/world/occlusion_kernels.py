@@ -101,6 +101,14 @@ def occlusion_probability_kernel(
         p11[j] = cov[j, 1, 1] / det
         p12[j] = -cov[j, 0, 1] / det
         p22[j] = cov[j, 0, 0] / det
+    iso = np.empty(M, dtype=np.bool_)
+    inv_sd = np.empty(M)
+    reach = np.empty(M)
+    for j in range(M):
+        iso[j] = cov[j, 0, 1] == 0.0 and cov[j, 0, 0] == cov[j, 1, 1]
+        sd = math.sqrt(cov[j, 0, 0])
+        inv_sd[j] = 1.0 / sd
+        reach[j] = CUTOFF * sd
     m1 = np.empty(M)
     m2 = np.empty(M)
     pm1 = np.empty(M)
@@ -120,16 +128,27 @@ def occlusion_probability_kernel(
             u1, u2 = rx / r, ry / r
             for j in range(M):
                 phi = -u2 * m1[j] + u1 * m2[j]
-                sp2 = cov[j, 0, 0] * u2 * u2 - 2.0 * cov[j, 0, 1] * u1 * u2 + cov[j, 1, 1] * u1 * u1
-                if (abs(phi) - half) ** 2 > CUTOFF * CUTOFF * sp2 and abs(phi) > half:
-                    continue
-                isp = 1.0 / math.sqrt(sp2)
+                if iso[j]:  # isotropic prior (the Kalman priors): both spreads are sqrt(var)
+                    if abs(phi) - half > reach[j]:
+                        continue
+                    isp = inv_sd[j]
+                    isa = inv_sd[j]
+                    m_a = u1 * m1[j] + u2 * m2[j]
+                else:
+                    sp2 = (
+                        cov[j, 0, 0] * u2 * u2
+                        - 2.0 * cov[j, 0, 1] * u1 * u2
+                        + cov[j, 1, 1] * u1 * u1
+                    )
+                    if (abs(phi) - half) ** 2 > CUTOFF * CUTOFF * sp2 and abs(phi) > half:
+                        continue
+                    isp = 1.0 / math.sqrt(sp2)
+                    a = p11[j] * u1 * u1 + 2.0 * p12[j] * u1 * u2 + p22[j] * u2 * u2
+                    isa = math.sqrt(a)
+                    m_a = (u1 * pm1[j] + u2 * pm2[j]) / a
                 across = _phi_fast((half - phi) * isp) - _phi_fast((-half - phi) * isp)
                 if across < 1e-9:
                     continue
-                a = p11[j] * u1 * u1 + 2.0 * p12[j] * u1 * u2 + p22[j] * u2 * u2
-                isa = math.sqrt(a)
-                m_a = (u1 * pm1[j] + u2 * pm2[j]) / a
                 along = _phi_fast((r - m_a) * isa) - _phi_fast(-m_a * isa)
                 v = along * across
                 out[i, l, j] = min(max(v, 0.0), 1.0)
