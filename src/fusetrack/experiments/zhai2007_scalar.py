@@ -256,7 +256,11 @@ def run(ctx: RunContext) -> Outcome:
             ours.loc["PF-SP-PEKF", "seconds"] < ours.loc["BS2000", "seconds"],
         )
     )
-    smallest = ours.loc[["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"], "var_rmse"].idxmin()
+    smallest = (
+        ours.loc[["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"], "var_rmse"]
+        .fillna(np.inf)
+        .idxmin()
+    )
     claims.append(
         Claim(
             "C3_smallest_variance",

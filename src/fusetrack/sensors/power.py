@@ -51,8 +51,9 @@ class Power:
         return xa[..., self.index]
 
     def predict(self, x: ArrayLike) -> Array:
-        """``scale x^p``, ``(..., 1)``."""
-        return np.asarray(self.scale * self._x(x) ** self.exponent)[..., None]
+        """``scale x^p``, ``(..., 1)`` (overflow of a diverged state gives inf, silently)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            return np.asarray(self.scale * self._x(x) ** self.exponent)[..., None]
 
     def residual(self, z: ArrayLike, z_pred: ArrayLike) -> Array:
         return np.asarray(np.subtract(z, z_pred), dtype=float)
@@ -69,7 +70,8 @@ class Power:
 
     def log_likelihood(self, z: ArrayLike, x: ArrayLike) -> Array:
         r = self.residual(z, self.predict(x))[..., 0] / self.sigma
-        return np.asarray(-0.5 * r * r - math.log(self.sigma) - 0.5 * math.log(2 * math.pi))
+        with np.errstate(over="ignore", invalid="ignore"):
+            return np.asarray(-0.5 * r * r - math.log(self.sigma) - 0.5 * math.log(2 * math.pi))
 
     def simulate(self, x: ArrayLike, rng: np.random.Generator) -> Array:
         z = self.predict(x)
