@@ -129,7 +129,9 @@ def simulate_measurements(
         tau = np.arange(0.0, t[-1] + 1e-9, period)
         noise = rng.standard_normal((tau.size, 2))  # drawn first: jitter 0 at the frame rate = grid
         if cfg.rfid_jitter > 0:
-            tau = np.sort(np.clip(tau + cfg.rfid_jitter * rng.standard_normal(tau.size), 0.0, t[-1]))
+            tau = np.sort(
+                np.clip(tau + cfg.rfid_jitter * rng.standard_normal(tau.size), 0.0, t[-1])
+            )
         # true position at the tag's sampling instant: the frame before, moved on with its velocity
         k = np.clip(np.searchsorted(t, tau + 1e-9, side="right") - 1, 0, cfg.n_steps - 1)
         p = truth[k, :2] + truth[k, 4:6] * (tau - t[k])[:, None]
