@@ -41,7 +41,13 @@ from .kushwaha2010_scene import (
 )
 
 CONDITIONS = ("base", "false_peak", "second_source", "yaw_error")
-LOSSES = (0.0, 0.1, 0.2, 0.3)
+LOSSES = (
+    0.0,
+    0.02,
+    0.1,
+    0.2,
+    0.3,
+)  # 0.02: the deployment ("less than 2%"), as the other conditions
 
 
 def scene_config(condition: str, t_mid: float) -> SceneConfig:
@@ -168,7 +174,7 @@ def _table(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def run(ctx: RunContext) -> Outcome:
-    runs = ctx.n_runs(full=10, quick=2)
+    runs = ctx.n_runs(full=10, quick=1)  # quick: one pass per condition (4 passes) in < 1 min
     configs = [{"condition": c} for c in CONDITIONS]
     everything = ctx.monte_carlo(run_once, configs, runs, desc="passes")
     df = everything[(everything.backend == "grid") & (everything.delta == 1.5)]
@@ -296,12 +302,18 @@ def run(ctx: RunContext) -> Outcome:
         )
     )
     # Conflict: how much each rule degrades under a calibration error / a second source.
+    # Reference: the same passes under deployment conditions (2 % loss, like the other conditions).
+    ref = (
+        df[(df.condition == "base") & (df.sensors == "all") & (df.packet_loss == 0.02)]
+        .groupby("variant")["error"]
+        .mean()
+    )
     deg = {}
     for cond in ("yaw_error", "second_source"):
         c = df[(df.condition == cond) & (df.sensors == "all")].groupby("variant")["error"].mean()
         deg[cond] = {
-            "product": float(c[["AVCP"]].mean() - err[["AVCP"]].mean()),
-            "sum": float(c[["AVCS"]].mean() - err[["AVCS"]].mean()),
+            "product": float(c["AVCP"] - ref["AVCP"]),
+            "sum": float(c["AVCS"] - ref["AVCS"]),
         }
     claims.append(
         Claim(
@@ -374,6 +386,12 @@ def run(ctx: RunContext) -> Outcome:
             pf_err <= grid_err + 0.5,
         )
     )
+    deployed = df[(df.sensors == "all") & (df.packet_loss == 0.02)]
+    by_condition = (
+        deployed.groupby(["condition", "variant"])["error"]
+        .mean()
+        .unstack("variant")[list(VARIANTS)]
+    )
     figs = _figures(ctx, df, table, loss)
     seen = df[df.condition == "base"]
     durations = seen[seen.variant == "AVCP"]["duration"]
@@ -408,9 +426,9 @@ video less uncertain than audio; "average tracking error of 2 meters".
 
 ## Poor video, poor audio, miscalibration (Fig. 19 analogues)
 
-Mean error (m) per condition and approach (all sensors):
+Mean error (m) per condition and approach (all sensors, 2 % packet loss in every condition):
 
-{df[df.sensors == "all"].groupby(["condition", "variant"])["error"].mean().unstack("variant")[list(VARIANTS)].to_markdown(floatfmt=".2f")}
+{by_condition.to_markdown(floatfmt=".2f")}
 
 Sensor subsets (false video peak: AV with 3 and 2 random audio nodes; second source: 2 of the 3 cameras):
 
@@ -451,6 +469,20 @@ Mean error (m) with the motion model's δ = 1.5 m (spec default) and δ = 2.5 m:
 * Hybrid product fusion multiplies the two cluster posteriors, counting the predicted prior twice
   (the paper's text: "posterior densities ... combined"); dividing the prior out once makes it
   identical to centralized product, which we note rather than run twice.
+* Audio against video: here video-only is the more accurate modality (the paper: audio). Our
+  cameras are calibrated exactly, see the vehicle against a static background and suffer only
+  the clutter we render (a swaying tree, glints); the paper's cameras looked along the road at
+  a grazing angle, were "very sensitive to camera calibration errors", were obstructed at times
+  and saw illumination changes and reflections. The `yaw_error` row shows how fast a 5°
+  heading error erodes video (VP) and product fusion. Our audio is also slowed by the
+  exponential smoothing (α = 0.5 per 250 ms adds about 0.25 s of lag, ≈ 2.5 m at 10 m/s).
+* Centralized against hybrid: centralized wins for product fusion (hybrid product counts the
+  prior twice and becomes overconfident), but hybrid wins for weighted sum here: the
+  α-mixture of two cluster posteriors keeps video's sharper posterior, whereas the centralized
+  sum dilutes the three camera likelihoods among six broad audio wedges.
+* Two audio nodes against a false video peak (Fig. 19a) only help in product fusion here
+  (see the subset table); in weighted-sum fusion the broad audio wedges add more spread than the
+  false peak removes, for the reason above.
 * Ground truth is the simulated centre of mass; the acoustic source is the engine, 1.5 m ahead of
   it, so audio carries a built-in bias of up to 1.5 m (the paper: "a vehicle is not a point source").
 """
