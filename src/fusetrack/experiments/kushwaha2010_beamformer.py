@@ -171,7 +171,10 @@ on this machine (the FPGA needs ≈ 160 ms per 2^14-sample window, i.e. it runs 
 
 ## Differences from the paper and their causes
 
-Our errors are what quantisation to 10° beams, the 10 cm aperture, the noise and the ground
+Beyond about 10 ft our mean error sits at the floor set by 10° beams (2.5° for angles spread
+uniformly between beams), so where along 10–150 ft the minimum falls is decided by noise of a
+few hundredths of a degree; the simulated SNR at 150 ft, integrated over 2^14 samples, is still
+high, so the far-range growth the paper saw outdoors is weak here. Our errors are what quantisation to 10° beams, the 10 cm aperture, the noise and the ground
 reflection leave. Close to the array the source is 0.6 m above it, so at 3 ft the wave arrives
 steeply from above and the horizontal delays shrink (the far-field, coplanar assumption fails
 as in the paper); at 150 ft the SNR is {40 - 20 * np.log10(150 * FEET):.0f} dB per microphone. Real speech, wind and
