@@ -76,7 +76,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
-    runs = ctx.n_runs(full=20, quick=1)
+    runs = ctx.n_runs(full=10, quick=1)
     n_part = 300 if ctx.quick else 1000
     # characterise the array once (its angle noise std), as the text assumes for its sensor
     cal_rng = np.random.default_rng([ctx.seed, 99])
