@@ -58,9 +58,11 @@ def curve_plot(
 ) -> Path:
     """Mean +- one standard deviation of each series against ``x`` (the paper's error-bar plots)."""
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    for i, (key, grp) in enumerate(table.groupby(series, sort=False)):
+    groups = list(table.groupby(series, sort=False))
+    span = float(table[x].max() - table[x].min()) or 1.0
+    for i, (key, grp) in enumerate(groups):
         grp = grp.sort_values(x)
-        off = (i - 1) * 0.04 * (grp[x].max() - grp[x].min() if len(grp) > 1 else 1)
+        off = (i - (len(groups) - 1) / 2) * 0.012 * span  # small shifts keep error bars apart
         ax.errorbar(
             grp[x] + off,
             grp["mean"],
