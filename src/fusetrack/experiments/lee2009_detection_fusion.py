@@ -413,7 +413,7 @@ prediction, {trials} trials per point.
 The qualitative claims are checked (P(G1) falls as the spread grows; more detecting cameras
 tolerate more spread). The thresholds of Fig. 4-3(b) are not reproduced, as the spec found
 with every reading it tried: with the logW statistic a single camera of six needs
-P1 > 0.996 to outweigh five "no" votes, so N = 1 only passes with a near-perfect detection.
+P1 > {1 / (1 + 10 ** (-4 * math.log10((1 - PM) / PF))):.4f} (log-odds above four net "no" votes) and W close to 1, so N = 1 only passes with a near-perfect detection.
 
 ## Synthetic sequence (beyond the paper)
 
