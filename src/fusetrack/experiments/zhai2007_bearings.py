@@ -61,7 +61,7 @@ def simulate(
     sensor = Bearing("radar", position=[0.0, 0.0], sigma=scn["sigma"])
     x, xs, zs = scn["x0"].copy(), [], []
     for k in range(1, scn["steps"] + 1):
-        model = cv
+        model: ConstantVelocity | CoordinatedTurn = cv
         if scn["turn"] is not None and scn["turn"][0] <= k < scn["turn"][1]:
             model = CoordinatedTurn(omega=-scn["turn"][2], q=scn["q"])
             x = model.mean(x, scn["dt"])

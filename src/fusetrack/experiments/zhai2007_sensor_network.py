@@ -270,7 +270,7 @@ def run(ctx: RunContext) -> Outcome:
                     m: r0[r0["method"] == m][["x", "y"]].to_numpy()
                     for m in ("CPF-SP (200)", "bootstrap (2000)")
                 },
-                sensors=[(None, np.array(p)) for p in GRID],
+                sensors=[("", np.array(p)) for p in GRID],
                 area=(-20, 520, -20, 520),
                 title=f"{s}: run 0",
             ).name

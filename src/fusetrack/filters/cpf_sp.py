@@ -63,6 +63,7 @@ class CPFSPProposal:
             bank = SPPEKFBank(filt.motion, [filt.sensors[k]], self.n_channels, stats=filt.stats)
             bs = state.banks.get(k)
             if bs is None:  # newly active: start from the last particle estimate
+                assert state.mean is not None and state.cov is not None
                 bs = bank.initialize(Gaussian(state.mean, state.cov), rng, prev.shape[:-2])
             bs = bank.step(bs, [zs[k]], dt, rng)
             banks[k] = bs

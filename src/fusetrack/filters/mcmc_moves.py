@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core.errors import check_positive
 from .sis import Array
@@ -33,7 +34,7 @@ from .sis import Array
 
 def _accept(
     x: Array, proposal: Array, log_ratio: Array, rng: np.random.Generator, filt: Any
-) -> tuple[Array, Array]:
+) -> tuple[Array, NDArray[np.bool_]]:
     log_ratio = np.where(np.isnan(log_ratio), -np.inf, log_ratio)
     ok = np.log(rng.random(log_ratio.shape)) < log_ratio  # u <= min(1, ratio)
     stats = filt.stats
@@ -42,7 +43,7 @@ def _accept(
     stats.moves_accepted += n_ok
     if n_ok == 0:
         stats.zero_acceptance_steps += 1
-    return np.where(ok[..., None], proposal, x), ok
+    return np.asarray(np.where(ok[..., None], proposal, x), dtype=np.float64), ok
 
 
 def _target(

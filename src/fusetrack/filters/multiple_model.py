@@ -156,7 +156,7 @@ class MultipleModelParticleFilter:
             raise ConfigError(invalid("models", sorted(dims), "models sharing one state dimension"))
         self.transition = check_transition(transition, len(self.models))
         self.sensors: list[SensorModel] = (
-            [sensors] if hasattr(sensors, "sensor_id") else list(sensors)  # type: ignore[arg-type]
+            [sensors] if hasattr(sensors, "sensor_id") else list(sensors)  # type: ignore[list-item]
         )
         if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 1:
             raise ConfigError(invalid("n_particles", n_particles, "an integer >= 1"))
@@ -242,7 +242,7 @@ class MultipleModelParticleFilter:
                     x[sel] = model.sample(prev[sel], dt, rng)
                 continue
             bank = self.banks[r]
-            bs = bank.step(banks[r], zs, dt, rng)  # Eq. 54
+            bs = bank.step(banks[r], zs, dt, rng)  # type: ignore[arg-type]  # Eq. 54
             banks[r] = bs
             draw, log_q = gaussian_draw(bs.mean, bs.total_cov, self.n_particles, rng)
             x = np.where(sel[..., None], draw, x)

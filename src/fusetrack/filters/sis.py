@@ -177,7 +177,7 @@ class ProposalParticleFilter:
     ) -> None:
         self.motion = motion
         self.sensors: list[SensorModel] = (
-            [sensors] if hasattr(sensors, "sensor_id") else list(sensors)  # type: ignore[arg-type]
+            [sensors] if hasattr(sensors, "sensor_id") else list(sensors)  # type: ignore[list-item]
         )
         self.proposal: Proposal = proposal if proposal is not None else PriorProposal()
         if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 1:
@@ -189,6 +189,7 @@ class ProposalParticleFilter:
             raise ConfigError(invalid("transition", transition, "'paired' or 'marginal'"))
         self.transition = transition
         self.stats = SISStats()
+        self.aux: Any = None
 
     def __repr__(self) -> str:
         return (
@@ -216,9 +217,16 @@ class ProposalParticleFilter:
         lp = self.motion.log_density(x[..., :, None, :], prev[..., None, :, :], dt)
         return np.asarray(logsumexp(lp, axis=-1) - np.log(prev.shape[-2]))
 
-    def step(self, state: SISState, zs: Zs, dt: float, rng: np.random.Generator) -> SISState:
-        """One predict-weight-resample(-move) step; returns the new equally weighted set."""
+    def step(
+        self, state: SISState, zs: Zs, dt: float, rng: np.random.Generator, aux: Any = None
+    ) -> SISState:
+        """One predict-weight-resample(-move) step; returns the new equally weighted set.
+
+        ``aux`` is side information for the proposal at this step (e.g. the received intensities
+        that weight the sensors of CPF-SP); proposals read it as ``filt.aux``.
+        """
         check_positive("dt", dt)
+        self.aux = aux
         prev = state.particles
         loglik = LogLikelihood(self.sensors, zs, self.stats)
         x, log_q, pstate = self.proposal.draw(state.proposal, prev, zs, dt, rng, self)
@@ -258,15 +266,17 @@ def run_sis(
     batch_shape: tuple[int, ...] = (),
     *,
     keep: Callable[[SISState], Any] | None = None,
+    aux: Sequence[Any] | None = None,
 ) -> tuple[Array, list[Any]]:
     """Run ``filt`` over ``measurements`` (one sensor-aligned sequence per step).
 
-    Returns the estimates ``(T, *batch_shape, d)`` and, if ``keep`` is given, ``keep(state)`` per step.
+    Returns the estimates ``(T, *batch_shape, d)`` and, if ``keep`` is given, ``keep(state)`` per
+    step. ``aux`` (one entry per step) is passed to :meth:`ProposalParticleFilter.step`.
     """
     state = filt.initialize(prior, rng, batch_shape)
     out, kept = [], []
-    for zs in measurements:
-        state = filt.step(state, zs, dt, rng)
+    for k, zs in enumerate(measurements):
+        state = filt.step(state, zs, dt, rng, None if aux is None else aux[k])
         out.append(state.estimate)
         if keep is not None:
             kept.append(keep(state))

@@ -45,10 +45,10 @@ class BankState:
 
 def _chol_factor(cov: Array) -> Array:
     try:
-        return np.linalg.cholesky(cov)
+        return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
     except np.linalg.LinAlgError:
         s, v = np.linalg.eigh(cov)
-        return v * np.sqrt(np.clip(s, 0.0, None))
+        return np.asarray(v * np.sqrt(np.clip(s, 0.0, None)), dtype=np.float64)
 
 
 def repair_covariance(cov: Array, floor: float = 1e-12) -> tuple[Array, NDArray[np.bool_]]:
