@@ -371,7 +371,7 @@ def _track_rows(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                 if cls is not None and shadow_truth.any()
                 else np.nan
             )
-            frag = find_blobs(fg, merge_gap=None)
+            frag = find_blobs(fg, merge_gap=None, min_area=30)  # keep the hand as a fragment
             big = largest_blob(frag)
             rows_t = np.nonzero(truth)
             bottom = rows_t[0] > rows_t[0].max() - 3
@@ -965,7 +965,7 @@ def _snapshot_figures(ctx: RunContext) -> list[str]:
     axes[1].set_title("Horprasert: F white, S blue, H yellow")
     fg = bgs.foreground(f.image)
     axes[2].imshow(fg, cmap="gray")
-    for b in find_blobs(fg, merge_gap=None):
+    for b in find_blobs(fg, merge_gap=None, min_area=30):
         u0, v0, u1, v1 = b.box
         axes[2].add_patch(plt.Rectangle((u0, v0), u1 - u0, v1 - v0, fill=False, color="r"))
         axes[2].plot(*b.foot, "gx")

@@ -204,10 +204,10 @@ class RoomRenderer:
         )
         parts.append((quad(-0.05, 0.05, 0.82 * H, 0.88 * H), person.skin, False))  # neck
         if person.separate_hand:
-            hs = 0.75 * W
+            hs = 1.15 * W  # far enough that the 7x7 closing does not reattach it
             parts.append(
                 (
-                    np.column_stack([hs + 0.06 * np.cos(ang), 0.55 * H + 0.09 * np.sin(ang)]),
+                    np.column_stack([hs + 0.09 * np.cos(ang), 0.55 * H + 0.12 * np.sin(ang)]),
                     person.skin,
                     True,
                 )
