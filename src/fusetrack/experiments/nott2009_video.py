@@ -815,6 +815,7 @@ def run(ctx: RunContext) -> Outcome:
         )
     )
     figs = _figures(ctx, df, single, cj)
+    figs += _figure_first_frames(ctx, single, rec_dir / "track" / "annotated.mp4", tool_summary)
     hom_tab = hs.copy()
     hom_tab.index = [" / ".join(i) for i in hom_tab.index]
     seg_tab = seg[
@@ -941,6 +942,53 @@ def _figures(
     figs.append(save(fig, ctx.figure_path("fig5_9_crossing_pixels")).name)
     figs += _snapshot_figures(ctx)
     return figs
+
+
+def _figure_first_frames(
+    ctx: RunContext, single: pd.DataFrame, annotated: Any, tool_summary: Mapping[str, Any]
+) -> list[str]:
+    """Figs. 5.6/5.7 analogue (tag and video filters over the first 25 frames) and Fig. 5.12
+    analogue (frames of the track-video output with the estimated foot marked)."""
+    import cv2
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6))
+    run0 = single[(single["run"] == 0) & (single["frame"] < 25)]
+    for ax, axis in zip(axes, ("x", "y")):
+        j = run0[run0["method"] == "J"]
+        b4 = run0[run0["method"] == "B4"]
+        ax.plot(j["frame"], j[f"true_{axis}"], "k-", lw=2, label="true")
+        ax.plot(j["frame"], j[f"radio_{axis}"], "b:", label="tag (raw)")
+        ax.plot(b4["frame"], b4[axis], "g--", label="EKF on video only")
+        ax.plot(j["frame"], j[axis], "r-", label="joint")
+        ax.set_xlabel("frame")
+        ax.set_ylabel(f"{axis} (m)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Figs. 5.6/5.7 analogue: the first 25 frames")
+    names = [save(fig, ctx.figure_path("fig5_6_7_first_frames")).name]
+    cap = cv2.VideoCapture(str(annotated))
+    shots = []
+    n = int(tool_summary["tracked_frames"])
+    want = {n // 4, (3 * n) // 4}
+    k = 0
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        if k in want:  # the annotated video starts after the background frames
+            shots.append(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB))
+        k += 1
+    cap.release()
+    if shots:
+        fig, axes = plt.subplots(1, len(shots), figsize=(6.5 * len(shots), 5.0))
+        for ax, im in zip(np.atleast_1d(axes), shots):
+            ax.imshow(im)
+            ax.axis("off")
+        fig.suptitle(
+            "Fig. 5.12 analogue: track-video output (red cross: estimated foot; green: blob foot)"
+        )
+        names.append(save(fig, ctx.figure_path("fig5_12_estimated_foot")).name)
+    return names
 
 
 def _snapshot_figures(ctx: RunContext) -> list[str]:
