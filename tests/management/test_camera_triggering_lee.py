@@ -131,3 +131,21 @@ def test_fast_bank_propagation_equals_each_models_map():
     fast = f._propagate(p, 0.5, np.random.default_rng(1))
     slow = np.stack([m.mean(p, 0.5) for m in models])
     assert np.allclose(fast, slow, atol=1e-12)
+
+
+def test_literal_jpda_chain_shrinks_towards_origin():
+    """Spec note on Eqs. 3.7-3.11: with jointly normalised weights the printed chain is not convex."""
+    rng = np.random.default_rng(5)
+    p = np.array([20.0, 20.0, 0.1, 0.0]) + np.array([0.2, 0.2, 0.01, 0.01]) * rng.standard_normal(
+        (200, 4)
+    )
+    z = np.array([45 * D, 44 * D, 80 * D])
+    out = {}
+    for est in ("consistent", "literal"):
+        f = MultiModelBearingPF(turn_models(1.0, 0.0), S, 2 * D, 200, estimator=est)
+        _, st = f.step(p, z, 1.0, np.random.default_rng(1))
+        out[est] = st.estimate
+    assert np.linalg.norm(out["consistent"][:2]) == pytest.approx(
+        np.linalg.norm(p[:, :2].mean(0)), rel=0.05
+    )
+    assert np.linalg.norm(out["literal"][:2]) < 0.9 * np.linalg.norm(out["consistent"][:2])
