@@ -23,7 +23,23 @@ EXPERIMENTS = [
 def test_experiment_writes_the_contract_files(name, tmp_path, monkeypatch):
     monkeypatch.setenv("FUSETRACK_SMOKE", "1")
     out = tmp_path / name
-    assert main(["run", name, "--quick", "--runs", "1", "--workers", "1", "--no-progress", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "run",
+                name,
+                "--quick",
+                "--runs",
+                "1",
+                "--workers",
+                "1",
+                "--no-progress",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert summary["experiment"] == name and summary["claims"]
     for c in summary["claims"]:
