@@ -76,6 +76,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Zhai 2007 (seed 001)",
         ),
         ExperimentInfo(
+            "zhai2007-denoising",
+            "zhai2007_denoising:run",
+            "Zhai 2007 E20 (Figs 79-80): PF-DWT denoising of Gaussian + Cauchy noise, ISNR",
+            "Zhai 2007 (seed 001)",
+        ),
+        ExperimentInfo(
             "lee2009-projected-planes",
             "lee2009_projected_planes:run",
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
