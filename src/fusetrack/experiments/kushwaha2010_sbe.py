@@ -115,6 +115,8 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                 "duration": float(rec.ticks[-1] - rec.ticks[start]),
                 "speed": abs(vehicle.speed),
                 "error_series": err.tolist(),
+                "est_series": means[start:].tolist(),
+                "truth_series": truth[start:].tolist(),
             }
         )
 
@@ -424,6 +426,8 @@ video less uncertain than audio; "average tracking error of 2 meters".
 
 ![A representative track]({figs["track"].name})
 
+![Layout and run 0]({figs["layout"].name})
+
 ## Poor video, poor audio, miscalibration (Fig. 19 analogues)
 
 Mean error (m) per condition and approach (all sensors, 2 % packet loss in every condition):
@@ -486,7 +490,8 @@ Mean error (m) with the motion model's δ = 1.5 m (spec default) and δ = 2.5 m:
 * Ground truth is the simulated centre of mass; the acoustic source is the engine, 1.5 m ahead of
   it, so audio carries a built-in bias of up to 1.5 m (the paper: "a vehicle is not a point source").
 """
-    return Outcome(everything.drop(columns=["error_series"]), claims, body, runs)
+    series = ["error_series", "est_series", "truth_series"]
+    return Outcome(everything.drop(columns=series), claims, body, runs)
 
 
 def _figures(
@@ -525,6 +530,18 @@ def _figures(
         ylabel="error (m)",
         title="Run 0: error along the track (Fig. 17 analogue)",
     )
+    layout = default_layout()
+    pick = {r.variant: r for r in base.itertuples() if r.variant in ("AP", "VP", "AVCP", "AVCS")}
+    if pick:
+        any_row = next(iter(pick.values()))
+        out["layout"] = plots.plot_trajectories(
+            ctx.figure_path("sbe_layout_track"),
+            np.asarray(any_row.truth_series),
+            {k: np.asarray(r.est_series) for k, r in pick.items()},
+            sensors=[(s[0], (s[1], s[2])) for s in (*layout.audio, *layout.video)],
+            area=(-2.0, 37.0, -2.0, 22.0),
+            title="Layout (Fig. 16 analogue) and run 0: truth and estimates",
+        )
     out["loss"] = plots.plot_series(
         ctx.figure_path("sbe_packet_loss"),
         loss.index.to_numpy(),
