@@ -39,7 +39,7 @@ METHODS = {
 def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=50, quick=2)
     size = (
-        {"steps": 100, "particles": 400, "burn_in": 4}
+        {"steps": 100, "particles": 800, "burn_in": 4}
         if ctx.quick
         else {"steps": 200, "particles": 1000, "burn_in": 4}
     )
