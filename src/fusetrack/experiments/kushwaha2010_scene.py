@@ -142,7 +142,9 @@ class SceneConfig:
     snr_db: float = 12.0  # per microphone, engine vs background noise, at 10 m
     clutter: float = 1.0  # tree and glint rate of the cameras
     camera_yaw_error: tuple[float, ...] = (0.0, 0.0, 0.0)  # true - assumed yaw (rad) per camera
-    false_video_peak: tuple[int, float, float, float] | None = None  # (camera, bearing rad, t0, t1)
+    # a false moving-foreground object (swaying tree, reflection) at (x, y) from t0 to t1, seen by
+    # every camera whose field of view holds it: (x, y, t0, t1)
+    false_video_peak: tuple[float, float, float, float] | None = None
     second_source: tuple[float, float] | None = None  # a stationary sound source (x, y)
     beam_alpha: float = 0.5
     preroll: float = (
@@ -394,10 +396,13 @@ def simulate_recording(
             boxes = [v.box(t) for v in vehicles]
             lam, _ = det.process(renderer.render(boxes))
             fp = config.false_video_peak
-            if fp is not None and fp[0] == c_idx and fp[2] <= t <= fp[3]:
-                k = int(np.argmin(np.abs(VIDEO_ANGLES - fp[1])))
-                lam = lam.copy()
-                lam[max(0, k - 3) : k + 4] += max(lam.max(), 50.0) * 1.5
+            if fp is not None and fp[2] <= t <= fp[3]:
+                ghost = np.arctan2(fp[1] - y, fp[0] - x) - yaw
+                ghost = float(np.mod(ghost + np.pi, 2 * np.pi) - np.pi)
+                if abs(ghost) < CAMERA_FOV / 2:
+                    k = int(np.argmin(np.abs(VIDEO_ANGLES - ghost)))
+                    lam = lam.copy()  # a blob as wide as a car at 15 m, 1.5 times as high
+                    lam[max(0, k - 7) : k + 8] += max(lam.max(), 50.0) * 1.5
             deliver(sid, seq, float(t), lam, hops=1)
 
     packets.sort(key=lambda p: p.arrival)
