@@ -3,21 +3,33 @@
 One import per line, re-exported with ``as``: add new filters by adding lines.
 """
 
+from .cpf_sp import CPFSPProposal as CPFSPProposal
 from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
 from .grid import GridSpec as GridSpec
 from .grid import GridTracker as GridTracker
 from .grid import SensorLikelihoods as SensorLikelihoods
+from .grid_proposals import DiscretisationProposal as DiscretisationProposal
+from .grid_proposals import GalerkinProposal as GalerkinProposal
 from .kalman import ExtendedKalmanFilter as ExtendedKalmanFilter
 from .kalman import GaussianFilter as GaussianFilter
 from .kalman import KalmanFilter as KalmanFilter
 from .kalman import SensorMoments as SensorMoments
 from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
+from .mcmc_moves import IndependenceMove as IndependenceMove
+from .mcmc_moves import MHPriorMove as MHPriorMove
+from .mcmc_moves import RandomWalkMove as RandomWalkMove
+from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
 from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
 from .particle import RegularizedParticleFilter as RegularizedParticleFilter
 from .runner import run_filter as run_filter
+from .sis import PriorProposal as PriorProposal
+from .sis import ProposalParticleFilter as ProposalParticleFilter
+from .sis import run_sis as run_sis
+from .sp_pekf import SPPEKFBank as SPPEKFBank
+from .sp_pekf import SPPEKFProposal as SPPEKFProposal
 from .stats import FilterStats as FilterStats
 from .stats import ValidatedMeasurement as ValidatedMeasurement
 from .stats import as_sensor_map as as_sensor_map
