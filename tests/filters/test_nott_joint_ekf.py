@@ -112,3 +112,17 @@ def test_joint_tracker_beats_the_tag_and_survives_a_long_occlusion():
     assert e["J"][:, visible].mean() < 0.06 < 0.3 < e["B1"][:, visible].mean()
     assert e["J"][:, occ].mean() < 0.35
     assert e["J"][:, occ][:, -1].mean() < e["B4"][:, occ][:, -1].mean()
+
+
+def test_constant_acceleration_person_model():
+    from fusetrack.motion import WalkingPersonCA
+
+    m = WalkingPersonCA(q_j=0.1, step=0.2)
+    x = np.array([1.0, 2.0, 1.75, 0.5, 1.0, 0.5, 0.2, -0.4])
+    assert np.allclose(m.mean(x, 0.5)[[0, 1, 4, 5, 6, 7]], [1.525, 2.2, 1.1, 0.3, 0.2, -0.4])
+    q = m.noise_cov(0.2)
+    assert (
+        np.allclose(q, q.T)
+        and q[6, 6] == pytest.approx(0.01)
+        and q[0, 6] == pytest.approx(0.01 * 0.02)
+    )

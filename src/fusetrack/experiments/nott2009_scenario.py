@@ -25,7 +25,7 @@ import numpy as np
 
 from ..core import Gaussian, Measurement
 from ..filters import ExtendedKalmanFilter, KalmanFilter, run_filter
-from ..motion import WalkingPerson
+from ..motion import WalkingPerson, WalkingPersonCA
 from ..sensors import HomographyCamera, PositionFix, StackedSensor
 from ..sensors.camera_geometry import back_project, default_camera, ground_homography
 
@@ -57,6 +57,7 @@ class SimConfig:
     rfid_jitter: float = 0.0  # s, std of the tag's sampling-time jitter (event mode)
     clock_offset: float = 0.0  # s, tag clock minus camera clock (event mode)
     stacked: bool = False
+    filter_model: str = "cv"  # "ca": the spec's optional 8-D constant-acceleration filter
     sigma_a_truth: float = 0.2
     accel: tuple[float, float] = (-0.10, 0.05)
     rfid_sigma: tuple[float, float] = (0.6, 0.4)
@@ -189,9 +190,16 @@ def run_trackers(cfg: SimConfig, truth: np.ndarray, rng: np.random.Generator) ->
     sens = sensors(cfg)
     cam = sens["camera"]
     t = cfg.times
-    motion = WalkingPerson(q_a=cfg.q_a, q_h=cfg.q_h, q_w=cfg.q_w, step=cfg.dt)
+    motion: WalkingPerson | WalkingPersonCA = WalkingPerson(
+        q_a=cfg.q_a, q_h=cfg.q_h, q_w=cfg.q_w, step=cfg.dt
+    )
     z0 = tags[0].value if tags else truth[0, :2]
     pri = prior(cfg, z0)
+    if cfg.filter_model == "ca":
+        motion = WalkingPersonCA(q_j=0.05, q_h=cfg.q_h, q_w=cfg.q_w, step=cfg.dt)
+        pri = Gaussian(
+            np.append(pri.mean, [0.0, 0.0]), np.diag([1, 1, 0.01, 0.04, 1, 1, 0.25, 0.25])
+        )
     occ = cfg.occluded()
     est: dict[str, np.ndarray] = {}
 

@@ -27,4 +27,5 @@ __all__ = [
 ]
 
 from .walking_person import WalkingPerson as WalkingPerson
+from .walking_person import WalkingPersonCA as WalkingPersonCA
 from .waypoint_regime import WaypointRegimeDynamics as WaypointRegimeDynamics
