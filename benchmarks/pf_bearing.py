@@ -1,4 +1,5 @@
-"""Speed of one bootstrap particle filter in fusetrack, Stone Soup, ``particles`` and plain NumPy.
+"""Speed of one bootstrap particle filter in fusetrack, Stone Soup, ``particles`` and plain NumPy,
+beside a hand-fused Numba *limit reference* of the same filter (``_limit_reference.py``).
 
 The filter (the same in all four): 2-D constant velocity ``[x, y, vx, vy]`` with continuous
 white-noise acceleration (PSD ``q``), three bearing sensors at fixed known positions, Gaussian
@@ -7,7 +8,14 @@ the same simulated truth and measurements (``_scenario.py``, one fixed seed) and
 weighted particle mean of the position, so their RMSEs must agree within Monte Carlo error.
 
     python benchmarks/pf_bearing.py [--N 1000 10000 100000 1000000]
-        [--libs fusetrack stonesoup particles numpy] [--repeats K] [--steps S] [--json]
+        [--libs fusetrack stonesoup particles numpy limit_reference] [--repeats K] [--steps S]
+        [--json]
+
+``limit_reference`` is not a library: it is this one filter written as two fused Numba loops
+(propagate + all likelihoods; weights + estimate + systematic resampling) with the noise from
+NumPy's generator, i.e. about as fast as this filter can be written by hand. It draws exactly what
+fusetrack draws, so its RMSE equals fusetrack's to rounding. BLAS is limited to one thread for
+every library (a threaded (N, 4) @ (4, 4) product is pathologically slow on a loaded machine).
 
 Timing: ``time.perf_counter`` (``--clock cpu``: ``time.process_time``) around a whole run
 (prior draw, then ``steps`` predict + update + resample + mean), divided by ``steps``; the
@@ -34,9 +42,12 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from threadpoolctl import threadpool_limits
+
+from _limit_reference import LimitReferencePF
 from _scenario import Array, Scenario, cv_matrices, make_scenario, position_rmse, wrap
 
-LIBS = ("fusetrack", "stonesoup", "particles", "numpy")
+LIBS = ("fusetrack", "stonesoup", "particles", "numpy", "limit_reference")
 WARMUP_STEPS = 3
 
 
@@ -287,6 +298,7 @@ RUNNERS: dict[str, Callable[[Scenario, int], object]] = {
     "stonesoup": StoneSoupPF,
     "particles": ParticlesPF,
     "numpy": NumpyPF,
+    "limit_reference": LimitReferencePF,
 }
 
 
@@ -457,6 +469,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--N values must be >= 1")
     global _clock
     _clock = CLOCKS[args.clock]
+    threadpool_limits(1)  # BLAS: one thread for every library
 
     # The first --steps steps of the standard 100-step scenario (the same truth for any --steps).
     scn = make_scenario(steps=max(args.steps, 100))

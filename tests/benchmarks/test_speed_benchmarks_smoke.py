@@ -1,0 +1,50 @@
+"""Smoke tests of the issue-3 speed benchmarks: they run and print JSON of the documented shape,
+and their equality checks hold. No timing assertions (speed is measured by the benchmarks)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
+
+
+def _json_lines(script: str, *args: str) -> list[dict]:
+    out = subprocess.run(
+        [sys.executable, str(BENCH / script), *args, "--json"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert out.returncode == 0, out.stderr
+    return [json.loads(line) for line in out.stdout.splitlines() if line.strip()]
+
+
+def test_pf_bearing_limit_reference_matches_fusetrack_rmse() -> None:
+    (row,) = _json_lines(
+        "pf_bearing.py", "--N", "300", "--steps", "4", "--repeats", "1",
+        "--libs", "fusetrack", "limit_reference",
+    )  # fmt: skip
+    assert set(row["seconds_per_step"]) == {"fusetrack", "limit_reference"}
+    assert row["seconds_per_step"]["limit_reference"] > 0
+    # the same draws: the estimates agree to rounding
+    assert abs(row["rmse"]["fusetrack"] - row["rmse"]["limit_reference"]) < 1e-9
+
+
+def test_kalman_batch_equals_filterpy() -> None:
+    rows = _json_lines("kalman_batch.py", "--tracks", "6", "--steps", "4", "--repeats", "1")
+    assert [r["filter"] for r in rows] == ["ekf", "ukf"]
+    for r in rows:
+        assert set(r["seconds_per_step"]) == {"fusetrack", "filterpy"}
+        assert r["max_abs_diff"]["mean"] < 1e-9 and r["max_abs_diff"]["cov"] < 1e-9
+
+
+def test_batched_runs_are_bit_identical_to_separate_runs() -> None:
+    (row,) = _json_lines(
+        "batched_runs.py", "--runs", "3", "--N", "64", "--steps", "3", "--repeats", "1"
+    )
+    assert row["bit_identical"] is True
+    assert set(row["seconds_per_step"]) == {"separate", "batched"}
