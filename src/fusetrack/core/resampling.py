@@ -117,6 +117,16 @@ def systematic(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArra
     return _systematic_sorted(w2, u0.reshape(-1)).reshape(w.shape)
 
 
+def systematic_from_uniforms(
+    weights: NDArray[np.float64], u0: NDArray[np.float64]
+) -> NDArray[np.intp]:
+    """:func:`systematic` for weight rows ``(R, N)`` given each row's uniform ``u0`` ``(R,)``
+    (drawn by the caller, e.g. one per run from that run's generator)."""
+    w = np.ascontiguousarray(weights, dtype=np.float64)
+    u = np.ascontiguousarray(u0, dtype=np.float64).reshape(-1)
+    return _systematic_sorted(w.reshape(-1, w.shape[-1]), u).reshape(w.shape)
+
+
 def residual(weights: NDArray[np.float64], rng: np.random.Generator) -> NDArray[np.intp]:
     """``floor(N w_i)`` deterministic copies, the rest drawn multinomially from the residuals."""
     w = np.asarray(weights, float)

@@ -85,6 +85,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core import resampling
 from ..core.beliefs import Gaussian, Particles
 from ..core.errors import (
     ConfigError,
@@ -98,7 +99,7 @@ from ..core.errors import (
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import Resampler, get_resampler
-from . import kernels
+from . import fused, kernels
 from .stats import FilterStats, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]
@@ -255,6 +256,8 @@ class ParticleFilter:
         self.min_log_evidence = mle
         self.stats = FilterStats()
         self._warned = False
+        self._fused_dt: tuple[float, tuple[Array, Array] | None] | None = None
+        self._fused_ll: dict[int, tuple[SensorModel, tuple[int, Array] | None]] = {}
 
     def __repr__(self) -> str:
         return (
@@ -308,6 +311,18 @@ class ParticleFilter:
         """Resample runs with low ESS, then draw ``x_k ~ p(x_k | x_{k-1})`` for each particle."""
         gens = self._generators(rng, particles.batch_shape)
         W = self._weights(particles)
+        n, d = particles.states.shape[-2:]
+        if (
+            type(self)._regularize is ParticleFilter._regularize
+            and self._fused_motion(dt) is not None
+            and np.all(W.ess < self.ess_threshold * n)
+        ):  # fused: gather the resampled parents inside the propagation loop (no copy)
+            self.stats.resample_count += 1
+            rows = np.arange(W.ess.size)
+            anc = self._ancestors(W.w, rows, gens)
+            s2 = particles.states.reshape(-1, n, d)
+            new = self._sample_motion(s2, dt, gens, ancestors=anc)
+            return self._particles(new.reshape(particles.states.shape), self._uniform(rows.size, n))
         states, W = self._maybe_resample(particles.states, W, gens)
         return self._particles(self._sample_motion(states, dt, gens), W)
 
@@ -399,15 +414,47 @@ class ParticleFilter:
             raise ConfigError(invalid("rng", f"a sequence of {len(gens)} items", valid))
         return gens
 
+    def _fused_motion(self, dt: float) -> tuple[Array, Array] | None:
+        """``(F, G)`` of the motion model's fused form at ``dt`` (engine "numba"), else None."""
+        if self.engine != "numba":
+            return None
+        cached = self._fused_dt
+        if cached is not None and cached[0] == dt:
+            return cached[1]
+        offer = getattr(self.motion, "fused_transition", None)
+        fg = offer(dt) if callable(offer) else None
+        self._fused_dt = (dt, fg)
+        return fg
+
     def _sample_motion(
         self,
         states: Array,
         dt: float,
         gens: np.random.Generator | list[np.random.Generator],
         rows: NDArray[np.intp] | None = None,
+        ancestors: NDArray[np.intp] | None = None,
     ) -> Array:
         """A draw of the next state of every particle; with per-run generators, row ``j`` of
-        ``states`` belongs to run ``rows[j]`` (default: row ``j`` is run ``j``)."""
+        ``states`` belongs to run ``rows[j]`` (default: row ``j`` is run ``j``).
+
+        ``ancestors`` ``(R, N)`` (fused path only) propagates ``states[r, ancestors[r]]``: the
+        gather of resampling done inside the loop. The fused path (a motion model with
+        ``fused_transition``, engine "numba") draws the same normals as ``motion.sample``.
+        """
+        fg = self._fused_motion(dt)
+        if fg is not None:
+            n, d = states.shape[-2:]
+            s2 = states.reshape(-1, n, d)
+            eps = np.empty(s2.shape)
+            if isinstance(gens, np.random.Generator):
+                gens.standard_normal(out=eps)
+            else:
+                for j, r in enumerate(range(s2.shape[0]) if rows is None else rows):
+                    gens[r].standard_normal(out=eps[j])
+            out = fused.linear_gaussian_step(s2, fg[0], fg[1], eps, ancestors)
+            return out if ancestors is not None else out.reshape(states.shape)
+        if ancestors is not None:
+            states = _gather(states.reshape(-1, *states.shape[-2:]), ancestors)
         if isinstance(gens, np.random.Generator):
             return np.asarray(self.motion.sample(states, dt, gens), dtype=float)
         n, d = states.shape[-2:]
@@ -437,6 +484,9 @@ class ParticleFilter:
         if isinstance(gens, np.random.Generator):
             sub = w if rows.size == w.shape[0] else w[rows]
             return np.asarray(self._resample(sub, gens), dtype=np.intp)
+        if self._resample is resampling.systematic:  # one merge for all runs, same draws
+            u0 = np.array([gens[r].random((1,))[0] for r in rows])
+            return resampling.systematic_from_uniforms(w[rows], u0)
         return np.stack([np.asarray(self._resample(w[r], gens[r]), dtype=np.intp) for r in rows])
 
     # ------------------------------------------------------------------------------------------
@@ -565,6 +615,10 @@ class ParticleFilter:
         least that. If the bound cannot vouch for every measurement of every run, the exact
         sequential update (:meth:`_reweight_exact`) runs instead.
         """
+        if subtract is None:
+            fast = self._reweight_fused(states, W, checked)
+            if fast is not None:
+                return fast, False
         per_run = rng is not None and not isinstance(rng, np.random.Generator)
         lls = []
         for k, c in enumerate(checked):
@@ -588,6 +642,54 @@ class ParticleFilter:
             bound = np.where(c.usable, rowmax + log_n, bound)
         lw, w, _, ess = self._k.normalize(acc, rowmax, overwrite=True)
         return _Weights(lw, w, ess), False
+
+    def _fused_sensor(self, sensor: SensorModel) -> tuple[int, Array] | None:
+        """``(kind, params)`` of the sensor's fused form (engine "numba"), else None."""
+        if self.engine != "numba":
+            return None
+        hit = self._fused_ll.get(id(sensor))
+        if hit is not None and hit[0] is sensor:
+            return hit[1]
+        offer = getattr(sensor, "fused_likelihood", None)
+        spec = offer() if callable(offer) else None
+        entry = None if spec is None else (fused.KINDS[spec[0]], fused.sensor_params(*spec))
+        self._fused_ll[id(sensor)] = (sensor, entry)
+        return entry
+
+    def _reweight_fused(
+        self, states: Array, W: _Weights, checked: list[_Checked]
+    ) -> _Weights | None:
+        """:meth:`_reweight` in one pass over the particles when every sensor has a fused form
+        and no measurement carries its own covariance; None otherwise, or when the degeneracy
+        bound cannot vouch for a measurement (the caller then takes the generic path)."""
+        specs = []
+        for c in checked:
+            spec = None if c.cov is not None else self._fused_sensor(c.sensor)
+            if spec is None:
+                return None
+            specs.append(spec)
+        rows = W.lw.shape[0]
+        n, d = states.shape[-2:]
+        z = np.zeros((rows, len(checked), 2))
+        for k, c in enumerate(checked):
+            z[:, k, : c.z.shape[-1]] = c.z
+        usable = np.stack([c.usable for c in checked], axis=1)
+        kinds = np.array([s[0] for s in specs], dtype=np.int64)
+        params = np.stack([s[1] for s in specs])
+        acc, maxima = fused.log_likelihood_sum(
+            states.reshape(-1, n, d), W.lw, kinds, params, z, usable
+        )
+        log_n = math.log(n)
+        bound = np.zeros(rows)
+        for k, c in enumerate(checked):  # the bound of _reweight, measurement by measurement
+            rowmax = maxima[:, k]
+            with np.errstate(invalid="ignore"):
+                safe = np.isfinite(rowmax) & (rowmax - bound >= self.min_log_evidence)
+            if not np.all(safe | ~c.usable):
+                return None
+            bound = np.where(c.usable, rowmax + log_n, bound)
+        lw, w, _, ess = self._k.normalize(acc, maxima[:, -1], overwrite=True)
+        return _Weights(lw, w, ess)
 
     def _reweight_exact(
         self, W: _Weights, checked: list[_Checked], lls: list[Array]

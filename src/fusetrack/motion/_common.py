@@ -176,6 +176,15 @@ class LinearGaussian(GaussianTransition):
         f = self.transition_matrix(dt)
         return as_state(x, self.dim, self.state_names) @ f.T
 
+    def fused_transition(self, dt: float) -> tuple[Array, Array] | None:
+        """``(F(dt), G)`` with ``G G^T = Q(dt)``: what the particle filters' fused step needs
+        (:mod:`fusetrack.filters.fused`, ``x' = F x + G eps`` with ``eps`` drawn as
+        :meth:`sample` draws it). None when a subclass changes ``mean`` or ``sample``."""
+        cls = type(self)
+        if cls.mean is not LinearGaussian.mean or cls.sample is not GaussianTransition.sample:
+            return None
+        return self.transition_matrix(dt), psd_factor(self.noise_cov(dt))
+
     def jacobian(self, x: ArrayLike, dt: float) -> Array:
         """``F(dt)`` broadcast to ``(..., d, d)`` (a read-only view: no copy per particle)."""
         f = self.transition_matrix(dt)

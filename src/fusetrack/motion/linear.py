@@ -25,6 +25,7 @@ density is needed (importance weights with a proposal other than the prior).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import ClassVar, Literal
@@ -68,6 +69,20 @@ def kinematic_noise(order: int, dt: float, noise: NoiseKind = "continuous") -> A
     raise ConfigError(invalid("noise", noise, "'continuous' or 'discrete'"))
 
 
+@functools.lru_cache(maxsize=512)
+def _kron_cached(order: int, ndim: int, dt: float, noise: str | None) -> Array:
+    """``kron(F_axis(dt), I)`` (``noise`` None) or ``kron(Q_axis(dt), I)`` for unit intensity,
+    read-only; cached because ``np.kron`` costs more than a whole batched filter step's algebra
+    on small matrices, and a filter asks for the same ``dt`` every step."""
+    if noise is None:
+        axis = kinematic_transition(order, dt)
+    else:
+        axis = kinematic_noise(order, dt, noise)  # type: ignore[arg-type]
+    out = np.asarray(np.kron(axis, np.eye(ndim)), dtype=np.float64)
+    out.flags.writeable = False
+    return out
+
+
 def _state_names(order: int, ndim: int) -> tuple[str, ...]:
     return tuple(_PREFIX[k] + _AXES[a] for k in range(order) for a in range(ndim))
 
@@ -103,13 +118,13 @@ class _Kinematic(LinearGaussian):
 
     def transition_matrix(self, dt: float) -> Array:
         """``F(dt) = kron(F_axis(dt), I_ndim)``, ``(d, d)``."""
-        f = np.kron(kinematic_transition(self._order, dt), np.eye(self._axes))
-        return np.asarray(f, dtype=np.float64)
+        f = _kron_cached(self._order, self._axes, check_dt(dt), None)
+        return np.array(f, dtype=np.float64)  # a copy: callers may write to it
 
     def noise_cov(self, dt: float) -> Array:
         """``Q(dt) = q kron(Q_axis(dt), I_ndim)``, ``(d, d)``."""
-        qa = kinematic_noise(self._order, dt, self.noise)
-        return np.asarray(float(self.q) * np.kron(qa, np.eye(self._axes)), dtype=np.float64)
+        qa = _kron_cached(self._order, self._axes, check_dt(dt), self.noise)
+        return np.asarray(float(self.q) * qa, dtype=np.float64)
 
 
 @dataclass(frozen=True)

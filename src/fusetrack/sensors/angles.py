@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -57,6 +57,10 @@ class Bearing(SensorBase):
     def noise_cov(self, x: ArrayLike | None = None) -> Array:
         """``[[sigma^2]]``."""
         return np.array([[self.sigma**2]])
+
+    def fused_likelihood(self) -> tuple[Any, ...] | None:
+        """``("bearing", ...)`` for the particle filters' fused loop (see the base class)."""
+        return self._fused("bearing") if self._fusable(Bearing) else None
 
 
 @dataclass(frozen=True, eq=False)

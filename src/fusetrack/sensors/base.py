@@ -350,6 +350,29 @@ class SensorBase:
             q = np.einsum("...i,...i->...", u, u)
         return self._log_norm - 0.5 * q
 
+    def fused_likelihood(self) -> tuple[Any, ...] | None:
+        """What the particle filters' fused likelihood loop needs to evaluate
+        :meth:`log_likelihood` per particle (:mod:`fusetrack.filters.fused`):
+        ``(kind, position_index, position, heading, 1 / diag(R), log_norm)``, or None when this
+        model has no fused form (the filters then call :meth:`log_likelihood`)."""
+        return None
+
+    def _fusable(self, cls: type[SensorBase]) -> bool:
+        """True when ``predict``, ``residual`` and ``log_likelihood`` are ``cls``'s own and ``R``
+        is diagonal (a subclass that changes any of them loses the fused form)."""
+        t = type(self)
+        return (
+            t.predict is cls.predict
+            and t.residual is SensorBase.residual
+            and t.log_likelihood is SensorBase.log_likelihood
+            and self._inv_var is not None
+        )
+
+    def _fused(self, kind: str) -> tuple[Any, ...]:
+        assert self._inv_var is not None
+        inv_var = tuple(float(v) for v in self._inv_var)
+        return (kind, self._idx, self._pos, self.heading, inv_var, self._log_norm)
+
     def simulate(self, x: ArrayLike, rng: np.random.Generator) -> Array:
         """Noisy measurements ``h(x) + v``, ``v ~ N(0, R)``, shape ``(..., m)``.
 

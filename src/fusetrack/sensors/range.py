@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -47,6 +47,10 @@ class Range(SensorBase):
     def noise_cov(self, x: ArrayLike | None = None) -> Array:
         """``[[sigma^2]]``."""
         return np.array([[self.sigma**2]])
+
+    def fused_likelihood(self) -> tuple[Any, ...] | None:
+        """``("range", ...)`` for the particle filters' fused loop (see the base class)."""
+        return self._fused("range") if self._fusable(Range) else None
 
 
 @dataclass(frozen=True, eq=False)
@@ -98,6 +102,10 @@ class RangeBearing(SensorBase):
     def noise_cov(self, x: ArrayLike | None = None) -> Array:
         """``diag(sigma_range^2, sigma_bearing^2)``."""
         return np.diag([self.sigma_range**2, self.sigma_bearing**2])
+
+    def fused_likelihood(self) -> tuple[Any, ...] | None:
+        """``("range_bearing", ...)`` for the particle filters' fused loop (see the base class)."""
+        return self._fused("range_bearing") if self._fusable(RangeBearing) else None
 
 
 __all__ = ["Range", "RangeBearing"]
