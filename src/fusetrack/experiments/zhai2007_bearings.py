@@ -24,11 +24,20 @@ from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter
 from ..filters.sis import ProposalParticleFilter
 from ..filters.sp_pekf import SPPEKFProposal
+from ..filters.unscented_proposal import UnscentedProposal
 from ..motion import ConstantVelocity, CoordinatedTurn
 from ..sensors import Bearing
 from .zhai2007_common import timed_gaussian, timed_sis
 
-METHODS = ("EKF", "UKF", "bootstrap", "PF-SP-PEKF", "PF-SP-PEKF marginal", "bootstrap equal time")
+METHODS = (
+    "EKF",
+    "UKF",
+    "bootstrap",
+    "PF-SP-PEKF",
+    "PF-SP-PEKF marginal",
+    "UPF",
+    "bootstrap equal time",
+)
 
 
 def scenario(name: str) -> dict[str, Any]:
@@ -92,6 +101,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         "bootstrap equal time": ProposalParticleFilter(
             motion, [sensor], n_particles=int(config["n_equal"])
         ),
+        "UPF": ProposalParticleFilter(motion, [sensor], UnscentedProposal(), n_particles=n),
         "PF-SP-PEKF marginal": ProposalParticleFilter(
             motion, [sensor], SPPEKFProposal(20), n_particles=n, transition="marginal"
         ),
@@ -184,7 +194,8 @@ def run(ctx: RunContext) -> Outcome:
             title=f"{s}: run 0" + (" (Fig 11)" if s == "E2" else ""),
         ).name
     winner = {
-        s: tables[s]["RMSE all t"].drop(["UKF", "PF-SP-PEKF marginal"]).idxmin() for s in tables
+        s: tables[s]["RMSE all t"].drop(["UKF", "PF-SP-PEKF marginal", "UPF"]).idxmin()
+        for s in tables
     }
     sp_vs_bs = {
         s: float(tables[s].loc["PF-SP-PEKF", "RMSE t>30"] / tables[s].loc["bootstrap", "RMSE t>30"])

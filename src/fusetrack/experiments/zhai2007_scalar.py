@@ -20,6 +20,7 @@ from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter
 from ..filters.sis import ProposalParticleFilter
 from ..filters.sp_pekf import SPPEKFProposal
+from ..filters.unscented_proposal import UnscentedProposal
 from ..motion.benchmark import ScalarBenchmark
 from ..sensors.power import Power
 from .zhai2007_common import fmt_order, ordering_holds, timed_gaussian, timed_sis
@@ -74,6 +75,7 @@ def filters_for(
         out["PF-SP-PEKF no feedback"] = ProposalParticleFilter(
             motion, [sensor], SPPEKFProposal(n_channels=20, feedback_on=False), 200
         )
+        out["UPF"] = ProposalParticleFilter(motion, [sensor], UnscentedProposal(), n_particles=200)
         n_eq = int(config.get("n_equal_time", 0))
         if n_eq:
             out["BS equal time"] = ProposalParticleFilter(motion, [sensor], n_particles=n_eq)
