@@ -39,7 +39,7 @@ class UnscentedProposal:
         self, state: Array, prev: Array, zs: Zs, dt: float, rng: np.random.Generator, filt: Any
     ) -> tuple[Array, Array, Array]:
         ukf = getattr(self, "_ukf", None)
-        if ukf is None or ukf.motion is not filt.motion:  # type: ignore[attr-defined]
+        if ukf is None or ukf.motion is not filt.motion:
             ukf = UnscentedKalmanFilter(filt.motion, filt.sensors)
             self._ukf = ukf
         n, d = prev.shape[-2], prev.shape[-1]
