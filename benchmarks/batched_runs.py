@@ -131,7 +131,7 @@ class Study:
 
 
 def measure(study: Study, repeats: int, seed: int = 1) -> dict[str, object]:
-    study.separate(seed + 999, runs=2)  # warm-up: Numba dispatch, caches
+    study.separate(seed + 999, runs=min(2, study.runs))  # warm-up: Numba dispatch, caches
     study.batched(seed + 999)
     wall: dict[str, list[float]] = {"separate": [], "batched": []}
     cpu: dict[str, list[float]] = {"separate": [], "batched": []}
