@@ -143,7 +143,7 @@ def run(ctx: RunContext) -> Outcome:
     pf = RasterParticleFilter()(noisy, seed=1)
     hard, soft = ti_threshold(pf, "hard", shifts=shifts), ti_threshold(pf, "soft", shifts=shifts)
     fig, axes = plt.subplots(1, 5, figsize=(16, 3.6))
-    for ax, (t, im) in zip(
+    for ax, (t, panel) in zip(
         axes,
         [
             ("clean", clean),
@@ -153,9 +153,9 @@ def run(ctx: RunContext) -> Outcome:
             ("PF + TI soft", soft),
         ],
     ):
-        ax.imshow(im, cmap="gray", vmin=0, vmax=255)
+        ax.imshow(panel, cmap="gray", vmin=0, vmax=255)
         ax.set(
-            title=t if t in ("clean", "noisy") else f"{t} ({isnr(clean, noisy, im):.2f} dB)",
+            title=t if t in ("clean", "noisy") else f"{t} ({isnr(clean, noisy, panel):.2f} dB)",
             xticks=[],
             yticks=[],
         )
