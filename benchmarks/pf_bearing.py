@@ -509,9 +509,10 @@ def main(argv: list[str] | None = None) -> int:
 
 def _print_table(n: int, libs: list[str], res: dict[str, dict[str, float | None]]) -> None:
     ft = res.get("fusetrack", {}).get("seconds_per_step")
+    w = max(10, *(len(lib) for lib in libs))
     print(f"\nN = {n:,}")
     print(
-        f"  {'library':<10} {'time / step':>24} {'runs':>5} {'RMSE (m)':>10} "
+        f"  {'library':<{w}} {'time / step':>24} {'runs':>5} {'RMSE (m)':>10} "
         f"{'fusetrack speed-up':>19}"
     )
     for lib in libs:
@@ -520,7 +521,7 @@ def _print_table(n: int, libs: list[str], res: dict[str, dict[str, float | None]
         ratio = "" if lib == "fusetrack" or ft is None or t is None else f"{t / ft:.1f}x"
         rm = "" if rmse is None else f"{rmse:.3f}"
         runs = "" if t is None else str(r["runs"])
-        print(f"  {lib:<10} {_fmt_time(t, est):>24} {runs:>5} {rm:>10} {ratio:>19}", flush=True)
+        print(f"  {lib:<{w}} {_fmt_time(t, est):>24} {runs:>5} {rm:>10} {ratio:>19}", flush=True)
 
 
 if __name__ == "__main__":
