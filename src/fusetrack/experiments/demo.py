@@ -260,8 +260,9 @@ def run(ctx: RunContext) -> Outcome:
 A target moves for {scn.duration:.0f} s (step {scn.dt} s) under the coordinated-turn model with the
 turn rate in the state (acceleration PSD {scn.q} m²/s³, turn-rate PSD {scn.q_omega} rad²/s³),
 starting from a draw of the prior (mean {list(scn.prior_mean)}, std {list(scn.prior_std)}).
-Two microphone arrays at (0, 0) and (100, 0) m report bearings with σ = 3°; a camera at (50, 62) m
-looking down the area with a 70° field of view reports bearings with σ = 0.5° except while an
+Two microphone arrays at {_where(sensors["mic_west"])} and {_where(sensors["mic_east"])} m report bearings with
+σ = {np.rad2deg(scn.sigma_mic):.1f}°; a camera at {_where(sensors["camera"])} m looking down the area with a
+{np.rad2deg(scn.camera_fov):.0f}° field of view reports bearings with σ = {np.rad2deg(scn.sigma_camera):.1f}° except while an
 occluder hides the target ({", ".join(f"{a:.0f}–{b:.0f} s" for a, b in scn.occluded)}); a radio tag
 reports its position every {scn.tag_period:.0f} s with covariance {[list(r) for r in scn.tag_cov]} m².
 The EKF, UKF and bootstrap particle filter ({n_particles} particles, systematic resampling when ESS < N/2)
@@ -297,3 +298,8 @@ to Gaussian, so the EKF is near-optimal and the particle filter's advantage, if 
 Monte Carlo error.
 """
     return Outcome(df, claims, body, runs)
+
+
+def _where(sensor: Any) -> str:
+    """A sensor's position as ``(x, y)`` for the report text."""
+    return "(" + ", ".join(f"{v:g}" for v in sensor.position) + ")"
