@@ -35,3 +35,5 @@ from .stats import ValidatedMeasurement as ValidatedMeasurement
 from .stats import as_sensor_map as as_sensor_map
 from .stats import validate_measurement as validate_measurement
 from .waypoint_asir import WaypointASIR as WaypointASIR
+from .imm import IMMBelief as IMMBelief
+from .imm import InteractingMultipleModel as InteractingMultipleModel

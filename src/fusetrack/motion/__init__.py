@@ -29,3 +29,5 @@ __all__ = [
 from .walking_person import WalkingPerson as WalkingPerson
 from .walking_person import WalkingPersonCA as WalkingPersonCA
 from .waypoint_regime import WaypointRegimeDynamics as WaypointRegimeDynamics
+from .benchmark import ScalarBenchmark as ScalarBenchmark
+from .maneuver import ManeuverTurn as ManeuverTurn
