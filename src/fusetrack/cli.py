@@ -7,7 +7,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .core.errors import FusetrackError
+from .core.errors import ConfigError, FusetrackError, invalid
 
 
 def _add_run_options(p: argparse.ArgumentParser, default_out: str | None) -> None:
@@ -55,6 +55,20 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="experiment-specific YAML file (e.g. your room and cameras for ercan2013-selection)",
     )
+    run.add_argument(
+        "--set",
+        dest="options",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="experiment option passed to the experiment (repeatable; e.g. measurements=audio)",
+    )
+    run.add_argument(
+        "--measurements",
+        default=None,
+        help="where simulated acoustic angles come from, for experiments that offer it: "
+        "gaussian (the paper's noise model) or audio (= --set measurements=audio)",
+    )
     demo = sub.add_parser("demo", help="= fusetrack run demo")
     _add_run_options(demo, "out/demo")
     from .tools.track_video_args import add_parser as add_track_video
@@ -76,6 +90,19 @@ def _print_summary(summary: dict, out: Path) -> None:
             f"  [{'ok ' if c['holds'] else 'NO '}] {c['id']}: {c['statement']} — ours {ours}, paper {c['paper']}"
         )
     print(f"report: {out / 'report.md'}")
+
+
+def _extra_options(args: argparse.Namespace) -> dict[str, str]:
+    """``ctx.extra`` from ``--config``, ``--set KEY=VALUE`` and ``--measurements``."""
+    extra = {"config": str(args.config)} if getattr(args, "config", None) else {}
+    for item in getattr(args, "options", []):
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(invalid("--set", item, "KEY=VALUE, e.g. measurements=audio"))
+        extra[key.strip()] = value.strip()
+    if getattr(args, "measurements", None) is not None:
+        extra["measurements"] = args.measurements
+    return extra
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -108,7 +135,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             scheduler=args.scheduler,
             workers=args.workers,
             progress=False if args.no_progress else None,
-            extra={"config": str(args.config)} if getattr(args, "config", None) else {},
+            extra=_extra_options(args),
         )
         summary = run_experiment(ctx)
     except FusetrackError as err:
