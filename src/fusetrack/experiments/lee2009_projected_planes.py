@@ -25,6 +25,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from ..core.errors import ConfigError, invalid
 from ..evaluation.plots import save
 from ..evaluation.projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from ..evaluation.report import Claim, Outcome, RunContext
@@ -378,7 +379,25 @@ kept as "literal" and the minimum-variance rule is run beside it.
     return claims, body, df
 
 
+MEASUREMENT_SOURCES = ("gaussian", "audio")
+
+
 def run(ctx: RunContext) -> Outcome:
+    """``--measurements gaussian`` (default): the dissertation's Ch. 2; ``audio``: angles from sound."""
+    unknown = sorted(set(ctx.extra) - {"measurements", "config"})
+    if unknown:
+        raise ConfigError(invalid("option", unknown[0], "measurements=gaussian|audio"))
+    source = str(ctx.extra.get("measurements", "gaussian"))
+    if source not in MEASUREMENT_SOURCES:
+        raise ConfigError(invalid("measurements", source, f"one of {MEASUREMENT_SOURCES}"))
+    if source == "audio":
+        from .lee2009_projected_planes_audio import run as run_audio
+
+        return run_audio(ctx)
+    return run_gaussian(ctx)
+
+
+def run_gaussian(ctx: RunContext) -> Outcome:
     s = Settings()
     runs = ctx.n_runs(full=100, quick=5)
     n_part = 500 if ctx.quick else s.n_particles

@@ -5,9 +5,9 @@ Here the angles of Scenario 1 also come from sound: a six-microphone octahedral 
 8 cm) at the sensor position hears a white-noise source on the trajectory, in free field or in a
 reverberant hall (pyroomacoustics), and narrowband MUSIC estimates azimuth and polar angle per
 32 ms frame (:mod:`fusetrack.perception.audio_doa`). The trackers run unchanged; their angle noise
-std is the one measured for the array (sensor characterisation, as the text assumes). This is the
-``--measurements audio`` option of the issue, as its own experiment name because the shared CLI
-has no per-experiment flags.
+std is the one measured for the array (sensor characterisation, as the text assumes). Run it as
+``fusetrack run lee2009-projected-planes --measurements audio`` (the issue's form); the name
+``lee2009-projected-planes-audio`` is kept as an alias.
 """
 
 from __future__ import annotations
@@ -136,6 +136,9 @@ def run(ctx: RunContext) -> Outcome:
             )
         )
     body = f"""
+`fusetrack run lee2009-projected-planes --measurements audio` (alias: `fusetrack run
+lee2009-projected-planes-audio`): the issue's comparison of the two noise models.
+
 Scenario 1 (sensor at the origin, 50 frames at 0.1 s), {runs} runs, {n_part} particles per filter.
 Array: six microphones on the axes at 8 cm, 16 kHz, 32 ms white-noise frames, STFT 128, MUSIC on
 300-3500 Hz (4-degree grid, refined to 0.5 degree). Hall: {HALL} m, image sources to order 2,
