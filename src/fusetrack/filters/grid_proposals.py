@@ -24,10 +24,13 @@ These proposals work on one particle set at a time (``prev`` of shape ``(N, d)``
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
+import numba
 import numpy as np
+from numpy.typing import NDArray
 from scipy.special import logsumexp
 
 from ..core.errors import ConfigError, ShapeError, invalid
@@ -55,14 +58,80 @@ def _split(motion: Any, d: int) -> tuple[list[int], list[int]]:
     return pos, rest
 
 
-def _gauss_logpdf(diff: Array, cov: Array) -> Array:
-    k = cov.shape[0]
+def _whitener(cov: Array) -> tuple[Array, float]:
+    """``(L^-1, log N normaliser)`` for ``cov = L L^T``: ``log N(x; 0, cov) = c - |L^-1 x|^2 / 2``."""
     L = np.linalg.cholesky(cov)
-    u = np.linalg.solve(L, np.moveaxis(diff, -1, 0).reshape(k, -1)).reshape(
-        np.moveaxis(diff, -1, 0).shape
-    )
-    maha = np.sum(u * u, axis=0)
-    return np.asarray(-0.5 * (maha + k * np.log(2 * np.pi)) - np.sum(np.log(np.diag(L))))
+    const = -0.5 * cov.shape[0] * np.log(2 * np.pi) - float(np.sum(np.log(np.diag(L))))
+    return np.asarray(np.linalg.inv(L)), const
+
+
+def _gauss_logpdf(diff: Array, cov: Array) -> Array:
+    """``log N(diff; 0, cov)`` over the last axis of ``diff``."""
+    Linv, const = _whitener(cov)
+    u = diff @ Linv.T
+    return np.asarray(const - 0.5 * np.sum(u * u, axis=-1))
+
+
+@numba.njit(cache=True, nogil=True)
+def _mixture_kernel(
+    a: Array, b: Array, log_w: Array, u: Array
+) -> tuple[Array, NDArray[np.intp]]:  # pragma: no cover - compiled
+    n_a, n_b, k = a.shape[0], b.shape[0], a.shape[1]
+    lse = np.empty(n_a)
+    anc = np.zeros(n_a, dtype=np.intp)
+    lp = np.empty(n_b)
+    for i in range(n_a):
+        top = -np.inf
+        for j in range(n_b):
+            s = 0.0
+            for c in range(k):
+                e = a[i, c] - b[j, c]
+                s += e * e
+            v = log_w[j] - 0.5 * s
+            lp[j] = v
+            if v > top:
+                top = v
+        if not np.isfinite(top):
+            lse[i] = top
+            continue
+        tot = 0.0
+        for j in range(n_b):
+            lp[j] = math.exp(lp[j] - top)
+            tot += lp[j]
+        lse[i] = top + math.log(tot)
+        target, acc = u[i] * tot, 0.0
+        for j in range(n_b):
+            acc += lp[j]
+            if acc >= target:
+                anc[i] = j
+                break
+        else:
+            anc[i] = n_b - 1
+    return lse, anc
+
+
+def gaussian_mixture_ancestors(
+    x: Array, means: Array, cov: Array, log_w: Array, u: Array, engine: str = "numba"
+) -> tuple[Array, NDArray[np.intp]]:
+    """``log sum_j exp(log_w_j) N(x_i; means_j, cov)`` ``(n,)`` and an index ``j`` per ``x_i`` drawn
+    ∝ ``exp(log_w_j) N(x_i; means_j, cov)`` by inverting the uniforms ``u (n,)``.
+
+    The O(n m) hot loop of the ancestor completion and of Eq. 78. ``engine="numba"`` runs it in
+    one compiled pass per point without an (n, m) array; ``"numpy"`` is the readable reference.
+    """
+    Linv, const = _whitener(np.asarray(cov, float))
+    a = np.ascontiguousarray(x @ Linv.T)
+    b = np.ascontiguousarray(means @ Linv.T)
+    lw = np.ascontiguousarray(np.broadcast_to(np.asarray(log_w, float), (len(b),)))
+    if engine == "numba":
+        lse, anc = _mixture_kernel(a, b, lw, np.ascontiguousarray(u, dtype=np.float64))
+        return lse + const, anc
+    d2 = np.sum((a[:, None, :] - b[None, :, :]) ** 2, axis=-1)
+    lp = lw[None, :] - 0.5 * d2
+    lse = logsumexp(lp, axis=1)
+    cdf = np.cumsum(np.exp(lp - lp.max(axis=1, keepdims=True)), axis=1)
+    anc = np.minimum((cdf < (u * cdf[:, -1])[:, None]).sum(axis=1), len(b) - 1)
+    return np.asarray(lse + const), np.asarray(anc, dtype=np.intp)
 
 
 def complete_from_ancestors(
@@ -84,12 +153,9 @@ def complete_from_ancestors(
     m = np.asarray(motion.mean(prev, dt))
     Q = np.asarray(motion.noise_cov(dt), float)
     Qpp = Q[np.ix_(pos, pos)]
-    lp = _gauss_logpdf(p[:, None, :] - m[None, :, pos], Qpp)  # (N_new, N_prev)
-    if log_ancestor_weight is not None:
-        lp = lp + log_ancestor_weight[None, :]
-    log_pred = logsumexp(lp, axis=1) - np.log(n)
-    g = rng.gumbel(size=lp.shape)
-    anc = np.argmax(lp + g, axis=1)  # categorical ∝ exp(lp) (Gumbel-max)
+    log_a = np.zeros(n) if log_ancestor_weight is None else log_ancestor_weight
+    lse, anc = gaussian_mixture_ancestors(p, m[:, pos], Qpp, log_a, rng.random(len(p)))
+    log_pred = lse - np.log(n)
     x = np.empty((len(p), d))
     x[:, pos] = p
     if rest:
@@ -263,8 +329,8 @@ class DiscretisationProposal:
         np.add.at(centre_prev, cell_of, prev)
         centre_prev /= counts[:, None]
         centre = np.asarray(motion.mean(centre_prev, dt))  # noise-free propagation (step 2)
-        lk = _gauss_logpdf(centre[:, None, pos] - centre[None, :, pos], Qpp)  # p(x_t,j | x_t-1,i)
-        log_pred = logsumexp(lk + np.log(w_prev)[None, :], axis=1)  # Eq. 78
+        cp = np.ascontiguousarray(centre[:, pos])  # p(x_t,j | x_t-1,i) = N(c_j; c_i, Q_pp)
+        log_pred, _ = gaussian_mixture_ancestors(cp, cp, Qpp, np.log(w_prev), np.zeros(c))  # Eq. 78
         ll = LogLikelihood(filt.sensors, zs)
         log_w = log_pred + (ll(centre) if ll else 0.0)  # Eq. 79
         if not np.any(np.isfinite(log_w)):
