@@ -16,11 +16,16 @@ with z_t terminated, c_t continuing, a_t new, d_t detected, u_t = c_t + a_t - d_
 tracks and f_t = n_t - d_t false alarms. Since f_t = n_t - d_t, log P is a constant plus a sum
 of independent per-track scores (:meth:`MCMCDA.track_score`), which the sampler caches.
 
-Moves: birth, death, split, merge, extension, reduction, track update and track switch, chosen
-uniformly. Difference from Oh et al.: the acceptance probability uses the posterior ratio only,
-without the proposal-probability ratio of each move pair. The chain is then not an exact sampler
-of P(ω | Y), but the output is the best hypothesis visited (the MAP estimate), which is what the
-tracker reports; the moves and the target density are those of the paper.
+Moves (Oh et al., Sec. IV): birth/death, split/merge, extension/reduction, track update and
+track switch, one of the eight chosen uniformly at every iteration. Growth (birth, extension,
+update) takes uniformly one gated free observation at a time and stops with probability
+``stop_prob`` once the track is long enough (or when nothing is left to take). Each move's
+proposal probability q(ω'|ω) and that of its reverse are computed exactly, and the move is
+accepted with min(1, P(ω'|Y) q(ω|ω') / (P(ω|Y) q(ω'|ω))): the chain samples P(ω | Y) (tested
+against the enumerated posterior of a tiny problem), and the tracker reports the best hypothesis
+visited (the MAP estimate), as Oh et al. do. The exact move probabilities are this module's
+reconstruction (spec 003 §2.6: the dissertation omits the algorithm); they differ from the
+paper's in details (e.g. a birth starts from a uniform free observation, not a uniform time).
 
 Online: a sliding window of ``window`` steps; each new step starts the chain from the previous
 best hypothesis (restricted to the window) and runs ``n_mc`` iterations; observations leaving the
@@ -40,6 +45,7 @@ from ..core.errors import ConfigError, invalid
 
 Obs = tuple[int, int]  # (time step, index of the observation at that step)
 TrackKey = tuple[Obs, ...]
+STOP: Obs = (-1, -1)  # end of a growth path (see MCMCDA._grow)
 
 
 @dataclass(frozen=True)
@@ -93,6 +99,7 @@ class MCMCDA:
     proposed: int = 0
     _next_id: int = 0
     _cache: dict[TrackKey, float] = field(default_factory=dict)
+    _gate_cache: dict[tuple[Obs, Obs], bool] = field(default_factory=dict)
 
     # ---- model -------------------------------------------------------------------------
     def _gate(self, a: Obs, b: Obs) -> bool:
@@ -154,100 +161,205 @@ class MCMCDA:
             return []
         return [(t, j) for j in range(len(self.observations[t])) if (t, j) not in used]
 
-    def _grow(
-        self, track: list[Obs], used: set[Obs], t_lo: int, t_hi: int, forward: bool = True
+    def _candidates(
+        self, end: Obs, used: set[Obs], t_lo: int, t_hi: int, forward: bool
     ) -> list[Obs]:
-        """Extend a track by random gated free observations until a random stop."""
+        """Free observations in ``[t_lo, t_hi]`` that can follow (precede) ``end`` within the gate."""
+        out = []
+        for gap in range(1, self.config.max_gap + 1):
+            t = end[0] + gap if forward else end[0] - gap
+            if t < t_lo or t > t_hi:
+                break
+            out += [o for o in self._free(used, t) if self._gated(end, o, forward)]
+        return out
+
+    def _gated(self, end: Obs, o: Obs, forward: bool) -> bool:
+        key = (end, o) if forward else (o, end)
+        hit = self._gate_cache.get(key)
+        if hit is None:
+            hit = self._gate_cache[key] = self._gate(*key)
+        return hit
+
+    def _grow(
+        self,
+        track: list[Obs],
+        used: set[Obs],
+        t_lo: int,
+        t_hi: int,
+        forward: bool,
+        min_len: int,
+        path: Sequence[Obs] | None = None,
+    ) -> tuple[list[Obs] | None, float]:
+        """Grow ``track`` by gated free observations; returns (track, log q) or (None, -inf).
+
+        The random growth: while the track is shorter than ``min_len`` it must take a candidate
+        (none: the move fails); from ``min_len`` on it stops when there is no candidate, else
+        with probability ``stop_prob``; each taken observation is uniform over the candidates.
+        With ``path`` given nothing is drawn: the log probability that the growth adds exactly
+        ``path`` (in growth order) and then stops is evaluated -- the reverse-move term of the
+        Metropolis-Hastings ratio.
+        """
+        gamma = self.config.stop_prob
+        track, used = list(track), set(used)
+        logq = 0.0
+        k = 0
         while True:
-            if len(track) >= 2 and self.rng.random() < self.config.stop_prob:
-                return track
-            end = track[-1] if forward else track[0]
-            cands = []
-            for gap in range(1, self.config.max_gap + 1):
-                t = end[0] + gap if forward else end[0] - gap
-                if t < t_lo or t > t_hi:
-                    break
-                for o in self._free(used, t):
-                    if self._gate(end, o) if forward else self._gate(o, end):
-                        cands.append(o)
-            if not cands:
-                return track
-            o = cands[int(self.rng.integers(len(cands)))]
+            want = None if path is None else (path[k] if k < len(path) else STOP)
+            cands = self._candidates(track[-1] if forward else track[0], used, t_lo, t_hi, forward)
+            if len(track) >= min_len:
+                if not cands:
+                    return (track, logq) if want in (None, STOP) else (None, -np.inf)
+                stop = self.rng.random() < gamma if want is None else want == STOP
+                if stop:
+                    return track, logq + np.log(gamma)
+                logq += np.log1p(-gamma)
+            elif not cands or want == STOP:
+                return None, -np.inf
+            if want is None:
+                o = cands[int(self.rng.integers(len(cands)))]
+            elif want in cands:
+                o = want
+            else:
+                return None, -np.inf
+            logq -= np.log(len(cands))
             used.add(o)
             if forward:
                 track.append(o)
             else:
                 track.insert(0, o)
+            k += 1
 
-    def _propose(self, tracks: list[TrackKey], t_lo: int, t_hi: int) -> list[TrackKey] | None:
+    def _window_free(self, used: set[Obs], t_lo: int, t_hi: int) -> list[Obs]:
+        return [o for t in range(t_lo, t_hi + 1) for o in self._free(used, t)]
+
+    def _mergeable(self, tracks: Sequence[TrackKey]) -> list[tuple[int, int]]:
+        return [
+            (i, j)
+            for i, a in enumerate(tracks)
+            for j, b in enumerate(tracks)
+            if i != j and self._gated(a[-1], b[0], True)
+        ]
+
+    def _switch_options(self, a: TrackKey, b: TrackKey) -> list[tuple[int, int]]:
+        return [
+            (p, q)
+            for p in range(len(a) - 1)
+            for q in range(len(b) - 1)
+            if self._gated(a[p], b[q + 1], True) and self._gated(b[q], a[p + 1], True)
+        ]
+
+    def _propose(
+        self, tracks: list[TrackKey], t_lo: int, t_hi: int
+    ) -> tuple[list[TrackKey], float] | None:
+        """One of the eight moves, chosen uniformly; returns (proposal, log q(back)/q(forth)).
+
+        Move pairs (each the other's reverse): birth/death, split/merge, extension/reduction,
+        track update and track switch (their own reverses). ``None`` when the move cannot be
+        made from ``tracks`` (the chain stays). ``t_hi`` is inclusive.
+        """
         rng = self.rng
         used = {o for tr in tracks for o in tr}
         move = int(rng.integers(8))
         k = len(tracks)
-        if move == 0 or k == 0:  # birth
-            free = [o for t in range(t_lo, t_hi) for o in self._free(used, t)]
+        if move == 0:  # birth: a free start, grown forward; reverse: death of that track
+            free = self._window_free(used, t_lo, t_hi)
             if not free:
                 return None
             start = free[int(rng.integers(len(free)))]
-            used.add(start)
-            new = self._grow([start], used, t_lo, t_hi)
-            return [*tracks, tuple(new)] if len(new) >= 2 else None
-        i = int(rng.integers(k))
-        tr = list(tracks[i])
-        rest = tracks[:i] + tracks[i + 1 :]
-        if move == 1:  # death
-            return rest
-        if move == 2:  # split
-            if len(tr) < 4:
+            new, logq = self._grow([start], used | {start}, t_lo, t_hi, True, 2)
+            if new is None:
                 return None
+            return [*tracks, tuple(new)], -np.log(k + 1) - (logq - np.log(len(free)))
+        if k == 0:
+            return None
+        i = int(rng.integers(k))
+        tr = tracks[i]
+        rest = tracks[:i] + tracks[i + 1 :]
+        if move == 1:  # death; reverse: birth of this track
+            rest_used = used - set(tr)
+            free = self._window_free(rest_used, t_lo, t_hi)
+            _, logq = self._grow([tr[0]], rest_used | {tr[0]}, t_lo, t_hi, True, 2, tr[1:])
+            return rest, (logq - np.log(len(free))) + np.log(k)
+        if move == 2:  # split at a uniform cut of a uniform long track; reverse: merge
+            long = [j for j, t in enumerate(tracks) if len(t) >= 4]
+            if not long:
+                return None
+            tr = tracks[long[int(rng.integers(len(long)))]]
             cut = int(rng.integers(2, len(tr) - 1))
-            return [*rest, tuple(tr[:cut]), tuple(tr[cut:])]
-        if move == 3:  # merge
-            pairs = [
-                j
-                for j, other in enumerate(tracks)
-                if j != i and self._gate(tracks[i][-1], other[0])
-            ]
+            out = [t for t in tracks if t is not tr] + [tr[:cut], tr[cut:]]
+            back = -np.log(len(self._mergeable(out)))
+            return out, back + np.log(len(long)) + np.log(len(tr) - 3)
+        if move == 3:  # merge a uniform gated pair; reverse: split
+            pairs = self._mergeable(tracks)
             if not pairs:
                 return None
-            j = pairs[int(rng.integers(len(pairs)))]
-            merged = tuple(tracks[i]) + tuple(tracks[j])
-            return [t for n, t in enumerate(tracks) if n not in (i, j)] + [merged]
-        if move == 4:  # extension (forward or backward)
-            forward = bool(rng.random() < 0.5)
-            grown = self._grow(tr, used, t_lo, t_hi, forward)
-            return [*rest, tuple(grown)] if len(grown) > len(tracks[i]) else None
-        if move == 5:  # reduction
+            a, b = pairs[int(rng.integers(len(pairs)))]
+            merged = tracks[a] + tracks[b]
+            out = [t for n, t in enumerate(tracks) if n not in (a, b)] + [merged]
+            n_long = sum(len(t) >= 4 for t in out)
+            return out, -np.log(n_long) - np.log(len(merged) - 3) + np.log(len(pairs))
+        forward = bool(rng.random() < 0.5)
+        if move == 4:  # extension by >= 1 observation; reverse: reduction of as many
+            grown, logq = self._grow(list(tr), used, t_lo, t_hi, forward, len(tr) + 1)
+            if grown is None:
+                return None
+            return [*rest, tuple(grown)], -np.log(len(grown) - 2) - logq
+        if move == 5:  # reduction by r ~ U{1..len-2} at one end; reverse: extension
             if len(tr) < 3:
                 return None
-            keep = int(rng.integers(2, len(tr)))
-            return [*rest, tuple(tr[:keep])]
-        if move == 6:  # track update: keep a prefix, re-grow the rest
-            keep = int(rng.integers(1, len(tr)))
-            for o in tr[keep:]:
-                used.discard(o)
-            grown = self._grow(tr[:keep], used, t_lo, t_hi)
-            return [*rest, tuple(grown)] if len(grown) >= 2 else None
-        # move == 7: track switch
+            r = int(rng.integers(1, len(tr) - 1))
+            kept = tr[:-r] if forward else tr[r:]
+            removed = tr[-r:] if forward else tr[:r][::-1]
+            rest_used = used - set(removed)
+            _, logq = self._grow(list(kept), rest_used, t_lo, t_hi, forward, len(kept) + 1, removed)
+            return [*rest, kept], logq + np.log(len(tr) - 2)
+        if (
+            move == 6
+        ):  # track update: keep r ~ U{1..len-1}, regrow; reverse: the same with the old tail
+            r = int(rng.integers(1, len(tr)))
+            base_used = used - set(tr[r:])
+            grown, logq = self._grow(list(tr[:r]), base_used, t_lo, t_hi, True, 2)
+            if grown is None or len(grown) <= r:
+                return None
+            _, back = self._grow(list(tr[:r]), base_used, t_lo, t_hi, True, 2, tr[r:])
+            return [*rest, tuple(grown)], (back - np.log(len(grown) - 1)) - (
+                logq - np.log(len(tr) - 1)
+            )
+        # move == 7: track switch of a uniform pair at a uniform crossing point
         if k < 2:
             return None
         j = int(rng.integers(k - 1))
         j = j + 1 if j >= i else j
-        a, b = list(tracks[i]), list(tracks[j])
-        options = [
-            (p, q)
-            for p in range(len(a) - 1)
-            for q in range(len(b) - 1)
-            if self._gate(a[p], b[q + 1]) and self._gate(b[q], a[p + 1])
-        ]
+        a, b = tracks[i], tracks[j]
+        options = self._switch_options(a, b)
         if not options:
             return None
         p, q = options[int(rng.integers(len(options)))]
-        na, nb = tuple(a[: p + 1] + b[q + 1 :]), tuple(b[: q + 1] + a[p + 1 :])
-        return [t for n, t in enumerate(tracks) if n not in (i, j)] + [na, nb]
+        na, nb = a[: p + 1] + b[q + 1 :], b[: q + 1] + a[p + 1 :]
+        out = [t for n, t in enumerate(tracks) if n not in (i, j)] + [na, nb]
+        return out, np.log(len(options)) - np.log(len(self._switch_options(na, nb)))
 
     def _total(self, tracks: Sequence[TrackKey], t_end: int) -> float:
         return sum(self.track_score(t, t_end) for t in tracks)
+
+    def mh_step(
+        self, tracks: list[TrackKey], score: float, t_lo: int, t_hi: int
+    ) -> tuple[list[TrackKey], float]:
+        """One Metropolis-Hastings transition on the hypotheses of steps ``t_lo..t_hi`` (inclusive).
+
+        Accepts with ``min(1, P(ω'|Y) q(ω|ω') / (P(ω|Y) q(ω'|ω)))`` (Oh et al. 2009, Alg. 1),
+        so the chain's stationary law is ``P(ω | Y)``; ``score`` is ``log P(ω | Y)`` up to a constant.
+        """
+        self.proposed += 1
+        move = self._propose(tracks, t_lo, t_hi)
+        if move is None:
+            return tracks, score
+        proposal, log_ratio = move
+        new = self._total(proposal, t_hi)
+        if np.log(self.rng.random() + 1e-300) < new - score + log_ratio:
+            self.accepted += 1
+            return proposal, new
+        return tracks, score
 
     # ---- online loop -------------------------------------------------------------------
     def step(self, observations: ArrayLike) -> None:
@@ -269,20 +381,14 @@ class MCMCDA:
         current_score = self._total(current, t_hi)
         best, best_score = list(current), current_score
         for _ in range(self.config.n_mc):
-            proposal = self._propose(current, t_lo, t_hi + 1)
-            self.proposed += 1
-            if proposal is None:
-                continue
-            score = self._total(proposal, t_hi)
-            if np.log(self.rng.random() + 1e-300) < score - current_score:
-                current, current_score = proposal, score
-                self.accepted += 1
-                if score > best_score:
-                    best, best_score = list(proposal), score
+            current, current_score = self.mh_step(current, current_score, t_lo, t_hi)
+            if current_score > best_score:
+                best, best_score = list(current), current_score
         self._assign_ids(best)
         self.best = best
         if len(self._cache) > 200_000:
             self._cache.clear()
+            self._gate_cache.clear()
 
     def _assign_ids(self, new: list[TrackKey]) -> None:
         old = [(set(t), self.ids[t]) for t in self.best if t in self.ids]
