@@ -293,9 +293,9 @@ class MCMCDA:
             pairs = self._mergeable(tracks)
             if not pairs:
                 return None
-            a, b = pairs[int(rng.integers(len(pairs)))]
-            merged = tracks[a] + tracks[b]
-            out = [t for n, t in enumerate(tracks) if n not in (a, b)] + [merged]
+            ia, ib = pairs[int(rng.integers(len(pairs)))]
+            merged = tracks[ia] + tracks[ib]
+            out = [t for n, t in enumerate(tracks) if n not in (ia, ib)] + [merged]
             n_long = sum(len(t) >= 4 for t in out)
             return out, -np.log(n_long) - np.log(len(merged) - 3) + np.log(len(pairs))
         forward = bool(rng.random() < 0.5)
