@@ -1,1 +1,29 @@
-"""fusetrack.service (see DESIGN.md)."""
+"""fusetrack.service: the live fusion node (``fusetrack serve``, ``replay``, ``demo --live``).
+
+Sensor nodes send authenticated, versioned messages (:mod:`.schema`, :mod:`.auth`) over UDP,
+HTTP or WebSocket; the node buffers and aligns them to its fusion ticks (:mod:`.alignment`),
+runs the configured filter (:mod:`.engine`), logs everything durably (:mod:`.log`) and publishes
+tracks over REST/WebSocket with a dashboard (:mod:`.app`). :mod:`.replay` plays a simulated
+scenario or a recording into a running node. See DESIGN.md and the README's service section.
+"""
+
+from .alignment import Aligner as Aligner
+from .alignment import Reading as Reading
+from .alignment import SensorBuffer as SensorBuffer
+from .auth import SequenceWindow as SequenceWindow
+from .auth import bearer_token as bearer_token
+from .auth import open_frame as open_frame
+from .auth import seal as seal
+from .config import NetworkConfig as NetworkConfig
+from .config import load_config as load_config
+from .config import parse_config as parse_config
+from .engine import FusionEngine as FusionEngine
+from .log import DurableLog as DurableLog
+from .log import replay_log as replay_log
+from .node import FusionNode as FusionNode
+from .schema import MessageBatch as MessageBatch
+from .schema import SensorMessage as SensorMessage
+from .schema import TrackState as TrackState
+from .schema import decode_messages as decode_messages
+from .schema import encode_message as encode_message
+from .schema import message_json_schema as message_json_schema

@@ -1,0 +1,236 @@
+"""The node's web application (FastAPI on Starlette): ingest, tracks, status and the dashboard.
+
+Reading (no key needed; the dashboard uses only these):
+
+* ``GET /`` the dashboard, ``GET /static/dashboard.js`` its script (served here: no CDN);
+* ``GET /tracks`` the latest track state and its recent trail; ``GET /sensors`` each sensor's
+  geometry, last reading and its age; ``GET /health``; ``GET /metrics`` (Prometheus text);
+* ``GET /schema`` the JSON Schema of sensor messages (``/openapi.json`` has it too);
+* ``WS /ws/tracks`` one JSON text frame per fusion tick (``{"type": "tick", "track": ...}``).
+
+Writing (``Authorization: Bearer <node token>``; see :func:`.auth.bearer_token`):
+
+* ``POST /ingest`` a message or a batch, ``application/json`` or ``application/msgpack``;
+  answers each message's outcome. 401 without a valid token, 413 when too large, 400 when
+  nothing parses, 503 (``Retry-After``) when the node is overloaded;
+* ``WS /ws/ingest`` the same per frame (text: JSON, binary: MessagePack).
+
+The lifespan runs the tick loop and, when given a socket, the UDP listener (:mod:`.udp`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import socket
+from collections.abc import AsyncIterator
+from importlib import resources
+from typing import Any
+
+from fastapi import FastAPI, Request, WebSocket, WebSocketDisconnect
+from fastapi.responses import HTMLResponse, JSONResponse, Response
+from pydantic.json_schema import models_json_schema
+
+from .node import FusionNode, Outcome
+from .schema import MessageBatch, SensorMessage, TrackState, message_json_schema
+from .udp import start_udp
+
+_STATIC = resources.files(__package__) / "static"
+_MSGPACK_TYPES = ("application/msgpack", "application/x-msgpack", "application/vnd.msgpack")
+
+
+def _encoding_of(content_type: str | None) -> str:
+    ct = (content_type or "application/json").split(";")[0].strip().lower()
+    return "msgpack" if ct in _MSGPACK_TYPES else "json"
+
+
+def _status(outcomes: list[Outcome]) -> int:
+    reasons = {o.reason for o in outcomes if not o.accepted}
+    if "overload" in reasons:
+        return 503
+    if "oversized" in reasons:
+        return 413
+    if len(outcomes) == 1 and reasons & {"malformed", "schema"}:
+        return 400
+    return 200
+
+
+def _summary(outcomes: list[Outcome]) -> dict[str, Any]:
+    n = sum(o.accepted for o in outcomes)
+    return {
+        "accepted": n,
+        "rejected": len(outcomes) - n,
+        "results": [o.as_dict() for o in outcomes],
+    }
+
+
+async def _read_limited(request: Request, limit: int) -> bytes | None:
+    """The body, or None when it is longer than ``limit`` bytes (never reads much past it)."""
+    length = request.headers.get("content-length")
+    if length is not None and length.isdigit() and int(length) > limit:
+        return None
+    chunks, size = [], 0
+    async for chunk in request.stream():
+        size += len(chunk)
+        if size > limit:
+            return None
+        chunks.append(chunk)
+    return b"".join(chunks)
+
+
+def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> FastAPI:
+    """The ASGI application of ``node`` (and its UDP listener on ``udp_socket``, if given)."""
+    period = node.cfg.fusion.period
+    poll = min(0.05, period / 4)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        async def ticker() -> None:
+            while True:
+                node.advance()
+                await asyncio.sleep(poll)
+
+        task = asyncio.create_task(ticker())
+        transport = await start_udp(node, udp_socket) if udp_socket is not None else None
+        try:
+            yield
+        finally:
+            task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+            if transport is not None:
+                transport.close()
+            node.commit()
+
+    app = FastAPI(
+        title="fusetrack fusion node",
+        version="1",
+        summary="Sensor nodes stream readings; the node fuses them and publishes tracks.",
+        lifespan=lifespan,
+    )
+    app.state.node = node
+    limit = node.cfg.limits.max_message_bytes
+
+    @app.get("/", response_class=HTMLResponse, include_in_schema=False)
+    async def dashboard() -> HTMLResponse:
+        return HTMLResponse((_STATIC / "dashboard.html").read_text())
+
+    @app.get("/static/dashboard.js", include_in_schema=False)
+    async def dashboard_script() -> Response:
+        return Response((_STATIC / "dashboard.js").read_text(), media_type="text/javascript")
+
+    @app.get("/tracks", summary="the latest track state and its recent trail")
+    async def tracks(history: int = 200) -> dict[str, Any]:
+        return node.tracks_view(max(0, min(history, node.cfg.limits.history)))
+
+    @app.get("/sensors", summary="each sensor's geometry, last reading and its age")
+    async def sensors() -> dict[str, Any]:
+        return {"area": node.cfg.area, "sensors": node.sensors_view()}
+
+    @app.get("/health", summary="status, clock, counts of accepted and refused messages")
+    async def health() -> dict[str, Any]:
+        return node.health()
+
+    @app.get("/metrics", summary="Prometheus text format")
+    async def metrics() -> Response:
+        return Response(node.metrics_text(), media_type="text/plain; version=0.0.4")
+
+    @app.get("/schema", summary="JSON Schema of what a sensor node may send")
+    async def schema() -> dict[str, Any]:
+        return message_json_schema()
+
+    body_schema = {
+        "oneOf": [
+            {"$ref": "#/components/schemas/SensorMessage"},
+            {"$ref": "#/components/schemas/MessageBatch"},
+        ]
+    }
+
+    @app.post(
+        "/ingest",
+        summary="send readings (bearer token of the sending node)",
+        openapi_extra={
+            "requestBody": {
+                "required": True,
+                "content": {
+                    "application/json": {"schema": body_schema},
+                    "application/msgpack": {"schema": body_schema},
+                },
+            }
+        },
+    )
+    async def ingest(request: Request) -> JSONResponse:
+        who = node.authorize(request.headers.get("authorization"))
+        if who is None:
+            node.reject("unauthorized", "missing or unknown bearer token")
+            return JSONResponse(
+                {"error": "unauthorized: a node's bearer token is needed"},
+                401,
+                {"WWW-Authenticate": "Bearer"},
+            )
+        body = await _read_limited(request, limit)
+        if body is None:
+            node.reject("oversized", f"body over {limit} bytes")
+            return JSONResponse({"error": f"body over {limit} bytes"}, 413)
+        outcomes = node.ingest_payload(body, _encoding_of(request.headers.get("content-type")), who)
+        node.commit()
+        status = _status(outcomes)
+        headers = {"Retry-After": "1"} if status == 503 else None
+        return JSONResponse(_summary(outcomes), status, headers)
+
+    @app.websocket("/ws/tracks")
+    async def ws_tracks(ws: WebSocket) -> None:
+        await ws.accept()
+        q = node.subscribe()
+        try:
+            hello = {"type": "hello", **node.tracks_view(), "area": node.cfg.area}
+            await ws.send_json(hello)
+            while True:
+                await ws.send_text(await q.get())
+        except (WebSocketDisconnect, RuntimeError):
+            pass
+        finally:
+            node.unsubscribe(q)
+
+    @app.websocket("/ws/ingest")
+    async def ws_ingest(ws: WebSocket) -> None:
+        who = node.authorize(ws.headers.get("authorization"))
+        if who is None:
+            node.reject("unauthorized", "missing or unknown bearer token (WebSocket)")
+            await ws.close(code=1008, reason="unauthorized")
+            return
+        await ws.accept()
+        try:
+            while True:
+                msg = await ws.receive()
+                if msg["type"] == "websocket.disconnect":
+                    break
+                if msg.get("bytes") is not None:
+                    payload, encoding = msg["bytes"], "msgpack"
+                else:
+                    payload, encoding = (msg.get("text") or "").encode(), "json"
+                outcomes = node.ingest_payload(payload, encoding, who)
+                node.commit()
+                await ws.send_json(_summary(outcomes))
+        except WebSocketDisconnect:
+            pass
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            from fastapi.openapi.utils import get_openapi
+
+            doc = get_openapi(title=app.title, version=app.version, routes=app.routes)
+            _, defs = models_json_schema(
+                [
+                    (SensorMessage, "validation"),
+                    (MessageBatch, "validation"),
+                    (TrackState, "serialization"),
+                ],
+                ref_template="#/components/schemas/{model}",
+            )
+            doc.setdefault("components", {}).setdefault("schemas", {}).update(defs["$defs"])
+            app.openapi_schema = doc
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+    return app

@@ -1,0 +1,309 @@
+"""The network config of a fusion node (``fusetrack serve --config network.yaml``).
+
+One YAML file says where the sensors are and what they measure, which node owns which sensors
+and with which key, how the node fuses (rate, alignment, clock, tracker) and its limits. Angles
+may be given in radians (``sigma``, ``heading``, ``fov``) or degrees (``sigma_deg``, ...);
+they are converted once here. See ``examples/network.yaml`` for a commented example.
+
+:func:`load_config` raises :class:`~fusetrack.core.ConfigError` naming the field, the value
+and what would be valid.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from ..core.beliefs import Gaussian
+from ..core.errors import ConfigError, invalid
+from ..motion import ConstantVelocity, CoordinatedTurnRate
+from ..sensors import AzimuthPolar, Bearing, PositionFix, Range, RangeBearing
+from .auth import MIN_KEY_BYTES, bearer_token
+from .schema import _NAME
+
+FUSED_KINDS: tuple[str, ...] = ("bearing", "doa", "range", "range_bearing", "position_fix")
+"""Reading kinds the configured trackers fuse (the schema has more; those are rejected as
+``unfusable`` by this node until a tracker that uses them is configured)."""
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+def _degrees(data: Any, names: tuple[str, ...]) -> Any:
+    """Replace ``NAME_deg`` entries by ``NAME`` in radians (unit conversion at the edge)."""
+    if not isinstance(data, dict):
+        return data
+    out = dict(data)
+    for name in names:
+        key = f"{name}_deg"
+        if key in out:
+            if name in out:
+                raise ValueError(f"give {name} (rad) or {key}, not both")
+            value = out.pop(key)
+            out[name] = math.radians(value) if isinstance(value, int | float) else value
+    return out
+
+
+class SensorConfig(_Section):
+    """One sensor: its id, kind, geometry and noise (SI units, radians)."""
+
+    id: str = Field(pattern=_NAME)
+    kind: Literal["bearing", "doa", "range", "range_bearing", "position_fix"]
+    position: list[float] | None = Field(default=None, min_length=2, max_length=3)
+    heading: float = 0.0
+    fov: float = Field(default=2 * math.pi, gt=0.0, le=2 * math.pi)
+    max_range: float = Field(default=math.inf, gt=0.0, allow_inf_nan=True)
+    sigma: float | None = Field(default=None, gt=0.0, description="bearing / range noise std")
+    sigma_range: float | None = Field(default=None, gt=0.0)
+    sigma_bearing: float | None = Field(default=None, gt=0.0)
+    sigma_azimuth: float | None = Field(default=None, gt=0.0)
+    sigma_polar: float | None = Field(default=None, gt=0.0)
+    cov: list[list[float]] | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _angles_in_degrees(cls, data: Any) -> Any:
+        names = ("heading", "fov", "sigma", "sigma_bearing", "sigma_azimuth", "sigma_polar")
+        return _degrees(data, names)
+
+    @model_validator(mode="after")
+    def _needs(self) -> SensorConfig:
+        need = {
+            "bearing": ("position", "sigma"),
+            "doa": ("position", "sigma_azimuth", "sigma_polar"),
+            "range": ("position", "sigma"),
+            "range_bearing": ("position", "sigma_range", "sigma_bearing"),
+            "position_fix": ("cov",),
+        }[self.kind]
+        missing = [n for n in need if getattr(self, n) is None]
+        if missing:
+            raise ValueError(f"a {self.kind} sensor needs {', '.join(missing)}")
+        return self
+
+    def model(self) -> Any:
+        """The fusetrack sensor model this entry describes."""
+        s: Any = self  # the validator above guarantees the fields this kind needs
+        geometry: dict[str, Any] = {
+            "heading": s.heading,
+            "fov": s.fov,
+            "max_range": s.max_range,
+        }
+        match s.kind:
+            case "bearing":
+                return Bearing(s.id, position=s.position, sigma=s.sigma, **geometry)
+            case "doa":
+                return AzimuthPolar(
+                    s.id,
+                    position=s.position,
+                    sigma_azimuth=s.sigma_azimuth,
+                    sigma_polar=s.sigma_polar,
+                    **geometry,
+                )
+            case "range":
+                return Range(s.id, position=s.position, sigma=s.sigma, **geometry)
+            case "range_bearing":
+                return RangeBearing(
+                    s.id,
+                    position=s.position,
+                    sigma_range=s.sigma_range,
+                    sigma_bearing=s.sigma_bearing,
+                    **geometry,
+                )
+            case _:
+                return PositionFix(s.id, cov=np.array(s.cov), position=s.position)
+
+
+class NodeConfig(_Section):
+    """A sensor node: its id, its key (inline, or the name of an environment variable holding
+    it) and the sensors it may report for."""
+
+    id: str = Field(pattern=_NAME)
+    key: str | None = None
+    key_env: str | None = None
+    sensors: list[str] = Field(min_length=1)
+
+    def secret(self) -> bytes:
+        """The node's key as bytes (at least 16)."""
+        if (self.key is None) == (self.key_env is None):
+            raise ConfigError(invalid(f"nodes[{self.id}].key", self.key, "key or key_env, one"))
+        raw = self.key if self.key is not None else os.environ.get(str(self.key_env))
+        if raw is None:
+            raise ConfigError(
+                invalid(f"nodes[{self.id}].key_env", self.key_env, "a set environment variable")
+            )
+        key = raw.encode()
+        if len(key) < MIN_KEY_BYTES:
+            raise ConfigError(
+                invalid(f"nodes[{self.id}].key", "<hidden>", f"at least {MIN_KEY_BYTES} bytes")
+            )
+        return key
+
+
+class MotionConfig(_Section):
+    model: Literal["constant_velocity", "coordinated_turn_rate"] = "constant_velocity"
+    q: float = Field(default=1.0, gt=0.0)
+    q_omega: float = Field(default=0.01, gt=0.0)
+    ndim: Literal[2, 3] = 2
+
+    def build(self) -> Any:
+        if self.model == "coordinated_turn_rate":
+            return CoordinatedTurnRate(q=self.q, q_omega=self.q_omega)
+        return ConstantVelocity(ndim=self.ndim, q=self.q)
+
+
+class TrackerConfig(_Section):
+    """Which filter fuses the readings, with which motion model and prior."""
+
+    filter: Literal["ekf", "ukf", "pf"] = "ekf"
+    particles: int = Field(default=1000, ge=10, le=1_000_000)
+    seed: int = Field(default=0, ge=0)
+    motion: MotionConfig = MotionConfig()
+    prior_mean: list[float]
+    prior_std: list[float]
+
+    @model_validator(mode="after")
+    def _prior(self) -> TrackerConfig:
+        if len(self.prior_mean) != len(self.prior_std) or any(s <= 0 for s in self.prior_std):
+            raise ValueError("prior_mean and prior_std need the same length and std > 0")
+        return self
+
+    def prior(self) -> Gaussian:
+        return Gaussian(np.array(self.prior_mean), np.diag(np.square(self.prior_std)))
+
+
+class FusionConfig(_Section):
+    """When and how readings are fused.
+
+    ``rate_hz``: fusion ticks per second. ``alignment``: ``all`` fuses every reading in time
+    order (each at its own time, then predicts to the tick); ``closest`` fuses, per sensor, the
+    one reading closest to the tick time (within half a period each side), as if taken at the
+    tick. ``clock``: ``wall`` ticks on the node's clock (readings stamped in Unix seconds);
+    ``data`` ticks as the readings' own times advance (replays at any speed, simulations).
+    ``lag``: seconds the fusion waits behind the clock for late readings. ``start``: the time of
+    the prior and of tick 0 (``data`` clock; the ``wall`` clock starts at the node's start).
+    ``idle_flush``: with the ``data`` clock, the last ``lag`` seconds of a stream are fused once
+    no reading has come for this many wall seconds (the end of a replay).
+    """
+
+    rate_hz: float = Field(default=4.0, gt=0.0, le=1000.0)
+    alignment: Literal["all", "closest"] = "all"
+    clock: Literal["wall", "data"] = "wall"
+    lag: float = Field(default=0.5, ge=0.0, le=3600.0)
+    start: float = 0.0
+    max_future: float = Field(default=10.0, gt=0.0, description="s ahead of the clock allowed")
+    silent_after: float = Field(default=5.0, gt=0.0, description="s without readings: silent")
+    idle_flush: float | None = Field(
+        default=2.0,
+        gt=0.0,
+        description="data clock: after this many wall seconds without a "
+        "reading, fuse up to the latest reading without waiting for the lag (None: never)",
+    )
+
+    @property
+    def period(self) -> float:
+        return 1.0 / self.rate_hz
+
+
+class LimitsConfig(_Section):
+    max_message_bytes: int = Field(default=65536, ge=256, le=16 * 2**20)
+    buffer_size: int = Field(default=256, ge=1, le=1_000_000)
+    max_pending: int = Field(default=100_000, ge=1)
+    history: int = Field(default=600, ge=1, le=1_000_000)
+
+
+class NetworkConfig(_Section):
+    """The whole node: sensors, nodes and their keys, fusion, tracker, limits, durable log."""
+
+    version: Literal[1] = 1
+    area: list[float] = Field(default=[0.0, 100.0, 0.0, 100.0], min_length=4, max_length=4)
+    sensors: list[SensorConfig] = Field(min_length=1)
+    nodes: list[NodeConfig] = Field(min_length=1)
+    fusion: FusionConfig = FusionConfig()
+    tracker: TrackerConfig
+    limits: LimitsConfig = LimitsConfig()
+    log: str | None = Field(default=None, description="SQLite file of the durable log")
+
+    @model_validator(mode="after")
+    def _consistent(self) -> NetworkConfig:
+        ids = [s.id for s in self.sensors]
+        if len(set(ids)) != len(ids):
+            raise ValueError(f"sensor ids must be unique, got {ids}")
+        nodes = [n.id for n in self.nodes]
+        if len(set(nodes)) != len(nodes):
+            raise ValueError(f"node ids must be unique, got {nodes}")
+        owners: dict[str, str] = {}
+        for n in self.nodes:
+            for s in n.sensors:
+                if s not in ids:
+                    raise ValueError(f"node {n.id!r} names sensor {s!r}, not one of {ids}")
+                if s in owners:
+                    raise ValueError(f"sensor {s!r} belongs to nodes {owners[s]!r} and {n.id!r}")
+                owners[s] = n.id
+        return self
+
+    # -- what the node is built from ---------------------------------------------------------
+    def sensor_models(self) -> dict[str, Any]:
+        return {s.id: s.model() for s in self.sensors}
+
+    def sensor(self, sensor_id: str) -> SensorConfig:
+        return next(s for s in self.sensors if s.id == sensor_id)
+
+    def keys(self) -> dict[str, bytes]:
+        return {n.id: n.secret() for n in self.nodes}
+
+    def tokens(self) -> dict[str, str]:
+        return {node: bearer_token(key) for node, key in self.keys().items()}
+
+    def owner(self) -> dict[str, str]:
+        """sensor id -> the node allowed to report it."""
+        return {s: n.id for n in self.nodes for s in n.sensors}
+
+
+def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConfig:
+    """Validate a config mapping; :class:`ConfigError` names the first bad field."""
+    try:
+        cfg = NetworkConfig.model_validate(data)
+    except ValidationError as err:
+        first = err.errors()[0]
+        where = ".".join(str(p) for p in first["loc"]) or "config"
+        shown = first.get("input")
+        raise ConfigError(f"{source}: " + invalid(where, shown, first["msg"])) from None
+    cfg.keys()  # keys are checked now, not at the first message
+    try:
+        models = cfg.sensor_models()
+    except ConfigError as err:
+        raise ConfigError(f"{source}: {err}") from None
+    dim = len(cfg.tracker.prior_mean)
+    expect = cfg.tracker.motion.build().dim
+    if dim != expect:
+        raise ConfigError(
+            f"{source}: "
+            + invalid("tracker.prior_mean", cfg.tracker.prior_mean, f"{expect} entries")
+        )
+    del models
+    return cfg
+
+
+def load_config(path: str | Path) -> NetworkConfig:
+    """Read and validate a network YAML file."""
+    p = Path(path)
+    try:
+        data = yaml.safe_load(p.read_text())
+    except OSError as err:
+        raise ConfigError(invalid("config", str(p), f"a readable YAML file ({err})")) from None
+    except yaml.YAMLError as err:
+        raise ConfigError(invalid("config", str(p), f"valid YAML ({err})")) from None
+    if not isinstance(data, dict):
+        raise ConfigError(invalid("config", str(p), "a YAML mapping"))
+    cfg = parse_config(data, str(p))
+    if cfg.log is not None and not Path(cfg.log).is_absolute():
+        cfg = cfg.model_copy(update={"log": str(p.parent / cfg.log)})
+    return cfg

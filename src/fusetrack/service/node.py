@@ -1,0 +1,440 @@
+"""The fusion node's state and rules, without any networking (the app and UDP listener call it).
+
+What happens to a message (:meth:`FusionNode.ingest_frame` for UDP, :meth:`ingest_payload` for
+HTTP/WebSocket after the bearer token named the node):
+
+1. authenticated (UDP: the frame's HMAC, :mod:`.auth`), size-checked, parsed and validated
+   against the schema (:mod:`.schema`);
+2. checked against the network: the message's node is the authenticated one, its sequence
+   number is new (replays refused), the sensor exists, belongs to that node, is of the kind
+   the message says, the value has the sensor's size, the time is not beyond the clock by more
+   than ``max_future`` and not before what was already fused (late);
+3. if accepted: appended to the durable log, put in its sensor's ring buffer, counted.
+
+Every refusal has a reason and is counted (``/metrics``, ``/health``, the dashboard); nothing a
+sender does raises out of the node. :meth:`advance` fires the ticks that are due, runs the
+engine, logs and publishes each :class:`~.schema.TrackState`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import time
+from collections import Counter, deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from prometheus_client import CollectorRegistry, Gauge, Histogram, generate_latest
+from prometheus_client import Counter as PromCounter
+
+from .alignment import Aligner
+from .auth import Rejected, SequenceWindow, node_of_token, open_frame
+from .config import FUSED_KINDS, NetworkConfig
+from .engine import FusionEngine
+from .log import DurableLog, reading_of, replay_log
+from .schema import SchemaRejection, SensorMessage, TrackState, decode_messages
+
+MAX_TICKS_PER_ADVANCE = 1000  # a long catch-up is done in slices, the loop stays responsive
+
+REJECTION_REASONS: tuple[str, ...] = (
+    "oversized",
+    "bad_frame",
+    "unknown_node",
+    "bad_mac",
+    "unauthorized",
+    "malformed",
+    "schema",
+    "node_mismatch",
+    "replay",
+    "unknown_sensor",
+    "forbidden_sensor",
+    "unfusable",
+    "wrong_kind",
+    "wrong_size",
+    "bad_covariance",
+    "future",
+    "late",
+    "overload",
+)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What became of one message: accepted, or refused with a reason."""
+
+    accepted: bool
+    reason: str = ""
+    detail: str = ""
+    seq: int | None = None
+
+    def as_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {"accepted": self.accepted}
+        if self.seq is not None:
+            d["seq"] = self.seq
+        if not self.accepted:
+            d["reason"], d["detail"] = self.reason, self.detail
+        return d
+
+
+class _Metrics:
+    """The node's Prometheus metrics (its own registry: several nodes may share a process)."""
+
+    def __init__(self, sensors: list[str]) -> None:
+        self.registry = CollectorRegistry()
+        r = self.registry
+        self.accepted = PromCounter(
+            "fusetrack_messages_accepted", "accepted readings", ["sensor"], registry=r
+        )
+        self.rejected = PromCounter(
+            "fusetrack_messages_rejected", "refused messages", ["reason"], registry=r
+        )
+        for reason in REJECTION_REASONS:
+            self.rejected.labels(reason)
+        self.ticks = PromCounter("fusetrack_ticks", "fusion ticks published", registry=r)
+        self.tick_seconds = Histogram(
+            "fusetrack_tick_seconds",
+            "compute time of one fusion tick",
+            buckets=(0.0005, 0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.25, 1.0),
+            registry=r,
+        )
+        self.tick_delay = Histogram(
+            "fusetrack_tick_delay_seconds",
+            "wall time from a tick falling due to its publication (wall clock only)",
+            buckets=(0.001, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 5.0),
+            registry=r,
+        )
+        self.buffered = Gauge("fusetrack_buffered_readings", "unfused readings", registry=r)
+        self.age = Gauge(
+            "fusetrack_sensor_age_seconds",
+            "wall seconds since a sensor's last reading",
+            ["sensor"],
+            registry=r,
+        )
+        self.subscribers = Gauge("fusetrack_ws_subscribers", "WebSocket readers", registry=r)
+        for s in sensors:
+            self.accepted.labels(s)
+
+
+class FusionNode:
+    """A fusion node (see the module docstring). Not thread-safe: call it from one event loop."""
+
+    def __init__(
+        self,
+        cfg: NetworkConfig,
+        *,
+        wall: Callable[[], float] = time.time,
+        log: DurableLog | None = None,
+    ) -> None:
+        self.cfg = cfg
+        self.wall = wall
+        self.keys = cfg.keys()
+        self.tokens = cfg.tokens()
+        self.owner = cfg.owner()
+        self.models = cfg.sensor_models()
+        self.kinds = {s.id: s.kind for s in cfg.sensors}
+        self.windows = {n: SequenceWindow() for n in self.keys}
+        self.started = wall()
+        fusion = cfg.fusion
+        start = fusion.start
+        if fusion.clock == "wall":
+            start = math.floor(self.started * fusion.rate_hz) / fusion.rate_hz
+        if log is not None:
+            logged = log.meta("start")
+            if logged is None:
+                log.set_meta("start", repr(start))
+            else:
+                start = float(logged)
+        self.log = log
+        self.aligner = Aligner(
+            [s.id for s in cfg.sensors],
+            fusion.rate_hz,
+            start,
+            fusion.alignment,
+            fusion.lag,
+            cfg.limits.buffer_size,
+        )
+        self.engine = FusionEngine(cfg, start)
+        self.next_id = log.next_id() if log is not None else 1
+        self.watermark = -math.inf  # latest accepted reading time (data clock)
+        self.accepted: Counter[str] = Counter()
+        self.rejected: Counter[str] = Counter()
+        self.last: dict[str, dict[str, Any]] = {}
+        self.history: deque[TrackState] = deque(maxlen=cfg.limits.history)
+        self.recent_accepts: deque[float] = deque(maxlen=100_000)
+        self.subscribers: set[asyncio.Queue[str]] = set()
+        self.metrics = _Metrics(list(self.models))
+        self.resumed_ticks = 0
+        if log is not None:
+            self.resume(log)
+
+    # -- clock -------------------------------------------------------------------------------
+    def clock(self) -> float:
+        """The fusion clock: Unix time (``wall``) or the latest reading's time (``data``)."""
+        return self.wall() if self.cfg.fusion.clock == "wall" else self.watermark
+
+    # -- ingest ------------------------------------------------------------------------------
+    def reject(self, reason: str, detail: str = "", seq: int | None = None) -> Outcome:
+        self.rejected[reason] += 1
+        self.metrics.rejected.labels(reason).inc()
+        return Outcome(False, reason, detail, seq)
+
+    def ingest_frame(self, frame: bytes) -> list[Outcome]:
+        """A UDP datagram: a sealed frame of one message or a batch."""
+        if len(frame) > self.cfg.limits.max_message_bytes:
+            return [self.reject("oversized", f"{len(frame)} bytes")]
+        try:
+            node, encoding, payload = open_frame(frame, self.keys)
+        except Rejected as err:
+            return [self.reject(err.reason, err.detail)]
+        return self.ingest_payload(payload, encoding, node)
+
+    def ingest_payload(self, payload: bytes, encoding: str, node: str) -> list[Outcome]:
+        """An authenticated payload (``node`` is who signed it or whose token came with it)."""
+        if len(payload) > self.cfg.limits.max_message_bytes:
+            return [self.reject("oversized", f"{len(payload)} bytes")]
+        try:
+            messages = decode_messages(payload, encoding)
+        except SchemaRejection as err:
+            return [self.reject(err.reason, err.detail)]
+        return [self.ingest_message(m, node) for m in messages]
+
+    def authorize(self, header: str | None) -> str | None:
+        """The node an ``Authorization: Bearer ...`` header names, or None."""
+        if not header or not header.startswith("Bearer "):
+            return None
+        return node_of_token(header[len("Bearer ") :].strip(), self.tokens)
+
+    def ingest_message(self, m: SensorMessage, node: str) -> Outcome:
+        """Check one parsed message against the network and accept or refuse it."""
+        seq = m.seq
+        if self.aligner.pending >= self.cfg.limits.max_pending:
+            return self.reject("overload", "too many unfused readings; retry later", seq)
+        if m.node != node:
+            return self.reject(
+                "node_mismatch", f"message says node={m.node!r}, signed by {node!r}", seq
+            )
+        if not self.windows[node].accept(seq):
+            return self.reject(
+                "replay", f"seq={seq} from node={node!r} was seen or is too old", seq
+            )
+        kind = self.kinds.get(m.sensor)
+        if kind is None:
+            return self.reject("unknown_sensor", f"sensor={m.sensor!r} is not configured", seq)
+        if self.owner[m.sensor] != node:
+            return self.reject(
+                "forbidden_sensor", f"sensor={m.sensor!r} is not node {node!r}'s", seq
+            )
+        if m.reading.kind not in FUSED_KINDS:
+            return self.reject(
+                "unfusable", f"kind={m.reading.kind!r}: no tracker here fuses it", seq
+            )
+        if m.reading.kind != kind:
+            return self.reject(
+                "wrong_kind", f"sensor={m.sensor!r} reports {kind!r}, got {m.reading.kind!r}", seq
+            )
+        value = m.value()
+        dim = self.models[m.sensor].dim
+        if value.shape != (dim,):
+            return self.reject(
+                "wrong_size",
+                f"value has {value.size} entries, sensor={m.sensor!r} needs {dim}",
+                seq,
+            )
+        if m.covariance is not None and not _valid_covariance(m.covariance, dim):
+            return self.reject(
+                "bad_covariance",
+                f"covariance must be a {dim}x{dim} symmetric positive definite matrix",
+                seq,
+            )
+        clock = self.clock()
+        ref = clock if math.isfinite(clock) else self.aligner.fused_until
+        if m.time > ref + self.cfg.fusion.max_future:
+            return self.reject(
+                "future",
+                f"time={m.time} is more than {self.cfg.fusion.max_future} s ahead of the fusion clock ({ref:.3f})",
+                seq,
+            )
+        if self.aligner.is_late(m.time):
+            return self.reject(
+                "late",
+                f"time={m.time} is at or before the fused time {self.aligner.fused_until:.3f}",
+                seq,
+            )
+        self._accept(m)
+        return Outcome(True, seq=seq)
+
+    def _accept(self, m: SensorMessage) -> None:
+        rid = self.next_id
+        self.next_id += 1
+        now = self.wall()
+        if self.log is not None:
+            self.log.append_message(rid, m, now)
+        self.aligner.push(reading_of(m, rid))
+        self.watermark = max(self.watermark, m.time)
+        self.accepted[m.sensor] += 1
+        self.metrics.accepted.labels(m.sensor).inc()
+        self.recent_accepts.append(now)
+        self.last[m.sensor] = {"time": m.time, "value": m.value().tolist(), "received": now}
+
+    def commit(self) -> None:
+        if self.log is not None:
+            self.log.commit()
+
+    # -- fusion ------------------------------------------------------------------------------
+    def advance(self) -> list[TrackState]:
+        """Fire every tick that is due by the clock; log and publish each state."""
+        clock = self.clock()
+        if not math.isfinite(clock):
+            return []
+        idle = self.cfg.fusion.idle_flush
+        if self.cfg.fusion.clock == "data" and idle is not None and self.recent_accepts:
+            if self.wall() - self.recent_accepts[-1] >= idle:
+                clock += self.aligner.lag  # the stream has paused: fuse what has come
+        states = []
+        for k in self.aligner.due(clock, MAX_TICKS_PER_ADVANCE):
+            t0 = time.perf_counter()
+            readings = self.aligner.take(k)
+            state = self.engine.step(k, self.aligner.tick_time(k), readings)
+            self.metrics.tick_seconds.observe(time.perf_counter() - t0)
+            if self.cfg.fusion.clock == "wall":
+                due = self.aligner.window_end(k) + self.aligner.lag
+                self.metrics.tick_delay.observe(max(0.0, self.wall() - due))
+            if self.log is not None:
+                self.log.append_tick(state, [r.id for r in readings])
+            self.history.append(state)
+            self.metrics.ticks.inc()
+            self._publish(state)
+            states.append(state)
+        if states:
+            self.commit()
+        return states
+
+    def resume(self, log: DurableLog) -> None:
+        """Rebuild the state from the durable log: re-run its ticks, re-buffer unfused readings,
+        restore the replay windows."""
+        engine, states = replay_log(self.cfg, log)
+        if not states:
+            return
+        self.engine = engine
+        self.history.extend(states)
+        fused = {i for _, ids in log.ticks() for i in ids}
+        self.aligner.last_tick = states[-1].tick
+        self.resumed_ticks = len(states)
+        for rid, m in log.messages():
+            self.watermark = max(self.watermark, m.time)
+            if rid not in fused and not self.aligner.is_late(m.time):
+                self.aligner.push(reading_of(m, rid))
+        for node, seq in log.highest_seq().items():
+            if node in self.windows:
+                self.windows[node].accept(seq)
+
+    # -- publication -------------------------------------------------------------------------
+    def subscribe(self) -> asyncio.Queue[str]:
+        q: asyncio.Queue[str] = asyncio.Queue(maxsize=64)
+        self.subscribers.add(q)
+        self.metrics.subscribers.set(len(self.subscribers))
+        return q
+
+    def unsubscribe(self, q: asyncio.Queue[str]) -> None:
+        self.subscribers.discard(q)
+        self.metrics.subscribers.set(len(self.subscribers))
+
+    def _publish(self, state: TrackState) -> None:
+        if not self.subscribers:
+            return
+        text = '{"type":"tick","track":' + state.model_dump_json() + "}"
+        for q in self.subscribers:
+            if q.full():  # a slow reader loses old ticks, never slows the node
+                q.get_nowait()
+            q.put_nowait(text)
+
+    # -- views -------------------------------------------------------------------------------
+    def rate(self, window: float = 5.0) -> float:
+        """Accepted messages per second over the last ``window`` wall seconds."""
+        now = self.wall()
+        n = (
+            sum(1 for t in reversed(self.recent_accepts) if now - t <= window)
+            if self.recent_accepts
+            else 0
+        )
+        return n / window
+
+    def tracks_view(self, history: int = 200) -> dict[str, Any]:
+        latest = self.history[-1] if self.history else None
+        trail = list(self.history)[-history:]
+        return {
+            "tracks": [] if latest is None else [latest.model_dump()],
+            "history": [{"tick": s.tick, "time": s.time, "position": s.position} for s in trail],
+        }
+
+    def sensors_view(self) -> list[dict[str, Any]]:
+        now = self.wall()
+        out = []
+        for s in self.cfg.sensors:
+            last = self.last.get(s.id)
+            out.append(
+                {
+                    "id": s.id,
+                    "kind": s.kind,
+                    "node": self.owner.get(s.id),
+                    "position": s.position,
+                    "heading": s.heading,
+                    "fov": s.fov,
+                    "max_range": None if math.isinf(s.max_range) else s.max_range,
+                    "accepted": self.accepted[s.id],
+                    "buffered": len(self.aligner.buffers[s.id]),
+                    "dropped": self.aligner.buffers[s.id].dropped,
+                    "last": None if last is None else {**last, "age": now - last["received"]},
+                }
+            )
+        return out
+
+    def health(self) -> dict[str, Any]:
+        now = self.wall()
+        silent = [
+            s
+            for s in self.models
+            if s not in self.last or now - self.last[s]["received"] > self.cfg.fusion.silent_after
+        ]
+        latest = self.history[-1] if self.history else None
+        return {
+            "status": "ok" if not silent else "degraded",
+            "uptime": now - self.started,
+            "clock": self.cfg.fusion.clock,
+            "tick": self.aligner.last_tick,
+            "time": None if latest is None else latest.time,
+            "silent_sensors": silent,
+            "accepted": sum(self.accepted.values()),
+            "rejected": dict(self.rejected),
+            "buffered": self.aligner.pending,
+            "superseded": self.aligner.superseded,
+            "dropped": sum(b.dropped for b in self.aligner.buffers.values()),
+            "filter_resets": self.engine.resets,
+            "messages_per_second": self.rate(),
+            "resumed_ticks": self.resumed_ticks,
+        }
+
+    def metrics_text(self) -> bytes:
+        now = self.wall()
+        for s in self.models:
+            last = self.last.get(s)
+            self.metrics.age.labels(s).set(math.inf if last is None else now - last["received"])
+        self.metrics.buffered.set(self.aligner.pending)
+        return bytes(generate_latest(self.metrics.registry))
+
+
+def _valid_covariance(c: list[list[float]], dim: int) -> bool:
+    try:
+        a = np.asarray(c, dtype=float)
+    except ValueError:  # ragged rows
+        return False
+    if a.shape != (dim, dim) or not np.allclose(a, a.T):
+        return False
+    try:
+        np.linalg.cholesky(a)
+    except np.linalg.LinAlgError:
+        return False
+    return True

@@ -1,0 +1,107 @@
+"""Running a fusion node: in the foreground (``fusetrack serve``) or in a background thread
+(``fusetrack demo --live``, the end-to-end tests) on uvicorn, with its UDP listener."""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+from pathlib import Path
+
+import uvicorn
+
+from ..core.errors import ConfigError, invalid
+from .app import create_app
+from .config import NetworkConfig
+from .log import DurableLog
+from .node import FusionNode
+from .udp import udp_socket
+
+
+def build_node(cfg: NetworkConfig, log_path: str | Path | None = None) -> FusionNode:
+    """A node for ``cfg``, resuming from its durable log when one is configured and exists."""
+    path = log_path if log_path is not None else cfg.log
+    return FusionNode(cfg, log=DurableLog(path) if path else None)
+
+
+def tcp_socket(host: str, port: int) -> socket.socket:
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except OSError as err:
+        sock.close()
+        raise ConfigError(invalid("port", port, f"a free TCP port on {host} ({err})")) from None
+    return sock
+
+
+class RunningNode:
+    """A node served by uvicorn on its own thread; ``url`` and ``udp`` say where it listens."""
+
+    def __init__(
+        self,
+        node: FusionNode,
+        host: str = "127.0.0.1",
+        http_port: int = 0,
+        udp_port: int | None = 0,
+    ) -> None:
+        self.node = node
+        self.http_sock = tcp_socket(host, http_port)
+        self.udp_sock = udp_socket(host, udp_port) if udp_port is not None else None
+        app = create_app(node, self.udp_sock)
+        config = uvicorn.Config(app, log_level="warning", lifespan="on", ws="websockets-sansio")
+        self.server = uvicorn.Server(config)
+        self.thread = threading.Thread(
+            target=self.server.run, kwargs={"sockets": [self.http_sock]}, daemon=True
+        )
+        h, p = self.http_sock.getsockname()[:2]
+        self.url = f"http://{h}:{p}"
+        self.udp = None if self.udp_sock is None else self.udp_sock.getsockname()[:2]
+
+    def start(self, timeout: float = 20.0) -> RunningNode:
+        self.thread.start()
+        deadline = time.monotonic() + timeout
+        while not self.server.started:
+            if not self.thread.is_alive() or time.monotonic() > deadline:
+                raise RuntimeError("the fusion node did not start")
+            time.sleep(0.01)
+        return self
+
+    def stop(self) -> None:
+        self.server.should_exit = True
+        self.thread.join(timeout=10)
+        if self.node.log is not None:
+            self.node.log.close()
+
+    def __enter__(self) -> RunningNode:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def serve(
+    cfg: NetworkConfig,
+    host: str = "127.0.0.1",
+    http_port: int = 8000,
+    udp_port: int | None = 9000,
+    log_path: str | Path | None = None,
+) -> None:
+    """Serve a node in the foreground until interrupted (``fusetrack serve``)."""
+    node = build_node(cfg, log_path)
+    http = tcp_socket(host, http_port)
+    udp = udp_socket(host, udp_port) if udp_port is not None else None
+    app = create_app(node, udp)
+    where = f"http://{host}:{http.getsockname()[1]}/"
+    print(f"fusion node: dashboard {where}", flush=True)
+    if udp is not None:
+        print(f"fusion node: UDP udp://{host}:{udp.getsockname()[1]}", flush=True)
+    if node.resumed_ticks:
+        print(f"fusion node: resumed {node.resumed_ticks} ticks from {node.log.path}", flush=True)  # type: ignore[union-attr]
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", ws="websockets-sansio"))
+    try:
+        server.run(sockets=[http])
+    finally:
+        if node.log is not None:
+            node.log.close()
