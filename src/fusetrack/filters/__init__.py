@@ -10,6 +10,8 @@ from .grid import GridTracker as GridTracker
 from .grid import SensorLikelihoods as SensorLikelihoods
 from .grid_proposals import DiscretisationProposal as DiscretisationProposal
 from .grid_proposals import GalerkinProposal as GalerkinProposal
+from .imm import IMMBelief as IMMBelief
+from .imm import InteractingMultipleModel as InteractingMultipleModel
 from .kalman import ExtendedKalmanFilter as ExtendedKalmanFilter
 from .kalman import GaussianFilter as GaussianFilter
 from .kalman import KalmanFilter as KalmanFilter
@@ -35,5 +37,3 @@ from .stats import ValidatedMeasurement as ValidatedMeasurement
 from .stats import as_sensor_map as as_sensor_map
 from .stats import validate_measurement as validate_measurement
 from .waypoint_asir import WaypointASIR as WaypointASIR
-from .imm import IMMBelief as IMMBelief
-from .imm import InteractingMultipleModel as InteractingMultipleModel

@@ -26,8 +26,8 @@ __all__ = [
     "kinematic_transition",
 ]
 
+from .benchmark import ScalarBenchmark as ScalarBenchmark
+from .maneuver import ManeuverTurn as ManeuverTurn
 from .walking_person import WalkingPerson as WalkingPerson
 from .walking_person import WalkingPersonCA as WalkingPersonCA
 from .waypoint_regime import WaypointRegimeDynamics as WaypointRegimeDynamics
-from .benchmark import ScalarBenchmark as ScalarBenchmark
-from .maneuver import ManeuverTurn as ManeuverTurn
