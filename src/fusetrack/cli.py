@@ -1,4 +1,5 @@
-"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo`` and ``track-video``."""
+"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``
+and ``replay``."""
 
 from __future__ import annotations
 
@@ -69,8 +70,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="where simulated acoustic angles come from, for experiments that offer it: "
         "gaussian (the paper's noise model) or audio (= --set measurements=audio)",
     )
-    demo = sub.add_parser("demo", help="= fusetrack run demo")
+    demo = sub.add_parser("demo", help="= fusetrack run demo (--live: a live fusion node)")
     _add_run_options(demo, "out/demo")
+    from .service.commands import add_live_options
+    from .service.commands import add_parsers as add_service
+
+    add_live_options(demo)
+    add_service(sub)
     from .tools.track_video_args import add_parser as add_track_video
 
     add_track_video(sub)
@@ -110,6 +116,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     from .evaluation.report import RunContext
     from .experiments import REGISTRY, run_experiment
 
+    if args.command in ("serve", "replay") or getattr(args, "live", False):
+        from .service.commands import main as service_main
+
+        try:
+            return service_main(args)
+        except FusetrackError as err:
+            print(f"fusetrack: error: {err}", file=sys.stderr)
+            return 2
     if args.command == "track-video":
         from .tools.track_video import main as track_video_main
 

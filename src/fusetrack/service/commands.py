@@ -1,0 +1,121 @@
+"""The ``fusetrack serve``, ``fusetrack replay`` and ``fusetrack demo --live`` commands.
+
+:func:`add_parsers` and :func:`add_live_options` extend the CLI's parser (imports stay light);
+:func:`main` runs whichever of the three was asked for.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+
+def add_parsers(sub: Any) -> None:
+    """The ``serve`` and ``replay`` subcommands (``fusetrack.cli`` calls this)."""
+    serve = sub.add_parser("serve", help="run a live fusion node (HTTP/WebSocket + UDP)")
+    serve.add_argument("--config", type=Path, required=True, help="network YAML")
+    serve.add_argument("--host", default="127.0.0.1", help="address to listen on")
+    serve.add_argument("--port", type=int, default=8000, help="HTTP/WebSocket port")
+    serve.add_argument("--udp-port", type=int, default=9000, help="UDP port (-1: no UDP)")
+    serve.add_argument("--log", type=Path, default=None, help="durable log (default: config's)")
+
+    rep = sub.add_parser("replay", help="play a scenario or a recording into a running node")
+    rep.add_argument("source", help="a scenario name (demo) or a .jsonl / .sqlite recording")
+    rep.add_argument("--to", required=True, help="udp://HOST:PORT or http://HOST:PORT")
+    rep.add_argument("--config", type=Path, required=True, help="network YAML (nodes and keys)")
+    rep.add_argument("--speed", type=float, default=1.0, help="times real time (inf: no pacing)")
+    rep.add_argument("--seed", type=int, default=0, help="scenario seed")
+    rep.add_argument("--duration", type=float, default=None, help="scenario seconds")
+    rep.add_argument("--encoding", choices=["json", "msgpack"], default="json")
+    rep.add_argument(
+        "--restamp", action="store_true", help="stamp readings with the send time (wall clock)"
+    )
+
+
+def add_live_options(demo: argparse.ArgumentParser) -> None:
+    """``fusetrack demo --live`` and its options."""
+    demo.add_argument(
+        "--live", action="store_true", help="start a fusion node and replay the demo into it"
+    )
+    demo.add_argument("--speed", type=float, default=1.0, help="--live: times real time")
+    demo.add_argument("--host", default="127.0.0.1", help="--live: address to listen on")
+    demo.add_argument("--port", type=int, default=8000, help="--live: HTTP port (0: any)")
+    demo.add_argument("--udp-port", type=int, default=0, help="--live: UDP port (0: any)")
+    demo.add_argument("--duration", type=float, default=None, help="--live: scenario seconds")
+    demo.add_argument(
+        "--exit-after-replay", action="store_true", help="--live: stop when the replay ends"
+    )
+
+
+def main(args: argparse.Namespace) -> int:
+    """Run ``serve``, ``replay`` or ``demo --live``; the caller maps FusetrackError to exit 2."""
+    from .config import load_config
+
+    if args.command == "serve":
+        from .server import serve
+
+        cfg = load_config(args.config)
+        udp = None if args.udp_port < 0 else args.udp_port
+        serve(cfg, args.host, args.port, udp, args.log)
+        return 0
+    if args.command == "replay":
+        return _replay(args, load_config(args.config))
+    return _live_demo(args)
+
+
+def _replay(args: argparse.Namespace, cfg: Any) -> int:
+    from .replay import SCENARIOS, load_recording, replay
+
+    if args.source in SCENARIOS:
+        readings = SCENARIOS[args.source](cfg, seed=args.seed, duration=args.duration).readings
+    else:
+        readings = load_recording(args.source)
+    print(f"replaying {len(readings)} readings from {args.source} to {args.to} at {args.speed}x")
+    out = replay(
+        readings,
+        cfg,
+        args.to,
+        speed=args.speed,
+        encoding=args.encoding,
+        restamp=args.restamp,
+    )
+    print(f"sent {out['sent']} messages" + (f"; refused: {out['refused']}" if out["refused"] else ""))  # fmt: skip
+    return 0
+
+
+def _live_demo(args: argparse.Namespace) -> int:
+    from .replay import demo_network, demo_scenario, replay
+    from .server import RunningNode, build_node
+
+    cfg = demo_network()
+    scenario = demo_scenario(cfg, seed=args.seed, duration=args.duration)
+    with RunningNode(build_node(cfg), args.host, args.port, args.udp_port) as running:
+        assert running.udp is not None
+        host, port = running.udp
+        print(f"dashboard: {running.url}/", flush=True)
+        print(f"replaying the demo scenario over udp://{host}:{port} at {args.speed}x", flush=True)
+        out = replay(scenario.readings, cfg, f"udp://{host}:{port}", speed=args.speed)
+        time.sleep(cfg.fusion.lag + (cfg.fusion.idle_flush or 0.0) + 0.5)
+        state = running.node.history[-1] if running.node.history else None
+        err = math.nan
+        if state is not None:
+            k = round(state.time / scenario.truth_times[1])
+            err = math.dist(state.position, scenario.truth[k, :2])
+        print(
+            f"replay done: {out['sent']} messages sent, {running.node.aligner.last_tick} ticks; "
+            f"final position error {err:.2f} m",
+            flush=True,
+        )
+        if args.exit_after_replay:
+            return 0
+        print("serving until Ctrl-C", flush=True)
+        try:
+            while True:
+                time.sleep(3600)
+        except KeyboardInterrupt:
+            print("", file=sys.stderr)
+    return 0
