@@ -100,7 +100,7 @@ def test_grid_proposals_refuse_batches():
 
 
 def test_mixture_kernel_matches_numpy_reference() -> None:
-    from fusetrack.filters.grid_proposals import gaussian_mixture_ancestors
+    from fusetrack.filters.mixture_density import gaussian_mixture_ancestors
 
     rng = np.random.default_rng(7)
     x, means = rng.normal(size=(300, 2)) * 3, rng.normal(size=(250, 2)) * 3

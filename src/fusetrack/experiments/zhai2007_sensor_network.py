@@ -83,14 +83,19 @@ def trajectory(scenario: str, rng: np.random.Generator) -> np.ndarray:
 def measurements(
     truth: np.ndarray, threshold: float, rng: np.random.Generator
 ) -> tuple[list[list[Any]], list[np.ndarray], np.ndarray]:
-    """Per step: DOAs of the active sensors (None elsewhere), intensity weights, active counts."""
-    mics = [AcousticIntensity(f"m{k}", position=p, source_db=SOURCE_DB) for k, p in enumerate(GRID)]
-    doas = [Bearing(f"d{k}", position=list(p), sigma=0.1) for k, p in enumerate(GRID)]
+    """Per step: DOAs of the active sensors (None elsewhere), intensity weights, active counts.
+
+    Every microphone is the same intensity sensor moved to its grid point, so one model at the
+    origin evaluates them all on the target seen from each sensor (``x - r_k``).
+    """
+    mic = AcousticIntensity("m", position=[0.0, 0.0], source_db=SOURCE_DB)
+    doa = Bearing("d", position=[0.0, 0.0], sigma=0.1)
+    offsets = np.c_[np.asarray(GRID), np.zeros((len(GRID), 2))]
     zs, ws, counts = [], [], []
     for x in truth[1:]:
-        levels = np.array([m.simulate(x, rng)[0] for m in mics])
+        levels = mic.simulate(x - offsets, rng)[:, 0]
         act = active_sensors(levels, threshold, SOURCE_DB)
-        zs.append([doas[k].simulate(x, rng) if act[k] else None for k in range(len(GRID))])
+        zs.append([doa.simulate(x - offsets[k], rng) if act[k] else None for k in range(len(GRID))])
         ws.append(intensity_weights(levels, act))
         counts.append(int(act.sum()))
     return zs, ws, np.array(counts)

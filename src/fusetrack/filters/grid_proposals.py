@@ -24,16 +24,13 @@ These proposals work on one particle set at a time (``prev`` of shape ``(N, d)``
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
-import numba
 import numpy as np
-from numpy.typing import NDArray
-from scipy.special import logsumexp
 
 from ..core.errors import ConfigError, ShapeError, invalid
+from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .sis import Array, LogLikelihood, Zs
 
 
@@ -56,82 +53,6 @@ def _split(motion: Any, d: int) -> tuple[list[int], list[int]]:
         raise ConfigError(invalid("motion.position_index", pos, "a non-empty tuple"))
     rest = [i for i in range(d) if i not in pos]
     return pos, rest
-
-
-def _whitener(cov: Array) -> tuple[Array, float]:
-    """``(L^-1, log N normaliser)`` for ``cov = L L^T``: ``log N(x; 0, cov) = c - |L^-1 x|^2 / 2``."""
-    L = np.linalg.cholesky(cov)
-    const = -0.5 * cov.shape[0] * np.log(2 * np.pi) - float(np.sum(np.log(np.diag(L))))
-    return np.asarray(np.linalg.inv(L)), const
-
-
-def _gauss_logpdf(diff: Array, cov: Array) -> Array:
-    """``log N(diff; 0, cov)`` over the last axis of ``diff``."""
-    Linv, const = _whitener(cov)
-    u = diff @ Linv.T
-    return np.asarray(const - 0.5 * np.sum(u * u, axis=-1))
-
-
-@numba.njit(cache=True, nogil=True)
-def _mixture_kernel(
-    a: Array, b: Array, log_w: Array, u: Array
-) -> tuple[Array, NDArray[np.intp]]:  # pragma: no cover - compiled
-    n_a, n_b, k = a.shape[0], b.shape[0], a.shape[1]
-    lse = np.empty(n_a)
-    anc = np.zeros(n_a, dtype=np.intp)
-    lp = np.empty(n_b)
-    for i in range(n_a):
-        top = -np.inf
-        for j in range(n_b):
-            s = 0.0
-            for c in range(k):
-                e = a[i, c] - b[j, c]
-                s += e * e
-            v = log_w[j] - 0.5 * s
-            lp[j] = v
-            if v > top:
-                top = v
-        if not np.isfinite(top):
-            lse[i] = top
-            continue
-        tot = 0.0
-        for j in range(n_b):
-            lp[j] = math.exp(lp[j] - top)
-            tot += lp[j]
-        lse[i] = top + math.log(tot)
-        target, acc = u[i] * tot, 0.0
-        for j in range(n_b):
-            acc += lp[j]
-            if acc >= target:
-                anc[i] = j
-                break
-        else:
-            anc[i] = n_b - 1
-    return lse, anc
-
-
-def gaussian_mixture_ancestors(
-    x: Array, means: Array, cov: Array, log_w: Array, u: Array, engine: str = "numba"
-) -> tuple[Array, NDArray[np.intp]]:
-    """``log sum_j exp(log_w_j) N(x_i; means_j, cov)`` ``(n,)`` and an index ``j`` per ``x_i`` drawn
-    ∝ ``exp(log_w_j) N(x_i; means_j, cov)`` by inverting the uniforms ``u (n,)``.
-
-    The O(n m) hot loop of the ancestor completion and of Eq. 78. ``engine="numba"`` runs it in
-    one compiled pass per point without an (n, m) array; ``"numpy"`` is the readable reference.
-    """
-    Linv, const = _whitener(np.asarray(cov, float))
-    a = np.ascontiguousarray(x @ Linv.T)
-    b = np.ascontiguousarray(means @ Linv.T)
-    lw = np.ascontiguousarray(np.broadcast_to(np.asarray(log_w, float), (len(b),)))
-    if engine == "numba":
-        lse, anc = _mixture_kernel(a, b, lw, np.ascontiguousarray(u, dtype=np.float64))
-        return lse + const, anc
-    d2 = np.sum((a[:, None, :] - b[None, :, :]) ** 2, axis=-1)
-    lp = lw[None, :] - 0.5 * d2
-    lse = logsumexp(lp, axis=1)
-    cdf = np.cumsum(np.exp(lp - lp.max(axis=1, keepdims=True)), axis=1)
-    anc = np.minimum((cdf < (u * cdf[:, -1])[:, None]).sum(axis=1), len(b) - 1)
-    return np.asarray(lse + const), np.asarray(anc, dtype=np.intp)
 
 
 def complete_from_ancestors(
@@ -245,12 +166,12 @@ class GalerkinProposal:
                 np.meshgrid(*[(np.arange(g) - g // 2) * dl for dl in deltas], indexing="ij"),
                 axis=-1,
             )
-            kern = np.exp(_gauss_logpdf(offs, Qpp))
+            kern = np.exp(gauss_logpdf(offs, Qpp))
             pred = np.clip(galerkin_predict(dens, kern, cell), 0.0, None)
         else:
             flat = mesh.reshape(-1, len(pos))
-            lp = _gauss_logpdf(flat[:, None, :] - mp[None, :, :], Qpp)
-            pred = np.exp(logsumexp(lp, axis=1) - np.log(n)).reshape(mesh.shape[:-1])
+            lse, _ = gaussian_mixture_ancestors(flat, mp, Qpp, np.zeros(n), np.zeros(len(flat)))
+            pred = np.exp(lse - np.log(n)).reshape(mesh.shape[:-1])
         states = _grid_states(mesh.reshape(-1, len(pos)), m.mean(axis=0), pos)
         ll = LogLikelihood(filt.sensors, zs)
         log_l = ll(states) if ll else np.zeros(len(states))

@@ -34,6 +34,7 @@ from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, check_positive, invalid
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
+from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .stats import FilterStats
 
 Array = NDArray[np.float64]
@@ -151,6 +152,21 @@ class SISState:
     info: dict[str, Any] = field(default_factory=dict)
 
 
+def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
+    """Whether ``motion.log_density(x', x, dt) = log N(x'; motion.mean(x, dt), noise_cov(dt))``
+    with a positive-definite ``noise_cov`` (checked at two random pairs)."""
+    try:
+        cov = np.asarray(motion.noise_cov(dt), float)
+        np.linalg.cholesky(cov)
+    except (np.linalg.LinAlgError, ValueError):
+        return False
+    rng = np.random.default_rng(0)
+    x0 = rng.normal(size=(2, cov.shape[0])) + 1.0
+    x1 = np.asarray(motion.mean(x0, dt)) + rng.normal(size=x0.shape) * np.sqrt(np.diag(cov))
+    ref = gauss_logpdf(x1 - np.asarray(motion.mean(x0, dt)), cov)
+    return bool(np.allclose(motion.log_density(x1, x0, dt), ref, rtol=1e-9, atol=1e-9))
+
+
 class ProposalParticleFilter:
     """SIS with proposal ``proposal``, resampling every step, optional MCMC ``move``.
 
@@ -214,6 +230,15 @@ class ProposalParticleFilter:
         """``log p(x^i | x_{t-1}^i)`` (paired) or ``log (1/N) sum_j p(x^i | x_{t-1}^j)``."""
         if self.transition == "paired":
             return np.asarray(self.motion.log_density(x, prev, dt))
+        if is_gaussian_transition(self.motion, dt):  # one O(N^2) Numba pass per run
+            cov = np.asarray(self.motion.noise_cov(dt), float)
+            m = np.asarray(self.motion.mean(prev, dt))
+            xs, ms = x.reshape(-1, *x.shape[-2:]), m.reshape(-1, *m.shape[-2:])
+            lse = [
+                gaussian_mixture_ancestors(a, b, cov, np.zeros(len(b)), np.zeros(len(a)))[0]
+                for a, b in zip(xs, ms)
+            ]
+            return np.asarray(np.reshape(lse, x.shape[:-1]) - np.log(prev.shape[-2]))
         lp = self.motion.log_density(x[..., :, None, :], prev[..., None, :, :], dt)
         return np.asarray(logsumexp(lp, axis=-1) - np.log(prev.shape[-2]))
 
