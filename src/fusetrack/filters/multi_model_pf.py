@@ -31,12 +31,20 @@ import numpy as np
 
 from ..core.angles import wrap_angle_inplace
 from ..core.errors import ConfigError, MeasurementError, invalid
-from ..core.resampling import systematic
+from ..core.resampling import inverse_cdf
 from ..motion.accel_turn import AccelTurn
 
 Array = np.ndarray
 
 ESTIMATORS = ("consistent", "literal")
+
+
+def resample_l(w: Array, n: int, rng: np.random.Generator) -> Array:
+    """Systematic draw of ``n`` ancestors from the flattened ``(..., J, L)`` weights (Fig. 3-1:
+    ``L`` of the ``J L N`` weighted copies); leading axes are independent filters."""
+    flat = w.reshape(*w.shape[:-2], -1)
+    u = (np.arange(n) + rng.random((*flat.shape[:-1], 1))) / n
+    return inverse_cdf(flat, u)
 
 
 def turn_models(alpha: float, sigma_a: float) -> tuple[AccelTurn, AccelTurn, AccelTurn]:
@@ -118,12 +126,11 @@ class MultiModelBearingPF:
         self.degenerate_steps += degenerate
         w_ml = w.sum(axis=0)  # (J, L): weight of each prediction summed over bearings
         est, means, probs = self._estimate(pred, w, w_ml)
-        idx = systematic(w_ml.reshape(-1), rng)  # Fig. 3-1: L of the J L N weighted copies
-        new = pred.reshape(J * L, 4)[idx[: self.n_particles]]
+        new = pred.reshape(J * L, 4)[resample_l(w_ml, self.n_particles, rng)]
         return new, MultiModelStep(est, pred, means, probs, degenerate)
 
     def _propagate(self, particles: Array, dt: float, rng: np.random.Generator) -> Array:
-        """Every particle through every model, ``(J, L, 4)``.
+        """Every particle through every model: ``(..., L, 4)`` -> ``(J, ..., L, 4)``.
 
         Fast path for the usual bank (2-D, no known acceleration, turns on axes (0, 1) or none):
         one vectorised coordinated-turn map with ``omega_j = alpha_j / speed`` (0 for CV),
@@ -138,8 +145,10 @@ class MultiModelBearingPF:
         )
         if not fast:
             return np.stack([m.sample(particles, dt, rng) for m in self.models])
-        alphas = np.array([m.turn_alpha if m.turn_axes else 0.0 for m in self.models])[:, None]
-        x, y, vx, vy = (particles[:, i] for i in range(4))
+        lead = particles.shape[:-1]
+        alphas = np.array([m.turn_alpha if m.turn_axes else 0.0 for m in self.models])
+        alphas = alphas.reshape(-1, *([1] * len(lead)))
+        x, y, vx, vy = (particles[..., i] for i in range(4))
         speed = np.hypot(vx, vy)
         omega = np.where(speed > 1e-9, alphas / np.maximum(speed, 1e-9), 0.0)  # (J, L)
         wt = omega * dt
@@ -148,14 +157,14 @@ class MultiModelBearingPF:
         s_, c_ = np.sin(wt), np.cos(wt)
         a1 = np.where(small, dt, s_ / safe)  # sin(wT)/w
         a2 = np.where(small, 0.0, (1.0 - c_) / safe)  # (1 - cos wT)/w
-        out = np.empty((len(self.models), len(particles), 4))
+        out = np.empty((len(self.models), *lead, 4))
         out[..., 0] = x + a1 * vx - a2 * vy
         out[..., 1] = y + a2 * vx + a1 * vy
         out[..., 2] = c_ * vx - s_ * vy
         out[..., 3] = s_ * vx + c_ * vy
         sa = self.models[0].sigma_a
         if sa > 0:
-            eta = sa * rng.standard_normal((len(self.models), len(particles), 2))
+            eta = sa * rng.standard_normal((len(self.models), *lead, 2))
             out[..., :2] += 0.5 * dt * dt * eta
             out[..., 2:] += dt * eta
         return out
