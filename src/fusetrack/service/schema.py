@@ -182,9 +182,6 @@ class TrackState(_Strict):
     readings: int = Field(description="how many readings this tick fused")
 
 
-_INCOMING = TypeAdapter(SensorMessage | MessageBatch)
-
-
 def reading_from_vector(kind: str, z: Sequence[float]) -> Any:
     """Build the reading of ``kind`` from a measurement vector (the inverse of ``.vector()``)."""
     z = [float(v) for v in np.atleast_1d(np.asarray(z, dtype=float))]
@@ -245,8 +242,9 @@ def decode_messages(payload: bytes, encoding: str) -> list[SensorMessage]:
         raise
     except Exception as err:  # any decoder failure is a malformed payload, never a crash
         raise SchemaRejection("malformed", f"not {encoding}: {type(err).__name__}") from None
+    model = MessageBatch if isinstance(data, dict) and "messages" in data else SensorMessage
     try:
-        parsed = _INCOMING.validate_python(data)
+        parsed = model.model_validate(data)
     except ValidationError as err:
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"]) or "message"
