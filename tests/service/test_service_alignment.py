@@ -76,7 +76,14 @@ def test_engine_equals_offline_run_filter(network, kind):
     ticks = np.array([s.time for s in states])
     ms = [Measurement(x.time, x.sensor, x.value) for x in readings]
     filt = build_filter(cfg)
-    track = run_filter(filt, cfg.tracker.prior(), ms, rng=np.random.default_rng(cfg.tracker.seed), times=ticks, t0=0.0)  # fmt: skip
+    track = run_filter(
+        filt,
+        cfg.tracker.prior(),
+        ms,
+        rng=np.random.default_rng(cfg.tracker.seed),
+        times=ticks,
+        t0=0.0,
+    )
     keep = np.isin(np.round(track.times, 9), np.round(ticks, 9))
     np.testing.assert_allclose([s.state for s in states], track.means[keep], rtol=0, atol=1e-9)
     np.testing.assert_allclose([s.covariance for s in states], track.covariances[keep], atol=1e-9)
@@ -85,7 +92,11 @@ def test_engine_equals_offline_run_filter(network, kind):
 
 
 def test_closest_alignment_fuses_one_reading_per_sensor_at_the_tick(network):
-    cfg = network.model_copy(update={"fusion": network.fusion.model_copy(update={"alignment": "closest", "rate_hz": 1.0})})  # fmt: skip
+    cfg = network.model_copy(
+        update={
+            "fusion": network.fusion.model_copy(update={"alignment": "closest", "rate_hz": 1.0})
+        }
+    )
     _, readings = _truth_run(cfg, duration=6.0)
     al = Aligner([s.id for s in cfg.sensors], 1.0, 0.0, "closest")
     for x in readings:
@@ -99,5 +110,7 @@ def test_closest_alignment_fuses_one_reading_per_sensor_at_the_tick(network):
         engine.step(k, al.tick_time(k), chosen)
     # offline: the same chosen readings, stamped at their tick
     ms = [Measurement(float(k + 1), x.sensor, x.value) for k, ch in enumerate(used) for x in ch]
-    track = run_filter(build_filter(cfg), cfg.tracker.prior(), ms, times=np.arange(1.0, len(used) + 1), t0=0.0)  # fmt: skip
+    track = run_filter(
+        build_filter(cfg), cfg.tracker.prior(), ms, times=np.arange(1.0, len(used) + 1), t0=0.0
+    )
     np.testing.assert_allclose(engine.belief.mean, track.means[-1], atol=1e-9)

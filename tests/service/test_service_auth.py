@@ -85,7 +85,9 @@ def test_bearer_tokens_are_derived_not_the_key():
 
 
 def _frame(network, node, seq, sensor="mic_west", time=1.0, key=None):
-    m = SensorMessage(node=node, seq=seq, sensor=sensor, time=time, reading=reading_from_vector("bearing", [0.2]))  # fmt: skip
+    m = SensorMessage(
+        node=node, seq=seq, sensor=sensor, time=time, reading=reading_from_vector("bearing", [0.2])
+    )
     k = key if key is not None else network.keys()[node]
     return seal(node, k, encode_message(m, "msgpack"), "msgpack")
 

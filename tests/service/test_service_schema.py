@@ -136,7 +136,7 @@ json_values = st.recursive(
     st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
     lambda inner: (
         st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4)
-    ),  # fmt: skip
+    ),
     max_leaves=20,
 )
 
@@ -169,5 +169,7 @@ def test_fuzz_near_messages_msgpack(fields):
 
 
 def test_value_is_float_array():
-    m = SensorMessage(node="a", seq=0, sensor="b", time=0.0, reading=reading_from_vector("doa", [0.1, 0.2]))  # fmt: skip
+    m = SensorMessage(
+        node="a", seq=0, sensor="b", time=0.0, reading=reading_from_vector("doa", [0.1, 0.2])
+    )
     assert m.value().dtype == np.float64 and m.value().shape == (2,)
