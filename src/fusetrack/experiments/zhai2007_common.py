@@ -38,10 +38,13 @@ def timed_gaussian(
     zs: Sequence[Sequence[Array | None]],
     sensor_ids: Sequence[str],
     dt: float,
+    probs: list[Array] | None = None,
 ) -> tuple[Array, float]:
-    """Run a fusetrack Gaussian filter (EKF/UKF) step by step; NaN/None measurements skipped."""
+    """Run a fusetrack Gaussian filter (EKF/UKF, or an IMM: started with ``filt.initialize``)
+    step by step; NaN/None measurements skipped. An IMM's regime probabilities per step are
+    appended to ``probs`` when it is given."""
     t0 = time.perf_counter()
-    belief = prior
+    belief = filt.initialize(prior) if hasattr(filt, "initialize") else prior
     out = []
     for k, step in enumerate(zs):
         with np.errstate(over="ignore", invalid="ignore"):
@@ -55,7 +58,29 @@ def timed_gaussian(
             with np.errstate(over="ignore", invalid="ignore"):
                 belief = filt.update(belief, ms)
         out.append(np.asarray(belief.mean, float))
+        if probs is not None:
+            probs.append(np.asarray(belief.probs, float))
     return np.array(out), time.perf_counter() - t0
+
+
+def track_rows(method: str, est: Array, truth: Array, **columns: Any) -> list[dict[str, Any]]:
+    """One row per step: squared position error, estimate and truth positions; ``columns``
+    values are constants or per-step sequences (``est``, ``truth`` ``(T, d)``, position first)."""
+    rows = []
+    for t in range(len(truth)):
+        row: dict[str, Any] = {
+            "method": method,
+            "step": t + 1,
+            "sq_pos_err": float(np.sum((est[t, :2] - truth[t, :2]) ** 2)),
+            "x": float(est[t, 0]),
+            "y": float(est[t, 1]),
+            "true_x": float(truth[t, 0]),
+            "true_y": float(truth[t, 1]),
+        }
+        for k, v in columns.items():
+            row[k] = v[t] if isinstance(v, (list, tuple, np.ndarray)) else v
+        rows.append(row)
+    return rows
 
 
 def ordering_holds(values: pd.Series, order: Sequence[str]) -> bool:

@@ -70,6 +70,16 @@ class IMMBelief:
         """The moment-matched Gaussian of the mixture (Bar-Shalom et al. 2001, Eq. 11.6.6-20/21)."""
         return Gaussian(*_moment_match(self.means, self.covs, self.probs))
 
+    @property
+    def mean(self) -> Array:
+        """``sum_j mu_j x_j`` ``(..., d)``: the IMM's output estimate."""
+        return np.asarray(np.einsum("...k,...kd->...d", self.probs, self.means))
+
+    @property
+    def cov(self) -> Array:
+        """The moment-matched covariance ``(..., d, d)``."""
+        return _moment_match(self.means, self.covs, self.probs)[1]
+
 
 def _moment_match(means: Array, covs: Array, w: Array) -> tuple[Array, Array]:
     """``sum_k w_k x_k`` and ``sum_k w_k [P_k + dev_k dev_k^T]`` over the model axis ``-2``/``-3``."""
