@@ -107,6 +107,11 @@ class SequenceWindow:
     highest: int = -1
     bitmap: int = 0  # bit i set: highest - i was seen
 
+    def restore(self, highest: int) -> None:
+        """After a restart: everything up to ``highest`` counts as seen."""
+        self.highest = max(self.highest, highest)
+        self.bitmap = (1 << self.size) - 1
+
     def accept(self, seq: int) -> bool:
         if seq > self.highest:
             shift = seq - self.highest

@@ -316,20 +316,19 @@ class FusionNode:
         """Rebuild the state from the durable log: re-run its ticks, re-buffer unfused readings,
         restore the replay windows."""
         engine, states = replay_log(self.cfg, log)
-        if not states:
-            return
-        self.engine = engine
-        self.history.extend(states)
+        if states:
+            self.engine = engine
+            self.history.extend(states)
+            self.aligner.last_tick = states[-1].tick
+            self.resumed_ticks = len(states)
         fused = {i for _, ids in log.ticks() for i in ids}
-        self.aligner.last_tick = states[-1].tick
-        self.resumed_ticks = len(states)
         for rid, m in log.messages():
             self.watermark = max(self.watermark, m.time)
             if rid not in fused and not self.aligner.is_late(m.time):
                 self.aligner.push(reading_of(m, rid))
         for node, seq in log.highest_seq().items():
             if node in self.windows:
-                self.windows[node].accept(seq)
+                self.windows[node].restore(seq)
 
     # -- publication -------------------------------------------------------------------------
     def subscribe(self) -> asyncio.Queue[str]:
