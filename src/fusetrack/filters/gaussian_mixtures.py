@@ -25,6 +25,14 @@ Array = NDArray[np.float64]
 MIN_VAR = 1e-8  # eigenvalue floor of every covariance (m^2 or px^2)
 
 
+def _lse(a: Array, axis: int) -> Array:
+    """Log-sum-exp over ``axis`` (a lean version of SciPy's for the EM inner loop)."""
+    m = np.max(a, axis=axis, keepdims=True)
+    m = np.where(np.isfinite(m), m, 0.0)
+    with np.errstate(divide="ignore"):
+        return np.log(np.sum(np.exp(a - m), axis=axis)) + np.squeeze(m, axis=axis)
+
+
 def floor_covariances(covs: ArrayLike, min_var: float = MIN_VAR) -> Array:
     """Symmetrise and lift the eigenvalues of ``(..., d, d)`` covariances to at least ``min_var``."""
     c = np.asarray(covs, float)
@@ -38,20 +46,21 @@ def component_logpdf(x: ArrayLike, means: ArrayLike, covs: ArrayLike) -> Array:
     """``log N(x_n | mu_k, S_k)`` as ``(N, K)`` for points ``(N, d)`` and ``K`` components."""
     x = np.asarray(x, float)
     mu = np.asarray(means, float)
-    L = np.linalg.cholesky(np.asarray(covs, float))
-    r = x[None, :, :] - mu[:, None, :]  # (K, N, d)
-    z = np.linalg.solve(L[:, None], r[..., None])[..., 0]
-    logdet = 2 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+    c = np.asarray(covs, float)
+    inv = np.linalg.inv(c)
+    logdet = np.linalg.slogdet(c)[1]
     d = x.shape[-1]
-    return (-0.5 * (np.sum(z * z, -1) + logdet[:, None] + d * np.log(2 * np.pi))).T
+    # (x - mu)^T S^-1 (x - mu) = x^T S^-1 x - 2 mu^T S^-1 x + mu^T S^-1 mu, one GEMM per term
+    xx = np.einsum("ni,nj->nij", x, x).reshape(len(x), d * d) @ inv.reshape(len(mu), d * d).T
+    im = np.einsum("kij,kj->ki", inv, mu)
+    maha = xx - 2 * x @ im.T + np.einsum("ki,ki->k", mu, im)
+    return -0.5 * (np.maximum(maha, 0.0) + logdet + d * np.log(2 * np.pi))
 
 
 def mixture_logpdf(gm: GaussianMixture, x: ArrayLike) -> Array:
     """``log sum_k w_k N(x | mu_k, S_k)`` for points ``(N, d)``."""
     with np.errstate(divide="ignore"):
-        return logsumexp(
-            component_logpdf(x, gm.means, gm.covs) + np.log(gm.weights), axis=1
-        )
+        return _lse(component_logpdf(x, gm.means, gm.covs) + np.log(gm.weights), axis=1)
 
 
 def weighted_em(
@@ -59,7 +68,7 @@ def weighted_em(
     weights: ArrayLike,
     k: int,
     rng: np.random.Generator,
-    iterations: int = 25,
+    iterations: int = 20,
     extra_cov: ArrayLike | None = None,
 ) -> GaussianMixture:
     """EM for a ``k``-component mixture of weighted points; ``extra_cov`` (the kernel of a KDE)
@@ -74,10 +83,16 @@ def weighted_em(
     spread = np.cov(x.T, aweights=w) if n > 1 else np.eye(d)
     covs = np.repeat(floor_covariances(np.atleast_2d(spread))[None], k, axis=0)
     mix = np.full(k, 1.0 / k)
+    last = -np.inf
     for _ in range(iterations):
         with np.errstate(divide="ignore"):
             logr = component_logpdf(x, means, covs) + np.log(mix)
-        r = np.exp(logr - logsumexp(logr, axis=1, keepdims=True)) * w[:, None]  # (N, K)
+        norm = _lse(logr, axis=1)
+        loglik = float(w @ norm)
+        if loglik - last < 1e-4:
+            break
+        last = loglik
+        r = np.exp(logr - norm[:, None]) * w[:, None]  # (N, K)
         nk = r.sum(0)
         keep = nk > 1e-12
         r, nk = r[:, keep], nk[keep]
@@ -113,23 +128,24 @@ def fit_kde_mixture(
     Orders ``m = 1..m_max`` are fitted by EM; the KL divergence ``KL(kde || g_m)`` is estimated
     with ``kl_samples`` draws from the KDE (Eq. 86). The paper takes the argmin, which always
     favours the largest order (KL does not grow with m); here the smallest order whose KL is
-    within ``kl_tolerance`` nats of the smallest KL is chosen (spec A-V-4). Returns the mixture
-    and the KL of each order.
+    within ``kl_tolerance`` nats of the smallest KL is chosen (spec A-V-4), and the search stops
+    at the first order that improves the KL by less than ``kl_tolerance``. Particles with a weight
+    below ``1e-3`` of the largest are dropped first. Returns the mixture and the KLs computed.
     """
     x = np.asarray(points, float)
     w = np.asarray(weights, float)
     if x.ndim != 2 or w.shape != x.shape[:1] or not np.all(np.isfinite(w)) or w.sum() <= 0:
         raise ConfigError(invalid("weights", w.shape, "finite non-negative weights, not all zero"))
     w = w / w.sum()
-    keep = w > 1e-6 * w.max()
+    keep = w > 1e-3 * w.max()
     x, w = x[keep], w[keep] / w[keep].sum()
     d = x.shape[1]
     h = kde_bandwidth(x, w) if bandwidth is None else float(bandwidth)
     kernel = h * h * np.eye(d)
     idx = rng.choice(len(w), size=kl_samples, p=w)
     s = x[idx] + h * rng.standard_normal((kl_samples, d))
-    sq = np.sum((s[:, None, :] - x[None, :, :]) ** 2, axis=-1)
-    log_kde = logsumexp(-0.5 * sq / (h * h) + np.log(w), axis=1) - 0.5 * d * np.log(
+    sq = np.maximum(np.sum(s * s, 1)[:, None] + np.sum(x * x, 1)[None, :] - 2 * s @ x.T, 0.0)
+    log_kde = _lse(-0.5 * sq / (h * h) + np.log(w), axis=1) - 0.5 * d * np.log(
         2 * np.pi * h * h
     )
     fits, kls = [], []
@@ -138,6 +154,8 @@ def fit_kde_mixture(
         fits.append(gm)
         kls.append(float(np.mean(log_kde - mixture_logpdf(gm, s))))
         if len(gm.weights) < m:  # fewer distinct points than components
+            break
+        if m > 1 and kls[-2] - kls[-1] < kl_tolerance:
             break
     best = min(kls)
     chosen = next(i for i, kl in enumerate(kls) if kl <= best + kl_tolerance)
