@@ -228,6 +228,13 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Beyond Lee 2009 Ch. 2: PPS on azimuth/polar angles estimated from simulated sound (MUSIC)",
             "Lee 2009 (seed 000)",
         ),
+        ExperimentInfo(
+            "zhai2007-visual",
+            "zhai2007_visual:run",
+            "Zhai 2007 E9-E12, E14, E18, E21: ellipse-edge, MMPF-SP, Galerkin and multi-cue visual "
+            "trackers against condensation on synthetic head video",
+            "Zhai 2007 (seed 001)",
+        ),
     ]
 }
 

@@ -20,6 +20,11 @@ independent sensors (Eq. 91).
 Eq. 85 is a plain (not normalised) correlation, which prefers bright (or edge-dense) regions
 over the target; ``correlation="normalised"`` (zero-mean normalised cross-correlation) is the
 usual fix. The default is the printed one; the experiments say which they use.
+
+Ties: when several candidates share the best score (the colour cue on a uniformly coloured
+target larger than the box: every placement inside it has the same histogram) the location is
+the centre of the tied candidates. The thesis takes "the" argmin; App. B's MATLAB returns every
+tied location and then uses the first, which biases the cue towards the window's top-left.
 """
 
 from __future__ import annotations
@@ -121,11 +126,18 @@ def kld_map(
     """
     bh, bw = box
     occ = np.flatnonzero(target > 0)
-    onehot = (region_bins[..., None] == occ).astype(np.float64)
-    integ = np.zeros((onehot.shape[0] + 1, onehot.shape[1] + 1, len(occ)))
-    integ[1:, 1:] = onehot.cumsum(0).cumsum(1)
+    lut = np.full(len(target), len(occ), dtype=np.intp)  # unoccupied bins -> a dummy channel
+    lut[occ] = np.arange(len(occ))
+    h, w = region_bins.shape
+    onehot = np.zeros((h, w, len(occ) + 1), np.float32)
+    rows, cols = np.indices((h, w))
+    onehot[rows, cols, lut[region_bins]] = 1.0
+    integ = np.zeros((h + 1, w + 1, len(occ) + 1), np.float32)
+    np.cumsum(onehot, axis=0, out=integ[1:, 1:])
+    np.cumsum(integ[1:, 1:], axis=1, out=integ[1:, 1:])
+    integ = integ[..., :-1]
     counts = integ[bh:, bw:] - integ[:-bh, bw:] - integ[bh:, :-bw] + integ[:-bh, :-bw]
-    q = counts / (bh * bw)
+    q = counts.astype(np.float64) / (bh * bw)
     p = target[occ] + eps
     return np.asarray(np.sum(p * np.log(p / (q + eps)), axis=-1), dtype=np.float64)
 
@@ -219,6 +231,8 @@ class MultiCueFrontEnd:
                 if not np.any(score > 0):
                     out.append(None)
                     continue
-            i, j = np.unravel_index(int(np.argmax(score)), score.shape)  # first of ties (App. B)
+            top = float(np.max(score))
+            ii, jj = np.nonzero(score >= top - 1e-9 * (1.0 + abs(top)))
+            i, j = float(ii.mean()), float(jj.mean())  # the centre of tied maxima (see below)
             out.append(np.array([rc[1] - hw + j, rc[0] - hw + i], dtype=np.float64))
         return out
