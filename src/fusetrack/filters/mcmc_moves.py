@@ -22,7 +22,7 @@ state of magnitude ~5, is the usual culprit).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -53,10 +53,22 @@ def _target(
 
 
 @dataclass(frozen=True)
-class MHPriorMove:
-    """Algorithm 8: MH with the transition prior ``p(x | x_{t-1}^{a_i})`` as instrumental density."""
+class MetropolisMove:
+    """Metropolis-Hastings after resampling (Algorithm 8): ``n_iter`` rounds of propose ``x*`` and
+    accept with ``exp(score(x*) - score(x))``. A subclass gives :meth:`propose` and :meth:`score`,
+    the log of the quantity whose ratio is the acceptance probability."""
 
-    n_iter: int = 1
+    n_iter: int = field(default=1, kw_only=True)
+
+    def propose(
+        self, x: Array, parents: Array, dt: float, rng: np.random.Generator, filt: Any
+    ) -> Array:
+        raise NotImplementedError
+
+    def score(
+        self, x: Array, parents: Array, loglik: Callable[[Array], Array], dt: float, filt: Any
+    ) -> Array:
+        raise NotImplementedError
 
     def __call__(
         self,
@@ -67,73 +79,70 @@ class MHPriorMove:
         rng: np.random.Generator,
         filt: Any,
     ) -> Array:
-        ll = loglik(x)
+        score = self.score(x, parents, loglik, dt, filt)
         for _ in range(self.n_iter):
-            prop = filt.motion.sample(parents, dt, rng)
-            ll_prop = loglik(prop)
-            x, ok = _accept(x, prop, ll_prop - ll, rng, filt)  # f T ratio = likelihood ratio
-            ll = np.where(ok, ll_prop, ll)
+            prop = self.propose(x, parents, dt, rng, filt)
+            score_prop = self.score(prop, parents, loglik, dt, filt)
+            x, ok = _accept(x, prop, score_prop - score, rng, filt)
+            score = np.where(ok, score_prop, score)
         return x
 
 
 @dataclass(frozen=True)
-class RandomWalkMove:
+class MHPriorMove(MetropolisMove):
+    """Algorithm 8: MH with the transition prior ``p(x | x_{t-1}^{a_i})`` as instrumental density;
+    ``f T`` ratio = likelihood ratio."""
+
+    def propose(
+        self, x: Array, parents: Array, dt: float, rng: np.random.Generator, filt: Any
+    ) -> Array:
+        return np.asarray(filt.motion.sample(parents, dt, rng))
+
+    def score(
+        self, x: Array, parents: Array, loglik: Callable[[Array], Array], dt: float, filt: Any
+    ) -> Array:
+        return np.asarray(loglik(x))
+
+
+@dataclass(frozen=True)
+class RandomWalkMove(MetropolisMove):
     """Algorithm 9: random-walk Metropolis, ``x' = x + N(0, variance I)`` (Sec. 6.1.2: 0.2)."""
 
     variance: float = 0.2
-    n_iter: int = 1
 
     def __post_init__(self) -> None:
         check_positive("variance", self.variance)
 
-    def __call__(
-        self,
-        x: Array,
-        parents: Array,
-        loglik: Callable[[Array], Array],
-        dt: float,
-        rng: np.random.Generator,
-        filt: Any,
+    def propose(
+        self, x: Array, parents: Array, dt: float, rng: np.random.Generator, filt: Any
     ) -> Array:
-        lf = _target(x, parents, loglik, dt, filt)
-        sd = np.sqrt(self.variance)
-        for _ in range(self.n_iter):
-            prop = x + sd * rng.standard_normal(x.shape)
-            lf_prop = _target(prop, parents, loglik, dt, filt)
-            x, ok = _accept(x, prop, lf_prop - lf, rng, filt)
-            lf = np.where(ok, lf_prop, lf)
-        return x
+        return np.asarray(x + np.sqrt(self.variance) * rng.standard_normal(x.shape))
+
+    def score(
+        self, x: Array, parents: Array, loglik: Callable[[Array], Array], dt: float, filt: Any
+    ) -> Array:
+        return _target(x, parents, loglik, dt, filt)
 
 
 @dataclass(frozen=True)
-class IndependenceMove:
-    """Algorithm 10: Metropolised independence sampler, ``x* ~ N(mean, variance I)`` (0, 0.15)."""
+class IndependenceMove(MetropolisMove):
+    """Algorithm 10: Metropolised independence sampler, ``x* ~ N(mean, variance I)`` (0, 0.15);
+    accept with ``w(x*) / w(x)``, ``w = f / T``."""
 
     variance: float = 0.15
     mean: float = 0.0
-    n_iter: int = 1
 
     def __post_init__(self) -> None:
         check_positive("variance", self.variance)
 
-    def _log_t(self, x: Array) -> Array:
-        r = (x - self.mean) ** 2 / self.variance
-        return np.asarray(-0.5 * np.sum(r + np.log(2 * np.pi * self.variance), axis=-1))
-
-    def __call__(
-        self,
-        x: Array,
-        parents: Array,
-        loglik: Callable[[Array], Array],
-        dt: float,
-        rng: np.random.Generator,
-        filt: Any,
+    def propose(
+        self, x: Array, parents: Array, dt: float, rng: np.random.Generator, filt: Any
     ) -> Array:
-        lw = _target(x, parents, loglik, dt, filt) - self._log_t(x)
-        sd = np.sqrt(self.variance)
-        for _ in range(self.n_iter):
-            prop = self.mean + sd * rng.standard_normal(x.shape)
-            lw_prop = _target(prop, parents, loglik, dt, filt) - self._log_t(prop)
-            x, ok = _accept(x, prop, lw_prop - lw, rng, filt)
-            lw = np.where(ok, lw_prop, lw)
-        return x
+        return np.asarray(self.mean + np.sqrt(self.variance) * rng.standard_normal(x.shape))
+
+    def score(
+        self, x: Array, parents: Array, loglik: Callable[[Array], Array], dt: float, filt: Any
+    ) -> Array:
+        r = (x - self.mean) ** 2 / self.variance
+        log_t = -0.5 * np.sum(r + np.log(2 * np.pi * self.variance), axis=-1)
+        return np.asarray(_target(x, parents, loglik, dt, filt) - log_t)

@@ -33,7 +33,7 @@ from ..core.errors import ConfigError, invalid
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
-from .sis import Array, LogLikelihood, SISStats, Zs
+from .sis import Array, LogLikelihood, SISStats, Zs, resample_log_weights
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
 
 IntArray = NDArray[np.intp]
@@ -250,17 +250,7 @@ class MultipleModelParticleFilter:
             log_w = np.where(sel, lt - log_q, log_w)  # Eq. 53 (likelihood added below)
         if loglik:
             log_w = log_w + loglik(x)
-        log_w = np.where(np.isnan(log_w), -np.inf, log_w)
-        top = np.max(log_w, axis=-1, keepdims=True)
-        bad = ~np.isfinite(top)
-        if np.any(bad):
-            self.stats.degenerate_steps += 1
-            log_w = np.where(bad, 0.0, log_w)
-            top = np.where(bad, 0.0, top)
-        w = np.exp(log_w - top)
-        w /= w.sum(axis=-1, keepdims=True)
-        idx = self.resample(w, rng)
-        self.stats.resample_count += 1
+        idx = resample_log_weights(log_w, self.resample, rng, self.stats)
         x = np.take_along_axis(x, idx[..., None], axis=-2)
         modes = np.take_along_axis(modes, idx, axis=-1)
         est = x.mean(axis=-2)

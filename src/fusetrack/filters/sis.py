@@ -128,18 +128,9 @@ class PriorProposal:
         return None
 
 
-class Move(Protocol):
-    """An MCMC kernel applied after resampling (Zhai 2007, Algorithms 8-10)."""
-
-    def __call__(
-        self,
-        x: Array,
-        parents: Array,
-        loglik: Callable[[Array], Array],
-        dt: float,
-        rng: np.random.Generator,
-        filt: Any,
-    ) -> Array: ...
+Move = Callable[[Array, Array, Callable[[Array], Array], float, np.random.Generator, Any], Array]
+"""An MCMC kernel applied after resampling (Zhai 2007, Algorithms 8-10):
+``move(x, parents, loglik, dt, rng, filt) -> x`` (see :mod:`.mcmc_moves`)."""
 
 
 @dataclass(frozen=True)
@@ -165,6 +156,27 @@ def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
     x1 = np.asarray(motion.mean(x0, dt)) + rng.normal(size=x0.shape) * np.sqrt(np.diag(cov))
     ref = gauss_logpdf(x1 - np.asarray(motion.mean(x0, dt)), cov)
     return bool(np.allclose(motion.log_density(x1, x0, dt), ref, rtol=1e-9, atol=1e-9))
+
+
+def resample_log_weights(
+    log_w: Array, resample: Callable[..., Any], rng: np.random.Generator, stats: FilterStats
+) -> NDArray[np.intp]:
+    """Normalise log-weights ``(..., N)`` per run and resample: ancestor indices ``(..., N)``.
+
+    NaN counts as ``-inf``; a run whose weights all vanished keeps them equal and the step is
+    counted in ``stats.degenerate_steps`` (never NaN).
+    """
+    log_w = np.where(np.isnan(log_w), -np.inf, log_w)
+    top = np.max(log_w, axis=-1, keepdims=True)
+    bad = ~np.isfinite(top)
+    if np.any(bad):
+        stats.degenerate_steps += 1
+        log_w = np.where(bad, 0.0, log_w)
+        top = np.where(bad, 0.0, top)
+    w = np.exp(log_w - top)
+    w /= w.sum(axis=-1, keepdims=True)
+    stats.resample_count += 1
+    return np.asarray(resample(w, rng), dtype=np.intp)
 
 
 class ProposalParticleFilter:
@@ -262,17 +274,7 @@ class ProposalParticleFilter:
             log_w = (loglik(x) if loglik else 0.0) + log_q
         else:
             log_w = loglik(x) + self.log_transition(x, prev, dt) - log_q
-        log_w = np.where(np.isnan(log_w), -np.inf, log_w)
-        top = np.max(log_w, axis=-1, keepdims=True)
-        bad = ~np.isfinite(top)
-        if np.any(bad):  # every weight vanished in some run: keep them equal, say so
-            self.stats.degenerate_steps += 1
-            log_w = np.where(bad, 0.0, log_w)
-            top = np.where(bad, 0.0, top)
-        w = np.exp(log_w - top)
-        w /= w.sum(axis=-1, keepdims=True)
-        idx = self.resample(w, rng)
-        self.stats.resample_count += 1
+        idx = resample_log_weights(log_w, self.resample, rng, self.stats)
         x_res = np.take_along_axis(x, idx[..., None], axis=-2)
         if self.move is not None and loglik:
             parents = np.take_along_axis(prev, idx[..., None], axis=-2)
