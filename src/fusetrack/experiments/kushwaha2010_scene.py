@@ -30,7 +30,12 @@ from numpy.typing import NDArray
 
 from ..filters.grid import GridSpec, SensorLikelihoods
 from ..management.fusion_scheduler import FusionScheduler, IntakeStats, Packet
-from ..perception.audio_beamforming import Beamformer, MicrophoneArray
+from ..perception.audio_beamforming import (
+    Beamformer,
+    MicrophoneArray,
+    pack_audio_message,
+    unpack_audio_message,
+)
 from ..perception.video_detection import VideoDetector, fit_angle_mixture
 from ..sensors.detection_function import (
     AngularSampling,
@@ -135,6 +140,26 @@ def random_pass(rng: np.random.Generator, grid: GridSpec | None = None) -> Vehic
     )
 
 
+ADC_FULL_SCALE = 1.0  # per-channel amplitude at the 8-bit ADC's full scale (simulation units)
+ACCUMULATOR_MAX = 2**32 - 1  # the FPGA's 32-bit energy register
+
+
+def audio_on_the_wire(lam: NDArray[np.float64], window: int = 2**14) -> NDArray[np.float64]:
+    """λ as the fusion node receives it from an acoustic node (spec 003 §2.1 step 6, A-III-4).
+
+    The FPGA accumulates ``B(α) = Σ_n r_α[n]²`` over ``window`` samples of 8-bit counts in a
+    32-bit register (Kushwaha 2010, Ch. IV), and the radio message carries 36 ``uint16(B >> s)``
+    with the smallest shift ``s`` that fits (72 bytes). ``lam`` is the per-sample mean power in
+    simulation units (full scale ``ADC_FULL_SCALE`` = 128 counts); it is converted to counts,
+    saturated at the register's maximum, packed and unpacked (:func:`pack_audio_message`), and
+    converted back. The error is at most ``max(B) / 2^15`` per beam.
+    """
+    lsb2 = (ADC_FULL_SCALE / 128.0) ** 2
+    counts = np.clip(np.asarray(lam, float) * window / lsb2, 0.0, float(ACCUMULATOR_MAX))
+    *_, back = unpack_audio_message(pack_audio_message(0, 0, 0, 0, counts))
+    return back * lsb2 / window
+
+
 @dataclass(frozen=True)
 class SceneConfig:
     """Conditions of one simulated pass (defaults: the paper's deployment, spec 003 [C] choices)."""
@@ -147,6 +172,7 @@ class SceneConfig:
     false_video_peak: tuple[float, float, float, float] | None = None
     second_source: tuple[float, float] | None = None  # a stationary sound source (x, y)
     beam_alpha: float = 0.5
+    quantise_audio: bool = True  # send λ as the FPGA does: 32-bit sums, 16-bit on the radio
     preroll: float = (
         0.5  # seconds simulated before the vehicle enters the field (smoothing warm-up)
     )
@@ -380,6 +406,8 @@ def simulate_recording(
             for em, path in sources:
                 sig += propagate(em, path, mics, times - emit_t0, FS)
             lam = bf.process(sig)
+            if config.quantise_audio:
+                lam = audio_on_the_wire(lam, bf.window)
             # the energy describes the window: stamp it at the window's centre ([C])
             deliver(sid, seq, float(t) - bf.window / (2 * FS), lam, hops=1 + n_idx % 3)
 
@@ -444,6 +472,23 @@ def track_start(fin: FusionInput, threshold: float) -> int:
     return len(fin.taken)
 
 
+def track_end(fin: FusionInput, threshold: float, start: int, quiet: int = 4) -> int:
+    """Tick (exclusive) at which a track started at ``start`` ends: after ``quiet`` consecutive
+    ticks at which no audio node's max λ exceeds the start threshold (spec 003 §2.5 step 6 [C]:
+    4 ticks = 1 s; the dissertation does not describe termination). The spec's other rule, the
+    posterior mean leaving the field, cannot fire on the grid (the mean of a density on the
+    field's cells is inside the field). ``len(fin.taken)`` when the track never ends."""
+    run = 0
+    for k in range(start + 1, len(fin.taken)):
+        loud = any(
+            sid.startswith("A") and p.values.max() > threshold for sid, p in fin.taken[k].items()
+        )
+        run = 0 if loud else run + 1
+        if run == quiet:
+            return k + 1
+    return len(fin.taken)
+
+
 def run_sbe(
     layout: Layout,
     liks: list[SensorLikelihoods],
@@ -453,10 +498,15 @@ def run_sbe(
     fin: FusionInput | None = None,
     prior: NDArray[np.float64] | None = None,
     delta: float = 1.5,
+    end_at_exit: bool = False,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Posterior means ``(T, 2)`` and det Σ ``(T,)`` of one SBE approach (NaN before ``start``).
 
-    ``sensors`` restricts the fusion to a subset (needs ``fin`` to know which row is which)."""
+    ``sensors`` restricts the fusion to a subset (needs ``fin`` to know which row is which).
+    ``end_at_exit``: the track ends (NaN from the next tick on) when the posterior mean is about
+    to leave the field, i.e. mean + the tracker's velocity lies outside it -- spec 003 §2.5
+    step 6's "posterior mean leaves the field", read for a grid, whose mean always lies inside;
+    checked from the 5th tick of the track on, once the velocity has settled."""
     from ..filters.grid import DirectionalMotion, GridTracker
 
     modalities, fusion, arch = VARIANTS[variant]
@@ -474,6 +524,9 @@ def run_sbe(
         m, c = tracker.step(lik.select(modalities))
         means[k] = m
         dets[k] = np.linalg.det(c)
+        settled = k - start >= 4  # 1 s: the velocity estimate needs a few steps
+        if end_at_exit and settled and not layout.grid.contains(m + tracker.velocity):
+            break
     return means, dets
 
 
