@@ -152,6 +152,15 @@ def _box(axes: tuple[float, float], scale: float) -> tuple[int, int]:
     return 2 * round(b) + 1, 2 * round(a) + 1
 
 
+def edge_maps(seq: Any) -> list[np.ndarray]:
+    """Canny edge maps of every frame, computed once per sequence and shared by the trackers."""
+    cached = getattr(seq, "_edge_maps", None)
+    if cached is None:
+        cached = [edge_map(f) for f in seq.frames]
+        object.__setattr__(seq, "_edge_maps", cached)
+    return cached
+
+
 def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> tuple[Any, Gaussian, Any]:
     """``(filter, prior, front end)`` for one method on one rendered sequence."""
     truth = seq.truth
@@ -162,7 +171,7 @@ def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> tuple[Any,
     lang = Langevin()
     if method.startswith(("condensation", "PF-SP-PEKF", "MMPF-SP", "Galerkin")):
         sensor = EllipseEdgeSensor("head", H, W, axes)
-        zs = [[sensor.measurement(edge_map(f))] for f in seq.frames]
+        zs = [[sensor.measurement(e)] for e in edge_maps(seq)]
         fe = PrecomputedMeasurements(zs)
         if method == "condensation":
             return ProposalParticleFilter(lang, [sensor], None, n), prior, fe

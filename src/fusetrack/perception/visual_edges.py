@@ -115,21 +115,25 @@ class EllipseEdgeSensor:
         """``q_0 = N(3 sigma; 0, sigma^2 I)`` in 2-D."""
         return float(np.exp(-4.5) / (2 * np.pi * self.sigma**2))
 
+    @property
+    def pad(self) -> int:
+        """Zero border (px) around the frame in ``z``: every ray sample of a centre inside the
+        frame (or one pixel out) stays inside the padded frame."""
+        return int(np.ceil(self._radii.max())) + self.search + 2
+
     def measurement(self, edges: ArrayLike) -> Array:
-        """``z``: the edge map ``(H, W)`` flattened to ``(H W,)``."""
+        """``z``: the edge map ``(H, W)``, zero-padded by :attr:`pad`, flattened."""
         e = np.asarray(edges, dtype=np.float64)
         if e.shape != (self.height, self.width):
             raise ShapeError(invalid("edges.shape", e.shape, f"({self.height}, {self.width})"))
-        return e.reshape(-1)
+        return np.pad(e, self.pad).reshape(-1)
 
     def _edges(self, z: ArrayLike) -> Array:
         e = np.asarray(z, dtype=np.float64)
-        n = self.height * self.width
+        n = (self.height + 2 * self.pad) * (self.width + 2 * self.pad)
         if e.shape[-1] != n or e.size != n:
             raise ShapeError(
-                invalid(
-                    "z.shape", e.shape, f"one flattened edge frame of {n} values (no run batch)"
-                )
+                invalid("z.shape", e.shape, f"one padded edge frame of {n} values (no run batch)")
             )
         return e.reshape(-1)
 
@@ -142,21 +146,19 @@ class EllipseEdgeSensor:
     def _hits(self, edges: Array, centres: Array) -> Array:
         """Edge values at the ray samples around each centre: ``(M, K, S)`` (0 outside the frame).
 
-        Centres and offsets are rounded to whole pixels separately (a flat-index gather into a
+        Centres and offsets are rounded to whole pixels separately (a flat-index gather into the
         zero-padded frame; at most one pixel from rounding the sum).
         """
         _, pts = self._offsets()
-        pad = int(np.ceil(self._radii.max())) + self.search + 2
+        pad = self.pad
         wp = self.width + 2 * pad
-        img = np.zeros((self.height + 2 * pad, wp), np.float32)
-        img[pad:-pad, pad:-pad] = edges.reshape(self.height, self.width)
         off = np.rint(pts[..., 1]).astype(np.int64) * wp + np.rint(pts[..., 0]).astype(np.int64)
         col = np.clip(np.rint(centres[:, 0]), -1, self.width).astype(np.int64)
         row = np.clip(np.rint(centres[:, 1]), -1, self.height).astype(np.int64)
         base = (row + pad) * wp + (col + pad)
         inside = (np.abs(centres[:, 0] - col) <= 0.5) & (np.abs(centres[:, 1] - row) <= 0.5)
-        hits = img.reshape(-1)[base[:, None, None] + off[None]]
-        return np.where(inside[:, None, None], hits, 0.0).astype(np.float64)
+        hits = edges[base[:, None, None] + off[None]]
+        return np.where(inside[:, None, None], hits, 0.0)
 
     def _positions(self, x: ArrayLike) -> Array:
         xa = np.asarray(x, dtype=np.float64)

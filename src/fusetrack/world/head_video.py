@@ -7,7 +7,8 @@ A sequence is built in two pure steps:
    interpolated: piecewise-constant acceleration) into a truth ``[x, y, vx, vy]`` per frame, in
    pixels and pixels/frame, ``x`` = column, ``y`` = row, with optional random acceleration jitter.
 2. :func:`render` draws every frame: a textured, cluttered background (smoothed colour noise plus
-   random rectangles, bars and ellipse outlines that make Canny edges), the target and any
+   random rectangles, bars and small ellipse outlines that make Canny edges -- none head-sized,
+   so clutter is never a second head), the target and any
    distractor sprites (a filled ellipse with texture and an optional dark "hair" cap), partial
    occluders, camera ego-motion (the background canvas shifts), a global illumination gain and
    sensor noise. Frames are RGB ``uint8`` ``(T, H, W, 3)``.
@@ -139,7 +140,7 @@ def _background(scene: Scene, rng: np.random.Generator) -> NDArray[np.uint8]:
             p1 = (int(cx + ln * np.cos(ang)), int(cy + ln * np.sin(ang)))
             cv2.line(img, p0, p1, col, int(rng.integers(1, 4)))
         else:
-            ax = (int(rng.uniform(6, 22)), int(rng.uniform(6, 22)))
+            ax = (int(rng.uniform(3, 9)), int(rng.uniform(3, 9)))  # smaller than a head
             cv2.ellipse(img, (int(cx), int(cy)), ax, rng.uniform(0, 180), 0, 360, col, 2)
 
     for _ in range(scene.clutter):
