@@ -235,6 +235,14 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "trackers against condensation on synthetic head video",
             "Zhai 2007 (seed 001)",
         ),
+        ExperimentInfo(
+            "kushwaha2010-harmonic-sources",
+            "kushwaha2010_harmonic_sources:run",
+            "Kushwaha 2010 Ch. IV (Figs 29-32): several harmonic sources located from beamform and PSD "
+            "features (ML fundamentals, Gibbs + slice-sampling MAP) against number, SNR, separation, "
+            "harmonicity and directivity, with energy-based localisation",
+            "Kushwaha 2010 Ch. IV (seed 003)",
+        ),
     ]
 }
 
