@@ -243,6 +243,18 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "harmonicity and directivity, with energy-based localisation",
             "Kushwaha 2010 Ch. IV (seed 003)",
         ),
+        ExperimentInfo(
+            "kushwaha2010-cameras-a",
+            "kushwaha2010_cameras:run_a",
+            "Kushwaha 2010 Ch. V setup A (Figs 40-49): 3-D tracking with 4 smart cameras, trackers P and T0-T4",
+            "Kushwaha 2010 Ch. V (seed 003)",
+        ),
+        ExperimentInfo(
+            "kushwaha2010-cameras-b",
+            "kushwaha2010_cameras:run_b",
+            "Kushwaha 2010 Ch. V setup B (Figs 50-56): 10 cameras, small target, a one-camera gap",
+            "Kushwaha 2010 Ch. V (seed 003)",
+        ),
     ]
 }
 

@@ -96,6 +96,14 @@ def routing_tree(positions: Array, base: Array) -> list[int]:
     return parent
 
 
+def hops(parent: Sequence[int], n: int) -> int:
+    """Links a message from camera ``n`` crosses to reach the base station."""
+    k, p = 1, parent[n]
+    while p >= 0:
+        k, p = k + 1, parent[p]
+    return k
+
+
 def children_first(parent: Sequence[int]) -> list[int]:
     """Nodes ordered so that every node comes after all of its descendants."""
     depth = []
@@ -203,7 +211,8 @@ class StepReport:
 
     position: Array
     quaternion: Array
-    bytes_sent: int
+    bytes_sent: int  # payload the cameras originate (the paper's accounting, one hop each)
+    link_bytes: int  # the same payload counted on every link it crosses on the routing tree
     cameras_used: int
     extra: dict[str, Array] = field(default_factory=dict)
 
@@ -286,7 +295,8 @@ class Particle3DTracker(_Tracker):
         used = self.net.usable(x0, self.q)
         particles = x0 + s.sigma * rng.standard_normal((s.n_particles, 3))
         logw = {n: self.net.log_similarity(n, frames[n], particles, self.q, s.sharpness) for n in used}
-        nbytes = STATE_BYTES
+        nbytes = links = STATE_BYTES
+        parent = self.net.parent
         estimate: Array | None = None
         if not used:
             estimate = None
@@ -295,6 +305,7 @@ class Particle3DTracker(_Tracker):
             w = np.exp(total - logsumexp(total))
             estimate = w @ particles  # MMSE, Eq. 82
             nbytes += WEIGHT_BYTES * s.n_particles * len(used)
+            links += sum(WEIGHT_BYTES * s.n_particles * hops(parent, n) for n in used)
         else:
             mixtures = {}
             for n in used:
@@ -302,13 +313,15 @@ class Particle3DTracker(_Tracker):
                 mixtures[n], _ = fit_kde_mixture(particles, w, rng, m_max=s.m_max)
             if self.mode == "T1":
                 nbytes += sum(GMM3_BYTES * len(g.weights) for g in mixtures.values())
+                links += sum(GMM3_BYTES * len(g.weights) * hops(parent, n) for n, g in mixtures.items())
                 fused = _product_all(list(mixtures.values()), s.base_components)
             else:
-                fused, sent = _aggregate(self.net.parent, mixtures, s.k_reduce, rng)
+                fused, sent = _aggregate(parent, mixtures, s.k_reduce, rng)
                 nbytes += sent
+                links += sent
             estimate = mixture_mode(fused)
         pos = self._finish(estimate, frames, used)
-        return StepReport(pos, self.q.copy(), nbytes, len(used))
+        return StepReport(pos, self.q.copy(), nbytes, links, len(used))
 
 
 def _product_all(mixtures: Sequence[GaussianMixture], keep: int) -> GaussianMixture:
@@ -392,23 +405,27 @@ class ImagePlaneTracker(_Tracker):
         x0 = self.predicted()
         used = self.net.usable(x0, self.q)
         mixtures = {n: self._camera_mixture(n, frames[n], x0, rng) for n in used}
-        nbytes = STATE_BYTES
+        nbytes = links = STATE_BYTES
         estimate: Array | None = None
         extra: dict[str, Array] = {}
         if used and self.mode == "T3":
             lifted = {n: self._lift(n, g, x0) for n, g in mixtures.items()}
             fused, sent = _aggregate(self.net.parent, lifted, self.s.k_reduce, rng)
             nbytes += sent
+            links += sent
             estimate = mixture_mode(fused)
         elif used:
             nbytes += sum(GMM2_BYTES * len(g.weights) for g in mixtures.values())
+            links += sum(
+                GMM2_BYTES * len(g.weights) * hops(self.net.parent, n) for n, g in mixtures.items()
+            )
             cams = [self.net.cameras[n] for n in used]
             gms = [mixtures[n] for n in used]
             prior_cov = self.s.sigma**2 * np.eye(3)
             estimate = map_estimate(cams, gms, x0, prior_cov)
             extra["eq103"] = closed_form_map(cams, gms, x0, prior_cov)
         pos = self._finish(estimate, frames, used)
-        return StepReport(pos, self.q.copy(), nbytes, len(used), extra)
+        return StepReport(pos, self.q.copy(), nbytes, links, len(used), extra)
 
 
 def _neg_log_posterior(
@@ -542,8 +559,9 @@ class RayIntersectionTracker(_Tracker):
             estimate = intersect_rays(np.array([c.centre for c in cams]), rays)
         used = list(estimates)
         nbytes = PIXEL_BYTES * len(estimates)
+        links = sum(PIXEL_BYTES * hops(self.net.parent, n) for n in estimates)
         pos = self._finish(estimate, frames, [])
         for n in self.net.usable(pos, self.q):  # cameras the target enters start a 2-D tracker
             if n not in self.pixels:
                 self._start(n, frames[n], pos, reference_from_frame=False)
-        return StepReport(pos, self.q.copy(), nbytes, len(used))
+        return StepReport(pos, self.q.copy(), nbytes, links, len(used))

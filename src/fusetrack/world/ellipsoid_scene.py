@@ -162,25 +162,24 @@ def perimeter_cameras(
     side: float = 30.0,
     n: int = 10,
     height: float = 4.0,
-    focal: float = 150.0,
+    focal: float = 260.0,
     size: tuple[int, int] = (160, 120),
+    reach: float = 12.0,
 ) -> list[EllipsoidCamera]:
     """Setup B (spec Sec. 3.8): ``n`` cameras spread along the perimeter of a ``side`` x ``side``
-    area, 4 m high, each looking across the area at a point near the middle of the far side."""
+    area, ``height`` m high, each looking inwards at a point ``reach`` m away, so that each
+    covers a patch of the area and the middle is seen by a few cameras only."""
     cams = []
     for i in range(n):
         s = (i + 0.5) / n * 4.0  # position along the perimeter in units of sides
         k, f = int(s), s - int(s)
-        edge = [
+        xy, inward = [
             (np.array([f * side, 0.0]), np.array([0.0, 1.0])),
             (np.array([side, f * side]), np.array([-1.0, 0.0])),
             (np.array([side * (1 - f), side]), np.array([0.0, -1.0])),
             (np.array([0.0, side * (1 - f)]), np.array([1.0, 0.0])),
         ][k]
-        xy, inward = edge
-        look_xy = 0.5 * np.array([side, side]) + 0.25 * side * (0.5 - f) * np.array(
-            [-inward[1], inward[0]]
-        )
+        look_xy = xy + reach * inward
         cams.append(
             _camera(
                 f"cam{i}",
