@@ -99,7 +99,10 @@ def _live_demo(args: argparse.Namespace) -> int:
         print(f"dashboard: {running.url}/", flush=True)
         print(f"replaying the demo scenario over udp://{host}:{port} at {args.speed}x", flush=True)
         out = replay(scenario.readings, cfg, f"udp://{host}:{port}", speed=args.speed)
-        time.sleep(cfg.fusion.lag + (cfg.fusion.idle_flush or 0.0) + 0.5)
+        last = round(scenario.truth_times[-1] * cfg.fusion.rate_hz)
+        deadline = time.monotonic() + cfg.fusion.lag + (cfg.fusion.idle_flush or 0.0) + 2.0
+        while running.node.aligner.last_tick < last and time.monotonic() < deadline:
+            time.sleep(0.05)  # the node fuses the stream's last readings once it pauses
         state = running.node.history[-1] if running.node.history else None
         err = math.nan
         if state is not None:
