@@ -154,12 +154,22 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
+def active_counts(
+    rng: np.random.Generator, runs: int, thresholds: tuple[float, ...] = (0.72, 0.75, 0.78)
+) -> pd.Series:
+    """Mean number of active sensors per step on S1 truths, by threshold (Fig 15 b-d; the
+    filters run at 75% and 78% only, 72% is shown for the activation pattern)."""
+    counts = {t: [] for t in thresholds}  # type: dict[float, list[float]]
+    for _ in range(runs):
+        truth = trajectory("S1", rng)
+        for t in thresholds:
+            counts[t].append(float(measurements(truth, t, rng)[2].mean()))
+    return pd.Series({t: float(np.mean(v)) for t, v in counts.items()})
+
+
 def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=100, quick=2)
-    cfgs = [
-        {"scenario": "S1", "threshold": t}
-        for t in ((0.75, 0.78) if ctx.quick else (0.72, 0.75, 0.78))
-    ]
+    cfgs = [{"scenario": "S1", "threshold": t} for t in (0.75, 0.78)]
     cfgs += [{"scenario": s, "threshold": 0.75} for s in ("S2", "S3")]
     df = ctx.monte_carlo(run_once, cfgs, runs)
     per_run = df.groupby(["scenario", "threshold", "method", "run"]).agg(
@@ -280,7 +290,7 @@ def run(ctx: RunContext) -> Outcome:
                 title=f"{s}: run 0",
             ).name
         )
-    active = df.groupby("threshold")["active"].mean()
+    active = active_counts(np.random.default_rng(ctx.seed), runs=5 if ctx.quick else 50)
     table = pd.concat({"paper": PAPER, "ours": s1.loc[PAPER.index]}, axis=1)
     body = f"""
 ## Set-up
