@@ -1,0 +1,63 @@
+"""Particle filters over frames: condensation, MMPF-SP and the App. B loop on a clean sequence."""
+
+import numpy as np
+
+from fusetrack.core import Gaussian
+from fusetrack.filters.multiple_model import MultipleModelParticleFilter
+from fusetrack.filters.sis import ProposalParticleFilter
+from fusetrack.motion.langevin import Langevin
+from fusetrack.perception.visual_edges import EllipseEdgeSensor, edge_map
+from fusetrack.perception.visual_tracking import PrecomputedMeasurements, lost_frames, track_frames
+from fusetrack.world.head_video import Actor, Scene, Sprite, keyframe_trajectory, render
+
+
+def test_lost_frames_by_hand():
+    err = np.array([1, 9, 9, 9, 9, 1, 9, 9, 9, 9, 9, 1.0])
+    assert lost_frames(err, 5.0) == (True, 6)
+    assert lost_frames(err, 5.0, frames=6) == (False, -1)
+    assert lost_frames(err, np.full(12, 10.0)) == (False, -1)
+
+
+def _sequence():
+    tr = keyframe_trajectory([40, 45, 2.0, 0.5], [(0, 2, 0.5), (8, 3, -1), (15, 0, 0)], 20)
+    seq = render(
+        Scene(height=90, width=120, clutter=10, noise=3.0),
+        Actor(Sprite(), tr),
+        np.random.default_rng(0),
+    )
+    sensor = EllipseEdgeSensor("head", 90, 120, seq.sprite.axes)
+    return (
+        seq,
+        sensor,
+        PrecomputedMeasurements([[sensor.measurement(edge_map(f))] for f in seq.frames]),
+    )
+
+
+def test_condensation_follows_a_clean_head():
+    seq, sensor, fe = _sequence()
+    pf = ProposalParticleFilter(Langevin(), [sensor], None, 150)
+    tk = track_frames(
+        pf,
+        Gaussian(seq.truth[0], np.diag([4, 4, 1, 1.0])),
+        seq.frames,
+        fe,
+        np.random.default_rng(1),
+    )
+    err = np.hypot(*(tk.estimates[:, :2] - seq.truth[:, :2]).T)
+    assert tk.estimates.shape == (20, 4)
+    assert np.sqrt(np.mean(err**2)) < 2.0
+
+
+def test_mmpf_sp_with_the_edge_sensor():
+    from fusetrack.experiments.zhai2007_visual import PI_B, _prior6, mm_models
+
+    seq, sensor, fe = _sequence()
+    mm = MultipleModelParticleFilter(
+        mm_models(), PI_B, [sensor], 100, proposal="sp-pekf", n_channels=5
+    )
+    prior = _prior6(Gaussian(seq.truth[0], np.diag([4, 4, 1, 1.0])))
+    tk = track_frames(mm, prior, seq.frames, fe, np.random.default_rng(2))
+    err = np.hypot(*(tk.estimates[:, :2] - seq.truth[:, :2]).T)
+    assert tk.estimates.shape == (20, 6)
+    assert np.sqrt(np.mean(err**2)) < 2.0
+    assert tk.info["degenerate_steps"] == 0
