@@ -4,8 +4,9 @@ Four acoustic nodes at the corners of a 10 m × 5 m field, each a 4-microphone 1
 (spec 003 A-IV-1), 100 kHz, C = 350 m/s, 25 dB SNR, 36 beams, ω_max = 1 kHz, a 1 s PSD at 4 kHz
 (N_FFT = 4000, top 30 bins) and 40 Gibbs samples (Table 10). Sources are drawn as in spec 003 §3.5
 [C]: uniform in the field at least 1 m from the nodes, fundamentals uniform in 40–200 Hz at least
-5 Hz apart, harmonic powers ∝ 1/h, random phases. The beamform is taken over the FPGA's 2^14
-samples (Ch. IV hardware). Every run draws new sources and noise; within a run every sweep point
+5 Hz apart, harmonic powers ∝ 1/h, random phases. The beamform is taken over the whole second
+(Table 10's data length; the FPGA's 2^14 samples leave cross-terms between harmonics a few Hz
+apart that Eq. 53 assumes away). Every run draws new sources and noise; within a run every sweep point
 shares the random numbers (common random numbers).
 
 Sweeps (Fig. 30a–c, 31, 32a): number of sources 1–4; SNR 7–52 dB (two sources); separation
@@ -43,7 +44,7 @@ from ..world.harmonic_sources import HarmonicSource, noise_sigma, random_sources
 FIELD = (0.0, 10.0, 0.0, 5.0)
 SENSORS = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0], [0.0, 5.0]])
 FS = 100e3
-BEAM_SAMPLES = 2**14
+BEAM_SAMPLES = 100_000 - 64  # Table 10: 1 s of audio (less the delay-table margin)
 PSD_SECONDS = 1.0
 
 SOURCES = (1, 2, 3, 4)
@@ -66,7 +67,7 @@ def network() -> AcousticNetwork:
 def simulate_features(
     sources: list[HarmonicSource], net: AcousticNetwork, snr_db: float, rng: np.random.Generator
 ) -> list[NodeFeatures]:
-    """Every node's beamform (2^14 samples, all four mics) and compressed PSD (1 s of mic 0), with
+    """Every node's beamform (``BEAM_SAMPLES``, all four mics) and compressed PSD (1 s of mic 0), with
     white noise at ``snr_db`` (mean received power over all microphones / σ_w²)."""
     mics = net.microphones()  # (K, P, 2)
     k, p, _ = mics.shape
@@ -156,11 +157,11 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     if config.get("ebl", False):
         powers, _ = harmonic_powers(res.f0, [f.psd for f in feats], FrequencyModel())
         energy = powers.sum(-1)  # (K, M): each separated source's harmonic power at each node
-        est = np.vstack(
+        ebl_xy = np.vstack(
             [energy_localise(energy[:, m], SENSORS, field_box=FIELD)[0] for m in range(n)]
         )
         rows.append(
-            {**base, "method": "EBL", "error": match_error(est, truth)[0], "cpu_seconds": 0.0}
+            {**base, "method": "EBL", "error": match_error(ebl_xy, truth)[0], "cpu_seconds": 0.0}
         )
     return rows
 
@@ -371,7 +372,7 @@ def run(ctx: RunContext) -> Outcome:
 Table 10 of the paper beside ours: f_s 100 kHz, C 350 m/s, 1 s of audio, ω_max 1 kHz, 25 dB SNR,
 36 beams, N_FFT 4000, 40 Gibbs samples ({gibbs} in this run) — the same. Four nodes at the corners of
 10 m × 5 m, each a 4-microphone 10 × 6 cm array; {runs} run(s) per sweep point (the paper does not say
-how many it used). Beamform over 2^14 samples (the FPGA's window), PSD from 1 s of one microphone
+how many it used). Beamform over the whole second, PSD from 1 s of one microphone
 decimated to 4 kHz, top 30 bins sent. The error is the paper's ``E = (1/M) Σ ‖x - x̃‖`` after the
 best assignment of estimates to sources (the paper calls it RMS; it is a mean).
 

@@ -22,7 +22,8 @@ def _residual(y: Array, D: Array) -> tuple[Array, Array]:
     dtd = np.swapaxes(D, -1, -2) @ D
     dty = np.swapaxes(D, -1, -2) @ y
     m = D.shape[-1]
-    S = np.linalg.solve(dtd + 1e-18 * np.eye(m), dty[..., None])[..., 0]
+    ridge = 1e-9 * np.trace(dtd, axis1=-2, axis2=-1)[..., None, None] + 1e-300
+    S = np.linalg.solve(dtd + ridge * np.eye(m), dty[..., None])[..., 0]
     S = np.maximum(S, 0.0)
     r = y - (D @ S[..., None])[..., 0]
     return S, (r * r).sum(-1)
