@@ -49,23 +49,30 @@ def _inverse_cdf_sorted(weights: np.ndarray, u: np.ndarray) -> np.ndarray:  # pr
 
 @numba.njit(cache=True, nogil=True)
 def _systematic_sorted(weights: np.ndarray, u0: np.ndarray) -> np.ndarray:  # pragma: no cover - jit
-    """:func:`_inverse_cdf_sorted` with ``u_k = (k + u0[r]) / n`` made on the fly (no array of
-    uniforms); the same floating-point operations as ``(np.arange(n) + u0) / n``."""
+    """Systematic ancestors, ``u_k = (k + u0[r]) / n``, by one merge per row without
+    divisions: ``u_k * total = (k + u0) * (total / n)`` is compared with the running sum of
+    the unnormalised weights. The same indices as :func:`inverse_cdf` of those ``u`` except
+    where a ``u_k`` and a cumulative weight agree to rounding (one comparison in ~1e16); the
+    merge stops at the last positive weight, so trailing zero-weight particles are never chosen.
+    """
     rows, n = weights.shape
     out = np.empty((rows, n), dtype=np.intp)
     for r in range(rows):
         total = 0.0
+        last = 0
         for i in range(n):
-            total += weights[r, i]
+            wi = weights[r, i]
+            total += wi
+            if wi > 0.0:
+                last = i
+        step = total / n
         j = 0
-        acc = weights[r, 0]
-        c = acc / total
+        c = weights[r, 0]
         for k in range(n):
-            u = (k + u0[r]) / n
-            while u >= c and j < n - 1:
+            u = (k + u0[r]) * step
+            while u >= c and j < last:
                 j += 1
-                acc += weights[r, j]
-                c = acc / total
+                c += weights[r, j]
             out[r, k] = j
     return out
 

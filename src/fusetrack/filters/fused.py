@@ -50,19 +50,26 @@ RANGE_BEARING = 2
 N_PARAMS = 10
 PARALLEL_MIN = 1 << 16  # particles (all runs together) from which the threaded loops pay
 CHUNK = 4096  # particles per work item of the threaded loops
+NOISE_STREAMS = 4  # generators that share a large draw of process noise (fixed: not the threads)
+SPLIT_MIN = PARALLEL_MIN  # particles per generator from which the noise is drawn by the streams
 
 _TWO_PI = 2.0 * math.pi
 
 __all__ = [
     "BEARING",
     "KINDS",
+    "NOISE_STREAMS",
     "N_PARAMS",
     "PARALLEL_MIN",
     "RANGE",
     "RANGE_BEARING",
+    "SPLIT_MIN",
+    "linear_gaussian_draw",
     "linear_gaussian_step",
     "log_likelihood_sum",
     "sensor_params",
+    "split_bounds",
+    "standard_normals",
 ]
 
 
@@ -101,75 +108,40 @@ def _twins(py: Callable[..., Any]) -> tuple[Any, Any]:
     dispatchers of one function would keep overwriting (and reloading) each other's entry."""
     twin = types.FunctionType(py.__code__, py.__globals__, py.__name__ + "_serial")
     twin.__qualname__ = py.__qualname__ + "_serial"
-    serial = numba.njit(cache=True, nogil=True)(twin)
-    return serial, numba.njit(cache=True, nogil=True, parallel=True)(py)
-
-
-# ---------------------------------------------------------------------------------------------
-# per-particle arithmetic (inlined into the loops)
-
-
-@numba.njit(cache=True, inline="always")
-def _wrap(a):  # pragma: no cover - jit
-    """``core.angles.wrap_angle_inplace`` for one value: ``a - 2 pi rint(a / 2 pi)`` into [-pi, pi)."""
-    a = a - _TWO_PI * np.rint(a / _TWO_PI)
-    if a < -math.pi:
-        a += _TWO_PI
-    if a >= math.pi:
-        a -= _TWO_PI
-    return a
-
-
-@numba.njit(cache=True, inline="always")
-def _sensor_ll(kind, p, k, z0, z1, x, r, i, ang):  # pragma: no cover - jit
-    """``log p(z | x)`` of sensor ``k`` (``SensorBase.log_likelihood``, diagonal ``R``) for
-    particle ``x[r, i]``; ``ang`` is its ``atan2(d_y, d_x)`` (precomputed, angular kinds only)."""
-    dx = x[r, i, int(p[k, 0])] - p[k, 3]
-    dy = x[r, i, int(p[k, 1])] - p[k, 4]
-    if kind == 0:  # Bearing: wrap(z - wrap(atan2(dy, dx) - heading))
-        b = ang
-        if p[k, 6] != 0.0:
-            b -= p[k, 6]
-        e = _wrap(z0 - _wrap(b))
-        return p[k, 9] - 0.5 * (e * e * p[k, 7])
-    if kind == 1:  # Range in 2-D or 3-D: z - |d|
-        s = 0.0 + dx * dx + dy * dy
-        if p[k, 2] >= 0.0:
-            dz = x[r, i, int(p[k, 2])] - p[k, 5]
-            s += dz * dz
-        e = z0 - math.sqrt(s)
-        return p[k, 9] - 0.5 * (e * e * p[k, 7])
-    # RangeBearing: [z0 - hypot(dx, dy), wrap(z1 - wrap(atan2(dy, dx) - heading))]
-    b = ang
-    if p[k, 6] != 0.0:
-        b -= p[k, 6]
-    e0 = z0 - math.hypot(dx, dy)
-    e1 = _wrap(z1 - _wrap(b))
-    return p[k, 9] - 0.5 * (e0 * e0 * p[k, 7] + e1 * e1 * p[k, 8])
+    # error_model="numpy": no ZeroDivisionError checks, which stop the loops from vectorising
+    serial = numba.njit(cache=True, nogil=True, error_model="numpy")(twin)
+    return serial, numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)(py)
 
 
 # ---------------------------------------------------------------------------------------------
 # propagation: x'_i = F x_{a_i} + G eps_i
 
 
+@numba.njit(cache=True, inline="always")
+def _affine(F, G, xj, e, o):  # pragma: no cover - jit
+    """``o = F xj + G e`` for one particle (1-D rows of length ``d``)."""
+    d = o.shape[0]
+    for a in range(d):
+        m = 0.0
+        for b in range(d):
+            m += F[a, b] * xj[b] + G[a, b] * e[b]
+        o[a] = m
+
+
 def _step_py(x, anc, F, G, eps, out):  # pragma: no cover - jit
-    rows, n, d = out.shape
+    rows, n, _ = out.shape
     nch = (n + CHUNK - 1) // CHUNK
     gather = anc.shape[1] > 0
     for c in numba.prange(rows * nch):
         r = c // nch
         lo = (c % nch) * CHUNK
         hi = min(n, lo + CHUNK)
+        xr = x[r]
+        er = eps[r]
+        orow = out[r]
+        ar = anc[r] if gather else anc[0]
         for i in range(lo, hi):
-            j = anc[r, i] if gather else i
-            for a in range(d):
-                m = 0.0
-                for b in range(d):
-                    m += F[a, b] * x[r, j, b]
-                s = 0.0
-                for b in range(d):
-                    s += G[a, b] * eps[r, i, b]
-                out[r, i, a] = m + s
+            _affine(F, G, xr[ar[i] if gather else i], er[i], orow[i])
 
 
 _step_serial, _step_parallel = _twins(_step_py)
@@ -194,38 +166,188 @@ def linear_gaussian_step(
 
 
 # ---------------------------------------------------------------------------------------------
+# propagation with the draw inside the loop: x'_i = F x_{a_i} + G eps_i, eps_i from streams
+
+
+def _draw_step_py(streams, x, anc, F, G, out):  # pragma: no cover - jit
+    """:func:`_step_py` with ``eps`` drawn in the loop: the particles of all rows, flattened
+    (run-major), are cut into ``len(streams)`` contiguous equal parts and part ``c`` draws its
+    ``d`` normals per particle, in order, from ``streams[c]`` (what ``standard_normal`` of
+    that part's shape ``(m, d)`` would return)."""
+    rows, n, d = out.shape
+    total = rows * n
+    nst = len(streams)
+    per = (total + nst - 1) // nst
+    gather = anc.shape[1] > 0
+    for c in numba.prange(nst):
+        g = streams[c]
+        e = np.empty(d)
+        for p in range(c * per, min(total, (c + 1) * per)):
+            r = p // n
+            i = p - r * n
+            for a in range(d):
+                e[a] = g.standard_normal()
+            _affine(F, G, x[r, anc[r, i] if gather else i], e, out[r, i])
+
+
+_draw_step_serial, _draw_step_parallel = _twins(_draw_step_py)
+
+
+def split_bounds(total: int, parts: int) -> list[tuple[int, int]]:
+    """The ``[lo, hi)`` particle ranges of the ``parts`` noise streams over ``total`` particles
+    (as :func:`linear_gaussian_draw` cuts them)."""
+    per = -(-total // parts)
+    return [(min(total, c * per), min(total, (c + 1) * per)) for c in range(parts)]
+
+
+def standard_normals(streams: tuple[np.random.Generator, ...], shape: tuple[int, ...]) -> Array:
+    """NumPy reference of the draws of :func:`linear_gaussian_draw`: normals of ``shape``
+    ``(..., d)`` whose particles (all leading axes flattened) are cut into ``len(streams)``
+    contiguous parts, part ``c`` drawn by ``streams[c].standard_normal``. One stream is
+    ``streams[0].standard_normal(shape)``."""
+    if len(streams) == 1:
+        return streams[0].standard_normal(shape)
+    d = shape[-1]
+    flat = np.empty((int(np.prod(shape[:-1], dtype=np.int64)), d))
+    for g, (lo, hi) in zip(streams, split_bounds(flat.shape[0], len(streams))):
+        g.standard_normal(out=flat[lo:hi])
+    return flat.reshape(shape)
+
+
+def linear_gaussian_draw(
+    states: Array,
+    F: Array,
+    G: Array,
+    streams: tuple[np.random.Generator, ...],
+    ancestors: NDArray[np.intp] | None = None,
+) -> Array:
+    """``F x_{a_i} + G eps_i`` for states ``(R, N, d)`` with ``eps`` drawn inside the loop from
+    the generators ``streams`` (Numba's implementation of ``Generator.standard_normal``, the
+    same numbers as NumPy's). Several streams fill their parts of the particles on parallel
+    threads; the result depends on the streams, never on the number of threads.
+
+    The NumPy reference is ``states[r, a] @ F.T + standard_normals(streams, shape) @ G.T``.
+    """
+    x = np.ascontiguousarray(states, dtype=np.float64)
+    anc = _NO_ANCESTORS if ancestors is None else np.ascontiguousarray(ancestors, dtype=np.intp)
+    out = np.empty(x.shape if ancestors is None else (x.shape[0], anc.shape[1], x.shape[2]))
+    fn = _draw_step_parallel if len(streams) > 1 else _draw_step_serial
+    fn(tuple(streams), x, anc, np.ascontiguousarray(F, float), np.ascontiguousarray(G, float), out)
+    return out
+
+
+_NO_ANCESTORS = np.zeros((1, 0), dtype=np.intp)
+
+
+# ---------------------------------------------------------------------------------------------
 # weighting: v_i = log w_i + sum_k log p(z_k | x_i), with the running maxima
+#
+# Angles without atan2 of the state: the residual of a bearing z (sensor heading h) is the
+# angle between the direction phi = z + h and the relative position (dx, dy),
+#     wrap(z - wrap(atan2(dy, dx) - h)) = -atan2(c_phi dy - s_phi dx, c_phi dx + s_phi dy),
+# and only its square enters the Gaussian, so |atan2(s, c)| = atan2(|s|, c) is all that is
+# needed. cos/sin of phi are computed once per (run, measurement); per particle the angle comes
+# from a branch-free rational approximation of atan on [0, 1] (Cephes' atan, about 1 ulp), which
+# the compiler vectorises, where libm's scalar atan2 cannot be.
+
+_PIO2 = math.pi / 2.0
+_PIO4 = math.pi / 4.0
+_MOREBITS = 6.123233995736765886130e-17  # pi/2 - float(pi/2)
+_P0, _P1, _P2, _P3, _P4 = (
+    -8.750608600031904122785e-1,
+    -1.615753718733365076637e1,
+    -7.500855792314704667340e1,
+    -1.228866684490136173410e2,
+    -6.485021904942025371773e1,
+)
+_Q0, _Q1, _Q2, _Q3, _Q4 = (
+    2.485846490142306297962e1,
+    1.650270098316988542046e2,
+    4.328810604912902668951e2,
+    4.853903996359136964868e2,
+    1.945506571482613964425e2,
+)
 
 
-def _relative_py(x, params, slots, dxy):  # pragma: no cover - jit
-    """``dxy[0, slots[k], r, i] = x[r, i, ix] - sx`` and ``dxy[1, ...]`` the same in y, for the
-    angular sensors ``k`` (``slots[k] >= 0``): the arguments of one vectorised ``atan2``."""
-    rows, n, _ = x.shape
-    nk = slots.shape[0]
-    nch = (n + CHUNK - 1) // CHUNK
-    for c in numba.prange(rows * nch):
-        r = c // nch
-        lo = (c % nch) * CHUNK
-        hi = min(n, lo + CHUNK)
-        for k in range(nk):
-            j = slots[k]
-            if j < 0:
-                continue
-            ix = int(params[k, 0])
-            iy = int(params[k, 1])
-            sx = params[k, 3]
-            sy = params[k, 4]
-            for i in range(lo, hi):
-                dxy[0, j, r, i] = x[r, i, ix] - sx
-                dxy[1, j, r, i] = x[r, i, iy] - sy
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _abs_angle(s, c):  # pragma: no cover - jit
+    """``|atan2(s, c)|`` in ``[0, pi]`` without branches (Cephes ``atan`` on ``[0, 1]``:
+    ``t > 0.66`` is reduced by ``atan t = pi/4 + atan((t - 1) / (t + 1))``)."""
+    a_s = abs(s)
+    a_c = abs(c)
+    steep = a_s > a_c
+    lo = min(a_s, a_c)
+    hi = max(a_s, a_c)
+    hi = hi if hi > 0.0 else 1.0  # (0, 0): angle 0, as atan2(0, 0)
+    big = lo > 0.66 * hi
+    num = lo - hi if big else lo
+    den = lo + hi if big else hi
+    t = num / den
+    z = t * t
+    p = (((_P0 * z + _P1) * z + _P2) * z + _P3) * z + _P4
+    q = ((((z + _Q0) * z + _Q1) * z + _Q2) * z + _Q3) * z + _Q4
+    y = t + t * (z * p / q)
+    y = y + (_PIO4 + 0.5 * _MOREBITS) if big else y  # atan(lo / hi) in [0, pi/4]
+    y = (_PIO2 - y) + _MOREBITS if steep else y  # atan(a_s / a_c) in [0, pi/2]
+    return (2.0 * _PIO2 - y) + 2.0 * _MOREBITS if c < 0.0 else y
 
 
-_relative_serial, _relative_parallel = _twins(_relative_py)
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _add_bearing(px, py, sx, sy, cphi, sphi, half_iv, log_norm, out):  # pragma: no cover - jit
+    """``out += log p(z | x)`` of a bearing for contiguous position columns ``px, py``."""
+    for i in range(out.shape[0]):
+        dx = px[i] - sx
+        dy = py[i] - sy
+        at = (dx == 0.0) & (dy == 0.0)  # atan2(0, 0) = 0: the direction (1, 0)
+        dx = 1.0 if at else dx
+        e = _abs_angle(cphi * dy - sphi * dx, cphi * dx + sphi * dy)
+        v = out[i] + (log_norm - half_iv * (e * e))
+        out[i] = -np.inf if v != v else v
 
 
-def _llsum_py(x, lw, kinds, params, z, usable, slots, ang, out, cmax):  # pragma: no cover - jit
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _add_range(px, py, pz, sx, sy, sz, z0, half_iv, log_norm, out):  # pragma: no cover - jit
+    """``out += log p(z | x)`` of a range (``pz`` empty in 2-D)."""
+    three = pz.shape[0] > 0
+    for i in range(out.shape[0]):
+        dx = px[i] - sx
+        dy = py[i] - sy
+        s = dx * dx + dy * dy
+        if three:
+            dz = pz[i] - sz
+            s += dz * dz
+        e = z0 - math.sqrt(s)
+        v = out[i] + (log_norm - half_iv * (e * e))
+        out[i] = -np.inf if v != v else v
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _add_range_bearing(px, py, sx, sy, z0, cphi, sphi, h0, h1, log_norm, out):
+    # pragma: no cover - jit
+    """``out += log p(z | x)`` of a range-bearing pair."""
+    for i in range(out.shape[0]):
+        dx = px[i] - sx
+        dy = py[i] - sy
+        e0 = z0 - math.sqrt(dx * dx + dy * dy)
+        at = (dx == 0.0) & (dy == 0.0)
+        dx = 1.0 if at else dx
+        e1 = _abs_angle(cphi * dy - sphi * dx, cphi * dx + sphi * dy)
+        v = out[i] + (log_norm - (h0 * (e0 * e0) + h1 * (e1 * e1)))
+        out[i] = -np.inf if v != v else v
+
+
+@numba.njit(cache=True, inline="always")
+def _column(x, r, lo, j, col):  # pragma: no cover - jit
+    """``col[i] = x[r, lo + i, j]``: one state component of a chunk, contiguous (the loops
+    above vectorise on contiguous columns, not on the strided state rows)."""
+    for i in range(col.shape[0]):
+        col[i] = x[r, lo + i, j]
+
+
+def _llsum_py(x, lw, kinds, params, zc, usable, out, cmax):  # pragma: no cover - jit
     """``out[r, i] = lw[r, i] + sum_k ll_k`` (NaN -> -inf), ``cmax[r, c, k]`` = max over chunk
-    ``c`` of the running sum after measurement ``k``. Unusable ``(r, k)`` add 0."""
+    ``c`` of the running sum after measurement ``k``. Unusable ``(r, k)`` add 0. ``zc[r, k]`` is
+    ``[z0, z1, cos phi, sin phi]`` with ``phi`` the bearing component plus the heading."""
     rows, n, _ = x.shape
     nk = kinds.shape[0]
     nch = (n + CHUNK - 1) // CHUNK
@@ -234,26 +356,43 @@ def _llsum_py(x, lw, kinds, params, z, usable, slots, ang, out, cmax):  # pragma
         ch = c % nch
         lo = ch * CHUNK
         hi = min(n, lo + CHUNK)
-        for i in range(lo, hi):
-            v = lw[r, i]
-            out[r, i] = -np.inf if v != v else v
+        o = out[r, lo:hi]
+        for i in range(hi - lo):
+            v = lw[r, lo + i]
+            o[i] = -np.inf if v != v else v
+        px = np.empty(hi - lo)
+        py = np.empty(hi - lo)
+        pz = np.empty(hi - lo)
+        have = (-1, -1, -1)  # which components px, py, pz hold
         for k in range(nk):
+            if usable[r, k]:
+                p = params[k]
+                kind = kinds[k]
+                ix = int(p[0])
+                iy = int(p[1])
+                iz = int(p[2]) if kind == 1 else -1
+                if ix != have[0]:
+                    _column(x, r, lo, ix, px)
+                if iy != have[1]:
+                    _column(x, r, lo, iy, py)
+                if iz >= 0 and iz != have[2]:
+                    _column(x, r, lo, iz, pz)
+                have = (ix, iy, iz if iz >= 0 else have[2])
+                if kind == 0:
+                    _add_bearing(px, py, p[3], p[4], zc[r, k, 2], zc[r, k, 3], 0.5 * p[7], p[9], o)
+                elif kind == 1:
+                    _add_range(
+                        px, py, pz[: hi - lo if iz >= 0 else 0], p[3], p[4], p[5], zc[r, k, 0],
+                        0.5 * p[7], p[9], o,
+                    )  # fmt: skip
+                else:
+                    _add_range_bearing(
+                        px, py, p[3], p[4], zc[r, k, 0], zc[r, k, 2], zc[r, k, 3], 0.5 * p[7],
+                        0.5 * p[8], p[9], o,
+                    )  # fmt: skip
             m = -np.inf
-            kind = kinds[k]
-            j = slots[k]
-            z0 = z[r, k, 0]
-            z1 = z[r, k, 1]
-            use = usable[r, k]
-            for i in range(lo, hi):
-                v = out[r, i]
-                if use:
-                    a = ang[j, r, i] if j >= 0 else 0.0
-                    v = v + _sensor_ll(kind, params, k, z0, z1, x, r, i, a)
-                    if v != v:
-                        v = -np.inf
-                    out[r, i] = v
-                if v > m:
-                    m = v
+            for i in range(hi - lo):
+                m = max(m, o[i])
             cmax[r, ch, k] = m
 
 
@@ -273,31 +412,29 @@ def log_likelihood_sum(
 
     ``states`` ``(R, N, d)``; ``kinds`` ``(K,)`` and ``params`` ``(K, N_PARAMS)`` from the
     sensors' ``fused_likelihood``; ``z`` ``(R, K, 2)`` (each measurement's value per run, padded);
-    ``usable`` ``(R, K)`` (False: that measurement leaves that run alone).
+    ``usable`` ``(R, K)`` (False: that measurement leaves that run alone). One pass over the
+    particles (threaded from :data:`PARALLEL_MIN` particles in total).
     """
     x = np.ascontiguousarray(states, dtype=np.float64)
     rows, n, _ = x.shape
     kinds = np.ascontiguousarray(kinds, dtype=np.int64)
     params = np.ascontiguousarray(params, dtype=np.float64)
-    angular = (kinds == BEARING) | (kinds == RANGE_BEARING)
-    slots = np.where(angular, np.cumsum(angular) - 1, -1).astype(np.int64)
-    big = rows * n >= PARALLEL_MIN
-    # atan2 is NumPy's: its SIMD loop is several times faster than libm's scalar atan2 in Numba
-    dxy = np.empty((2, int(angular.sum()), rows, n))
-    (_relative_parallel if big else _relative_serial)(x, params, slots, dxy)
-    ang = np.arctan2(dxy[1], dxy[0], out=dxy[0])
+    z = np.asarray(z, dtype=np.float64)
+    zc = np.empty((rows, kinds.shape[0], 4))
+    zc[..., :2] = z
+    phi = np.where(kinds == RANGE_BEARING, z[..., 1], z[..., 0]) + params[:, 6]
+    np.cos(phi, out=zc[..., 2])
+    np.sin(phi, out=zc[..., 3])
     nch = (n + CHUNK - 1) // CHUNK
     out = np.empty((rows, n))
     cmax = np.empty((rows, nch, kinds.shape[0]))
-    (_llsum_parallel if big else _llsum_serial)(
+    (_llsum_parallel if rows * n >= PARALLEL_MIN else _llsum_serial)(
         x,
         np.ascontiguousarray(log_w, dtype=np.float64),
         kinds,
         params,
-        np.ascontiguousarray(z, dtype=np.float64),
+        zc,
         np.ascontiguousarray(usable, dtype=np.bool_),
-        slots,
-        ang,
         out,
         cmax,
     )

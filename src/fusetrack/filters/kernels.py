@@ -53,6 +53,7 @@ __all__ = [
     "log_weight_update_reference",
     "normalize_log_weights",
     "normalize_log_weights_reference",
+    "normalize_with_mean",
     "weighted_mean",
     "weighted_mean_cov",
     "weighted_mean_cov_reference",
@@ -389,3 +390,76 @@ def weighted_mean_cov_reference(states: ArrayLike, weights: ArrayLike) -> tuple[
     r = x - mean[..., None, :]
     cov = np.einsum("...n,...ni,...nj->...ij", w, r, r)
     return mean, 0.5 * (cov + np.swapaxes(cov, -1, -2))
+
+
+# ---------------------------------------------------------------------------------------------
+# normalisation and weighted mean together (the particle filters' fused update)
+# ---------------------------------------------------------------------------------------------
+
+
+@numba.njit(cache=True, fastmath=False, nogil=True)
+def _normalize_mean_rows(v, e, rowmax, x, lse, ess, mean):  # pragma: no cover - jit
+    """Per row, given ``e = exp(v - max)``: ``s = sum e``, ``sum e^2`` and ``sum e x`` in one
+    pass; then ``lse = max + log s``, ``v -= lse``, ``e *= 1/s`` (the
+    weights), ``ess = s^2 / sum e^2``, ``mean = sum e x / s``. Rows with a non-finite maximum:
+    ``e = 0``, ``ess = 0``, ``lse = max``, ``mean = NaN``, ``v`` left raw."""
+    rows, n, d = x.shape
+    part = np.empty(d)
+    acc = np.empty(d)
+    for r in range(rows):
+        m = rowmax[r]
+        if not math.isfinite(m):
+            for i in range(n):
+                e[r, i] = 0.0
+            lse[r] = m
+            ess[r] = 0.0
+            for k in range(d):
+                mean[r, k] = np.nan
+            continue
+        s = 0.0
+        q = 0.0
+        acc[:] = 0.0
+        for lo in range(0, n, CHUNK):
+            ps = 0.0
+            pq = 0.0
+            part[:] = 0.0
+            for i in range(lo, min(n, lo + CHUNK)):
+                ei = e[r, i]
+                ps += ei
+                pq += ei * ei
+                for k in range(d):
+                    part[k] += ei * x[r, i, k]
+            s += ps
+            q += pq
+            for k in range(d):
+                acc[k] += part[k]
+        total = m + math.log(s)
+        inv = 1.0 / s
+        for i in range(n):
+            v[r, i] = v[r, i] - total
+            e[r, i] = e[r, i] * inv
+        lse[r] = total
+        ess[r] = s * s / q
+        for k in range(d):
+            mean[r, k] = acc[k] * inv
+
+
+def normalize_with_mean(
+    log_w: Array, rowmax: Array, states: Array
+) -> tuple[Array, Array, Array, Array, Array]:
+    """:func:`normalize_log_weights` (``overwrite=True``: ``log_w`` rows ``(R, N)`` become the
+    normalised log-weights) and the weighted mean of ``states`` ``(R, N, d)`` in the same pass:
+    ``(log_w - lse, w, lse, ess, mean)``. The ``exp`` is NumPy's SIMD one (as in
+    :func:`normalize_log_weights`; even at ``N = 1000`` it beats libm's scalar ``exp`` in the
+    loop). The reference is :func:`normalize_log_weights_reference` then
+    :func:`weighted_mean_reference`."""
+    v = log_w
+    rows, n = v.shape
+    m = np.ascontiguousarray(rowmax, dtype=np.float64).reshape(-1)
+    e = _exp_shifted(v, m)
+    x = np.ascontiguousarray(states, dtype=np.float64).reshape(rows, n, -1)
+    lse = np.empty(rows)
+    ess = np.empty(rows)
+    mean = np.empty((rows, x.shape[2]))
+    _normalize_mean_rows(v, e, m, x, lse, ess, mean)
+    return v, e, lse, ess, mean

@@ -78,10 +78,13 @@ recovered, however many runs) and ``resample_count`` (one per step that resample
 from __future__ import annotations
 
 import math
+import os
 import warnings
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any, NamedTuple
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -110,8 +113,10 @@ LOG_TINY = math.log(np.finfo(float).tiny)
 
 _LOG_2PI = math.log(2.0 * math.pi)
 _CACHE = "_pf_weights"  # Particles.info key: the normalised weights of those log-weights
+_MEAN = "_pf_mean"  # Particles.info key: the weighted mean of those log-weights (fused update)
 _PARENTS = "_apf_parents"  # Particles.info key: (parent states, dt) for the auxiliary filter
 _MAX_TEMPER = 1e-300
+_THREADED_DRAW_MIN = 1 << 15  # normals per step from which per-run draws use a few threads
 
 __all__ = [
     "LOG_TINY",
@@ -258,6 +263,9 @@ class ParticleFilter:
         self._warned = False
         self._fused_dt: tuple[float, tuple[Array, Array] | None] | None = None
         self._fused_ll: dict[int, tuple[SensorModel, tuple[int, Array] | None]] = {}
+        self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...]]] = {}
+        self._fused_sets: dict[tuple[int, ...], tuple[tuple[Any, ...], Any]] = {}
+        self._everyone: dict[int, NDArray[np.bool_]] = {}  # read-only all-True "usable" rows
 
     def __repr__(self) -> str:
         return (
@@ -336,7 +344,11 @@ class ParticleFilter:
         checked = self._check_measurements(measurements, particles.batch_shape)
         if not checked:
             return particles
-        W, degenerate = self._reweight(particles.states, self._weights(particles), checked, rng)
+        W = self._weights(particles)
+        fast = self._reweight_fused(particles.states, W, checked)
+        if fast is not None:  # weights and their mean in one pass (see mean())
+            return self._particles(particles.states, fast[0], mean=fast[1])
+        W, degenerate = self._reweight(particles.states, W, checked, rng, fused=False)
         self._note_degenerate(degenerate)
         return self._particles(particles.states, W)
 
@@ -351,6 +363,9 @@ class ParticleFilter:
 
     def mean(self, particles: Particles) -> Array:
         """Weighted mean ``(..., d)`` only (one pass; cheaper than :meth:`estimate`)."""
+        cached = particles.info.get(_MEAN)
+        if cached is not None and cached[0] is particles.log_weights:
+            return np.array(cached[1].reshape((*particles.batch_shape, particles.dim)))
         W = self._weights(particles)
         s = particles.states
         n, d = s.shape[-2:]
@@ -367,8 +382,14 @@ class ParticleFilter:
     # ------------------------------------------------------------------------------------------
     # weights and their cache
 
-    def _particles(self, states: Array, W: _Weights, **info: Any) -> Particles:
+    def _particles(
+        self, states: Array, W: _Weights, mean: Array | None = None, **info: Any
+    ) -> Particles:  # mean: keyword only in practice (info keys never clash with it)
+        """Particles with their normalised weights (and, when given, their weighted mean rows
+        ``(R, d)``) cached in ``info`` for these log-weights."""
         lw = W.lw.reshape(states.shape[:-1])
+        if mean is not None:
+            info[_MEAN] = (lw, mean)
         return Particles(states, lw, {_CACHE: (lw, W), **info})
 
     def _weights(self, particles: Particles) -> _Weights:
@@ -415,9 +436,8 @@ class ParticleFilter:
         return gens
 
     def _fused_motion(self, dt: float) -> tuple[Array, Array] | None:
-        """``(F, G)`` of the motion model's fused form at ``dt`` (engine "numba"), else None."""
-        if self.engine != "numba":
-            return None
+        """``(F, G)`` of a linear-Gaussian motion model at ``dt`` (its ``fused_transition``),
+        else None. Both engines use it: "numba" runs the fused loop, "numpy" its reference."""
         cached = self._fused_dt
         if cached is not None and cached[0] == dt:
             return cached[1]
@@ -425,6 +445,25 @@ class ParticleFilter:
         fg = offer(dt) if callable(offer) else None
         self._fused_dt = (dt, fg)
         return fg
+
+    def _noise_streams(self, gen: np.random.Generator, particles: int) -> tuple[Any, ...]:
+        """The generators that draw the process noise of ``particles`` particles for ``gen``:
+        ``(gen,)`` below :data:`~fusetrack.filters.fused.SPLIT_MIN`, else ``gen``'s
+        :data:`~fusetrack.filters.fused.NOISE_STREAMS` children, spawned once per generator
+        and kept (so that they continue their streams from step to step). The split is fixed:
+        the draws do not depend on the number of threads."""
+        if particles < fused.SPLIT_MIN:
+            return (gen,)
+        hit = self._streams.get(id(gen))
+        if hit is not None and hit[0] is gen:  # the entry holds gen: its id cannot be reused
+            return hit[1]
+        try:
+            kids = tuple(gen.spawn(fused.NOISE_STREAMS))
+        except (TypeError, ValueError):  # a bit generator without a SeedSequence
+            seed = np.random.SeedSequence(gen.integers(0, 2**63, size=4).tolist())
+            kids = tuple(np.random.default_rng(s) for s in seed.spawn(fused.NOISE_STREAMS))
+        self._streams[id(gen)] = (gen, kids)
+        return kids
 
     def _sample_motion(
         self,
@@ -437,24 +476,15 @@ class ParticleFilter:
         """A draw of the next state of every particle; with per-run generators, row ``j`` of
         ``states`` belongs to run ``rows[j]`` (default: row ``j`` is run ``j``).
 
-        ``ancestors`` ``(R, N)`` (fused path only) propagates ``states[r, ancestors[r]]``: the
-        gather of resampling done inside the loop. The fused path (a motion model with
-        ``fused_transition``, engine "numba") draws the same normals as ``motion.sample``.
+        ``ancestors`` ``(R, N)`` (linear-Gaussian models only) propagates
+        ``states[r, ancestors[r]]``: the gather of resampling done inside the loop. A
+        linear-Gaussian model (``fused_transition``) draws ``F x + G eps`` with ``eps`` from
+        :meth:`_noise_streams` (what ``motion.sample`` draws when there is one stream); other
+        models are called as they are.
         """
         fg = self._fused_motion(dt)
         if fg is not None:
-            n, d = states.shape[-2:]
-            s2 = states.reshape(-1, n, d)
-            eps = np.empty(s2.shape)
-            if isinstance(gens, np.random.Generator):
-                gens.standard_normal(out=eps)
-            else:
-                for j, r in enumerate(range(s2.shape[0]) if rows is None else rows):
-                    gens[r].standard_normal(out=eps[j])
-            out = fused.linear_gaussian_step(s2, fg[0], fg[1], eps, ancestors)
-            return out if ancestors is not None else out.reshape(states.shape)
-        if ancestors is not None:
-            states = _gather(states.reshape(-1, *states.shape[-2:]), ancestors)
+            return self._linear_step(states, fg, gens, rows, ancestors)
         if isinstance(gens, np.random.Generator):
             return np.asarray(self.motion.sample(states, dt, gens), dtype=float)
         n, d = states.shape[-2:]
@@ -464,6 +494,46 @@ class ParticleFilter:
         for j, r in enumerate(runs):
             out[j] = self.motion.sample(s2[j], dt, gens[r])
         return out.reshape(states.shape)
+
+    def _linear_step(
+        self,
+        states: Array,
+        fg: tuple[Array, Array],
+        gens: np.random.Generator | list[np.random.Generator],
+        rows: NDArray[np.intp] | None,
+        ancestors: NDArray[np.intp] | None,
+    ) -> Array:
+        """``F x_a + G eps`` for a linear-Gaussian model (see :meth:`_sample_motion`)."""
+        F, G = fg
+        n, d = states.shape[-2:]
+        s2 = states.reshape(-1, n, d)
+        numba_engine = self.engine == "numba"
+        shape = s2.shape if ancestors is None else (s2.shape[0], ancestors.shape[1], d)
+        if isinstance(gens, np.random.Generator):
+            streams = self._noise_streams(gens, shape[0] * shape[1])
+            if numba_engine and len(streams) > 1:  # drawn inside the loop, one thread per stream
+                out = fused.linear_gaussian_draw(s2, F, G, streams, ancestors)
+            elif numba_engine:  # NumPy draws: handing a Generator to Numba costs ~20-50 us
+                out = fused.linear_gaussian_step(s2, F, G, gens.standard_normal(shape), ancestors)
+            else:
+                src = s2 if ancestors is None else _gather(s2, ancestors)
+                out = src @ F.T + fused.standard_normals(streams, shape) @ G.T
+        else:
+            runs = range(s2.shape[0]) if rows is None else rows
+            if shape[1] >= fused.SPLIT_MIN:  # each run's own streams, one run at a time
+                out = np.empty(shape)
+                for j, r in enumerate(runs):
+                    a = None if ancestors is None else ancestors[j : j + 1]
+                    out[j] = self._linear_step(s2[j : j + 1], fg, gens[r], None, a)[0]
+            else:
+                eps = np.empty(shape)
+                _fill_normals([gens[r] for r in runs], eps)
+                if numba_engine:
+                    out = fused.linear_gaussian_step(s2, F, G, eps, ancestors)
+                else:
+                    src = s2 if ancestors is None else _gather(s2, ancestors)
+                    out = src @ F.T + eps @ G.T
+        return out if ancestors is not None else out.reshape(states.shape)
 
     def _motion_mean(self, states: Array, dt: float, per_run: bool) -> Array:
         if not per_run:
@@ -485,7 +555,7 @@ class ParticleFilter:
             sub = w if rows.size == w.shape[0] else w[rows]
             return np.asarray(self._resample(sub, gens), dtype=np.intp)
         if self._resample is resampling.systematic:  # one merge for all runs, same draws
-            u0 = np.array([gens[r].random((1,))[0] for r in rows])
+            u0 = np.array([gens[r].random() for r in rows])
             return resampling.systematic_from_uniforms(w[rows], u0)
         return np.stack([np.asarray(self._resample(w[r], gens[r]), dtype=np.intp) for r in rows])
 
@@ -532,13 +602,17 @@ class ParticleFilter:
     ) -> list[_Checked]:
         """Validate every measurement; keep those with a usable run, as rows ``(R, ...)``."""
         ms = [measurements] if isinstance(measurements, Measurement) else list(measurements)
-        runs = int(np.prod(batch, dtype=np.int64))
+        runs = math.prod(batch)
         out: list[_Checked] = []
         for m in ms:
             if not isinstance(m, Measurement):
                 raise MeasurementError(
                     invalid("measurements", m, "a sequence of fusetrack Measurement")
                 )
+            quick = self._check_one_report(m, runs)
+            if quick is not None:
+                out.append(quick)
+                continue
             v = validate_measurement(m, self.sensors, self.stats)
             lead = v.value.shape[:-1]
             if not _broadcasts(lead, batch) or np.broadcast_shapes(lead, batch) != batch:
@@ -574,6 +648,27 @@ class ParticleFilter:
             out.append(_Checked(v.sensor, z, cov, usable))
         return out
 
+    def _check_one_report(self, m: Measurement, runs: int) -> _Checked | None:
+        """The common case of :meth:`_check_measurements` without its array checks: a known
+        sensor, one finite value ``(m,)`` for every run, no covariance. None otherwise (the
+        caller then validates in full, raising or counting as it must)."""
+        sensor = self.sensors.get(m.sensor_id)
+        z = m.value
+        if (
+            sensor is None
+            or m.covariance is not None
+            or z.ndim != 1
+            or z.shape[0] != sensor.dim
+            or not all(math.isfinite(v) for v in z.tolist())
+        ):
+            return None
+        usable = self._everyone.get(runs)
+        if usable is None:
+            usable = self._everyone[runs] = np.ones(runs, dtype=bool)
+            usable.flags.writeable = False
+        rows = z.reshape(1, -1) if runs == 1 else np.broadcast_to(z, (runs, z.shape[0]))
+        return _Checked(sensor, rows, None, usable)
+
     def _loglik(self, c: _Checked, states: Array, per_run: bool) -> Array:
         """``log p(z | x_i)`` for every particle, as a writable array of rows ``(R, N)``."""
         n, d = states.shape[-2:]
@@ -603,6 +698,7 @@ class ParticleFilter:
         checked: list[_Checked],
         rng: Rng | None,
         subtract: list[Array] | None = None,
+        fused: bool = True,
     ) -> tuple[_Weights, bool]:
         """Apply the measurements in sequence; ``subtract[k]`` (auxiliary filter) is removed from
         measurement ``k``'s log-likelihood. Returns the new weights and whether any recovered.
@@ -615,10 +711,10 @@ class ParticleFilter:
         least that. If the bound cannot vouch for every measurement of every run, the exact
         sequential update (:meth:`_reweight_exact`) runs instead.
         """
-        if subtract is None:
+        if subtract is None and fused:
             fast = self._reweight_fused(states, W, checked)
             if fast is not None:
-                return fast, False
+                return fast[0], False
         per_run = rng is not None and not isinstance(rng, np.random.Generator)
         lls = []
         for k, c in enumerate(checked):
@@ -658,38 +754,59 @@ class ParticleFilter:
 
     def _reweight_fused(
         self, states: Array, W: _Weights, checked: list[_Checked]
-    ) -> _Weights | None:
+    ) -> tuple[_Weights, Array] | None:
         """:meth:`_reweight` in one pass over the particles when every sensor has a fused form
         and no measurement carries its own covariance; None otherwise, or when the degeneracy
         bound cannot vouch for a measurement (the caller then takes the generic path)."""
-        specs = []
-        for c in checked:
-            spec = None if c.cov is not None else self._fused_sensor(c.sensor)
-            if spec is None:
-                return None
-            specs.append(spec)
+        key = tuple(id(c.sensor) for c in checked)
+        hit = self._fused_sets.get(key)
+        if hit is None or any(c.sensor is not s for c, s in zip(checked, hit[0])):
+            specs = [self._fused_sensor(c.sensor) for c in checked]
+            if any(spec is None for spec in specs):
+                hit = (tuple(c.sensor for c in checked), None)
+            else:
+                kinds = np.array([sp[0] for sp in specs], dtype=np.int64)  # type: ignore[index]
+                hit = (tuple(c.sensor for c in checked), (kinds, np.stack([sp[1] for sp in specs])))  # type: ignore[index]
+            self._fused_sets[key] = hit
+        if hit[1] is None or any(c.cov is not None for c in checked):
+            return None
+        kinds, params = hit[1]
         rows = W.lw.shape[0]
         n, d = states.shape[-2:]
+        s3 = states.reshape(-1, n, d)
         z = np.zeros((rows, len(checked), 2))
         for k, c in enumerate(checked):
             z[:, k, : c.z.shape[-1]] = c.z
         usable = np.stack([c.usable for c in checked], axis=1)
-        kinds = np.array([s[0] for s in specs], dtype=np.int64)
-        params = np.stack([s[1] for s in specs])
-        acc, maxima = fused.log_likelihood_sum(
-            states.reshape(-1, n, d), W.lw, kinds, params, z, usable
-        )
+        acc, maxima = fused.log_likelihood_sum(s3, W.lw, kinds, params, z, usable)
+        if not self._bound_holds(maxima, usable, n):
+            return None
+        lw, w, _, ess, mean = kernels.normalize_with_mean(acc, maxima[:, -1], s3)
+        return _Weights(lw, w, ess), mean
+
+    def _bound_holds(self, maxima: Array, usable: NDArray[np.bool_], n: int) -> bool:
+        """The degeneracy bound of :meth:`_reweight` for every measurement ``k`` and run:
+        ``maxima[:, k] - U_{k-1} >= min_log_evidence`` (``U_{-1} = 0``, then
+        ``U_k = maxima[:, k] + log N`` where measurement ``k`` is usable)."""
         log_n = math.log(n)
-        bound = np.zeros(rows)
-        for k, c in enumerate(checked):  # the bound of _reweight, measurement by measurement
+        mle = self.min_log_evidence
+        if maxima.shape[0] == 1:  # one run: plain floats
+            top = 0.0
+            for mk, use in zip(maxima[0].tolist(), usable[0].tolist()):
+                if use:
+                    if not (math.isfinite(mk) and mk - top >= mle):
+                        return False
+                    top = mk + log_n
+            return True
+        bound = np.zeros(maxima.shape[0])
+        for k in range(maxima.shape[1]):
             rowmax = maxima[:, k]
             with np.errstate(invalid="ignore"):
-                safe = np.isfinite(rowmax) & (rowmax - bound >= self.min_log_evidence)
-            if not np.all(safe | ~c.usable):
-                return None
-            bound = np.where(c.usable, rowmax + log_n, bound)
-        lw, w, _, ess = self._k.normalize(acc, maxima[:, -1], overwrite=True)
-        return _Weights(lw, w, ess)
+                safe = np.isfinite(rowmax) & (rowmax - bound >= mle)
+            if not np.all(safe | ~usable[:, k]):
+                return False
+            bound = np.where(usable[:, k], rowmax + log_n, bound)
+        return True
 
     def _reweight_exact(
         self, W: _Weights, checked: list[_Checked], lls: list[Array]
@@ -785,6 +902,33 @@ def _take_rows(values: Array, rows: NDArray[np.intp], idx: NDArray[np.intp]) -> 
     return out
 
 
+_POOL: ThreadPoolExecutor | None = None
+
+
+def _fill_normals(gens: list[np.random.Generator], eps: Array) -> None:
+    """``eps[j] = gens[j].standard_normal(eps[j].shape)`` for every run ``j``, the runs split
+    over a few threads (each generator fills its own rows, so the numbers do not depend on the
+    threads; NumPy releases the GIL while it draws)."""
+    global _POOL
+    threads = min(numba.get_num_threads(), len(gens))
+    if threads < 2 or eps.size < _THREADED_DRAW_MIN:
+        for j, g in enumerate(gens):
+            g.standard_normal(out=eps[j])
+        return
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(max_workers=max(1, (os.cpu_count() or 2) - 1))
+
+    def fill(lo: int, hi: int) -> None:
+        for j in range(lo, hi):
+            gens[j].standard_normal(out=eps[j])
+
+    bounds = fused.split_bounds(len(gens), threads)
+    jobs = [_POOL.submit(fill, lo, hi) for lo, hi in bounds[1:]]
+    fill(*bounds[0])
+    for job in jobs:
+        job.result()
+
+
 def _broadcasts(a: tuple[int, ...], b: tuple[int, ...]) -> bool:
     try:
         np.broadcast_shapes(a, b)
@@ -874,7 +1018,7 @@ class AuxiliaryParticleFilter(ParticleFilter):
         gens = self._generators(rng, particles.batch_shape)
         W = self._weights(particles)
         children = self._sample_motion(particles.states, dt, gens)
-        return self._particles(children, W, **{_PARENTS: (particles.states, dt)})
+        return self._particles(children, W, None, **{_PARENTS: (particles.states, dt)})
 
     def update(
         self,
