@@ -46,13 +46,21 @@ from ..core.beliefs import Gaussian, GaussianMixture
 from ..core.measurement import Measurement
 from ..core.resampling import systematic
 from ..motion import ConstantVelocity
-from ..perception.appearance import N_HS, AppearanceModel, FeatureImage, bhattacharyya, region_histograms
+from ..perception.appearance import (
+    N_HS,
+    AppearanceModel,
+    FeatureImage,
+    bhattacharyya,
+    region_histograms,
+)
 from ..sensors import PositionFix
 from ..sensors.ellipsoid_camera import (
     EllipsoidCamera,
     axis_angle_quaternion,
     intersect_rays,
+    quaternion_multiply,
     quaternion_to_rotation,
+    rotation_to_quaternion,
 )
 from .gaussian_mixtures import (
     fit_kde_mixture,
@@ -155,34 +163,77 @@ class CameraNetwork:
         rho = self.model.similarity(features, yc, B, view)
         return sharpness * np.log(np.maximum(rho, RHO_FLOOR))
 
-    def camera_orientation(
-        self, n: int, features: FeatureImage, x: Array, q: Array
-    ) -> tuple[Array, float]:
-        """One camera's orientation estimate and its weight ``max_j rho_j`` (Eqs. 77-78)."""
+    def camera_view(
+        self, n: int, features: FeatureImage, x: Array, q: Array, sharpness: float
+    ) -> tuple[Array, Array, float]:
+        """Camera ``n``'s evidence on the orientation (Eq. 77): the similarity-weighted mean
+        viewpoint ``e_avg`` (body frame, towards the camera), the world direction from the target
+        to the camera, and the weight ``max_j rho_j``. The viewpoints are weighted by
+        ``rho_j^gamma`` like the particles (``gamma = 1`` is the paper's ``rho_j``)."""
         cam = self.cameras[n]
         yc, B = cam.ellipse(x, q, self.semi_axes)
         rho = self.model.all_views(features, yc, B)
-        e_avg = rho @ self.model.viewpoints / max(rho.sum(), 1e-12)
+        w = np.maximum(rho, RHO_FLOOR) ** sharpness
+        e_avg = w @ self.model.viewpoints / max(w.sum(), 1e-300)
         e_avg /= max(np.linalg.norm(e_avg), 1e-12)
-        z_cam = (x - cam.centre) / np.linalg.norm(x - cam.centre)  # camera-to-target (A-V-7)
-        axis = np.cross(-e_avg, z_cam)
-        angle = float(np.arccos(np.clip(np.dot(-e_avg, z_cam), -1.0, 1.0)))
-        return axis_angle_quaternion(axis, angle), float(rho.max())
+        to_cam = (cam.centre - x) / np.linalg.norm(cam.centre - x)
+        return e_avg, to_cam, float(rho.max())
+
+
+def minimal_rotation_quaternion(e_avg: Array, to_cam: Array) -> Array:
+    """One camera's orientation (Eqs. 77-78): the smallest rotation taking the camera's axis in
+    the body frame, ``-e_avg``, to the camera-to-target direction ``-to_cam`` (spec A-V-7)."""
+    a, b = -e_avg, -to_cam
+    axis = np.cross(a, b)
+    angle = float(np.arccos(np.clip(np.dot(a, b), -1.0, 1.0)))
+    return axis_angle_quaternion(axis, angle)
+
+
+def wahba_rotation(body: Array, world: Array, weights: Array) -> Array:
+    """Rotation ``R`` minimising ``sum_n w_n |R b_n - d_n|^2`` (Kabsch/SVD) for two or more
+    non-parallel pairs; the full rotation, roll included."""
+    H = np.einsum("n,ni,nj->ij", weights, world, body)
+    U, _, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
+    return U @ D @ Vt
 
 
 def fuse_orientation(
-    estimates: Sequence[tuple[Array, float]], prior: Array, alpha: float
+    views: Sequence[tuple[Array, Array, float]],
+    prior: Array,
+    alpha: float,
+    method: Literal["paper", "wahba"] = "wahba",
 ) -> Array:
-    """``theta_all = sum w_n theta_n / |.|`` with signs aligned to the prior, then
-    ``theta = alpha theta_all + (1 - alpha) theta_prior`` renormalised (spec Sec. 2.9)."""
-    if not estimates:
+    """Network orientation from the cameras' views, blended with the prior:
+    ``theta = alpha theta_all + (1 - alpha) theta_prior`` renormalised (spec Sec. 2.9).
+
+    ``paper``: ``theta_all = sum w_n theta_n / |.|`` over the per-camera minimal rotations (Eq.
+    78; each sets the unobservable roll arbitrarily, so their average is poor). ``wahba``: the
+    rotation that best maps every camera's ``e_avg`` onto its target-to-camera direction at once
+    (the same evidence, fused as one least-squares problem); with one camera, the minimal
+    correction of the prior."""
+    if not views:
         return prior
-    acc = np.zeros(4)
-    for qn, wn in estimates:
-        acc += wn * (qn if np.dot(qn, prior) >= 0 else -qn)
-    if np.linalg.norm(acc) < 1e-12:
-        return prior
-    q = alpha * acc / np.linalg.norm(acc) + (1 - alpha) * prior
+    if method == "paper":
+        acc = np.zeros(4)
+        for e_avg, to_cam, wn in views:
+            qn = minimal_rotation_quaternion(e_avg, to_cam)
+            acc += wn * (qn if np.dot(qn, prior) >= 0 else -qn)
+        if np.linalg.norm(acc) < 1e-12:
+            return prior
+        q_all = acc / np.linalg.norm(acc)
+    else:
+        body = np.array([v[0] for v in views])
+        world = np.array([v[1] for v in views])
+        w = np.array([v[2] for v in views])
+        if len(views) >= 2 and np.linalg.matrix_rank(world, tol=1e-3) >= 2:
+            q_all = rotation_to_quaternion(wahba_rotation(body, world, w))
+        else:
+            R0 = quaternion_to_rotation(prior)
+            fix = minimal_rotation_quaternion(-(R0 @ body[0]), -world[0])  # R0 b -> d
+            q_all = quaternion_multiply(fix, prior)
+    q_all = q_all if np.dot(q_all, prior) >= 0 else -q_all
+    q = alpha * q_all + (1 - alpha) * prior
     return q / np.linalg.norm(q)
 
 
@@ -203,6 +254,7 @@ class TrackerSettings:
     depth_fraction: float = 0.5  # T3: depth std = fraction x predicted depth
     base_components: int = 64  # T1: components kept at the base after each product
     estimate_orientation: bool = True
+    orientation_fusion: Literal["paper", "wahba"] = "wahba"
 
 
 @dataclass
@@ -265,8 +317,10 @@ class _Tracker:
         self.belief = prior
         if self.s.estimate_orientation and used:
             x = self.position
-            ests = [self.net.camera_orientation(n, frames[n], x, self.q) for n in used]
-            self.q = fuse_orientation(ests, self.q, self.s.orientation_alpha)
+            views = [self.net.camera_view(n, frames[n], x, self.q, self.s.sharpness) for n in used]
+            self.q = fuse_orientation(
+                views, self.q, self.s.orientation_alpha, self.s.orientation_fusion
+            )
         return self.position.copy()
 
     def step(self, frames: Sequence[FeatureImage], rng: np.random.Generator) -> StepReport:
@@ -294,7 +348,9 @@ class Particle3DTracker(_Tracker):
         x0 = self.predicted()
         used = self.net.usable(x0, self.q)
         particles = x0 + s.sigma * rng.standard_normal((s.n_particles, 3))
-        logw = {n: self.net.log_similarity(n, frames[n], particles, self.q, s.sharpness) for n in used}
+        logw = {
+            n: self.net.log_similarity(n, frames[n], particles, self.q, s.sharpness) for n in used
+        }
         nbytes = links = STATE_BYTES
         parent = self.net.parent
         estimate: Array | None = None
@@ -313,7 +369,9 @@ class Particle3DTracker(_Tracker):
                 mixtures[n], _ = fit_kde_mixture(particles, w, rng, m_max=s.m_max)
             if self.mode == "T1":
                 nbytes += sum(GMM3_BYTES * len(g.weights) for g in mixtures.values())
-                links += sum(GMM3_BYTES * len(g.weights) * hops(parent, n) for n, g in mixtures.items())
+                links += sum(
+                    GMM3_BYTES * len(g.weights) * hops(parent, n) for n, g in mixtures.items()
+                )
                 fused = _product_all(list(mixtures.values()), s.base_components)
             else:
                 fused, sent = _aggregate(parent, mixtures, s.k_reduce, rng)
@@ -392,9 +450,16 @@ class ImagePlaneTracker(_Tracker):
         z = float(cam.depth(x0))
         K, R = cam.camera.K, cam.camera.R
         f = K[0, 0]
-        a = np.column_stack(
-            [(gm.means[:, 0] - K[0, 2]) / f, (gm.means[:, 1] - K[1, 2]) / K[1, 1], np.ones(len(gm.weights))]
-        ) @ R  # ray direction at unit depth, world frame
+        a = (
+            np.column_stack(
+                [
+                    (gm.means[:, 0] - K[0, 2]) / f,
+                    (gm.means[:, 1] - K[1, 2]) / K[1, 1],
+                    np.ones(len(gm.weights)),
+                ]
+            )
+            @ R
+        )  # ray direction at unit depth, world frame
         means = cam.centre + z * a
         J = (z / f) * R.T[:, :2]  # d X / d (u, v)
         lateral = np.einsum("ia,kab,jb->kij", J, gm.covs, J)
@@ -429,7 +494,11 @@ class ImagePlaneTracker(_Tracker):
 
 
 def _neg_log_posterior(
-    x: Array, cams: Sequence[EllipsoidCamera], gms: Sequence[GaussianMixture], x0: Array, prec0: Array
+    x: Array,
+    cams: Sequence[EllipsoidCamera],
+    gms: Sequence[GaussianMixture],
+    x0: Array,
+    prec0: Array,
 ) -> float:
     r = x - x0
     val = 0.5 * r @ prec0 @ r

@@ -44,6 +44,25 @@ def axis_angle_quaternion(axis: ArrayLike, angle: ArrayLike) -> Array:
     return np.concatenate([a * np.sin(half), np.cos(half)], axis=-1)
 
 
+def rotation_to_quaternion(R: ArrayLike) -> Array:
+    """Scalar-last unit quaternion of a rotation matrix ``(3, 3)`` (inverse of Eq. 72)."""
+    m = np.asarray(R, float)
+    tr = np.trace(m)
+    if tr > 0:
+        s = 2.0 * np.sqrt(1.0 + tr)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s]
+    else:
+        i = int(np.argmax(np.diag(m)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * np.sqrt(max(1.0 + m[i, i] - m[j, j] - m[k, k], 1e-12))
+        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / s]
+        q[i] = 0.25 * s
+        q[j] = (m[j, i] + m[i, j]) / s
+        q[k] = (m[k, i] + m[i, k]) / s
+    out = np.asarray(q, float)
+    return out / np.linalg.norm(out)
+
+
 def quaternion_multiply(p: ArrayLike, q: ArrayLike) -> Array:
     """Hamilton product ``p q`` of scalar-last quaternions (rotation ``q`` first, then ``p``)."""
     p = np.asarray(p, float)
