@@ -265,22 +265,32 @@ def _predict_weigh_kernel(
     J, N = alphas.shape[0], z.shape[1]
     two_pi = 2.0 * np.pi
     r2 = np.empty((J, L, N))
+    twin = np.full(J, -1)  # a model with the opposite turn: sin flips, cos and a1 are shared
+    for j in range(J):
+        for i in range(j):
+            if alphas[i] == -alphas[j] and alphas[j] != 0.0:
+                twin[j] = i
+    sw, cw = np.empty(J), np.empty(J)
     degenerate = 0
     for b in range(B):
         for o in range(O):
             top = -np.inf
-            for j in range(J):
-                for l in range(L):
-                    x, y = parts[b, o, l, 0], parts[b, o, l, 1]
-                    vx, vy = parts[b, o, l, 2], parts[b, o, l, 3]
-                    speed = np.hypot(vx, vy)
+            for l in range(L):
+                x, y = parts[b, o, l, 0], parts[b, o, l, 1]
+                vx, vy = parts[b, o, l, 2], parts[b, o, l, 3]
+                speed = np.hypot(vx, vy)
+                for j in range(J):
                     omega = alphas[j] / max(speed, 1e-9) if speed > 1e-9 else 0.0
                     wt = omega * dt
                     if abs(wt) < 1e-9:
                         s_, c_, a1, a2 = np.sin(wt), np.cos(wt), dt, 0.0
                     else:
-                        s_, c_ = np.sin(wt), np.cos(wt)
+                        if twin[j] >= 0:  # sin(-x) = -sin(x), cos(-x) = cos(x) exactly
+                            s_, c_ = -sw[twin[j]], cw[twin[j]]
+                        else:
+                            s_, c_ = np.sin(wt), np.cos(wt)
                         a1, a2 = s_ / omega, (1.0 - c_) / omega
+                    sw[j], cw[j] = s_, c_
                     e0, e1 = eta[j, b, o, l, 0], eta[j, b, o, l, 1]
                     px = x + a1 * vx - a2 * vy + 0.5 * dt * dt * e0
                     py = y + a2 * vx + a1 * vy + 0.5 * dt * dt * e1
@@ -304,7 +314,9 @@ def _predict_weigh_kernel(
                 for l in range(L):
                     acc = 0.0
                     for n in range(N):
-                        acc += np.exp(r2[j, l, n] - top)
+                        d = r2[j, l, n] - top
+                        if d > -60.0:  # e^-60 < 1e-26: below rounding of the sum
+                            acc += np.exp(d)
                     w_ml[b, o, j, l] = acc
                     total += acc
             if not (np.isfinite(top) and total > 0.0):
