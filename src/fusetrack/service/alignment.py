@@ -86,6 +86,7 @@ class Aligner:
         self.buffers = {s: SensorBuffer(buffer_size) for s in sensors}
         self.last_tick = 0  # tick 0 is the prior
         self.superseded = 0
+        self.pending = 0  # buffered readings, all sensors
 
     def tick_time(self, k: int) -> float:
         return self.start + k * self.period
@@ -105,11 +106,10 @@ class Aligner:
         return t <= self.fused_until
 
     def push(self, reading: Reading) -> None:
-        self.buffers[reading.sensor].push(reading)
-
-    @property
-    def pending(self) -> int:
-        return sum(len(b) for b in self.buffers.values())
+        buf = self.buffers[reading.sensor]
+        before = buf.dropped
+        buf.push(reading)
+        self.pending += 1 - (buf.dropped - before)
 
     def due(self, clock: float, limit: int = 1_000_000) -> list[int]:
         """The ticks whose window has closed by ``clock`` (their end + lag <= clock), at most
@@ -132,6 +132,7 @@ class Aligner:
             window = buf.take_until(end)
             if not window:
                 continue
+            self.pending -= len(window)
             if self.alignment == "all":
                 chosen.extend(window)
             else:

@@ -33,7 +33,7 @@ from pydantic.json_schema import models_json_schema
 
 from .node import FusionNode, Outcome
 from .schema import MessageBatch, SensorMessage, TrackState, message_json_schema
-from .udp import start_udp
+from .udp import UdpListener
 
 _STATIC = resources.files(__package__) / "static"
 _MSGPACK_TYPES = ("application/msgpack", "application/x-msgpack", "application/vnd.msgpack")
@@ -85,21 +85,24 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        listener = UdpListener(node, udp_socket).start() if udp_socket is not None else None
+
         async def ticker() -> None:
             while True:
+                if listener is not None:
+                    listener.drain()  # what has arrived counts for the ticks now due
                 node.advance()
                 await asyncio.sleep(poll)
 
         task = asyncio.create_task(ticker())
-        transport = await start_udp(node, udp_socket) if udp_socket is not None else None
         try:
             yield
         finally:
             task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await task
-            if transport is not None:
-                transport.close()
+            if listener is not None:
+                listener.close()
             node.commit()
 
     app = FastAPI(

@@ -1,8 +1,10 @@
 """The node's UDP listener: each datagram is one sealed frame (:func:`.auth.seal`).
 
-Datagrams are handled in the event loop that runs the node, one at a time, so a frame is
-authenticated, parsed, checked and buffered before the next is read. Nothing is sent back
-(UDP senders learn about refusals from ``/health`` and ``/metrics``).
+The socket is read by :meth:`UdpListener.drain`, which takes *every* datagram waiting (not one per
+event-loop turn, as asyncio's datagram transport does). The tick loop drains the socket right
+before it fires a tick, so a reading that reached the host before its tick fell due is fused
+even when the loop was busy (a long tick, a burst), instead of being refused as late. Nothing is
+sent back: UDP senders learn about refusals from ``/health`` and ``/metrics``.
 """
 
 from __future__ import annotations
@@ -14,20 +16,11 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from .node import FusionNode
 
-
-class _Protocol(asyncio.DatagramProtocol):
-    def __init__(self, node: FusionNode) -> None:
-        self.node = node
-
-    def datagram_received(self, data: bytes, addr: tuple[str, int]) -> None:
-        self.node.ingest_frame(data)
-
-    def error_received(self, exc: Exception) -> None:  # e.g. ICMP unreachable: not fatal
-        pass
+MAX_DATAGRAM = 65535
 
 
-def udp_socket(host: str = "127.0.0.1", port: int = 0, rcvbuf: int = 4 * 2**20) -> socket.socket:
-    """A bound UDP socket (``port=0``: any free port; read it with ``getsockname()``)."""
+def udp_socket(host: str = "127.0.0.1", port: int = 0, rcvbuf: int = 8 * 2**20) -> socket.socket:
+    """A bound non-blocking UDP socket (``port=0``: any free port; see ``getsockname()``)."""
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     sock = socket.socket(family, socket.SOCK_DGRAM)
     try:
@@ -39,8 +32,34 @@ def udp_socket(host: str = "127.0.0.1", port: int = 0, rcvbuf: int = 4 * 2**20) 
     return sock
 
 
-async def start_udp(node: FusionNode, sock: socket.socket) -> asyncio.DatagramTransport:
-    """Listen on ``sock`` for ``node``; close the returned transport to stop."""
-    loop = asyncio.get_running_loop()
-    transport, _ = await loop.create_datagram_endpoint(lambda: _Protocol(node), sock=sock)
-    return transport
+class UdpListener:
+    """Feeds the datagrams arriving on ``sock`` to ``node`` (from the node's event loop)."""
+
+    def __init__(self, node: FusionNode, sock: socket.socket) -> None:
+        self.node = node
+        self.sock = sock
+        self.loop: asyncio.AbstractEventLoop | None = None
+
+    def drain(self, limit: int = 100_000) -> int:
+        """Handle every waiting datagram (at most ``limit``); return how many."""
+        n = 0
+        while n < limit:
+            try:
+                data = self.sock.recv(MAX_DATAGRAM)
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError:  # e.g. ICMP port unreachable reported on the socket: not fatal
+                continue
+            self.node.ingest_frame(data)
+            n += 1
+        return n
+
+    def start(self) -> UdpListener:
+        self.loop = asyncio.get_running_loop()
+        self.loop.add_reader(self.sock.fileno(), self.drain)
+        return self
+
+    def close(self) -> None:
+        if self.loop is not None:
+            self.loop.remove_reader(self.sock.fileno())
+            self.loop = None

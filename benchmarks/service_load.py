@@ -1,0 +1,294 @@
+"""Load and fault test of the live fusion node, on loopback only; stops by itself.
+
+    python benchmarks/service_load.py                       # 100 nodes x 10 msg/s, 4 Hz, 10 min
+    python benchmarks/service_load.py --duration 60 --faults --out benchmarks/service_faults.json
+
+A node (``fusetrack serve``, its own process, wall clock) fuses bearings from ``--nodes`` sensor
+nodes placed on a ring around a target that circles inside it; each node sends ``--rate`` signed
+UDP messages per second, stamped with its own clock. A reader on ``/ws/tracks`` records when each
+tick arrives. Measured:
+
+* **loss**: messages sent vs accepted + refused by the node (``/health``); with ``--faults`` the
+  packets the senders dropped on purpose are not counted as sent;
+* **tick latency**: arrival of the tick at the WebSocket reader minus the moment it fell due
+  (window end + lag), p50 / p99 / max;
+* **memory**: the node process's resident set size every 5 s (first, last, max);
+* **tracking**: position RMSE of the published ticks against the true circle.
+
+``--faults`` adds: 20 % of UDP packets dropped; nodes 0-9 silent from 20 % to 35 % of the run
+(then back); node 10's clock 30 s fast from 40 % to 50 % (refused as ``future``); node 11's clock
+5 s slow from 60 % to 70 % (refused as ``late``). The report says whether ``/health`` saw each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import re
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import httpx
+import numpy as np
+import yaml
+from websockets.sync.client import connect
+
+from fusetrack.service.auth import seal
+from fusetrack.service.schema import BearingReading, SensorMessage, encode_message
+
+CENTRE, RADIUS, RING, PERIOD = (50.0, 50.0), 25.0, 60.0, 60.0
+SIGMA = math.radians(2.0)
+
+
+def truth(t: float) -> np.ndarray:
+    a = 2 * math.pi * t / PERIOD
+    return np.array([CENTRE[0] + RADIUS * math.cos(a), CENTRE[1] + RADIUS * math.sin(a)])
+
+
+def free_port(kind: int) -> int:
+    with socket.socket(socket.AF_INET, kind) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def network(n: int, fusion_hz: float, alignment: str = "all") -> dict:
+    sensors, nodes = [], []
+    for i in range(n):
+        a = 2 * math.pi * i / n
+        pos = [CENTRE[0] + RING * math.cos(a), CENTRE[1] + RING * math.sin(a)]
+        sensors.append({"id": f"s{i}", "kind": "bearing", "position": pos, "sigma": SIGMA})
+        nodes.append({"id": f"n{i}", "key": f"load-test-key-{i:06d}-abcdef", "sensors": [f"s{i}"]})
+    v = 2 * math.pi * RADIUS / PERIOD
+    return {
+        "area": [0, 100, 0, 100],
+        "sensors": sensors,
+        "nodes": nodes,
+        "fusion": {
+            "rate_hz": fusion_hz,
+            "alignment": alignment,
+            "clock": "wall",
+            "lag": 0.2,
+            "max_future": 10.0,
+        },
+        "tracker": {
+            "filter": "ekf",
+            "motion": {"model": "constant_velocity", "q": 1.0},
+            "prior_mean": [CENTRE[0] + RADIUS, CENTRE[1], 0.0, v],
+            "prior_std": [5.0, 5.0, 2.0, 2.0],
+        },
+        "limits": {"buffer_size": 1024},
+    }
+
+
+def rss_mb(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return math.nan
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument("--nodes", type=int, default=100)
+    ap.add_argument("--rate", type=float, default=10.0, help="messages per second per node")
+    ap.add_argument("--fusion-hz", type=float, default=4.0)
+    ap.add_argument("--duration", type=float, default=600.0, help="seconds of sending")
+    ap.add_argument("--alignment", choices=["all", "closest"], default="all")
+    ap.add_argument("--faults", action="store_true")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--out", type=Path, default=None, help="JSON results file")
+    args = ap.parse_args()
+    rng = np.random.default_rng(args.seed)
+
+    tmp = Path(tempfile.mkdtemp(prefix="fusetrack-load-"))
+    cfg = network(args.nodes, args.fusion_hz, args.alignment)
+    (tmp / "net.yaml").write_text(yaml.safe_dump(cfg))
+    http_port, udp_port = free_port(socket.SOCK_STREAM), free_port(socket.SOCK_DGRAM)
+    node = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "fusetrack.cli",
+            "serve",
+            "--config",
+            str(tmp / "net.yaml"),
+            "--port",
+            str(http_port),
+            "--udp-port",
+            str(udp_port),
+        ],
+        stdout=subprocess.DEVNULL,
+    )
+    url = f"http://127.0.0.1:{http_port}"
+    try:
+        for _ in range(1200):
+            try:
+                httpx.get(url + "/health", timeout=1.0)
+                break
+            except httpx.HTTPError:
+                time.sleep(0.1)
+        else:
+            raise SystemExit("the node did not start")
+        return run(args, cfg, node, url, udp_port, rng)
+    finally:
+        node.terminate()
+        node.wait(timeout=30)
+
+
+def run(args, cfg, node, url, udp_port, rng) -> int:
+    lag, period = cfg["fusion"]["lag"], 1.0 / args.fusion_hz
+    ticks: list[tuple[float, float, list[float]]] = []  # (tick time, arrival, position)
+    stop = threading.Event()
+
+    def reader() -> None:
+        with connect(url.replace("http", "ws") + "/ws/tracks") as ws:
+            ws.recv(timeout=10)
+            while not stop.is_set():
+                try:
+                    frame = json.loads(ws.recv(timeout=1.0))
+                except TimeoutError:
+                    continue
+                ticks.append((frame["track"]["time"], time.time(), frame["track"]["position"]))
+
+    memory: list[tuple[float, float]] = []
+    health_log: list[dict] = []
+
+    def monitor() -> None:
+        while not stop.is_set():
+            memory.append((time.time(), rss_mb(node.pid)))
+            try:
+                health_log.append(
+                    {"t": time.time(), **httpx.get(url + "/health", timeout=5).json()}
+                )
+            except httpx.HTTPError:
+                pass
+            stop.wait(5.0 if not args.faults else 1.0)
+
+    threads = [
+        threading.Thread(target=reader, daemon=True),
+        threading.Thread(target=monitor, daemon=True),
+    ]
+    for t in threads:
+        t.start()
+    time.sleep(1.0)
+
+    keys = {n["id"]: n["key"].encode() for n in cfg["nodes"]}
+    positions = [np.array(s["position"]) for s in cfg["sensors"]]
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    seq = [0] * args.nodes
+    sent = dropped = 0
+    behind = 0.0
+    t_start = time.time()
+    interval = 1.0 / args.rate
+    k = 0
+    while True:
+        slot = t_start + k * interval
+        now = time.time()
+        if slot - t_start >= args.duration:
+            break
+        if slot > now:
+            time.sleep(slot - now)
+        behind = max(behind, time.time() - slot)
+        frac = (slot - t_start) / args.duration
+        for i in range(args.nodes):
+            stamp = time.time()
+            if args.faults:
+                if i < 10 and 0.20 <= frac < 0.35:
+                    continue  # disconnected
+                if i == 10 and 0.40 <= frac < 0.50:
+                    stamp += 30.0  # clock jumped ahead
+                if i == 11 and 0.60 <= frac < 0.70:
+                    stamp -= 5.0  # clock jumped back
+            p = truth(time.time() - t_start)
+            d = p - positions[i]
+            z = math.atan2(d[1], d[0]) + SIGMA * rng.standard_normal()
+            z = (z + math.pi) % (2 * math.pi) - math.pi
+            seq[i] += 1
+            m = SensorMessage(
+                node=f"n{i}",
+                seq=seq[i],
+                sensor=f"s{i}",
+                time=stamp,
+                reading=BearingReading(bearing=z),
+            )
+            frame = seal(f"n{i}", keys[f"n{i}"], encode_message(m, "msgpack"), "msgpack")
+            if args.faults and rng.random() < 0.2:
+                dropped += 1
+                continue
+            sock.sendto(frame, ("127.0.0.1", udp_port))
+            sent += 1
+        k += 1
+    time.sleep(lag + 3 * period + 1.0)
+    stop.set()
+    for t in threads:
+        t.join(timeout=10)
+    final = httpx.get(url + "/health", timeout=5).json()
+    metrics = httpx.get(url + "/metrics", timeout=5).text
+    tick_sum = float(re.search(r"^fusetrack_tick_seconds_sum ([\d.e+-]+)", metrics, re.M).group(1))
+    tick_count = float(
+        re.search(r"^fusetrack_tick_seconds_count ([\d.e+-]+)", metrics, re.M).group(1)
+    )
+
+    # tick time is relative to the node's wall grid; truth is a function of wall time
+    lat = np.array([arr - (tt + lag) for tt, arr, _ in ticks])
+    err = np.array(
+        [
+            np.linalg.norm(np.array(pos) - truth(tt - t_start))
+            for tt, _, pos in ticks
+            if tt > t_start + 5
+        ]
+    )
+    refused = sum(final["rejected"].values())
+    mem = np.array([m for _, m in memory])
+    result = {
+        "nodes": args.nodes,
+        "rate_per_node": args.rate,
+        "fusion_hz": args.fusion_hz,
+        "duration_s": args.duration,
+        "faults": args.faults,
+        "sent": sent,
+        "dropped_by_sender": dropped,
+        "accepted": final["accepted"],
+        "refused": final["rejected"],
+        "lost": sent - final["accepted"] - refused,
+        "sender_max_behind_s": behind,
+        "ticks": len(ticks),
+        "alignment": args.alignment,
+        "ticks_expected": round(args.duration * args.fusion_hz),
+        "tick_compute_ms_mean": 1e3 * tick_sum / max(tick_count, 1.0),
+        "tick_latency_ms": {
+            "p50": float(np.percentile(lat, 50) * 1e3),
+            "p99": float(np.percentile(lat, 99) * 1e3),
+            "max": float(lat.max() * 1e3),
+        },
+        "memory_mb": {"first": float(mem[0]), "last": float(mem[-1]), "max": float(mem.max())},
+        "position_rmse_m": float(np.sqrt(np.mean(err**2))),
+        "position_max_err_m": float(err.max()),
+        "load_average": os.getloadavg(),
+    }
+    if args.faults:
+        silent_seen = max((len(h["silent_sensors"]) for h in health_log), default=0)
+        result["faults_seen"] = {
+            "silent_sensors_max": silent_seen,
+            "silent_recovered": len(final["silent_sensors"]) == 0,
+            "future_refused": final["rejected"].get("future", 0),
+            "late_refused": final["rejected"].get("late", 0),
+        }
+    text = json.dumps(result, indent=2)
+    print(text)
+    if args.out is not None:
+        args.out.write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
