@@ -16,6 +16,27 @@ or NaN (``eta_i = 0``: out of view or occluded). Since ``eta`` is a function of 
   point it cannot see (out of view or behind a static occluder) and 1 otherwise (Sec. 6.1).
 
 Returned log-likelihoods are ``-inf`` for impossible particles, never NaN.
+
+Two corrections to the printed model, both off by default (``floor = 0``, ``exclusion = 0`` is
+the paper as printed):
+
+* ``floor``: ``p(eta | u)`` of a particle that every reporting camera can see is at least
+  ``floor``. The extremes of Sec. 6.1 and the clamped Eq. 8 give ``p = 0`` to particles whose
+  seen/not-seen pattern contradicts the occluder knowledge; when the whole predicted cloud is a
+  little off (the object just behind a disc, a thin shadow no particle reached) every weight is
+  zero, the readings are lost and the tracker drifts away from a correct fix. A small floor keeps
+  the Gaussian part of Eq. 6 pulling the cloud back.
+* ``exclusion``: the rectangle ``A_i(x)`` of Eq. 7 ends ``exclusion`` before ``x``. All the
+  rectangles of a particle meet at ``x``, so near ``x`` approximation (d) of Eq. 8 (disjoint
+  rectangles) fails: an occluder prior close to the object puts mass in every camera's rectangle,
+  ``sum_i q_ij > 1``, the clamped factor is 0 and even the true position gets ``p = 0``. An occluder
+  cannot stand within ``D`` of the object (they would overlap), so ``exclusion = D`` removes exactly
+  the impossible part of the rectangles where they overlap.
+
+:meth:`OcclusionAwareLikelihood.log_likelihood` is one Numba pass over the particles
+(:func:`fusetrack.world.occlusion_kernels.camera_likelihood_kernel`);
+:meth:`OcclusionAwareLikelihood.log_likelihood_reference` is the NumPy composition of the
+building blocks it replaces (the tests compare them).
 """
 
 from __future__ import annotations
@@ -32,9 +53,10 @@ from ..world.geometry import Array
 from ..world.occlusion import (
     OccluderPriors,
     disks_block,
-    occlusion_probability,
+    occlusion_probability_reference,
     pattern_probability,
 )
+from ..world.occlusion_kernels import camera_likelihood_kernel
 from ..world.room import Room
 
 PriorMode = Literal["gaussian", "perfect", "none"]
@@ -49,12 +71,18 @@ class OcclusionAwareLikelihood:
     room: Room
     diameter: float = 3.33
     prior_mode: PriorMode = "gaussian"
+    floor: float = 0.0
+    exclusion: float = 0.0
 
     def __post_init__(self) -> None:
         if self.prior_mode not in PRIOR_MODES:
             raise ConfigError(invalid("prior_mode", self.prior_mode, f"one of {PRIOR_MODES}"))
         if not self.diameter >= 0:
             raise ConfigError(invalid("diameter", self.diameter, "a number >= 0"))
+        if not 0 <= self.floor < 1:
+            raise ConfigError(invalid("floor", self.floor, "a probability in [0, 1)"))
+        if not 0 <= self.exclusion < np.inf:
+            raise ConfigError(invalid("exclusion", self.exclusion, "a finite length >= 0"))
 
     def assigned(self, selected: NDArray[np.intp], x: Array) -> NDArray[np.bool_]:
         """``(K, L)``: camera ``selected[k]`` has particle l in view, not behind a wall or static occluder."""
@@ -72,6 +100,43 @@ class OcclusionAwareLikelihood:
             cams.positions, x, occluder_positions, self.diameter
         )
 
+    def _inputs(
+        self, z: ArrayLike, selected: ArrayLike, x: ArrayLike
+    ) -> tuple[Array, NDArray[np.intp], Array]:
+        sel = np.asarray(selected, dtype=np.intp).reshape(-1)
+        zz = np.asarray(z, float).reshape(-1)
+        if zz.shape != sel.shape:
+            raise ShapeError(
+                invalid("z.shape", zz.shape, f"one reading per selected camera {sel.shape}")
+            )
+        return zz, sel, np.ascontiguousarray(np.asarray(x, float)[..., :2].reshape(-1, 2))
+
+    def _occluder_arrays(
+        self, occluders: OccluderPriors | ArrayLike | None
+    ) -> tuple[int, Array, Array]:
+        """Kernel mode (0 none, 1 known centres, 2 Gaussian priors), means, covariances."""
+        none = np.zeros((0, 2)), np.zeros((0, 2, 2))
+        if self.prior_mode == "none":
+            return 0, *none
+        if self.prior_mode == "perfect":
+            if occluders is None:
+                return 1, *none
+            centres = (
+                occluders.mean
+                if isinstance(occluders, OccluderPriors)
+                else np.asarray(occluders, float).reshape(-1, 2)
+            )
+            return 1, np.ascontiguousarray(centres), none[1]
+        if not isinstance(occluders, OccluderPriors):
+            raise ConfigError(
+                invalid(
+                    "occluders",
+                    type(occluders).__name__,
+                    "OccluderPriors for prior_mode='gaussian'",
+                )
+            )
+        return 2, np.ascontiguousarray(occluders.mean), np.ascontiguousarray(occluders.cov)
+
     def log_likelihood(
         self,
         z: ArrayLike,
@@ -84,7 +149,48 @@ class OcclusionAwareLikelihood:
         ``z (K,)``: readings of the queried cameras ``selected (K,)`` (indices into
         ``cameras``), NaN where a camera did not see the object. ``occluders``: the priors
         (``"gaussian"``), the true centres ``(M, 2)`` (``"perfect"``), ignored (``"none"``).
+        One Numba pass (Eq. 6 with Eqs. 2, 7-9 and the partition of Sec. 4.3).
         """
+        zz, sel, pts = self._inputs(z, selected, x)
+        mode, mu, cov = self._occluder_arrays(occluders)
+        cams = self.cameras.subset(sel)
+        edge_a, edge_b = self.room._blocking_edges
+        in_static = (
+            self.room.in_static_occluder(pts)
+            if self.room.static_occluders
+            else np.zeros(len(pts), dtype=bool)
+        )
+        return np.asarray(
+            camera_likelihood_kernel(
+                pts,
+                zz,
+                np.ascontiguousarray(cams.positions),
+                np.ascontiguousarray(cams.yaws, dtype=float),
+                np.tan(cams.fovs / 2),
+                np.ascontiguousarray(cams.focals, dtype=float),
+                cams.sigma_theta**2,
+                cams.sigma_pos**2,
+                cams.sigma_read**2,
+                edge_a,
+                edge_b,
+                np.ascontiguousarray(in_static),
+                mode,
+                mu,
+                cov,
+                float(self.diameter),
+                float(self.exclusion),
+                float(self.floor),
+            )
+        )
+
+    def log_likelihood_reference(
+        self,
+        z: ArrayLike,
+        selected: ArrayLike,
+        x: ArrayLike,
+        occluders: OccluderPriors | ArrayLike | None = None,
+    ) -> Array:
+        """NumPy reference of :meth:`log_likelihood` built from the world's occlusion functions."""
         sel = np.asarray(selected, dtype=np.intp).reshape(-1)
         zz = np.asarray(z, float).reshape(-1)
         if zz.shape != sel.shape:
@@ -137,7 +243,10 @@ class OcclusionAwareLikelihood:
             p = np.zeros(len(x))
             if possible.any():
                 cams = self.cameras.subset(sel)
-                q = occlusion_probability(cams.positions, x[possible], occluders, self.diameter)
+                q = occlusion_probability_reference(
+                    cams.positions, x[possible], occluders, self.diameter, self.exclusion
+                )
                 p[possible] = pattern_probability(q, eta, A[:, possible])
+        p = np.where(possible, np.maximum(p, self.floor), 0.0)
         with np.errstate(divide="ignore"):
             return np.asarray(np.log(p))

@@ -112,9 +112,17 @@ def occlusion_probability(
 
 
 def occlusion_probability_reference(
-    viewers: ArrayLike, points: ArrayLike, priors: OccluderPriors, diameter: float
+    viewers: ArrayLike,
+    points: ArrayLike,
+    priors: OccluderPriors,
+    diameter: float,
+    exclusion: float = 0.0,
 ) -> Array:
-    """NumPy reference of :func:`occlusion_probability` (every triple evaluated)."""
+    """NumPy reference of :func:`occlusion_probability` (every triple evaluated).
+
+    ``exclusion``: the rectangle ``A_i(x)`` ends this far before the point (0: Eq. 7 as printed;
+    see :class:`fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`).
+    """
     c = np.asarray(viewers, float).reshape(-1, 2)
     x = np.asarray(points, float).reshape(-1, 2)
     mu, cov = priors.mean, priors.cov
@@ -136,7 +144,8 @@ def occlusion_probability_reference(
     m_a = (u1 * pm1 + u2 * pm2) / a
     phi = -u2 * m[:, None, :, 0] + u1 * m[:, None, :, 1]
     s_p = np.sqrt(cov[:, 0, 0] * u2 * u2 - 2 * cov[:, 0, 1] * u1 * u2 + cov[:, 1, 1] * u1 * u1)
-    along = ndtr((r[..., None] - m_a) / s_a) - ndtr(-m_a / s_a)
+    r_eff = np.maximum(r - float(exclusion), 0.0)[..., None]
+    along = np.where(r_eff > 0, ndtr((r_eff - m_a) / s_a) - ndtr(-m_a / s_a), 0.0)
     half = 0.5 * float(diameter)
     across = ndtr((half - phi) / s_p) - ndtr((-half - phi) / s_p)
     return np.asarray(np.clip(along * across, 0.0, 1.0))

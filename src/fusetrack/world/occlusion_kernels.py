@@ -291,3 +291,319 @@ def pair_visibility_kernel(
         for k in range(i + 1, N):
             p2[k, i] = p2[i, k]
     return p1, p2
+
+
+@numba.njit(cache=True, inline="always")
+def _q_one(
+    rx: float,
+    ry: float,
+    r: float,
+    m1: float,
+    m2: float,
+    pm1: float,
+    pm2: float,
+    c00: float,
+    c01: float,
+    c11: float,
+    p11: float,
+    p12: float,
+    p22: float,
+    iso: bool,
+    inv_sd: float,
+    reach: float,
+    half: float,
+    exclusion: float,
+) -> float:  # pragma: no cover - jit
+    """q for one (camera, point, occluder) triple: the body of :func:`occlusion_probability_kernel`
+    with the rectangle ending ``exclusion`` before the point and far triples skipped."""
+    u1, u2 = rx / r, ry / r
+    phi = -u2 * m1 + u1 * m2
+    r_eff = r - exclusion
+    if r_eff <= 0.0:
+        return 0.0
+    if iso:
+        if abs(phi) - half > reach:
+            return 0.0
+        isp = inv_sd
+        isa = inv_sd
+        m_a = u1 * m1 + u2 * m2
+        if m_a - r_eff > reach or m_a < -reach:
+            return 0.0
+    else:
+        sp2 = c00 * u2 * u2 - 2.0 * c01 * u1 * u2 + c11 * u1 * u1
+        if (abs(phi) - half) ** 2 > CUTOFF * CUTOFF * sp2 and abs(phi) > half:
+            return 0.0
+        isp = 1.0 / math.sqrt(sp2)
+        a = p11 * u1 * u1 + 2.0 * p12 * u1 * u2 + p22 * u2 * u2
+        isa = math.sqrt(a)
+        m_a = (u1 * pm1 + u2 * pm2) / a
+    across = _phi_fast((half - phi) * isp) - _phi_fast((-half - phi) * isp)
+    if across < 1e-9:
+        return 0.0
+    along = _phi_fast((r_eff - m_a) * isa) - _phi_fast(-m_a * isa)
+    v = along * across
+    return min(max(v, 0.0), 1.0)
+
+
+@numba.njit(cache=True, nogil=True)
+def camera_likelihood_kernel(
+    x: np.ndarray,
+    z: np.ndarray,
+    cam_pos: np.ndarray,
+    cam_yaw: np.ndarray,
+    cam_tan_half: np.ndarray,
+    cam_focal: np.ndarray,
+    cam_var_theta: np.ndarray,
+    cam_var_pos: np.ndarray,
+    cam_var_read: np.ndarray,
+    edge_a: np.ndarray,
+    edge_b: np.ndarray,
+    in_static: np.ndarray,
+    mode: int,
+    occ_mu: np.ndarray,
+    occ_cov: np.ndarray,
+    diameter: float,
+    exclusion: float,
+    floor: float,
+) -> np.ndarray:  # pragma: no cover - jit
+    """``log f(Z | x)`` of Ercan et al. 2013 (Eq. 6) for every particle in one pass.
+
+    ``mode``: 0 no occluder information, 1 known occluder centres ``occ_mu`` (discs), 2 Gaussian
+    priors ``(occ_mu, occ_cov)`` (Eqs. 7-9 on the assigned cameras). A particle that a reporting
+    camera cannot see (field of view, walls, static occluders) is impossible (-inf); otherwise the
+    pattern probability is floored at ``floor``. Same formulas as
+    :meth:`fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood.log_likelihood_reference`.
+    """
+    L, K, M, E = x.shape[0], cam_pos.shape[0], occ_mu.shape[0], edge_a.shape[0]
+    out = np.empty(L)
+    half = 0.5 * diameter
+    r2disk = half * half
+    cy_ = np.cos(cam_yaw)
+    sy_ = np.sin(cam_yaw)
+    eta = np.empty(K, dtype=np.bool_)
+    for i in range(K):
+        eta[i] = not math.isnan(z[i])
+    # per-occluder precision and per-(camera, occluder) offsets (mode 2)
+    p11 = np.zeros(M)
+    p12 = np.zeros(M)
+    p22 = np.zeros(M)
+    iso = np.zeros(M, dtype=np.bool_)
+    inv_sd = np.zeros(M)
+    reach = np.zeros(M)
+    m1 = np.zeros((K, M))
+    m2 = np.zeros((K, M))
+    pm1 = np.zeros((K, M))
+    pm2 = np.zeros((K, M))
+    use = np.zeros((K, M), dtype=np.int64)
+    n_use = np.zeros(K, dtype=np.int64)
+    if mode == 2:
+        for j in range(M):
+            det = occ_cov[j, 0, 0] * occ_cov[j, 1, 1] - occ_cov[j, 0, 1] * occ_cov[j, 0, 1]
+            p11[j] = occ_cov[j, 1, 1] / det
+            p12[j] = -occ_cov[j, 0, 1] / det
+            p22[j] = occ_cov[j, 0, 0] / det
+            iso[j] = occ_cov[j, 0, 1] == 0.0 and occ_cov[j, 0, 0] == occ_cov[j, 1, 1]
+            sd = math.sqrt(occ_cov[j, 0, 0])
+            inv_sd[j] = 1.0 / sd
+            reach[j] = CUTOFF * sd
+        # Cull: every sight line of the cloud lies within rho of the segment camera -> centre of
+        # the cloud's bounding box, so an occluder farther than rho + D/2 + 5.5 sd from that
+        # segment has q < 3e-7 for every particle (2-D Gaussian tail) and is skipped.
+        lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
+        for l in range(L):
+            lo_x = min(lo_x, x[l, 0])
+            hi_x = max(hi_x, x[l, 0])
+            lo_y = min(lo_y, x[l, 1])
+            hi_y = max(hi_y, x[l, 1])
+        bx, by = 0.5 * (lo_x + hi_x), 0.5 * (lo_y + hi_y)
+        rho = 0.5 * math.sqrt((hi_x - lo_x) ** 2 + (hi_y - lo_y) ** 2)
+        for i in range(K):
+            sx, sy = bx - cam_pos[i, 0], by - cam_pos[i, 1]
+            len2 = sx * sx + sy * sy
+            n_use[i] = 0
+            for j in range(M):
+                ox, oy = occ_mu[j, 0] - cam_pos[i, 0], occ_mu[j, 1] - cam_pos[i, 1]
+                t = (ox * sx + oy * sy) / len2 if len2 > 0 else 0.0
+                t = min(max(t, 0.0), 1.0)
+                fx, fy = ox - t * sx, oy - t * sy
+                sd_max = math.sqrt(  # Gershgorin bound on the largest eigenvalue
+                    max(occ_cov[j, 0, 0], occ_cov[j, 1, 1]) + abs(occ_cov[j, 0, 1])
+                )
+                lim = rho + half + 1.1 * CUTOFF * sd_max
+                if fx * fx + fy * fy <= lim * lim:
+                    use[i, n_use[i]] = j
+                    n_use[i] += 1
+        for i in range(K):
+            for j in range(M):
+                m1[i, j] = occ_mu[j, 0] - cam_pos[i, 0]
+                m2[i, j] = occ_mu[j, 1] - cam_pos[i, 1]
+                pm1[i, j] = p11[j] * m1[i, j] + p12[j] * m2[i, j]
+                pm2[i, j] = p12[j] * m1[i, j] + p22[j] * m2[i, j]
+    assigned = np.empty(K, dtype=np.bool_)
+    q = np.zeros((K, M))
+    s_v = np.empty(M)
+    s = np.empty(M)
+    zeros = np.empty(K, dtype=np.int64)
+    active = np.empty(M, dtype=np.int64)
+    log_floor = math.log(floor) if floor > 0.0 else -np.inf
+    for l in range(L):
+        px, py = x[l, 0], x[l, 1]
+        log_g = 0.0
+        possible = True
+        for i in range(K):
+            rx, ry = px - cam_pos[i, 0], py - cam_pos[i, 1]
+            d = cy_[i] * rx + sy_[i] * ry
+            h = -sy_[i] * rx + cy_[i] * ry
+            ok = d > 0.0 and abs(h) <= cam_tan_half[i] * d and not in_static[l]
+            if ok:
+                for e in range(E):  # walls of a non-convex room and static occluders
+                    ax, ay = edge_a[e, 0], edge_a[e, 1]
+                    ex, ey = edge_b[e, 0] - ax, edge_b[e, 1] - ay
+                    d1 = ex * (cam_pos[i, 1] - ay) - ey * (cam_pos[i, 0] - ax)
+                    d2 = ex * (py - ay) - ey * (px - ax)
+                    if d1 * d2 >= 0.0:
+                        continue
+                    d3 = rx * (ay - cam_pos[i, 1]) - ry * (ax - cam_pos[i, 0])
+                    d4 = rx * (edge_b[e, 1] - cam_pos[i, 1]) - ry * (edge_b[e, 0] - cam_pos[i, 0])
+                    if d3 * d4 < 0.0:
+                        ok = False
+                        break
+            assigned[i] = ok
+            if eta[i]:
+                if not ok:
+                    possible = False
+                    break
+                dd = max(d, 1e-6)  # MIN_DEPTH of perspective_camera
+                ratio = h / dd
+                rr = ratio * ratio
+                f2 = cam_focal[i] * cam_focal[i]
+                var = (
+                    f2 * (1.0 + rr) ** 2 * cam_var_theta[i]
+                    + f2 * (1.0 + rr) / (dd * dd) * cam_var_pos[i]
+                    + cam_var_read[i]
+                )
+                res = z[i] - cam_focal[i] * ratio
+                log_g -= 0.5 * (res * res / var + math.log(2.0 * math.pi * var))
+        if not possible:
+            out[l] = -np.inf
+            continue
+        p = 1.0
+        if mode == 1:
+            for i in range(K):
+                vis = assigned[i]
+                if vis:
+                    rx, ry = px - cam_pos[i, 0], py - cam_pos[i, 1]
+                    len2 = rx * rx + ry * ry
+                    for j in range(M):
+                        ox, oy = occ_mu[j, 0] - cam_pos[i, 0], occ_mu[j, 1] - cam_pos[i, 1]
+                        t = (ox * rx + oy * ry) / len2 if len2 > 0 else 0.0
+                        t = min(max(t, 0.0), 1.0)
+                        fx, fy = ox - t * rx, oy - t * ry
+                        if fx * fx + fy * fy < r2disk:
+                            vis = False
+                            break
+                if vis != eta[i]:
+                    p = 0.0
+                    break
+        elif mode == 2 and M > 0:
+            for j in range(M):
+                s_v[j] = 0.0
+            nz = 0
+            for i in range(K):
+                if not assigned[i]:
+                    continue
+                rx, ry = px - cam_pos[i, 0], py - cam_pos[i, 1]
+                r = math.sqrt(rx * rx + ry * ry)
+                for j in range(M):
+                    q[i, j] = 0.0
+                for u in range(n_use[i]):
+                    j = use[i, u]
+                    v = 0.0
+                    if r > 0.0:
+                        v = _q_one(
+                            rx, ry, r, m1[i, j], m2[i, j], pm1[i, j], pm2[i, j],
+                            occ_cov[j, 0, 0], occ_cov[j, 0, 1], occ_cov[j, 1, 1],
+                            p11[j], p12[j], p22[j], iso[j], inv_sd[j], reach[j], half, exclusion,
+                        )  # fmt: skip
+                    q[i, j] = v
+                    if eta[i]:
+                        s_v[j] += v
+                if not eta[i]:
+                    zeros[nz] = i
+                    nz += 1
+            # Occluders that no occluded camera's rectangle reaches give the same factor to every
+            # term of the inclusion-exclusion: multiply them once. The rest are enumerated in
+            # Gray-code order (one camera added or removed per term).
+            common = 1.0
+            na = 0
+            for j in range(M):
+                touched = False
+                for b in range(nz):
+                    if q[zeros[b], j] > 0.0:
+                        touched = True
+                        break
+                if touched:
+                    active[na] = j
+                    s[na] = s_v[j]
+                    na += 1
+                else:
+                    f = 1.0 - s_v[j]
+                    if f <= 0.0:
+                        common = 0.0
+                        break
+                    if f < 1.0:
+                        common *= f
+            total = 0.0
+            if common > 0.0:
+                in_b = 0
+                for step in range(1 << nz):
+                    if step > 0:
+                        bit = 0
+                        while not (step >> bit) & 1:
+                            bit += 1
+                        ib = zeros[bit]
+                        if in_b & (1 << bit):
+                            for a in range(na):
+                                s[a] -= q[ib, active[a]]
+                        else:
+                            for a in range(na):
+                                s[a] += q[ib, active[a]]
+                        in_b ^= 1 << bit
+                    prod = 1.0
+                    for a in range(na):
+                        f = 1.0 - s[a]
+                        if f <= 0.0:
+                            prod = 0.0
+                            break
+                        if f < 1.0:
+                            prod *= f
+                    # parity of the subset size: popcount of the Gray code
+                    g = in_b
+                    odd = False
+                    while g:
+                        odd = not odd
+                        g &= g - 1
+                    total += -prod if odd else prod
+                total *= common
+            p = min(max(total, 0.0), 1.0)
+        out[l] = log_g + (math.log(p) if p > floor else log_floor)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def points_in_polygon_kernel(points: np.ndarray, v: np.ndarray) -> np.ndarray:  # pragma: no cover
+    """Even-odd test of ``points (n, 2)`` against polygon ``v``: the arithmetic of
+    :func:`fusetrack.world.geometry.points_in_polygon`, one loop."""
+    n, m = points.shape[0], v.shape[0]
+    out = np.zeros(n, dtype=np.bool_)
+    for k in range(n):
+        x, y = points[k, 0], points[k, 1]
+        inside = False
+        for e in range(m):
+            ax, ay = v[e, 0], v[e, 1]
+            b = e + 1 if e + 1 < m else 0
+            bx, by = v[b, 0], v[b, 1]
+            if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
+                inside = not inside
+        out[k] = inside
+    return out

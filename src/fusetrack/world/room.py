@@ -23,7 +23,14 @@ from .geometry import (
     segments_cross_polygon,
     signed_area,
 )
-from .occlusion_kernels import segments_cross_edges_kernel
+from .occlusion_kernels import points_in_polygon_kernel, segments_cross_edges_kernel
+
+
+def _in_polygon(points: ArrayLike, v: Array) -> NDArray[np.bool_]:
+    """:func:`points_in_polygon` (same arithmetic) as a Numba loop, for any leading shape."""
+    p = np.asarray(points, dtype=float)
+    flat = np.ascontiguousarray(p.reshape(-1, 2))
+    return np.asarray(points_in_polygon_kernel(flat, v).reshape(p.shape[:-1]))
 
 
 @dataclass(frozen=True)
@@ -73,13 +80,13 @@ class Room:
 
     def inside(self, points: ArrayLike) -> NDArray[np.bool_]:
         """Inside the floor polygon (static occluders ignored)."""
-        return points_in_polygon(points, self.boundary)
+        return _in_polygon(points, self.boundary)
 
     def in_static_occluder(self, points: ArrayLike) -> NDArray[np.bool_]:
         p = np.asarray(points, dtype=float)
         out = np.zeros(p.shape[:-1], dtype=bool)
         for o in self.static_occluders:
-            out |= points_in_polygon(p, o)
+            out |= _in_polygon(p, o)
         return out
 
     def free(self, points: ArrayLike) -> NDArray[np.bool_]:

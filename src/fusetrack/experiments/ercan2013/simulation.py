@@ -8,7 +8,10 @@ people walking and the same camera noise: differences between them are the metho
 Config keys (defaults in :data:`DEFAULTS`): ``scene`` (name or a :class:`Scene`), ``n_occluders``,
 ``prior`` ("perfect", "gaussian", "none"), ``sigma_psi``, ``k``, ``method`` (greedy, brute,
 fixed, random, closest, all), ``model`` (perspective, weak), ``period`` T, ``steps``,
-``particles`` L, ``burn_in``, ``trace`` (keep per-step estimates).
+``particles`` L, ``burn_in``, ``trace`` (keep per-step estimates), ``floor`` (least p(eta | u) of a
+particle the reporting cameras can see; 0 = the paper's hard zeros) and ``exclusion`` (the
+rectangles of Eq. 7 end this many occluder diameters before the particle; 0 = as printed): see
+:class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`.
 """
 
 from __future__ import annotations
@@ -54,6 +57,8 @@ DEFAULTS: dict[str, Any] = {
     "particles": 1000,
     "burn_in": 0,
     "trace": False,
+    "floor": 1e-3,
+    "exclusion": 1.0,
 }
 
 
@@ -142,7 +147,14 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         rmse_occ = (
             rmse_per_coordinate(np.broadcast_to(center, occ[1:].shape), occ[1:]) if m else 0.0
         )
-    likelihood = OcclusionAwareLikelihood(scene.cameras, scene.room, scene.diameter, prior)
+    likelihood = OcclusionAwareLikelihood(
+        scene.cameras,
+        scene.room,
+        scene.diameter,
+        prior,
+        floor=float(cfg["floor"]),
+        exclusion=float(cfg["exclusion"]) * scene.diameter,
+    )
     dynamics = WaypointRegimeDynamics(sigma_v=scene.motion_noise)
     asir = WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed)
     rng_f = np.random.default_rng([seed, 3])

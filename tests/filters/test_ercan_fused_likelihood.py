@@ -1,0 +1,106 @@
+"""The one-pass Numba camera-network likelihood against its NumPy reference, and its two corrections
+to the printed model (the floor on p(eta | u) and the rectangles that stop short of the object)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fusetrack.experiments.ercan2013.scenes import get_scene
+from fusetrack.experiments.ercan2013.simulation import world_and_readings
+from fusetrack.filters.occlusion_likelihood import OcclusionAwareLikelihood
+from fusetrack.sensors.perspective_camera import ring_of_cameras
+from fusetrack.world.geometry import points_in_polygon
+from fusetrack.world.occlusion import OccluderPriors, occlusion_probability_reference
+from fusetrack.world.room import square_room
+
+NOISE = {"sigma_theta": 0.01, "sigma_pos": 1.0, "sigma_read": 2.0}
+
+
+@pytest.mark.parametrize("scene_name", ["square", "L"])
+@pytest.mark.parametrize("floor, exclusion", [(0.0, 0.0), (1e-3, 3.33)])
+def test_fused_kernel_equals_the_reference(scene_name: str, floor: float, exclusion: float) -> None:
+    scene = get_scene(scene_name)
+    obj, occ, z = world_and_readings(scene, 40, 40, 3)
+    rng = np.random.default_rng(1)
+    sel = np.arange(6)
+    for t in (10, 35):
+        x = obj[t] + rng.normal(0, 5, (300, 2))
+        iso = OccluderPriors(occ[t] + rng.normal(0, 2, (40, 2)), np.eye(2) * 9.0)
+        tilted = OccluderPriors(occ[t], np.array([[4.0, 1.0], [1.0, 2.0]]))
+        for mode, occluders in (
+            ("none", None),
+            ("perfect", occ[t]),
+            ("gaussian", iso),
+            ("gaussian", tilted),
+        ):
+            lik = OcclusionAwareLikelihood(
+                scene.cameras, scene.room, scene.diameter, mode, floor, exclusion
+            )  # type: ignore[arg-type]
+            fast = lik.log_likelihood(z[t, sel], sel, x, occluders)
+            ref = lik.log_likelihood_reference(z[t, sel], sel, x, occluders)
+            assert np.array_equal(np.isfinite(fast), np.isfinite(ref))
+            ok = np.isfinite(ref)
+            # table-lookup normal CDF and 5-sd cut-offs: probabilities agree to ~1e-6
+            np.testing.assert_allclose(np.exp(fast[ok]), np.exp(ref[ok]), rtol=1e-3, atol=1e-9)
+
+
+def _cross_of_cameras() -> tuple[object, object]:
+    cams = ring_of_cameras(
+        [(0, 50), (50, 0), (100, 50), (50, 100)], [0, 90, 180, 270], 90.0, **NOISE
+    )
+    return cams, square_room(100.0, [])
+
+
+def test_rectangles_meeting_at_the_object_no_longer_rule_out_the_truth() -> None:
+    """Four cameras see the object at (50, 50); an occluder prior sits 1 unit from it (sd 1). All
+    four rectangles of Eq. 7 contain that mass: sum_i q = 1.65 > 1, the clamped Eq. 8 factor is 0
+    and the printed model gives the true position probability 0. Stopping the rectangles D before
+    the object (where no occluder can stand) leaves sum_i q ~ 0.007 and a finite likelihood."""
+    cams, room = _cross_of_cameras()
+    x = np.array([[50.0, 50.0]])
+    prior = OccluderPriors(np.array([[50.7, 50.7]]), np.eye(2)[None])
+    q = occlusion_probability_reference(cams.positions, x, prior, 3.33)  # type: ignore[attr-defined]
+    assert q.sum() == pytest.approx(1.647, abs=1e-3)
+    q_short = occlusion_probability_reference(cams.positions, x, prior, 3.33, exclusion=3.33)  # type: ignore[attr-defined]
+    assert q_short.sum() < 0.01
+    z = cams.image_coordinate(x[:, None, :])[0]  # type: ignore[attr-defined]
+    sel = np.arange(4)
+    printed = OcclusionAwareLikelihood(cams, room, 3.33, "gaussian")  # type: ignore[arg-type]
+    fixed = OcclusionAwareLikelihood(cams, room, 3.33, "gaussian", exclusion=3.33)  # type: ignore[arg-type]
+    assert printed.log_likelihood(z, sel, x, prior)[0] == -np.inf
+    assert np.isfinite(fixed.log_likelihood(z, sel, x, prior)[0])
+
+
+def test_floor_keeps_inconsistent_particles_alive_but_never_impossible_ones() -> None:
+    """Perfect priors: a particle that a disc hides from a camera that did see the object gets the
+    floor (not 0); a particle outside a reporting camera's field of view stays impossible."""
+    cams, room = _cross_of_cameras()
+    sel = np.array([0])  # camera at (0, 50) looking along +x
+    disc = np.array([[30.0, 50.0]])
+    hidden, clear, behind = [60.0, 50.0], [60.0, 70.0], [-5.0, 50.0]
+    x = np.array([hidden, clear, behind])
+    z = cams.subset(sel).image_coordinate(np.array([[[60.0, 70.0]]]))[0]  # type: ignore[attr-defined]
+    hard = OcclusionAwareLikelihood(cams, room, 3.33, "perfect")  # type: ignore[arg-type]
+    soft = OcclusionAwareLikelihood(cams, room, 3.33, "perfect", floor=1e-3)  # type: ignore[arg-type]
+    l_hard = hard.log_likelihood(z, sel, x, disc)
+    l_soft = soft.log_likelihood(z, sel, x, disc)
+    assert l_hard[0] == -np.inf and np.isfinite(l_hard[1]) and l_hard[2] == -np.inf
+    assert l_soft[1] == pytest.approx(l_hard[1])
+    assert l_soft[2] == -np.inf
+    # the hidden particle keeps the Gaussian part of Eq. 6, scaled by the floor
+    gauss_hidden = soft.log_likelihood(z, sel, x[:1], np.zeros((0, 2)))[0]
+    assert l_soft[0] == pytest.approx(gauss_hidden + np.log(1e-3))
+
+
+def test_numba_point_in_polygon_equals_the_numpy_one() -> None:
+    rng = np.random.default_rng(0)
+    for name in ("L", "square", "lab"):
+        room = get_scene(name).room
+        p = rng.uniform(-10, 270, (5000, 2))
+        p[:200] = np.round(p[:200] / 50) * 50  # vertices and edges
+        expected = points_in_polygon(p, room.boundary)
+        for o in room.static_occluders:
+            expected &= ~points_in_polygon(p, o)
+        assert np.array_equal(room.free(p), expected)
+        assert room.free(p.reshape(50, 100, 2)).shape == (50, 100)
