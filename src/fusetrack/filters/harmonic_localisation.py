@@ -464,6 +464,8 @@ class _Posterior:
         spread = beamforms.std(axis=-1)
         floor = 1e-12 * max(float(np.abs(beamforms).max()), 1e-300)
         self.sigma2 = (model.rel_sigma * np.maximum(spread, floor)) ** 2  # (K,)
+        self.om = beamforms - beamforms.mean(-1, keepdims=True)  # centred observations
+        self.ss_o = (self.om * self.om).sum(-1)
         self.evaluations = 0
         self.models = [
             SourceBeamform(network, powers[:, m], freqs[:, m]) for m in range(powers.shape[1])
@@ -476,7 +478,12 @@ class _Posterior:
     def energy(self, total: Array, x_all: Array) -> Array:
         """``Σ_k ℓ_k`` plus the prior, for summed shares ``total (..., K, Q)`` and positions
         ``x_all (..., M, 2)``."""
-        _, _, rss = fit_gain_offset(self.B, total)
+        # fit_gain_offset's residual, from centred sums: rss = S_oo - 2a S_bo + a² S_bb
+        bm = total - total.mean(-1, keepdims=True)
+        sbb = np.einsum("...q,...q->...", bm, bm)
+        sbo = np.einsum("...q,...q->...", bm, self.om)
+        a = np.maximum(sbo / np.maximum(sbb, 1e-300), 0.0)
+        rss = np.maximum(self.ss_o - 2 * a * sbo + a * a * sbb, 0.0)
         u = (rss / self.sigma2).sum(-1)
         x0, x1, y0, y1 = self.cfg.field_box
         inside = np.all(
