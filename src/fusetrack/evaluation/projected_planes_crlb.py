@@ -26,6 +26,8 @@ propagates), Lee 2009 Figs. 2-10 ... 2-13.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..core.errors import ConfigError, ShapeError, invalid
@@ -134,7 +136,7 @@ def plane_crlb(
 
 def direct3d_crlb(
     truth: Array,
-    sensor: DoaSensor3D,
+    sensor: DoaSensor3D | Sequence[DoaSensor3D],
     model: AccelTurn,
     dt: float,
     *,
@@ -142,27 +144,38 @@ def direct3d_crlb(
     sigma_vel: float = 0.1,
     transition: str = "jacobian",
 ) -> Array:
-    """Bound standard deviations ``(T, 6)`` of the direct 3-D filter (Lee 2009, Eqs. 2.39-2.41, corrected)."""
+    """Bound standard deviations ``(T, 6)`` of the direct 3-D filter (Lee 2009, Eqs. 2.39-2.41, corrected).
+
+    ``sensor`` may be several sensors: their (independent) angle pairs add their information
+    every step, ``J += sum_k H_k^T R_k^-1 H_k`` -- the bound of a 3-D filter using all of them.
+    """
     truth = np.asarray(truth, dtype=float)
     if truth.ndim != 2 or truth.shape[1] != 6:
         raise ShapeError(invalid("truth.shape", truth.shape, "(T, 6)"))
-    local = sensor.local(truth[:, :3])
-    x, y, z = local[:, 0], local[:, 1], local[:, 2]
-    r2 = x * x + y * y
-    r = np.sqrt(r2)
-    rho2 = r2 + z * z
-    H = np.zeros((len(truth), 2, 6))
-    H[:, 0, 0], H[:, 0, 1] = -y / r2, x / r2
-    H[:, 1, 0], H[:, 1, 1], H[:, 1, 2] = x * z / (rho2 * r), y * z / (rho2 * r), -r / rho2
-    H[:, :, :3] *= sensor.polarity
-    Rinv = np.eye(2) / sensor.sigma**2
+    sensors = [sensor] if isinstance(sensor, DoaSensor3D) else list(sensor)
+    if not sensors:
+        raise ConfigError(
+            invalid("sensor", sensor, "a DoaSensor3D or a non-empty sequence of them")
+        )
+    info = np.zeros((len(truth), 6, 6))
+    for s in sensors:
+        local = s.local(truth[:, :3])
+        x, y, z = local[:, 0], local[:, 1], local[:, 2]
+        r2 = x * x + y * y
+        r = np.sqrt(r2)
+        rho2 = r2 + z * z
+        H = np.zeros((len(truth), 2, 6))
+        H[:, 0, 0], H[:, 0, 1] = -y / r2, x / r2
+        H[:, 1, 0], H[:, 1, 1], H[:, 1, 2] = x * z / (rho2 * r), y * z / (rho2 * r), -r / rho2
+        H[:, :, :3] *= s.polarity
+        info += np.einsum("tmi,tmj->tij", H, H) / s.sigma**2
     J = _prior_information(3, sigma_pos, sigma_vel)
     out = np.empty((len(truth), 6))
     for n in range(len(truth)):
         if n > 0:
             Fi = np.linalg.inv(_transition(model, truth[n - 1], dt, transition))
             J = Fi.T @ J @ Fi
-        J = J + H[n].T @ Rinv @ H[n]
+        J = J + info[n]
         out[n] = np.sqrt(np.diag(np.linalg.inv(J)))
     return out
 
