@@ -37,7 +37,8 @@ def test_single_edge_pixel_gives_the_hand_computed_likelihood():
     edges = np.zeros((50, 60))
     edges[25, 30 + 12] = 1.0  # on ray 0 (pointing +x), 2 px beyond the boundary at radius 10
     ll = s.log_likelihood(s.measurement(edges), np.array([30.0, 25.0, 0, 0]))
-    g = np.exp(-0.5 * (2 / 3) ** 2) / (2 * np.pi * 9)
+    # the cross-dilated pixel covers columns 41-43 of the ray: samples s = 1, 2, 3
+    g = sum(np.exp(-0.5 * (d / 3) ** 2) / (2 * np.pi * 9) for d in (1.0, 2.0, 3.0))
     assert float(ll) == pytest.approx(np.log1p(g / s.clutter_floor))
     assert float(s.log_likelihood(s.measurement(np.zeros((50, 60))), np.zeros(4))) == 0.0
 
@@ -80,3 +81,19 @@ def test_edge_map_and_shapes():
         s.measurement(np.zeros((10, 10)))
     with pytest.raises(ShapeError, match=r"z\.shape"):
         s.log_likelihood(np.zeros((2, s.measurement(e).size)), np.zeros((3, 4)))
+
+
+def test_simulated_outline_is_seen_where_it_was_drawn():
+    s = EllipseEdgeSensor("e", 60, 80, axes=(10.0, 12.0))
+    z = s.simulate(np.array([37.4, 29.6, 0, 0]), np.random.default_rng(0))
+    xs, ys = np.meshgrid(np.arange(25, 50), np.arange(18, 42))
+    states = np.stack([xs.ravel(), ys.ravel()], -1).astype(float)
+    np.testing.assert_allclose(
+        states[np.argmax(s.log_likelihood(z, states))], [37.4, 29.6], atol=1.5
+    )
+    np.testing.assert_allclose(
+        s.fisher_information(np.zeros(4))[:2, :2], np.eye(2) / 0.75, atol=1e-12
+    )
+    np.testing.assert_array_equal(
+        s.detection_probability(np.array([[5.0, 5.0], [-3.0, 5.0]])), [1, 0]
+    )

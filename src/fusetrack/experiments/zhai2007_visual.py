@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
@@ -171,14 +171,14 @@ def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> tuple[Any,
     lang = Langevin()
     if method.startswith(("condensation", "PF-SP-PEKF", "MMPF-SP", "Galerkin")):
         sensor = EllipseEdgeSensor("head", H, W, axes)
-        zs = [[sensor.measurement(e)] for e in edge_maps(seq)]
+        zs: list[list[np.ndarray | None]] = [[sensor.measurement(e)] for e in edge_maps(seq)]
         fe = PrecomputedMeasurements(zs)
         if method == "condensation":
             return ProposalParticleFilter(lang, [sensor], None, n), prior, fe
         if method.startswith("condensation "):
             return ProposalParticleFilter(lang, [sensor], None, int(method.split()[1])), prior, fe
         if method.startswith("PF-SP-PEKF"):
-            tr = "marginal" if "marginal" in method else "paired"
+            tr: Literal["paired", "marginal"] = "marginal" if "marginal" in method else "paired"
             prop = SPPEKFProposal(n_channels=10)
             return ProposalParticleFilter(lang, [sensor], prop, n, transition=tr), prior, fe
         if method == "MMPF-SP":
@@ -192,15 +192,15 @@ def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> tuple[Any,
     box = _box(seq.sprite.axes, float(seq.scale[0]))
     cues = [PositionFix(c, cov=CUE_SIGMA**2 * np.eye(2)) for c in CUES]
     if method.startswith("bootstrap grey cue"):
-        corr = "plain" if "plain" in method else "normalised"
+        corr: Literal["plain", "normalised"] = "plain" if "plain" in method else "normalised"
         fe_g = MultiCueFrontEnd(box, cues=("grey",), correlation=corr)
         return ProposalParticleFilter(lang, [cues[1]], None, n), prior, fe_g
     if method == "multi-cue MMPF":
         mm = MultipleModelParticleFilter(mm_models(), PI_B, cues, n, proposal="cells")
         return mm, _prior6(prior), MultiCueFrontEnd(box, correlation="normalised")
     if method.startswith("App. B"):
-        corr = "normalised" if "normalised" in method else "plain"
-        fe_b = MultiCueFrontEnd((7, 7), 20, ("grey",), half_life=None, correlation=corr)
+        corr_b: Literal["plain", "normalised"] = "normalised" if "normalised" in method else "plain"
+        fe_b = MultiCueFrontEnd((7, 7), 20, ("grey",), half_life=None, correlation=corr_b)
         motion = Langevin(beta=0.0, v_mean=0.0, position_var=5.0)  # x += v + sqrt(5) N(0, 1)
         like = PositionFix("grey", cov=np.eye(2))  # var_o = 1
         at_start = Gaussian(truth[0].copy(), 1e-9 * np.eye(4))  # all particles at ctr_1, v_ini

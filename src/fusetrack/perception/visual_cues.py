@@ -192,7 +192,7 @@ class MultiCueFrontEnd:
         rc = (round(float(estimate[1])), round(float(estimate[0])))
         half = (self.box[0] // 2, self.box[1] // 2)
         if "grey" in self.cues:
-            patch = crop(self._grey(frame), rc, half)
+            patch = np.asarray(crop(self._grey(frame), rc, half), dtype=np.float64)
             a = self.alpha
             self.grey = patch if self.grey is None else a * patch + (1 - a) * self.grey
         if "edge" in self.cues:
@@ -219,11 +219,13 @@ class MultiCueFrontEnd:
             elif cue == "grey":
                 assert self.grey is not None
                 score = correlation_map(
-                    crop(self._grey(frame), rc, half), self.grey, self.correlation
+                    np.asarray(crop(self._grey(frame), rc, half), dtype=np.float64),
+                    self.grey,
+                    self.correlation,
                 )
             else:
                 assert self.edge is not None
-                region = crop(self._edges(frame), rc, half)
+                region = np.asarray(crop(self._edges(frame), rc, half), dtype=np.float64)
                 if not np.any(region) or not np.any(self.edge):
                     out.append(None)
                     continue

@@ -59,7 +59,7 @@ def predicted_centre(estimate: Array) -> Array:
 def track_frames(
     filt: FrameFilter,
     prior: Gaussian,
-    frames: Sequence[NDArray[np.uint8]],
+    frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8],
     front_end: FrontEnd,
     rng: np.random.Generator,
     *,
@@ -79,7 +79,8 @@ def track_frames(
         e = np.asarray(state.estimate, float)
         est.append(e)
         front_end.adapt(frames[k], e)
-    info = dict(getattr(filt, "stats", None).as_dict()) if hasattr(filt, "stats") else {}
+    stats = getattr(filt, "stats", None)
+    info: dict[str, Any] = dict(stats.as_dict()) if stats is not None else {}
     return Track(np.array(est), time.perf_counter() - t0, info)
 
 

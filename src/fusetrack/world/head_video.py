@@ -257,9 +257,10 @@ def render(
         img = canvas[iy : iy + H + 1, ix : ix + W + 1]
         if ox != ix or oy != iy:  # sub-pixel pan
             shift = np.array([[1.0, 0.0, ix - ox], [0.0, 1.0, iy - oy]], np.float32)
-            img = cv2.warpAffine(img, shift, (W + 1, H + 1), flags=cv2.INTER_LINEAR)
-        img = img[:H, :W]
-        img = cv2.convertScaleAbs(img, alpha=float(gain[k]))  # illumination, saturating
+            img = np.asarray(cv2.warpAffine(img, shift, (W + 1, H + 1)), dtype=np.uint8)
+        img = np.asarray(
+            cv2.convertScaleAbs(img[:H, :W], alpha=float(gain[k])), dtype=np.uint8
+        )  # illumination, saturating
         for actor in (*back, target, *front):
             traj = np.asarray(actor.trajectory, float)
             if k >= len(traj):
