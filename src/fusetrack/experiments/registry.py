@@ -255,6 +255,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. V setup B (Figs 50-56): 10 cameras, small target, a one-camera gap",
             "Kushwaha 2010 Ch. V (seed 003)",
         ),
+        ExperimentInfo(
+            "lee2009-periodic-sweep",
+            "lee2009_camera_triggering:run_sweep",
+            "Lee 2009 E3.2 (Fig. 3-6): periodic camera cooperation, error against the camera period, 1,000 trials",
+            "Lee 2009 (seed 000)",
+        ),
     ]
 }
 
