@@ -99,7 +99,9 @@ def weighted_em(
         mix = nk / nk.sum()
         means = (r.T @ x) / nk[:, None]
         diff = x[None, :, :] - means[:, None, :]
-        covs = floor_covariances(np.einsum("nk,kni,knj->kij", r, diff, diff) / nk[:, None, None], 1e-6)
+        covs = floor_covariances(
+            np.einsum("nk,kni,knj->kij", r, diff, diff) / nk[:, None, None], 1e-6
+        )
     return GaussianMixture(mix, means, floor_covariances(covs + extra))
 
 
@@ -120,13 +122,15 @@ def fit_kde_mixture(
     rng: np.random.Generator,
     m_max: int = 5,
     bandwidth: float | None = None,
-    kl_samples: int = 2000,
+    kl_samples: int = 1000,
     kl_tolerance: float = 0.05,
+    max_centres: int = 300,
 ) -> tuple[GaussianMixture, list[float]]:
     """Compress the weighted KDE ``sum_i w_i N(x; x_i, h^2 I)`` (Eq. 85) to a mixture.
 
     Orders ``m = 1..m_max`` are fitted by EM; the KL divergence ``KL(kde || g_m)`` is estimated
-    with ``kl_samples`` draws from the KDE (Eq. 86). The paper takes the argmin, which always
+    with ``kl_samples`` draws from the KDE (Eq. 86), the KDE's density at them from its
+    ``max_centres`` heaviest kernels (renormalised; this bounds the cost). The paper takes the argmin, which always
     favours the largest order (KL does not grow with m); here the smallest order whose KL is
     within ``kl_tolerance`` nats of the smallest KL is chosen (spec A-V-4), and the search stops
     at the first order that improves the KL by less than ``kl_tolerance``. Particles with a weight
@@ -145,9 +149,7 @@ def fit_kde_mixture(
     idx = rng.choice(len(w), size=kl_samples, p=w)
     s = x[idx] + h * rng.standard_normal((kl_samples, d))
     sq = np.maximum(np.sum(s * s, 1)[:, None] + np.sum(x * x, 1)[None, :] - 2 * s @ x.T, 0.0)
-    log_kde = _lse(-0.5 * sq / (h * h) + np.log(w), axis=1) - 0.5 * d * np.log(
-        2 * np.pi * h * h
-    )
+    log_kde = _lse(-0.5 * sq / (h * h) + np.log(w), axis=1) - 0.5 * d * np.log(2 * np.pi * h * h)
     fits, kls = [], []
     for m in range(1, max(1, m_max) + 1):
         gm = weighted_em(x, w, m, rng, extra_cov=kernel)
@@ -178,7 +180,9 @@ def mixture_product(a: GaussianMixture, b: GaussianMixture) -> GaussianMixture:
     z = np.linalg.solve(L, r[..., None])[..., 0]
     d = a.dim
     logn = -0.5 * (
-        np.sum(z * z, -1) + 2 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1) + d * np.log(2 * np.pi)
+        np.sum(z * z, -1)
+        + 2 * np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1)
+        + d * np.log(2 * np.pi)
     )
     with np.errstate(divide="ignore"):
         logw = np.log(a.weights)[:, None] + np.log(b.weights)[None, :] + logn
@@ -186,7 +190,9 @@ def mixture_product(a: GaussianMixture, b: GaussianMixture) -> GaussianMixture:
     return GaussianMixture(w / w.sum(), mean.reshape(-1, d), cov.reshape(-1, d, d))
 
 
-def prune_mixture(gm: GaussianMixture, max_components: int, min_weight: float = 1e-9) -> GaussianMixture:
+def prune_mixture(
+    gm: GaussianMixture, max_components: int, min_weight: float = 1e-9
+) -> GaussianMixture:
     """Keep the ``max_components`` heaviest components above ``min_weight`` (renormalised)."""
     order = np.argsort(-gm.weights)[:max_components]
     order = order[gm.weights[order] >= min_weight * gm.weights[order[0]]]

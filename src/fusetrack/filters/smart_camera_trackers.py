@@ -496,28 +496,45 @@ class ImagePlaneTracker(_Tracker):
 def _neg_log_posterior(
     x: Array,
     cams: Sequence[EllipsoidCamera],
-    gms: Sequence[GaussianMixture],
+    terms: Sequence[tuple[Array, Array, Array]],
     x0: Array,
     prec0: Array,
-) -> float:
+) -> tuple[float, Array]:
+    """``-log`` of Eq. 99 and its gradient; ``terms`` per camera: means, inverse covariances and
+    log(weight / sqrt(det 2 pi S)) of its 2-D mixture."""
     r = x - x0
     val = 0.5 * r @ prec0 @ r
-    for cam, gm in zip(cams, gms):
-        y = cam.project(x)
-        diff = y - gm.means
-        inv = np.linalg.inv(gm.covs)
-        maha = np.einsum("ki,kij,kj->k", diff, inv, diff)
-        logn = -0.5 * maha - 0.5 * np.log(np.linalg.det(2 * np.pi * gm.covs))
-        val -= float(logsumexp(logn + np.log(gm.weights)))
-    return float(val)
+    grad = prec0 @ r
+    for cam, (means, inv, logc) in zip(cams, terms):
+        P = cam.P
+        h = P @ np.append(x, 1.0)
+        y = h[:2] / h[2]
+        J = (P[:2, :3] - np.outer(y, P[2, :3])) / h[2]  # d y / d x
+        diff = y - means
+        sd = np.einsum("kij,kj->ki", inv, diff)
+        logn = logc - 0.5 * np.einsum("ki,ki->k", diff, sd)
+        top = logn.max()
+        resp = np.exp(logn - top)
+        total = resp.sum()
+        val -= float(top + np.log(total))
+        grad += J.T @ (resp @ sd) / total
+    return float(val), grad
 
 
 def map_estimate(
     cams: Sequence[EllipsoidCamera], gms: Sequence[GaussianMixture], x0: Array, prior_cov: Array
 ) -> Array:
-    """Numerical MAP of Eq. 99 (L-BFGS on ``-log p``) started at ``x0`` and at the ray
-    intersection of each camera's heaviest component (spec A-V-9)."""
+    """Numerical MAP of Eq. 99 (L-BFGS on ``-log p`` with its gradient) started at ``x0`` and at
+    the ray intersection of each camera's heaviest component (spec A-V-9)."""
     prec0 = np.linalg.inv(prior_cov)
+    terms = [
+        (
+            gm.means,
+            np.linalg.inv(gm.covs),
+            np.log(gm.weights) - 0.5 * np.linalg.slogdet(2 * np.pi * gm.covs)[1],
+        )
+        for gm in gms
+    ]
     starts = [x0]
     if len(cams) >= 2:
         heads = [gm.means[int(np.argmax(gm.weights))] for gm in gms]
@@ -525,7 +542,9 @@ def map_estimate(
         starts.append(intersect_rays(np.array([c.centre for c in cams]), rays))
     best, best_val = x0, np.inf
     for s0 in starts:
-        res = minimize(_neg_log_posterior, s0, args=(cams, gms, x0, prec0), method="L-BFGS-B")
+        res = minimize(
+            _neg_log_posterior, s0, args=(cams, terms, x0, prec0), jac=True, method="L-BFGS-B"
+        )
         if np.isfinite(res.fun) and res.fun < best_val:
             best, best_val = res.x, res.fun
     return np.asarray(best, float)
