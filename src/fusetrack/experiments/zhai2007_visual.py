@@ -445,7 +445,14 @@ def run(ctx: RunContext) -> Outcome:
     for exp in EXPERIMENTS:
         n = runs_e10 if exp == "E10" else runs
         frames.append(ctx.monte_carlo(run_once, [{"exp": exp, "grid": grid}], n, desc=exp))
-    df = pd.concat(frames, ignore_index=True)
+    return analyse(ctx, pd.concat(frames, ignore_index=True))
+
+
+def analyse(ctx: RunContext, df: pd.DataFrame) -> Outcome:
+    """Claims, figures and report from the tidy rows (also usable on a saved results.parquet)."""
+    per_run = df[df["frame"] == 0].groupby("exp")["run"].nunique()
+    runs_e10, runs = int(per_run["E10"]), int(per_run.drop("E10").min())
+    grid = int(df["grid"].iloc[0]) if "grid" in df else 50
     summary = summarise(df)
     claims = build_claims(summary, ctx.quick)
     e10 = df[df["exp"] == "E10"]
