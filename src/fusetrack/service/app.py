@@ -91,8 +91,9 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
             while True:
                 if listener is not None:
                     listener.drain()  # what has arrived counts for the ticks now due
-                node.advance()
-                await asyncio.sleep(poll)
+                # one tick per turn: a node that fell behind still answers HTTP in between
+                fired = node.advance(limit=1)
+                await asyncio.sleep(0 if fired else poll)
 
         task = asyncio.create_task(ticker())
         try:

@@ -283,9 +283,14 @@ class FusionNode:
         if self.log is not None:
             self.log.commit()
 
+    def behind(self) -> int:
+        """How many ticks are due but not yet fused."""
+        clock = self.clock()
+        return len(self.aligner.due(clock, MAX_TICKS_PER_ADVANCE)) if math.isfinite(clock) else 0
+
     # -- fusion ------------------------------------------------------------------------------
-    def advance(self) -> list[TrackState]:
-        """Fire every tick that is due by the clock; log and publish each state."""
+    def advance(self, limit: int = MAX_TICKS_PER_ADVANCE) -> list[TrackState]:
+        """Fire the ticks due by the clock (at most ``limit``); log and publish each state."""
         clock = self.clock()
         if not math.isfinite(clock):
             return []
@@ -294,7 +299,7 @@ class FusionNode:
             if self.wall() - self.recent_accepts[-1] >= idle:
                 clock += self.aligner.lag  # the stream has paused: fuse what has come
         states = []
-        for k in self.aligner.due(clock, MAX_TICKS_PER_ADVANCE):
+        for k in self.aligner.due(clock, limit):
             t0 = time.perf_counter()
             readings = self.aligner.take(k)
             state = self.engine.step(k, self.aligner.tick_time(k), readings)
