@@ -34,9 +34,17 @@ costs more than it saves below that). ``numba.set_num_threads`` limits the threa
 from __future__ import annotations
 
 import math
+import os
 import types
 from collections.abc import Callable
 from typing import Any
+
+# Threads that wait for work sleep instead of spinning (unless the user chose otherwise). GNU
+# OpenMP, Numba's default threading layer here, spins by default: on a machine whose cores are
+# busy with other processes the spinning threads take the CPU from the working ones, and the
+# threaded loops ran 2.5x slower than serial ones (likelihood loop at N = 1e5, load 12: 32 ms
+# spinning, 12 ms passive, 11 ms serial). Read when the layer starts (the first threaded loop).
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numba
 import numpy as np
