@@ -74,7 +74,7 @@ def test_singular_covariances_are_floored_not_nan():
 def test_kde_fit_finds_two_clusters_and_one_for_one():
     rng = np.random.default_rng(5)
     x = np.vstack([rng.normal([0, 0, 0], 0.1, (400, 3)), rng.normal([2, 0, 0], 0.1, (400, 3))])
-    gm, kls = fit_kde_mixture(x, np.ones(len(x)), rng)
+    gm, _ = fit_kde_mixture(x, np.ones(len(x)), rng)
     assert len(gm.weights) == 2
     np.testing.assert_allclose(np.sort(gm.means[:, 0]), [0, 2], atol=0.05)
     single, _ = fit_kde_mixture(x[:400], np.ones(400), rng)

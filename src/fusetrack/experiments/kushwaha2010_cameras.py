@@ -80,7 +80,11 @@ def appearance_model() -> tuple[EllipsoidTarget, AppearanceModel]:
 
 
 def gap_mask(
-    cams: list[EllipsoidCamera], target: EllipsoidTarget, positions: np.ndarray, quats: np.ndarray, steps: range
+    cams: list[EllipsoidCamera],
+    target: EllipsoidTarget,
+    positions: np.ndarray,
+    quats: np.ndarray,
+    steps: range,
 ) -> np.ndarray:
     """Hide the target at ``steps`` from every camera except the one that sees it largest."""
     hidden = np.zeros((len(positions), len(cams)), dtype=bool)
@@ -113,7 +117,9 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         rotation_deg=10.0 if config["rotating"] else 0.0,
     )
     gap = int(config.get("gap", 0))
-    hidden = gap_mask(cams, target, truth.positions, truth.quaternions, range(GAP_START, GAP_START + gap))
+    hidden = gap_mask(
+        cams, target, truth.positions, truth.quaternions, range(GAP_START, GAP_START + gap)
+    )
     frames = render_frames(cams, target, truth, rng, hidden=hidden)
     feats = [[FeatureImage.from_rgb(img) for img in row] for row in frames.images]
     net = CameraNetwork.build(cams, model, target.semi_axes, setup.base)
@@ -147,11 +153,16 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         trng = np.random.default_rng([seed, [*TRACKERS, *ABLATIONS].index(name)])
         for t in range(1, steps):
             rep = tracker.step(feats[t], trng)
-            estimates = {name: rep.position, **({"T4-eq103": rep.extra["eq103"]} if "eq103" in rep.extra else {})}
+            estimates = {
+                name: rep.position,
+                **({"T4-eq103": rep.extra["eq103"]} if "eq103" in rep.extra else {}),
+            }
             seen = np.flatnonzero(participating[t])
             for label, est in estimates.items():
                 err2d = [
-                    float(np.linalg.norm(cams[n].project(est) - cams[n].project(truth.positions[t])))
+                    float(
+                        np.linalg.norm(cams[n].project(est) - cams[n].project(truth.positions[t]))
+                    )
                     for n in seen
                 ]
                 rows.append(
@@ -160,9 +171,11 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                         "t": t,
                         "err3d": float(np.linalg.norm(est - truth.positions[t])),
                         "err2d": float(np.mean(err2d)) if err2d else np.nan,
-                        "participating": int(len(seen)),
+                        "participating": len(seen),
                         "pixel_fraction": float(
-                            frames.target_pixels[t, seen].mean() / IMAGE_PIXELS if len(seen) else 0.0
+                            frames.target_pixels[t, seen].mean() / IMAGE_PIXELS
+                            if len(seen)
+                            else 0.0
                         ),
                         "bytes": int(rep.bytes_sent) if label == name else np.nan,
                         "link_bytes": int(rep.link_bytes) if label == name else np.nan,
@@ -186,7 +199,10 @@ def _configs(setup: str, ctx: RunContext) -> tuple[list[dict[str, Any]], dict[st
         "n_particles_2d": 100 if quick else 200,
         "gap": 2 if setup == "b" else 0,
     }
-    return [{**base, "rotating": False}, {**base, "rotating": True}], {"fixed": fixed, "rotating": rotating}
+    return [{**base, "rotating": False}, {**base, "rotating": True}], {
+        "fixed": fixed,
+        "rotating": rotating,
+    }
 
 
 def _simulate(setup: str, ctx: RunContext) -> pd.DataFrame:
@@ -195,14 +211,20 @@ def _simulate(setup: str, ctx: RunContext) -> pd.DataFrame:
         counts = {"fixed": ctx.runs, "rotating": ctx.runs}
     frames = []
     for cfg, key in zip(configs, ("fixed", "rotating")):
-        frames.append(ctx.monte_carlo(run_once, [cfg], counts[key], desc=f"setup {setup.upper()} {key}"))
+        frames.append(
+            ctx.monte_carlo(run_once, [cfg], counts[key], desc=f"setup {setup.upper()} {key}")
+        )
     df = pd.concat(frames, ignore_index=True)
     df["experiment_run"] = df["run"] + np.where(df["rotating"], counts["fixed"], 0)
     return df
 
 
 def _means(df: pd.DataFrame) -> pd.DataFrame:
-    per_run = df.groupby(["tracker", "experiment_run", "rotating"])[["err3d", "err2d"]].mean().reset_index()
+    per_run = (
+        df.groupby(["tracker", "experiment_run", "rotating"])[["err3d", "err2d"]]
+        .mean()
+        .reset_index()
+    )
     table = per_run.groupby("tracker")[["err3d", "err2d"]].mean()
     by_rot = per_run.groupby(["tracker", "rotating"])["err3d"].mean().unstack()
     table["err3d_fixed"] = by_rot.get(False)
@@ -219,7 +241,9 @@ def _t0_formula_bytes(n_particles: int, cameras: int) -> int:
     return STATE_BYTES + WEIGHT_BYTES * n_particles * cameras  # C = |chi| + M N |w|
 
 
-def _bandwidth_claims(df: pd.DataFrame, table: pd.DataFrame, n_particles: int, prefix: str) -> list[Claim]:
+def _bandwidth_claims(
+    df: pd.DataFrame, table: pd.DataFrame, n_particles: int, prefix: str
+) -> list[Claim]:
     t0 = df[df.tracker == "T0"]
     rows4 = t0[t0.cameras_used == 4]
     measured = int(rows4["bytes"].iloc[0]) if len(rows4) else None
@@ -269,13 +293,17 @@ def _figures(ctx: RunContext, df: pd.DataFrame, table: pd.DataFrame, setup: str)
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
     order = [*TRACKERS, "T4-eq103", *ABLATIONS]
     x = np.arange(len(order))
-    for ax, col, label in zip(axes, ("err3d", "err2d"), ("3-D error (m)", "2-D reprojection error (px)")):
+    for ax, col, label in zip(
+        axes, ("err3d", "err2d"), ("3-D error (m)", "2-D reprojection error (px)")
+    ):
         ax.bar(x - 0.2, table[f"{col}_fixed"].reindex(order), 0.4, label="fixed orientation")
         ax.bar(x + 0.2, table[f"{col}_rotating"].reindex(order), 0.4, label="rotating")
         ax.set_xticks(x, order, rotation=30)
         ax.set_ylabel(label)
     axes[0].legend()
-    fig.suptitle(f"Setup {setup.upper()}: mean errors per tracker (Figs {'48-49' if setup == 'a' else '54-56'})")
+    fig.suptitle(
+        f"Setup {setup.upper()}: mean errors per tracker (Figs {'48-49' if setup == 'a' else '54-56'})"
+    )
     names.append(plots.save(fig, ctx.figure_path(f"errors_setup_{setup}")).name)
 
     fig, ax = plt.subplots(figsize=(7, 3.6))
@@ -321,7 +349,6 @@ def run_a(ctx: RunContext) -> Outcome:
     df = _simulate("a", ctx)
     table = _means(df)
     e = table["err3d"]
-    quick = ctx.quick
     claims = [
         Claim(
             "a_t0_best",
@@ -353,15 +380,26 @@ def run_a(ctx: RunContext) -> Outcome:
             "same trend for 3-D and 2-D error",
             _order(table, "err2d"),
             "T0 lowest 2-D error",
-            bool(table.loc["T0", "err2d"] < table.loc[["P", "T1", "T2", "T3", "T4"], "err2d"].min()),
+            bool(
+                table.loc["T0", "err2d"] < table.loc[["P", "T1", "T2", "T3", "T4"], "err2d"].min()
+            ),
         ),
         Claim(
             "a_rotation_hurts",
             "setup A: for almost all trackers the rotating target is tracked worse than the fixed one",
             "rotating worse for almost all trackers",
-            {k: round(float(table.loc[k, "err3d_rotating"] - table.loc[k, "err3d_fixed"]), 3) for k in TRACKERS},
+            {
+                k: round(float(table.loc[k, "err3d_rotating"] - table.loc[k, "err3d_fixed"]), 3)
+                for k in TRACKERS
+            },
             ">= 4 of 6 trackers worse when rotating (3-D error)",
-            int((table.loc[list(TRACKERS), "err3d_rotating"] > table.loc[list(TRACKERS), "err3d_fixed"]).sum()) >= 4,
+            int(
+                (
+                    table.loc[list(TRACKERS), "err3d_rotating"]
+                    > table.loc[list(TRACKERS), "err3d_fixed"]
+                ).sum()
+            )
+            >= 4,
         ),
         Claim(
             "a_t1_t2_close",
@@ -442,7 +480,9 @@ def run_b(ctx: RunContext) -> Outcome:
     recovered = post <= 2.0 * pre + 0.1
     pix = per_step[per_step.tracker == "T0"]
     share_small = float((pix.pixel_fraction < 0.01).mean())
-    gap_cams = int(pix[pix.t == GAP_START].participating.max()) if (pix.t == GAP_START).any() else -1
+    gap_cams = (
+        int(pix[pix.t == GAP_START].participating.max()) if (pix.t == GAP_START).any() else -1
+    )
     claims = [
         Claim(
             "b_kernel_best",
@@ -505,8 +545,12 @@ def run_b(ctx: RunContext) -> Outcome:
             "setup B: rotation raises the 3-D error (averaged over the 3-D-model trackers T0-T4)",
             "rotation slightly increases the 3-D error",
             {
-                "fixed": round(float(table.loc[["T0", "T1", "T2", "T3", "T4"], "err3d_fixed"].mean()), 3),
-                "rotating": round(float(table.loc[["T0", "T1", "T2", "T3", "T4"], "err3d_rotating"].mean()), 3),
+                "fixed": round(
+                    float(table.loc[["T0", "T1", "T2", "T3", "T4"], "err3d_fixed"].mean()), 3
+                ),
+                "rotating": round(
+                    float(table.loc[["T0", "T1", "T2", "T3", "T4"], "err3d_rotating"].mean()), 3
+                ),
             },
             "rotating > fixed",
             bool(

@@ -78,7 +78,7 @@ def weighted_em(
     w = w / w.sum()
     n, d = x.shape
     extra = np.zeros((d, d)) if extra_cov is None else np.asarray(extra_cov, float)
-    k = int(min(k, np.count_nonzero(w > 0)))
+    k = min(int(k), int(np.count_nonzero(w > 0)))
     means = x[rng.choice(n, size=k, replace=False, p=w)]
     spread = np.cov(x.T, aweights=w) if n > 1 else np.eye(d)
     covs = np.repeat(floor_covariances(np.atleast_2d(spread))[None], k, axis=0)

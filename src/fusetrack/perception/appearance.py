@@ -169,7 +169,9 @@ class AppearanceModel:
             lbp.append(region_histograms(f.lbp, c[j], b[j], N_LBP)[0])
         return cls(np.asarray(viewpoints, float), np.array(hs), np.array(lbp), alpha)
 
-    def view_index(self, camera_centre: ArrayLike, x: ArrayLike, rotation: ArrayLike) -> NDArray[np.intp]:
+    def view_index(
+        self, camera_centre: ArrayLike, x: ArrayLike, rotation: ArrayLike
+    ) -> NDArray[np.intp]:
         """``argmax_j e_target^T R(theta) e_j`` with ``e_target`` from the target to the camera
         (Eq. 71), for positions ``x`` ``(..., 3)``."""
         e = np.asarray(camera_centre, float) - np.asarray(x, float)

@@ -24,9 +24,9 @@ Array = NDArray[np.float64]
 
 def quaternion_to_rotation(q: ArrayLike) -> Array:
     """Rotation matrices ``(..., 3, 3)`` of unit quaternions ``(..., 4)`` (Kushwaha 2010, Eq. 72)."""
-    q = np.asarray(q, float)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    q1, q2, q3, q4 = np.moveaxis(q, -1, 0)
+    qa = np.asarray(q, float)
+    qa = qa / np.linalg.norm(qa, axis=-1, keepdims=True)
+    q1, q2, q3, q4 = np.moveaxis(qa, -1, 0)
     rows = [
         [1 - 2 * q2**2 - 2 * q3**2, 2 * q1 * q2 - 2 * q3 * q4, 2 * q1 * q3 + 2 * q2 * q4],
         [2 * q1 * q2 + 2 * q3 * q4, 1 - 2 * q1**2 - 2 * q3**2, 2 * q2 * q3 - 2 * q1 * q4],

@@ -123,7 +123,7 @@ def smooth_trajectory(
         climb = 0.8 * climb + rng.normal(0.0, 0.02)
         step = np.array([np.cos(heading) * speed, np.sin(heading) * speed, climb])
         pos[t] = np.clip(pos[t - 1] + step, lo, hi)
-    vel = np.gradient(pos, axis=0)
+    vel = np.asarray(np.gradient(pos, axis=0), float)
     axis = rng.normal(size=3)
     q0 = axis_angle_quaternion(rng.normal(size=3), rng.uniform(0, np.pi))
     turn_q = axis_angle_quaternion(axis, np.deg2rad(rotation_deg))
