@@ -3,6 +3,9 @@
 from .clocks import HopTranslation as HopTranslation
 from .clocks import NodeClock as NodeClock
 from .clocks import RbsDomain as RbsDomain
+from .harmonic_sources import HarmonicSource as HarmonicSource
+from .harmonic_sources import random_sources as random_sources
+from .harmonic_sources import received_signals as received_signals
 from .occluder_priors import RandomWalkPriorFilter as RandomWalkPriorFilter
 from .occlusion import OccluderPriors as OccluderPriors
 from .occlusion import disks_block as disks_block
