@@ -200,3 +200,33 @@ def test_bad_configs_name_the_field(network, change, field):
     change(data)
     with pytest.raises(ConfigError, match=field):
         parse_config(data)
+
+
+def test_recordings_jsonl_and_node_logs_replay_as_readings(tmp_path, network):
+    from fusetrack.service.replay import load_recording
+
+    scn = demo_scenario(network, seed=5, duration=3.0)
+    clock = [0.0]
+    node = FusionNode(network, wall=lambda: clock[0], log=DurableLog(tmp_path / "n.sqlite"))
+    _feed(node, network, scn.readings)
+    node.log.close()
+    from_log = load_recording(tmp_path / "n.sqlite")
+    assert [(r.time, r.sensor, r.value) for r in from_log] == [
+        (r.time, r.sensor, r.value) for r in scn.readings
+    ]
+    lines = [
+        json.dumps(
+            {
+                "sensor": r.sensor,
+                "time": r.time,
+                "reading": {"kind": "bearing", "bearing": r.value[0]},
+            }
+        )
+        for r in scn.readings
+        if r.sensor != "tag"
+    ]
+    (tmp_path / "rec.jsonl").write_text("\n".join(lines) + "\n")
+    got = load_recording(tmp_path / "rec.jsonl")
+    assert len(got) == len(lines) and all(r.sensor != "tag" for r in got)
+    with pytest.raises(ConfigError, match="recording"):
+        load_recording(tmp_path / "rec.csv")
