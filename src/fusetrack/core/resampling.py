@@ -8,6 +8,7 @@ below stratified). Leading axes are independent sets (batched runs), each with i
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numba
@@ -47,33 +48,39 @@ def _inverse_cdf_sorted(weights: np.ndarray, u: np.ndarray) -> np.ndarray:  # pr
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _systematic_sorted(weights: np.ndarray, u0: np.ndarray) -> np.ndarray:  # pragma: no cover - jit
-    """Systematic ancestors, ``u_k = (k + u0[r]) / n``, by one merge per row without
-    divisions: ``u_k * total = (k + u0) * (total / n)`` is compared with the running sum of
-    the unnormalised weights. The same indices as :func:`inverse_cdf` of those ``u`` except
-    where a ``u_k`` and a cumulative weight agree to rounding (one comparison in ~1e16); the
-    merge stops at the last positive weight, so trailing zero-weight particles are never chosen.
+    """Systematic ancestors, ``u_k = (k + u0[r]) / n``, without divisions and without the
+    merge's unpredictable branch: particle ``i`` (cumulative weight ``C_i``) is the ancestor of
+    the ``u_k < C_i`` not taken by ``i - 1``, and there are ``K_i = ceil(C_i n / total - u0)``
+    such ``k`` (clipped to ``[0, n]``); so the ancestor of ``k`` is the number of particles with
+    ``K_i <= k``: a histogram of the ``K_i`` and its running sum. The same indices as
+    :func:`inverse_cdf` of those ``u`` except where a ``u_k`` and a cumulative weight agree to
+    rounding (one comparison in ~1e16); only particles before the last positive weight are
+    counted, so trailing zero-weight particles are never chosen.
     """
     rows, n = weights.shape
     out = np.empty((rows, n), dtype=np.intp)
+    counts = np.empty(n + 1, dtype=np.intp)
     for r in range(rows):
         total = 0.0
         last = 0
         for i in range(n):
             wi = weights[r, i]
             total += wi
-            if wi > 0.0:
-                last = i
-        step = total / n
-        j = 0
-        c = weights[r, 0]
+            last = i if wi > 0.0 else last
+        scale = n / total
+        u = u0[r]
+        counts[:] = 0
+        c = 0.0
+        for i in range(last):
+            c += weights[r, i]
+            k = min(max(math.ceil(c * scale - u), 0.0), float(n))
+            counts[int(k)] += 1
+        a = 0
         for k in range(n):
-            u = (k + u0[r]) * step
-            while u >= c and j < last:
-                j += 1
-                c += weights[r, j]
-            out[r, k] = j
+            a += counts[k]
+            out[r, k] = a
     return out
 
 
