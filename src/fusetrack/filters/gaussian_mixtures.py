@@ -79,7 +79,15 @@ def weighted_em(
     n, d = x.shape
     extra = np.zeros((d, d)) if extra_cov is None else np.asarray(extra_cov, float)
     k = min(int(k), int(np.count_nonzero(w > 0)))
-    means = x[rng.choice(n, size=k, replace=False, p=w)]
+    # k-means++ seeding by weight: each new mean drawn with probability ~ w_i * (distance to the
+    # nearest chosen mean)^2, so the seeds spread over the modes
+    means = x[[rng.choice(n, p=w)]]
+    for _ in range(1, k):
+        d2 = np.min(np.sum((x[:, None, :] - means[None]) ** 2, axis=-1), axis=1) * w
+        if d2.sum() <= 0:
+            break
+        means = np.vstack([means, x[rng.choice(n, p=d2 / d2.sum())]])
+    k = len(means)
     spread = np.cov(x.T, aweights=w) if n > 1 else np.eye(d)
     covs = np.repeat(floor_covariances(np.atleast_2d(spread))[None], k, axis=0)
     mix = np.full(k, 1.0 / k)
