@@ -132,13 +132,11 @@ def fit_kde_mixture(
     bandwidth: float | None = None,
     kl_samples: int = 1000,
     kl_tolerance: float = 0.05,
-    max_centres: int = 300,
 ) -> tuple[GaussianMixture, list[float]]:
     """Compress the weighted KDE ``sum_i w_i N(x; x_i, h^2 I)`` (Eq. 85) to a mixture.
 
     Orders ``m = 1..m_max`` are fitted by EM; the KL divergence ``KL(kde || g_m)`` is estimated
-    with ``kl_samples`` draws from the KDE (Eq. 86), the KDE's density at them from its
-    ``max_centres`` heaviest kernels (renormalised; this bounds the cost). The paper takes the argmin, which always
+    with ``kl_samples`` draws from the KDE (Eq. 86). The paper takes the argmin, which always
     favours the largest order (KL does not grow with m); here the smallest order whose KL is
     within ``kl_tolerance`` nats of the smallest KL is chosen (spec A-V-4), and the search stops
     at the first order that improves the KL by less than ``kl_tolerance``. Particles with a weight
