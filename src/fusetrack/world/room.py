@@ -46,6 +46,7 @@ class Room:
     static_occluders: tuple[Array, ...] = ()
     name: str = "room"
     convex: bool = field(init=False)
+    _free_area: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         b = as_polygon(self.boundary, "room.boundary")
@@ -61,6 +62,8 @@ class Room:
         object.__setattr__(self, "boundary", b)
         object.__setattr__(self, "static_occluders", occ)
         object.__setattr__(self, "convex", is_convex(b))
+        area = signed_area(b) - sum(signed_area(o) for o in occ)
+        object.__setattr__(self, "_free_area", area)  # sample_free needs it every call
 
     @property
     def bounding_box(self) -> tuple[float, float, float, float]:
@@ -76,7 +79,7 @@ class Room:
 
     @property
     def free_area(self) -> float:
-        return signed_area(self.boundary) - sum(signed_area(o) for o in self.static_occluders)
+        return self._free_area
 
     def inside(self, points: ArrayLike) -> NDArray[np.bool_]:
         """Inside the floor polygon (static occluders ignored)."""
