@@ -27,6 +27,7 @@ import json
 import math
 import os
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -94,6 +95,47 @@ def rss_mb(pid: int) -> float:
     return math.nan
 
 
+def write_report(results: list[Path], out: Path) -> None:
+    """A markdown table of result files (``--report``): the numbers as measured."""
+    rows = []
+    for path in results:
+        r = json.loads(path.read_text())
+        lat, mem = r["tick_latency_ms"], r["memory_mb"]
+        faults = r.get("faults_seen")
+        rows.append(
+            f"| {path.name} | {r['nodes']} x {r['rate_per_node']:g}/s, {r['fusion_hz']:g} Hz, "
+            f"{r['alignment']}, {r['duration_s']:g} s{' + faults' if r['faults'] else ''} "
+            f"| {r['sent']} | {r['accepted']} | {sum(r['refused'].values())} | {r['lost']} "
+            f"| {r['ticks']} / {r['ticks_expected']} | {r['tick_compute_ms_mean']:.0f} "
+            f"| {lat['p50']:.0f} / {lat['p99']:.0f} / {lat['max']:.0f} "
+            f"| {mem['first']:.0f} → {mem['last']:.0f} (max {mem['max']:.0f}) "
+            f"| {r['position_rmse_m']:.2f} | {r['node_catch_up_after_last_send_s']:.1f} "
+            f"| {r['load_average'][0]:.1f} |"
+        )
+        if faults:
+            rows[-1] += (
+                f" silent during outage {faults['silent_sensors_during_disconnect_max']}, after "
+                f"{faults['silent_sensors_after_return_max']}; future {faults['future_refused']}"
+                f"/{faults['messages_of_jumped_clocks']['ahead']}, late {faults['late_refused']}"
+                f"/{faults['messages_of_jumped_clocks']['back']}; sender dropped "
+                f"{r['dropped_by_sender']} |"
+            )
+        else:
+            rows[-1] += " |"
+    head = (
+        "| run | load | sent | accepted | refused | lost | ticks / due | tick compute (ms, mean) "
+        "| tick latency p50 / p99 / max (ms) | node RSS (MiB) | position RMSE (m) "
+        "| catch-up after last send (s) | load avg (1 min) | faults seen |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    )
+    out.write_text(
+        "# Fusion node under load (written by `benchmarks/service_load.py --report`)\n\n"
+        "Loopback only; sender, node and WebSocket reader on this machine (2 cores shared with "
+        "other jobs: see the load average column). Latency: a tick's arrival at a WebSocket reader "
+        "minus the moment it fell due (window end + lag).\n\n" + head + "\n".join(rows) + "\n"
+    )
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
@@ -106,7 +148,14 @@ def main() -> int:
     ap.add_argument("--faults", action="store_true")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=None, help="JSON results file")
+    ap.add_argument(
+        "--report", type=Path, nargs="+", default=None, help="result JSON files: write --md"
+    )
+    ap.add_argument("--md", type=Path, default=Path("benchmarks/SERVICE.md"))
     args = ap.parse_args()
+    if args.report:
+        write_report(args.report, args.md)
+        return 0
     rng = np.random.default_rng(args.seed)
 
     tmp = Path(tempfile.mkdtemp(prefix="fusetrack-load-"))
@@ -129,6 +178,7 @@ def main() -> int:
         stdout=subprocess.DEVNULL,
     )
     url = f"http://127.0.0.1:{http_port}"
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(1))  # so the node is stopped too
     try:
         for _ in range(1200):
             try:
@@ -147,17 +197,24 @@ def main() -> int:
 def run(args, cfg, node, url, udp_port, rng) -> int:
     lag, period = cfg["fusion"]["lag"], 1.0 / args.fusion_hz
     ticks: list[tuple[float, float, list[float]]] = []  # (tick time, arrival, position)
+    reconnects: list[str] = []
     stop = threading.Event()
 
     def reader() -> None:
-        with connect(url.replace("http", "ws") + "/ws/tracks") as ws:
-            ws.recv(timeout=10)
-            while not stop.is_set():
-                try:
-                    frame = json.loads(ws.recv(timeout=1.0))
-                except TimeoutError:
-                    continue
-                ticks.append((frame["track"]["time"], time.time(), frame["track"]["position"]))
+        # no keepalive pings on loopback: a busy machine must not close the reader
+        while not stop.is_set():
+            try:
+                with connect(url.replace("http", "ws") + "/ws/tracks", ping_interval=None) as ws:
+                    ws.recv(timeout=30)
+                    while not stop.is_set():
+                        try:
+                            frame = json.loads(ws.recv(timeout=1.0))
+                        except TimeoutError:
+                            continue
+                        track = frame["track"]
+                        ticks.append((track["time"], time.time(), track["position"]))
+            except Exception as err:  # reconnect, and say so
+                reconnects.append(repr(err))
 
     memory: list[tuple[float, float]] = []
     health_log: list[dict] = []
@@ -272,6 +329,7 @@ def run(args, cfg, node, url, udp_port, rng) -> int:
         "sender_max_behind_s": behind,
         "node_catch_up_after_last_send_s": catch_up,
         "ticks": len(ticks),
+        "reader_reconnects": len(reconnects),
         "alignment": args.alignment,
         "ticks_expected": round(args.duration * args.fusion_hz),
         "tick_compute_ms_mean": 1e3 * tick_sum / max(tick_count, 1.0),

@@ -42,6 +42,11 @@ function draw() {
   ctx.setLineDash([]);
   const reach = 0.35 * Math.max(x1 - x0, y1 - y0);
   for (const s of state.sensors) {
+    const recent = s.last && s.last.age < 5;
+    if (s.kind === "position_fix" && recent) { // a position fix: an orange dot where it says
+      ctx.fillStyle = "#e08a00";
+      ctx.beginPath(); ctx.arc(v.px(s.last.value[0]), v.py(s.last.value[1]), 4, 0, 2 * Math.PI); ctx.fill();
+    }
     if (!s.position) continue;
     const [sx, sy] = s.position;
     const r = (s.max_range ? Math.min(s.max_range, reach) : reach) * v.s;
@@ -66,10 +71,6 @@ function draw() {
       ctx.beginPath(); ctx.moveTo(v.px(sx), v.py(sy));
       ctx.lineTo(v.px(sx + 2 * reach * Math.cos(th)), v.py(sy + 2 * reach * Math.sin(th)));
       ctx.stroke();
-    }
-    if (s.kind === "position_fix" && s.last && age < 5) {
-      ctx.fillStyle = "#e08a00";
-      ctx.beginPath(); ctx.arc(v.px(s.last.value[0]), v.py(s.last.value[1]), 4, 0, 2 * Math.PI); ctx.fill();
     }
   }
   if (state.trail.length > 1) {

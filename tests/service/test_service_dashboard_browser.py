@@ -1,0 +1,56 @@
+"""The dashboard in headless Chromium (Playwright driving the Debian ``chromium``): the page
+loads, lists the sensors, and a track appears and moves while a replay runs.
+
+Skipped where Chromium or Playwright is missing (``apt-get install chromium``; Playwright is in
+the ``dev`` extra). The screenshot is kept in ``$FUSETRACK_ARTIFACTS`` (default: pytest's
+temporary directory).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import threading
+from pathlib import Path
+
+import pytest
+
+from fusetrack.service.replay import demo_scenario, replay
+from fusetrack.service.server import RunningNode, build_node
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+playwright = pytest.importorskip("playwright.sync_api")
+pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this machine")
+
+
+def test_dashboard_shows_sensors_and_a_moving_track(network, tmp_path):
+    scn = demo_scenario(network, seed=1, duration=30.0)
+    out_dir = Path(os.environ.get("FUSETRACK_ARTIFACTS", tmp_path))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with RunningNode(build_node(network)) as node, playwright.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1400, "height": 800})
+        page.goto(node.url + "/")
+        page.wait_for_function("document.querySelectorAll('#sensors tr').length === 4")
+        assert page.locator("#sensors").inner_text().split()[0] == "mic_west"
+        to = f"udp://{node.udp[0]}:{node.udp[1]}"
+        sender = threading.Thread(
+            target=replay, args=(scn.readings, network, to), kwargs={"speed": 10.0}
+        )
+        sender.start()
+        page.wait_for_function(
+            "Number(document.getElementById('tick').textContent) >= 5", timeout=30000
+        )
+        first = page.locator("#track").inner_text()
+        page.wait_for_function(
+            "Number(document.getElementById('tick').textContent) >= 30", timeout=30000
+        )
+        later = page.locator("#track").inner_text()
+        sender.join(timeout=30)
+        page.wait_for_timeout(1500)
+        page.screenshot(path=str(out_dir / "dashboard.png"))
+        status = page.locator("#status").inner_text()
+        browser.close()
+    assert "position (m)" in first and first != later  # the track moved
+    assert status in ("ok", "degraded")
+    assert (out_dir / "dashboard.png").stat().st_size > 10_000
