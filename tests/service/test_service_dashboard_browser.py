@@ -24,7 +24,7 @@ pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="no chromium on this ma
 
 
 def test_dashboard_shows_sensors_and_a_moving_track(network, tmp_path):
-    scn = demo_scenario(network, seed=1, duration=30.0)
+    scn = demo_scenario(network, seed=1, duration=15.0)
     out_dir = Path(os.environ.get("FUSETRACK_ARTIFACTS", tmp_path))
     out_dir.mkdir(parents=True, exist_ok=True)
     with RunningNode(build_node(network)) as node, playwright.sync_playwright() as p:
@@ -43,11 +43,11 @@ def test_dashboard_shows_sensors_and_a_moving_track(network, tmp_path):
         )
         first = page.locator("#track").inner_text()
         page.wait_for_function(
-            "Number(document.getElementById('tick').textContent) >= 30", timeout=30000
+            "Number(document.getElementById('tick').textContent) >= 25", timeout=30000
         )
         later = page.locator("#track").inner_text()
         sender.join(timeout=30)
-        page.wait_for_timeout(1500)
+        page.wait_for_timeout(1200)
         page.screenshot(path=str(out_dir / "dashboard.png"))
         status = page.locator("#status").inner_text()
         browser.close()
