@@ -16,6 +16,8 @@ SENSORS = [
     Bearing("b1", position=[40.0, 0.0], sigma=0.05, heading=2.5),
     Range("r2", position=[10.0, 30.0], sigma=0.7),
     RangeBearing("rb", position=[-5.0, 5.0], sigma_range=0.4, sigma_bearing=0.03, heading=-1.0),
+    PositionFix("tag", cov=[[2.0, 0.6], [0.6, 1.0]], bias=[0.5, -0.25]),
+    PositionFix("x_only", cov=[[0.3]], position_index=(0,)),
 ]
 
 
@@ -61,7 +63,12 @@ def test_models_that_change_the_maths_have_no_fused_form():
 
     assert Shifted().fused_transition(1.0) is None
     assert Biased("b", position=[0.0, 0.0], sigma=0.1).fused_likelihood() is None
-    assert PositionFix("gps", cov=[[1.0, 0.2], [0.2, 1.0]]).fused_likelihood() is None
+
+    class Shifted2(PositionFix):
+        def predict(self, x):
+            return super().predict(x) + 1.0
+
+    assert Shifted2("gps", cov=[[1.0, 0.2], [0.2, 1.0]]).fused_likelihood() is None
     assert all(s.fused_likelihood() is not None for s in SENSORS)
 
 
@@ -77,7 +84,9 @@ def test_log_likelihood_sum_equals_sensor_log_likelihoods(n):
     z[:, 1, 0] = [0.3, -2.0]
     z[:, 2, 0] = [25.0, 31.0]
     z[:, 3, :] = [[12.0, 3.1], [20.0, -3.1]]
-    usable = np.array([[True, True, True, True], [True, False, True, True]])
+    z[:, 4, :] = [[3.0, -4.0], [10.0, 2.0]]
+    z[:, 5, 0] = [1.0, -20.0]
+    usable = np.array([[True] * 6, [True, False, True, True, False, True]])
     lw = np.log(rng.dirichlet(np.ones(n), size=rows))
     specs = [_spec(s) for s in SENSORS]
     kinds = np.array([k for k, _ in specs])

@@ -168,3 +168,53 @@ def test_division_free_systematic_merge():
     # the last u of the last row rounds to 1.0 in the reference, which then picks particle 776
     np.testing.assert_array_equal(idx[4, :-1], ref[4, :-1])
     assert idx.max() == 746 and np.all(w[np.arange(5)[:, None], idx] > 0)
+
+
+def test_three_d_position_fix_and_range_in_the_fused_loop():
+    from fusetrack.sensors import PositionFix, Range
+
+    cov = np.array([[2.0, 0.3, 0.1], [0.3, 1.0, -0.2], [0.1, -0.2, 0.5]])
+    sensors = [
+        PositionFix("tag", cov=cov, bias=[0.1, 0.2, -0.3], position_index=(0, 1, 2)),
+        Range("r", position=[1.0, 2.0, 3.0], sigma=0.4, position_index=(0, 1, 2)),
+    ]
+    rng = np.random.default_rng(11)
+    x = rng.normal(0, 5, (2, 300, 6))
+    z = np.array([[[1.0, 2.0, 0.5], [6.0, 0, 0]], [[-3.0, 0.0, 1.0], [2.5, 0, 0]]])
+    specs = [s.fused_likelihood() for s in sensors]
+    kinds = np.array([fused.KINDS[s[0]] for s in specs])
+    params = np.stack([fused.sensor_params(*s) for s in specs])
+    got, maxima = fused.log_likelihood_sum(
+        x, np.zeros((2, 300)), kinds, params, z, np.ones((2, 2), bool)
+    )
+    ref = np.stack(
+        [
+            sum(s.log_likelihood(z[r, k, : s.dim], x[r]) for k, s in enumerate(sensors))
+            for r in range(2)
+        ]
+    )
+    np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(maxima[:, -1], ref.max(axis=1), rtol=1e-12)
+
+
+def test_position_fix_takes_the_fused_path_and_matches_the_numpy_engine():
+    from fusetrack.sensors import PositionFix
+
+    sensors = [SENSORS[0], PositionFix("tag", cov=[[4.0, 1.0], [1.0, 2.0]], bias=[0.3, 0.0])]
+    out = []
+    for engine in ("numba", "numpy"):
+        f = BootstrapFilter(ConstantVelocity(q=0.1), sensors, n_particles=2000, engine=engine)
+        rng = np.random.default_rng(12)
+        p = f.initialize(PRIOR, rng)
+        for k in range(3):
+            p = f.predict(p, 1.0, rng)
+            ms = [Measurement(k, "b0", [0.98 + 0.01 * k]), Measurement(k, "tag", [21.0 + k, 31.0])]
+            if engine == "numba":
+                assert (
+                    f._reweight_fused(p.states, f._weights(p), f._check_measurements(ms, ()))
+                    is not None
+                )
+            p = f.update(p, ms, rng)
+        out.append((f.mean(p), p.log_weights))
+    np.testing.assert_allclose(out[0][0], out[1][0], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(out[0][1], out[1][1], rtol=0, atol=1e-8)

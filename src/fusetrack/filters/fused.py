@@ -17,8 +17,9 @@ A model offers a fast path through a small method that returns plain numbers:
 
 * a motion model: ``fused_transition(dt) -> (F, G)`` with ``G G^T = Q(dt)``
   (:class:`~fusetrack.motion.ConstantVelocity` and the other linear-Gaussian models), or None;
-* a sensor: ``fused_likelihood() -> (kind, index, position, heading, inv_var, log_norm)``
-  with ``kind`` one of ``"bearing"``, ``"range"``, ``"range_bearing"`` (the arguments of
+* a sensor: ``fused_likelihood() -> (kind, index, position, heading, inv_var, log_norm[,
+  chol_inv])`` with ``kind`` one of ``"bearing"``, ``"range"``, ``"range_bearing"``,
+  ``"position"`` (the arguments of
   :func:`sensor_params`), or None (then the generic path runs).
 
 The kernels are the NumPy models' arithmetic written per particle, so they agree with the
@@ -55,7 +56,8 @@ Array = NDArray[np.float64]
 BEARING = 0
 RANGE = 1
 RANGE_BEARING = 2
-N_PARAMS = 10
+POSITION = 3
+N_PARAMS = 16
 PARALLEL_MIN = 1 << 16  # particles (all runs together) from which the threaded loops pay
 CHUNK = 4096  # particles per work item of the threaded loops
 NOISE_STREAMS = 4  # generators that share a large draw of process noise (fixed: not the threads)
@@ -69,6 +71,7 @@ __all__ = [
     "NOISE_STREAMS",
     "N_PARAMS",
     "PARALLEL_MIN",
+    "POSITION",
     "RANGE",
     "RANGE_BEARING",
     "SPLIT_MIN",
@@ -81,7 +84,7 @@ __all__ = [
 ]
 
 
-KINDS = {"bearing": BEARING, "range": RANGE, "range_bearing": RANGE_BEARING}
+KINDS = {"bearing": BEARING, "range": RANGE, "range_bearing": RANGE_BEARING, "position": POSITION}
 
 
 def sensor_params(
@@ -91,22 +94,28 @@ def sensor_params(
     heading: float = 0.0,
     inv_var: tuple[float, ...] = (),
     log_norm: float = 0.0,
+    chol_inv: Array | None = None,
 ) -> Array:
     """The parameter vector of one sensor for :func:`log_likelihood_sum`.
 
-    Layout: ``[ix, iy, iz, sx, sy, sz, heading, inv_var_0, inv_var_1, log_norm]``; ``iz = -1``
-    for a 2-D sensor. ``inv_var`` are ``1 / sigma^2`` of the components in measurement order.
+    Layout: ``[ix, iy, iz, sx, sy, sz, heading, inv_var_0, inv_var_1, log_norm, l00, l10, l11,
+    l20, l21, l22]``; an unused index is -1. ``inv_var`` are ``1 / sigma^2`` of the components
+    in measurement order. A position fix (``z = x[index] + position + v``, ``position`` its
+    bias) gives ``chol_inv = L^-1`` (lower triangular, ``L L^T = cov``), packed row by row.
     """
     if kind not in KINDS:
         raise ValueError(f"kind={kind!r} is invalid: expected one of {sorted(KINDS)}")
     p = np.zeros(N_PARAMS)
-    p[2] = -1.0
+    p[:3] = -1.0
     for k, (i, s) in enumerate(zip(index, np.asarray(position, dtype=float))):
         p[k], p[3 + k] = float(i), float(s)
     p[6] = heading
     for k, v in enumerate(inv_var):
         p[7 + k] = v
     p[9] = log_norm
+    if chol_inv is not None:
+        li = np.asarray(chol_inv, dtype=float)
+        p[10 : 10 + li.shape[0] * (li.shape[0] + 1) // 2] = li[np.tril_indices(li.shape[0])]
     return p
 
 
@@ -344,6 +353,26 @@ def _add_range_bearing(px, py, sx, sy, z0, cphi, sphi, h0, h1, log_norm, out):
         out[i] = -np.inf if v != v else v
 
 
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _add_position(px, py, pz, k, z, p, log_norm, out):  # pragma: no cover - jit
+    """``out += log p(z | x)`` of a position fix with ``k`` components: ``r = z - x - bias``,
+    ``u = L^-1 r``, ``log_norm - |u|^2 / 2`` (``z`` its 3 padded values, ``p`` its params)."""
+    for i in range(out.shape[0]):
+        e0 = z[0] - (px[i] + p[3])
+        u = p[10] * e0
+        q = u * u
+        if k >= 2:
+            e1 = z[1] - (py[i] + p[4])
+            u = p[11] * e0 + p[12] * e1
+            q += u * u
+            if k >= 3:
+                e2 = z[2] - (pz[i] + p[5])
+                u = p[13] * e0 + p[14] * e1 + p[15] * e2
+                q += u * u
+        v = out[i] + (log_norm - 0.5 * q)
+        out[i] = -np.inf if v != v else v
+
+
 @numba.njit(cache=True, inline="always")
 def _column(x, r, lo, j, col):  # pragma: no cover - jit
     """``col[i] = x[r, lo + i, j]``: one state component of a chunk, contiguous (the loops
@@ -355,7 +384,8 @@ def _column(x, r, lo, j, col):  # pragma: no cover - jit
 def _llsum_py(x, lw, kinds, params, zc, usable, out, cmax):  # pragma: no cover - jit
     """``out[r, i] = lw[r, i] + sum_k ll_k`` (NaN -> -inf), ``cmax[r, c, k]`` = max over chunk
     ``c`` of the running sum after measurement ``k``. Unusable ``(r, k)`` add 0. ``zc[r, k]`` is
-    ``[z0, z1, cos phi, sin phi]`` with ``phi`` the bearing component plus the heading."""
+    ``[z0, z1, z2, cos phi, sin phi]`` with ``phi`` the bearing component plus the heading. One
+    loop per measurement over contiguous position columns of the chunk (vectorised)."""
     rows, n, _ = x.shape
     nk = kinds.shape[0]
     nch = (n + CHUNK - 1) // CHUNK
@@ -371,33 +401,34 @@ def _llsum_py(x, lw, kinds, params, zc, usable, out, cmax):  # pragma: no cover 
         px = np.empty(hi - lo)
         py = np.empty(hi - lo)
         pz = np.empty(hi - lo)
-        have = (-1, -1, -1)  # which components px, py, pz hold
+        have = (-1, -1, -1)  # which state components px, py, pz hold
         for k in range(nk):
             if usable[r, k]:
                 p = params[k]
                 kind = kinds[k]
                 ix = int(p[0])
                 iy = int(p[1])
-                iz = int(p[2]) if kind == 1 else -1
+                iz = int(p[2])
                 if ix != have[0]:
                     _column(x, r, lo, ix, px)
-                if iy != have[1]:
+                if iy >= 0 and iy != have[1]:
                     _column(x, r, lo, iy, py)
                 if iz >= 0 and iz != have[2]:
                     _column(x, r, lo, iz, pz)
-                have = (ix, iy, iz if iz >= 0 else have[2])
+                have = (ix, iy if iy >= 0 else have[1], iz if iz >= 0 else have[2])
+                z = zc[r, k]
                 if kind == 0:
-                    _add_bearing(px, py, p[3], p[4], zc[r, k, 2], zc[r, k, 3], 0.5 * p[7], p[9], o)
+                    _add_bearing(px, py, p[3], p[4], z[3], z[4], 0.5 * p[7], p[9], o)
                 elif kind == 1:
-                    _add_range(
-                        px, py, pz[: hi - lo if iz >= 0 else 0], p[3], p[4], p[5], zc[r, k, 0],
-                        0.5 * p[7], p[9], o,
-                    )  # fmt: skip
-                else:
+                    pz3 = pz[: hi - lo if iz >= 0 else 0]
+                    _add_range(px, py, pz3, p[3], p[4], p[5], z[0], 0.5 * p[7], p[9], o)
+                elif kind == 2:
                     _add_range_bearing(
-                        px, py, p[3], p[4], zc[r, k, 0], zc[r, k, 2], zc[r, k, 3], 0.5 * p[7],
-                        0.5 * p[8], p[9], o,
-                    )  # fmt: skip
+                        px, py, p[3], p[4], z[0], z[3], z[4], 0.5 * p[7], 0.5 * p[8], p[9], o
+                    )
+                else:
+                    dims = 1 + (iy >= 0) + (iz >= 0)
+                    _add_position(px, py, pz, dims, z, p, p[9], o)
             m = -np.inf
             for i in range(hi - lo):
                 m = max(m, o[i])
@@ -419,7 +450,8 @@ def log_likelihood_sum(
     ``(R, K)``, the maximum over particles of the running sum after measurement ``k``.
 
     ``states`` ``(R, N, d)``; ``kinds`` ``(K,)`` and ``params`` ``(K, N_PARAMS)`` from the
-    sensors' ``fused_likelihood``; ``z`` ``(R, K, 2)`` (each measurement's value per run, padded);
+    sensors' ``fused_likelihood``; ``z`` ``(R, K, m)``, ``m <= 3`` (each measurement's value per
+    run, padded);
     ``usable`` ``(R, K)`` (False: that measurement leaves that run alone). One pass over the
     particles (threaded from :data:`PARALLEL_MIN` particles in total).
     """
@@ -428,11 +460,11 @@ def log_likelihood_sum(
     kinds = np.ascontiguousarray(kinds, dtype=np.int64)
     params = np.ascontiguousarray(params, dtype=np.float64)
     z = np.asarray(z, dtype=np.float64)
-    zc = np.empty((rows, kinds.shape[0], 4))
-    zc[..., :2] = z
-    phi = np.where(kinds == RANGE_BEARING, z[..., 1], z[..., 0]) + params[:, 6]
-    np.cos(phi, out=zc[..., 2])
-    np.sin(phi, out=zc[..., 3])
+    zc = np.zeros((rows, kinds.shape[0], 5))
+    zc[..., : z.shape[-1]] = z
+    phi = np.where(kinds == RANGE_BEARING, zc[..., 1], zc[..., 0]) + params[:, 6]
+    np.cos(phi, out=zc[..., 3])
+    np.sin(phi, out=zc[..., 4])
     nch = (n + CHUNK - 1) // CHUNK
     out = np.empty((rows, n))
     cmax = np.empty((rows, nch, kinds.shape[0]))

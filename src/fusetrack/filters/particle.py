@@ -774,7 +774,7 @@ class ParticleFilter:
         rows = W.lw.shape[0]
         n, d = states.shape[-2:]
         s3 = states.reshape(-1, n, d)
-        z = np.zeros((rows, len(checked), 2))
+        z = np.zeros((rows, len(checked), 3))
         for k, c in enumerate(checked):
             z[:, k, : c.z.shape[-1]] = c.z
         usable = np.stack([c.usable for c in checked], axis=1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import KW_ONLY, dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -120,6 +120,19 @@ class PositionFix(SensorBase):
     def noise_cov(self, x: ArrayLike | None = None) -> Array:
         """``cov``, shape ``(k, k)``."""
         return np.asarray(self.cov, dtype=float)
+
+    def fused_likelihood(self) -> tuple[Any, ...] | None:
+        """``("position", index, bias, 0.0, (), log_norm, L^-1)`` for the particle filters'
+        fused loop (see the base class; ``L`` is the Cholesky factor of ``cov``), or None when a
+        subclass changes ``predict``, ``residual`` or ``log_likelihood``."""
+        t = type(self)
+        if self._k > 3 or not (
+            t.predict is PositionFix.predict
+            and t.residual is SensorBase.residual
+            and t.log_likelihood is SensorBase.log_likelihood
+        ):
+            return None
+        return ("position", self._idx, self._bias, 0.0, (), self._log_norm, self._chol_inv_T.T)
 
 
 __all__ = ["PositionFix"]
