@@ -234,6 +234,9 @@ def _means(df: pd.DataFrame) -> pd.DataFrame:
     table["err2d_rotating"] = by_rot2.get(True)
     table["bytes_per_step"] = df.groupby("tracker")["bytes"].mean()
     table["link_bytes_per_step"] = df.groupby("tracker")["link_bytes"].mean()
+    # steps a tracker had nothing to fuse and coasted on its prediction (P needs two 2-D tracks)
+    coasting = df.cameras_used < np.where(df.tracker == "P", 2, 1)
+    table["coasting_steps"] = coasting.groupby(df.tracker).sum()
     return table.reindex([*TRACKERS, "T4-eq103", *ABLATIONS])
 
 
@@ -334,6 +337,42 @@ def _figures(ctx: RunContext, df: pd.DataFrame, table: pd.DataFrame, setup: str)
     ax.set_title(f"Setup {setup.upper()}: communication per time step")
     names.append(plots.save(fig, ctx.figure_path(f"bandwidth_{setup}")).name)
     return names
+
+
+#: Table 12 (spec A-V-15 reading): tracking accuracy and communication cost per tracker
+TABLE12 = {
+    "P": ("POOR", "LOW"),
+    "T0": ("GOOD", "VERY HIGH"),
+    "T1": ("MEDIUM", "MEDIUM"),
+    "T2": ("MEDIUM", "LOW"),
+    "T3": ("GOOD", "LOW"),
+    "T4": ("GOOD", "MEDIUM"),
+}
+#: the paper's rank of each tracker by error (ties share a range), Figs 48-49 and 56
+PAPER_RANK = {
+    "a": {"T0": "1", "T3": "2-3", "T4": "2-3", "T1": "4-5", "T2": "4-5", "P": "6"},
+    "b": {"T1": "1-2", "T2": "1-2", "T0": "3", "P": "4-6", "T3": "4-6", "T4": "4-6"},
+}
+
+
+def _paper_vs_ours(table: pd.DataFrame, setup: str) -> str:
+    """The paper's ranks and Table 12 beside our ranks, errors and bytes."""
+    ours = table.loc[list(TRACKERS), "err3d"].rank(method="min").astype(int)
+    rows = [
+        {
+            "tracker": k,
+            "paper rank": PAPER_RANK[setup][k],
+            "our rank": int(ours[k]),
+            "our 3-D error (m)": round(float(table.loc[k, "err3d"]), 3),
+            "our 2-D error (px)": round(float(table.loc[k, "err2d"]), 2),
+            "Table 12 accuracy": TABLE12[k][0],
+            "Table 12 comm. cost": TABLE12[k][1],
+            "our bytes/step": round(float(table.loc[k, "bytes_per_step"]), 1),
+            "our link bytes/step": round(float(table.loc[k, "link_bytes_per_step"]), 1),
+        }
+        for k in TRACKERS
+    ]
+    return pd.DataFrame(rows).to_markdown(index=False)
 
 
 def _table_md(table: pd.DataFrame) -> str:
@@ -439,6 +478,10 @@ image-plane particles (T3, T4, P), proposal sd 0.15 m, weights rho^20.
 The paper gives no numbers for Figs 48-49, only the ranking: **T0 best, then the image-plane
 trackers T3/T4, then the kernel-density trackers T1/T2, then P**; rotation hurts almost all.
 Ours (mean over runs of the per-run mean error, steps 1-{int(df.t.max())}):
+
+{_paper_vs_ours(table, "a")}
+
+All rows (errors by orientation, bytes, steps without anything to fuse):
 
 {_table_md(table)}
 
@@ -578,6 +621,10 @@ Fig. 53a. Target pixels: {100 * share_small:.1f} % of (step, camera) pairs under
 
 Paper (Fig. 56, no numbers): **T1/T2 far better than any other tracker, then T0; P/T3/T4 poor**;
 T2 re-converges after the single-camera gap, T0 does not. Ours:
+
+{_paper_vs_ours(table, "b")}
+
+All rows (errors by orientation, bytes, steps without anything to fuse):
 
 {_table_md(table)}
 
