@@ -230,3 +230,46 @@ def test_recordings_jsonl_and_node_logs_replay_as_readings(tmp_path, network):
     assert len(got) == len(lines) and all(r.sensor != "tag" for r in got)
     with pytest.raises(ConfigError, match="recording"):
         load_recording(tmp_path / "rec.csv")
+
+
+def test_a_sensor_that_does_not_fit_the_state_is_a_config_error(network):
+    data = network.model_dump(mode="python")
+    data["sensors"].append(
+        {
+            "id": "doa1",
+            "kind": "doa",
+            "position": [0, 0, 1],
+            "sigma_azimuth": 0.1,
+            "sigma_polar": 0.1,
+        }
+    )
+    data["nodes"][0]["sensors"].append("doa1")
+    with pytest.raises(ConfigError, match="doa1"):
+        parse_config(data)
+
+
+def test_a_tick_that_fails_predicts_only_and_is_counted(tmp_path, network):
+    clock = [0.0]
+    node = FusionNode(network, wall=lambda: clock[0], log=DurableLog(tmp_path / "n.sqlite"))
+    scn = demo_scenario(network, seed=6, duration=3.0)
+    _feed(node, network, scn.readings)
+    real = node.engine.filter.update
+    calls = []
+
+    def flaky(belief, group, rng=None):
+        calls.append(1)
+        if len(calls) == 3:
+            raise np.linalg.LinAlgError("simulated")
+        return real(belief, group, rng)
+
+    node.engine.filter.update = flaky
+    clock[0] = 10.0
+    states = node.advance()
+    assert (
+        len(states) == 6
+        and node.tick_errors == 1
+        and "simulated" in node.health()["last_tick_error"]
+    )
+    assert all(np.all(np.isfinite(s.state)) for s in states)
+    _, offline = replay_log(network, node.log)  # the log says what was really fused
+    assert [s.model_dump() for s in offline] == [s.model_dump() for s in states]

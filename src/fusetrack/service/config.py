@@ -288,7 +288,15 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
             f"{source}: "
             + invalid("tracker.prior_mean", cfg.tracker.prior_mean, f"{expect} entries")
         )
-    del models
+    motion = cfg.tracker.motion.build()
+    for sid, model in models.items():  # each sensor must read positions of the tracker's state
+        idx = tuple(getattr(model, "_idx", ()) or model.position_index)
+        if not set(idx) <= set(motion.position_index):
+            raise ConfigError(
+                f"{source}: sensor {sid!r} ({cfg.sensor(sid).kind}) reads state entries "
+                f"{list(idx)}, but the tracker's positions are {list(motion.position_index)} "
+                f"({cfg.tracker.motion.model}, {expect} entries)"
+            )
     return cfg
 
 

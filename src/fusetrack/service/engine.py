@@ -60,7 +60,18 @@ class FusionEngine:
         self.position_index = list(self.filter.motion.position_index)
 
     def step(self, tick: int, t: float, readings: Sequence[Reading]) -> TrackState:
-        """Fuse ``readings`` (already in fusion order) and predict to the tick time ``t``."""
+        """Fuse ``readings`` (already in fusion order) and predict to the tick time ``t``.
+
+        All or nothing: if anything raises, the belief, time and random state are as before.
+        """
+        saved = (self.belief, self.time, self.rng.bit_generator.state, self.resets)
+        try:
+            return self._step(tick, t, readings)
+        except Exception:
+            self.belief, self.time, self.rng.bit_generator.state, self.resets = saved
+            raise
+
+    def _step(self, tick: int, t: float, readings: Sequence[Reading]) -> TrackState:
         at = t if self.cfg.fusion.alignment == "closest" else None
         for when, group in group_by_time(as_measurements(readings, at), _TIME_TOLERANCE):
             self._predict_to(when)

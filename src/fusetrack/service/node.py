@@ -167,6 +167,8 @@ class FusionNode:
         self.subscribers: set[asyncio.Queue[str]] = set()
         self.metrics = _Metrics(list(self.models))
         self.resumed_ticks = 0
+        self.tick_errors = 0
+        self.last_tick_error = ""
         if log is not None:
             self.resume(log)
 
@@ -302,7 +304,13 @@ class FusionNode:
         for k in self.aligner.due(clock, limit):
             t0 = time.perf_counter()
             readings = self.aligner.take(k)
-            state = self.engine.step(k, self.aligner.tick_time(k), readings)
+            try:
+                state = self.engine.step(k, self.aligner.tick_time(k), readings)
+            except Exception as err:  # a tick that cannot fuse its readings predicts only
+                self.tick_errors += 1
+                self.last_tick_error = f"tick {k}: {type(err).__name__}: {err}"
+                readings = []
+                state = self.engine.step(k, self.aligner.tick_time(k), readings)
             self.metrics.tick_seconds.observe(time.perf_counter() - t0)
             if self.cfg.fusion.clock == "wall":
                 due = self.aligner.window_end(k) + self.aligner.lag
@@ -417,6 +425,8 @@ class FusionNode:
             "superseded": self.aligner.superseded,
             "dropped": sum(b.dropped for b in self.aligner.buffers.values()),
             "filter_resets": self.engine.resets,
+            "tick_errors": self.tick_errors,
+            "last_tick_error": self.last_tick_error,
             "messages_per_second": self.rate(),
             "resumed_ticks": self.resumed_ticks,
         }
