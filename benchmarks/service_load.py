@@ -88,11 +88,21 @@ def network(n: int, fusion_hz: float, alignment: str = "all") -> dict:
     }
 
 
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU seconds of a process so far (from /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def rss_mb(pid: int) -> float:
     for line in Path(f"/proc/{pid}/status").read_text().splitlines():
         if line.startswith("VmRSS:"):
             return int(line.split()[1]) / 1024
     return math.nan
+
+
+def _num(v: float | None) -> str:
+    return "–" if v is None else f"{v:.0f}"
 
 
 def write_report(results: list[Path], out: Path) -> None:
@@ -107,6 +117,7 @@ def write_report(results: list[Path], out: Path) -> None:
             f"{r['alignment']}, {r['duration_s']:g} s{' + faults' if r['faults'] else ''} "
             f"| {r['sent']} | {r['accepted']} | {sum(r['refused'].values())} | {r['lost']} "
             f"| {r['ticks']} / {r['ticks_expected']} | {r['tick_compute_ms_mean']:.0f} "
+            f"| {_num(r.get('node_cpu_ms_per_tick'))} "
             f"| {lat['p50']:.0f} / {lat['p99']:.0f} / {lat['max']:.0f} "
             f"| {mem['first']:.0f} → {mem['last']:.0f} (max {mem['max']:.0f}) "
             f"| {r['position_rmse_m']:.2f} | {r['node_catch_up_after_last_send_s']:.1f} "
@@ -124,9 +135,10 @@ def write_report(results: list[Path], out: Path) -> None:
             rows[-1] += " |"
     head = (
         "| run | load | sent | accepted | refused | lost | ticks / due | tick compute (ms, mean) "
+        "| node CPU per tick (ms, all work) "
         "| tick latency p50 / p99 / max (ms) | node RSS (MiB) | position RMSE (m) "
         "| catch-up after last send (s) | load avg (1 min) | faults seen |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     )
     out.write_text(
         "# Fusion node under load (written by `benchmarks/service_load.py --report`)\n\n"
@@ -246,6 +258,7 @@ def run(args, cfg, node, url, udp_port, rng) -> int:
     jumped = {"ahead": 0, "back": 0}
     behind = 0.0
     t_start = time.time()
+    cpu_start = cpu_seconds(node.pid)
     interval = 1.0 / args.rate
     k = 0
     while True:
@@ -292,6 +305,7 @@ def run(args, cfg, node, url, udp_port, rng) -> int:
     while time.time() - t_sent < 300 and (not ticks or ticks[-1][0] < expected_last - 1e-6):
         time.sleep(0.1)  # the node catches up with what was sent
     catch_up = time.time() - t_sent
+    node_cpu = cpu_seconds(node.pid) - cpu_start
     stop.set()
     for t in threads:
         t.join(timeout=10)
@@ -306,6 +320,7 @@ def run(args, cfg, node, url, udp_port, rng) -> int:
     # a tick falls due when its window has closed and the lag has passed (see alignment.py)
     window = period / 2 if args.alignment == "closest" else 0.0
     lat = np.array([arr - (tt + window + lag) for tt, arr, _ in ticks])
+    tt_arr = np.array([tt for tt, _, _ in ticks])
     err = np.array(
         [
             np.linalg.norm(np.array(pos) - truth(tt - t_start))
@@ -333,12 +348,25 @@ def run(args, cfg, node, url, udp_port, rng) -> int:
         "alignment": args.alignment,
         "ticks_expected": round(args.duration * args.fusion_hz),
         "tick_compute_ms_mean": 1e3 * tick_sum / max(tick_count, 1.0),
+        "node_cpu_share": node_cpu / (time.time() - t_start),
+        "node_cpu_ms_per_tick": 1e3 * node_cpu / max(len(ticks), 1),
         "tick_latency_ms": {
             "p50": float(np.percentile(lat, 50) * 1e3),
             "p99": float(np.percentile(lat, 99) * 1e3),
             "max": float(lat.max() * 1e3),
         },
         "memory_mb": {"first": float(mem[0]), "last": float(mem[-1]), "max": float(mem.max())},
+        "memory_mb_samples": [[round(t - t_start, 1), round(m, 1)] for t, m in memory],
+        "tick_latency_ms_by_minute_p99": [
+            float(
+                np.percentile(
+                    lat[(tt_arr >= t_start + 60 * i) & (tt_arr < t_start + 60 * (i + 1))], 99
+                )
+                * 1e3
+            )
+            for i in range(math.ceil(args.duration / 60))
+            if np.any((tt_arr >= t_start + 60 * i) & (tt_arr < t_start + 60 * (i + 1)))
+        ],
         "position_rmse_m": float(np.sqrt(np.mean(err**2))),
         "position_max_err_m": float(err.max()),
         "load_average": os.getloadavg(),
