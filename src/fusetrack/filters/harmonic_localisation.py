@@ -160,6 +160,39 @@ def harmonic_powers(
     return np.moveaxis(amp, -1, 1), np.moveaxis(np.where(hit, h * f0, 0.0), -1, 1)
 
 
+def factorised_powers(
+    f0s: ArrayLike, powers: Array, freqs: Array, iterations: int = 20
+) -> tuple[Array, Array]:
+    """Harmonic powers ``λ_k² ψ_h`` on a harmonic-number grid ``(K, M, H)`` at ``h·f^(m)``, fitted to
+    the per-sensor Eq. 43 powers ``(K, M, J)`` (from :func:`harmonic_powers`) as the product the
+    graphical model implies (Fig. 28: ``ψ^(m)`` belongs to the source, ``λ_k^(m)`` to the path).
+
+    Beyond the paper: Eq. 43 reads ``λ_k² ψ_h`` at each node on its own, so a harmonic that one node
+    did not send counts as silent there. Fitting ``λ_k²`` and ``ψ_h`` to the harmonics every node did
+    send (alternating least squares over the observed entries) fills those in."""
+    f0 = np.asarray(f0s, float).reshape(-1)
+    k_n, m_n, _ = powers.shape
+    h_of = np.where(powers > 0, np.round(freqs / f0[None, :, None]), 0).astype(int)
+    h_max = max(int(h_of.max(initial=0)), 1)
+    obs = np.zeros((k_n, m_n, h_max))  # two bins of one line (or repeats) add up
+    seen = np.zeros((k_n, m_n, h_max), bool)
+    k_i, m_i, j_i = np.nonzero(powers > 0)
+    np.add.at(obs, (k_i, m_i, h_of[k_i, m_i, j_i] - 1), powers[k_i, m_i, j_i])
+    seen[k_i, m_i, h_of[k_i, m_i, j_i] - 1] = True
+    lam = np.ones((k_n, m_n))
+    psi = np.where(seen.any(0), obs.max(0), 0.0)  # (M, H)
+    for _ in range(iterations):
+        num = (obs * psi[None] * seen).sum(-1)
+        den = (psi[None] ** 2 * seen).sum(-1)
+        lam = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)  # (K, M)
+        num = (obs * lam[..., None] * seen).sum(0)
+        den = (lam[..., None] ** 2 * seen).sum(0)
+        psi = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)  # (M, H)
+    full = np.where(seen, obs, lam[..., None] * psi[None])  # keep what was observed
+    grid = np.broadcast_to(f0[None, :, None] * np.arange(1, h_max + 1), full.shape)
+    return np.maximum(full, 0.0), np.array(grid)
+
+
 @dataclass(frozen=True)
 class FrequencyEstimate:
     """ML fundamentals ``f0 (M,)``, their ``ℓ'`` and all Gibbs samples ``(N, M)``."""
@@ -429,7 +462,9 @@ class LocalisationResult:
 class BeamformModel:
     """Settings of the localisation step: the ``field_box`` (uniform prior), relative beamform
     noise ``rel_sigma`` (``σ_B,k = rel_sigma · std_α B_k``), the initial grid step (m), Gibbs
-    samples, slice width (m), and the shared-harmonic power rule."""
+    samples, slice width (m), the shared-harmonic power rule, and whether the per-node harmonic
+    powers are read as Eq. 43 prints them (``"per-node"``) or fitted as ``λ_k² ψ_h``
+    (``"factorised"``, :func:`factorised_powers`)."""
 
     field_box: tuple[float, float, float, float] = (0.0, 10.0, 0.0, 5.0)
     rel_sigma: float = 0.05
@@ -437,6 +472,7 @@ class BeamformModel:
     n_samples: int = 40
     width: float = 1.0
     shared_power: Literal["paper", "incoherent"] = "paper"
+    powers: Literal["per-node", "factorised"] = "factorised"
     min_share: float = 0.01
     prior_sigma: float = 1.0  # m: N(X | X_{t-1}, prior_sigma² I) when a previous estimate is given
 
@@ -524,6 +560,8 @@ def localise(
         psds, n_sources, rng, model=frequency_model, n_samples=model.n_samples, init=f0_init
     )
     powers, freqs = harmonic_powers(freq.f0, psds, frequency_model, model.shared_power)
+    if model.powers == "factorised":
+        powers, freqs = factorised_powers(freq.f0, powers, freqs)
     share = powers.sum(axis=(0, 2))
     total_power = float(sum(float(p.powers.sum()) for p in psds))
     supported = share > model.min_share * max(float(share.sum()), 1e-300)
