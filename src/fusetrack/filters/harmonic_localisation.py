@@ -28,6 +28,11 @@ Where this departs from the printed equations (spec 003 §5, A-IV-*):
   ``a_k ≥ 0`` and an offset ``c_k`` (which also absorbs ``N_mic R_η(0)``) by least squares (A-IV-6).
 * Eq. 38 assumes ``E[cos(Φ_i - Φ_j)] = 1`` for sources sharing a harmonic (hence ``M'²`` in Eq. 43);
   for independent phases the powers add (``M'``). ``shared_power="incoherent"`` selects that.
+* Beyond the paper: the harmonic tolerance is one 1 Hz bin (a line between two bins lights both);
+  the ML fundamentals are refined below a bin from the two bins a line lights; by default the
+  per-node powers are fitted as ``λ_k² ψ_h`` over all nodes (:func:`factorised_powers`: Eq. 43 per
+  node treats a harmonic a node did not send as silent); and each Gibbs sweep ends with Metropolis
+  swaps of two sources' positions, which coordinate-wise moves cannot make.
 """
 
 from __future__ import annotations
