@@ -189,3 +189,18 @@ def test_harmonic_source_checks_and_directivity():
     s = HarmonicSource(np.zeros(2), 50.0, np.ones(3), facing=0.0, directivity=1.0)
     g = s.gain(np.array([[2.0, 0.0], [-2.0, 0.0]]))
     assert g[0] == pytest.approx(0.5) and g[1] == pytest.approx(0.5 / 3)  # ((2 + cos φ)/3)^β / r
+
+
+def test_factorised_powers_fill_a_harmonic_a_node_did_not_send():
+    from fusetrack.filters.harmonic_localisation import factorised_powers
+
+    f0 = np.array([50.0])
+    lam2 = np.array([1.0, 0.25, 4.0])
+    psi = np.array([8.0, 4.0, 2.0, 1.0])
+    full = lam2[:, None] * psi[None, :]  # (K, H)
+    powers = full[:, None, :].copy()  # (K, M=1, J=H): peak j is harmonic j + 1
+    freqs = np.broadcast_to(f0[0] * np.arange(1, 5), powers.shape).copy()
+    powers[1, 0, 2] = 0.0  # node 1 did not send harmonic 3
+    filled, grid = factorised_powers(f0, powers, freqs)
+    np.testing.assert_allclose(filled[:, 0, :], full, rtol=1e-6)
+    np.testing.assert_allclose(grid[0, 0], [50.0, 100.0, 150.0, 200.0])
