@@ -57,7 +57,8 @@ def _mixture_kernel(
             continue
         tot = 0.0
         for j in range(n_b):
-            lp[j] = math.exp(lp[j] - top)
+            d = lp[j] - top  # terms below e^-50 cannot change a sum that contains 1: skip exp
+            lp[j] = math.exp(d) if d > -50.0 else 0.0
             tot += lp[j]
         lse[i] = top + math.log(tot)
         target, acc = u[i] * tot, 0.0
