@@ -293,7 +293,7 @@ def _figures(ctx: RunContext, df: pd.DataFrame, table: pd.DataFrame, setup: str)
     import matplotlib.pyplot as plt
 
     names = []
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), layout="constrained")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     order = [*TRACKERS, "T4-eq103", *ABLATIONS]
     x = np.arange(len(order))
     for ax, col, label in zip(
