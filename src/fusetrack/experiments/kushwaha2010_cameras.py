@@ -10,6 +10,7 @@ T0-T4 and the baseline P on the same frames (``fusetrack.filters.smart_camera_tr
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -144,7 +145,8 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     }
     participating = frames.participating
     seen_px = np.where(participating, frames.target_pixels, np.nan).astype(float)
-    with np.errstate(all="ignore"):
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # cameras that never see the target
         ratio = np.nanmax(seen_px, axis=0) / np.nanmin(seen_px, axis=0)
     # linear scale change of the target image in the camera where it changes most
     scale_change = float(np.sqrt(np.nanmax(ratio))) if np.any(np.isfinite(ratio)) else np.nan
