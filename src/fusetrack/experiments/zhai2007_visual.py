@@ -574,7 +574,7 @@ median error of each cue's location and the share of frames where it is more tha
   ordering is reversed here. Every PF-SP-PEKF particle is drawn from one Gaussian, the bank's
   moment-matched output; when the bank's centre pseudo-measurement (nearest edge on each ray)
   takes a clutter edge, the whole particle set moves with it and the weights cannot bring it
-  back. With paired weights the transition density of a new particle is evaluated against an
+  back (our reading of the error curves, not traced run by run). With paired weights the transition density of a new particle is evaluated against an
   arbitrary ancestor, and with a tight Langevin position noise most pairs are improbable, so a
   few particles take all the weight; the marginal weight removes that part of the problem.
 * **E10, MMPF-SP against condensation** ({runs_e10} runs, the thesis's count). Lost
@@ -584,9 +584,10 @@ median error of each cue's location and the share of frames where it is more tha
   accurate (lower median), but it is lost about as often. Condensation's losses start at the dash
   left (median first-loss frame {s.loc[("E10", "condensation"), "median first loss"]:.0f}), as the
   thesis describes ("fails at the third manoeuvre"); MMPF-SP's start earlier (median frame
-  {s.loc[("E10", "MMPF-SP"), "median first loss"]:.0f}, the deceleration and stop of frames 30-40),
-  for the reason given under E9: all its particles of a regime come from that regime's single
-  bank Gaussian, which follows a clutter edge when the nearest edge on enough rays is clutter. The
+  {s.loc[("E10", "MMPF-SP"), "median first loss"]:.0f}, while the head still moves at constant
+  velocity), which points to clutter rather than to a manoeuvre: all the particles of a regime
+  come from that regime's single bank Gaussian, which follows a clutter edge when the nearest
+  edge on enough rays is clutter (as under E9; not traced run by run). The
   beyond-the-paper comparator, condensation with 1000 particles
   ({s.loc[("E10", "condensation 1000"), "seconds/run"]:.2g} s per run against MMPF-SP's
   {s.loc[("E10", "MMPF-SP"), "seconds/run"]:.2g} s), is the best of the three: lost
