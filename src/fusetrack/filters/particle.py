@@ -53,7 +53,13 @@ over the batch axes), to make run ``r`` of a batch bit-identical to a separate s
 by ``rng[r]``: the filter then calls the motion model, the sensors and the resampler run by
 run (pass the same sequence to ``update``, which the auxiliary filter draws in, and which then
 also evaluates the likelihoods run by run). With one generator a batch is statistically, not
-bitwise, equivalent to separate runs. ``engine="numba"`` uses the kernels of
+bitwise, equivalent to separate runs. The process noise of a linear-Gaussian motion model
+(``fused_transition``) is drawn as ``motion.sample`` draws it below
+:data:`~fusetrack.filters.fused.SPLIT_MIN` particles per generator; from there the particles are
+cut into :data:`~fusetrack.filters.fused.NOISE_STREAMS` fixed parts whose normals come from as
+many child generators of that generator (``Generator.spawn``, once; the filter keeps them, and a
+reference to their parent, for its lifetime), so that both cores can draw. The split depends on
+the number of particles only, never on the threads: a seed gives the same particles everywhere. ``engine="numba"`` uses the kernels of
 :mod:`fusetrack.filters.kernels`, ``engine="numpy"`` their NumPy references (same draws; results
 agree to rounding, about 1e-15). Both use the resampling schemes of
 :mod:`fusetrack.core.resampling`.
