@@ -92,7 +92,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
-    runs = ctx.n_runs(full=500, quick=40)
+    runs = ctx.n_runs(full=1000, quick=40)
     df = ctx.monte_carlo(run_once, [{"n_particles": n} for n in NS], runs)
     g = df.groupby(["n_particles", "method"])
     mse = g["mse"].mean().unstack("method")[list(METHODS)]
