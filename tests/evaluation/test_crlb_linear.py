@@ -83,8 +83,9 @@ def test_per_run_masks_average_information():
     half = posterior_information(CV, [TAG_A], x, dt, P0, mask=np.where(mask.all(0), 1.0, 0.5))
     np.testing.assert_allclose(J, half, atol=1e-12)
     Jr = posterior_information(CV, [TAG_A], x, dt, P0, mask=mask, average=False)
-    np.testing.assert_allclose(Jr[1], posterior_information(CV, [TAG_A], x[1], dt, P0,
-                                                            mask=mask[1]), atol=1e-12)
+    np.testing.assert_allclose(
+        Jr[1], posterior_information(CV, [TAG_A], x[1], dt, P0, mask=mask[1]), atol=1e-12
+    )
 
 
 @pytest.mark.parametrize("p", [0.3, 0.8])
@@ -101,17 +102,20 @@ def test_detection_probability_scales_one_step_of_information(p):
     Jm = posterior_information(CV, [TAG_A], x, 1.0, P0, mask=np.full((2, 1), p))
     np.testing.assert_allclose(Jm, J, atol=1e-12)
     # and mask x detection probability multiply
-    Jb = posterior_information(CV, [tag], x, 1.0, P0, mask=np.full((2, 1), 0.5),
-                               use_detection_probability=True)
+    Jb = posterior_information(
+        CV, [tag], x, 1.0, P0, mask=np.full((2, 1), 0.5), use_detection_probability=True
+    )
     np.testing.assert_allclose(Jb[0] - np.linalg.inv(P0), 0.5 * p * HRH, atol=1e-12)
 
 
 def test_rmse_bound_helpers():
     B = posterior_crlb(CV, [TAG_A], trajectories(1, 5, [1.0] * 4), 1.0, P0)
-    np.testing.assert_allclose(position_rmse_bound(B, CV.position_index),
-                               np.sqrt(B[:, 0, 0] + B[:, 1, 1]))
-    np.testing.assert_allclose(velocity_rmse_bound(B, CV.velocity_index),
-                               np.sqrt(B[:, 2, 2] + B[:, 3, 3]))
+    np.testing.assert_allclose(
+        position_rmse_bound(B, CV.position_index), np.sqrt(B[:, 0, 0] + B[:, 1, 1])
+    )
+    np.testing.assert_allclose(
+        velocity_rmse_bound(B, CV.velocity_index), np.sqrt(B[:, 2, 2] + B[:, 3, 3])
+    )
     np.testing.assert_allclose(axis_bounds(B, (1, 3)), np.sqrt(B[:, [1, 3], [1, 3]]))
     assert axis_bounds(B).shape == (5, 4)
 

@@ -47,8 +47,12 @@ def reference_information(motion, sensors, x, dts, P0, weights):
     """Tichavský et al. 1998 written out with a loop over runs (slow, obvious)."""
     R, T, d = x.shape
     J = np.linalg.inv(P0) + np.mean(
-        [sum(w * s.fisher_information(x[r, 0]) for w, s in zip(weights[r, 0], sensors))
-         for r in range(R)], axis=0)
+        [
+            sum(w * s.fisher_information(x[r, 0]) for w, s in zip(weights[r, 0], sensors))
+            for r in range(R)
+        ],
+        axis=0,
+    )
     out = [J]
     for k in range(T - 1):
         Qi = np.linalg.inv(motion.noise_cov(dts[k]))
@@ -59,8 +63,13 @@ def reference_information(motion, sensors, x, dts, P0, weights):
             F = motion.jacobian(x[r, k], dts[k])
             D11 += F.T @ Qi @ F / R
             EF += F / R
-            I += sum(w * s.fisher_information(x[r, k + 1])
-                     for w, s in zip(weights[r, k + 1], sensors)) / R
+            I += (
+                sum(
+                    w * s.fisher_information(x[r, k + 1])
+                    for w, s in zip(weights[r, k + 1], sensors)
+                )
+                / R
+            )
         D12 = -EF.T @ Qi
         D22 = Qi + I
         J = D22 - D12.T @ np.linalg.inv(J + D11) @ D12

@@ -92,5 +92,6 @@ def test_nees_of_a_correct_kalman_filter_averages_to_d():
     w = nis(np.array(innov), np.array(scov))
     assert average(w, over="all") == pytest.approx(2.0, abs=0.1)
     # position-only NEES has 2 degrees of freedom
-    assert average(nees(np.array(means), np.array(covs), np.array(truths), index=(0, 1)),
-                   over="all") == pytest.approx(2.0, abs=0.1)
+    assert average(
+        nees(np.array(means), np.array(covs), np.array(truths), index=(0, 1)), over="all"
+    ) == pytest.approx(2.0, abs=0.1)

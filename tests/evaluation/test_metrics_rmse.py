@@ -36,8 +36,9 @@ def test_position_and_velocity_rmse():
     # squared position errors: step 0: 25, 0; step 1: 2, 2
     np.testing.assert_allclose(position_rmse(EST, TRUTH, (0, 1)), [np.sqrt(12.5), np.sqrt(2.0)])
     assert position_rmse(EST, TRUTH, (0, 1), over="all") == pytest.approx(np.sqrt(29 / 4))
-    np.testing.assert_allclose(position_rmse(EST, TRUTH, (0, 1), over="time"),
-                               [np.sqrt(13.5), np.sqrt(1.0)])
+    np.testing.assert_allclose(
+        position_rmse(EST, TRUTH, (0, 1), over="time"), [np.sqrt(13.5), np.sqrt(1.0)]
+    )
     # squared velocity errors: step 0: 1, 4; step 1: 0, 8
     np.testing.assert_allclose(velocity_rmse(EST, TRUTH, (2, 3)), [np.sqrt(2.5), 2.0])
     np.testing.assert_allclose(position_error(EST, TRUTH, (0, 1)), [[5.0, 0.0], [np.sqrt(2)] * 2])

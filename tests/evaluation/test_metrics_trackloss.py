@@ -32,16 +32,15 @@ def test_lost_at_end_switch():
     # k = 1: any bad step loses the run
     np.testing.assert_array_equal(track_loss_onset(E, threshold=1.0, k=1), [3, 1, 0, 1, 5, 0])
     # k longer than the run: only the end rule can fire
-    np.testing.assert_array_equal(
-        track_loss_onset(E, threshold=1.0, k=10), [-1, -1, -1, -1, 5, 3]
-    )
+    np.testing.assert_array_equal(track_loss_onset(E, threshold=1.0, k=10), [-1, -1, -1, -1, 5, 3])
 
 
 def test_exactly_threshold_is_kept_and_time_axis():
     e = np.full((4, 1), 1.0)
     assert track_loss_rate(e, threshold=1.0, k=1) == 0.0
-    np.testing.assert_array_equal(track_loss_onset(E.T, threshold=1.0, k=3, time_axis=1),
-                                  [-1, 1, -1, 1, 5, 3])
+    np.testing.assert_array_equal(
+        track_loss_onset(E.T, threshold=1.0, k=3, time_axis=1), [-1, 1, -1, 1, 5, 3]
+    )
 
 
 def test_from_estimates():

@@ -101,9 +101,7 @@ def _prior_information(prior_cov: ArrayLike, d: int) -> Array:
     return Linv.T @ Linv
 
 
-def _weights(
-    mask: ArrayLike | None, R: int, T: int, S: int
-) -> Array:
+def _weights(mask: ArrayLike | None, R: int, T: int, S: int) -> Array:
     """Information-reduction factors ``(R, T, S)`` from the mask (all ones when None)."""
     if mask is None:
         return np.ones((R, T, S))
@@ -251,8 +249,14 @@ def posterior_crlb(
     :func:`velocity_rmse_bound` or :func:`axis_bounds` to compare with an RMSE.
     """
     J = posterior_information(
-        motion, sensors, trajectories, dt, prior_cov, mask=mask,
-        use_detection_probability=use_detection_probability, average=average,
+        motion,
+        sensors,
+        trajectories,
+        dt,
+        prior_cov,
+        mask=mask,
+        use_detection_probability=use_detection_probability,
+        average=average,
     )
     return _symmetrise(np.linalg.inv(J))
 
@@ -296,8 +300,11 @@ def deterministic_crlb(
             A = np.swapaxes(np.linalg.solve(FT, np.swapaxes(Y, -1, -2)), -1, -2)  # F^-T J F^-1
         except np.linalg.LinAlgError:
             raise ConfigError(
-                invalid(f"motion.jacobian(x, dt={float(steps[k])!r})", "singular",
-                        "an invertible transition Jacobian (deterministic_crlb needs F^-1)")
+                invalid(
+                    f"motion.jacobian(x, dt={float(steps[k])!r})",
+                    "singular",
+                    "an invertible transition Jacobian (deterministic_crlb needs F^-1)",
+                )
             ) from None
         J[:, k + 1] = _symmetrise(
             A + _measurement_information(sl, x[:, k + 1], w[:, k + 1], use_detection_probability)

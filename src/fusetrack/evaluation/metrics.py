@@ -104,8 +104,11 @@ def _reduce(
     if nan_policy == "raise" and not present.all():
         where = tuple(int(i[0]) for i in np.nonzero(~present))
         raise ConfigError(
-            invalid(name, f"non-finite sample at (step, run...) {where}", "finite values "
-                    "(or nan_policy='propagate' / 'omit')")
+            invalid(
+                name,
+                f"non-finite sample at (step, run...) {where}",
+                "finite values (or nan_policy='propagate' / 'omit')",
+            )
         )
     if over == "runs":
         axes = tuple(range(1, lead))
@@ -176,7 +179,12 @@ def rmse_per_axis(
 ) -> Array:
     """RMSE of each selected component separately (:func:`rmse` with ``joint=False``)."""
     return rmse(
-        estimates, truth, index=index, joint=False, over=over, nan_policy=nan_policy,
+        estimates,
+        truth,
+        index=index,
+        joint=False,
+        over=over,
+        nan_policy=nan_policy,
         time_axis=time_axis,
     )
 
@@ -192,7 +200,12 @@ def position_rmse(
 ) -> Array:
     """Position RMSE ``sqrt(E[|p_hat - p|^2])`` (:func:`rmse` with ``joint=True``)."""
     return rmse(
-        estimates, truth, index=position_index, joint=True, over=over, nan_policy=nan_policy,
+        estimates,
+        truth,
+        index=position_index,
+        joint=True,
+        over=over,
+        nan_policy=nan_policy,
         time_axis=time_axis,
     )
 
@@ -208,7 +221,12 @@ def velocity_rmse(
 ) -> Array:
     """Velocity RMSE ``sqrt(E[|v_hat - v|^2])`` (:func:`rmse` with ``joint=True``)."""
     return rmse(
-        estimates, truth, index=velocity_index, joint=True, over=over, nan_policy=nan_policy,
+        estimates,
+        truth,
+        index=velocity_index,
+        joint=True,
+        over=over,
+        nan_policy=nan_policy,
         time_axis=time_axis,
     )
 
@@ -383,8 +401,9 @@ def track_loss_rate(
     time_axis: int = 0,
 ) -> float:
     """Fraction of runs whose track was lost (definition in :func:`track_loss_onset`)."""
-    onset = track_loss_onset(errors, threshold=threshold, k=k, lost_at_end=lost_at_end,
-                             time_axis=time_axis)
+    onset = track_loss_onset(
+        errors, threshold=threshold, k=k, lost_at_end=lost_at_end, time_axis=time_axis
+    )
     return float(np.mean(onset >= 0)) if onset.size else 0.0
 
 
