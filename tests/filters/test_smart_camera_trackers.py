@@ -138,3 +138,12 @@ def test_routing_tree_reaches_the_base():
     parent = routing_tree(pos, np.zeros(3))
     assert parent[0] == -1
     assert sorted(hops(parent, n) for n in range(4)) == [1, 2, 2, 3]
+
+
+@pytest.mark.parametrize(("cls", "mode"), [(Particle3DTracker, "T3"), (ImagePlaneTracker, "T0")])
+def test_a_mode_of_another_family_is_refused(cls, mode):
+    from fusetrack.core.errors import ConfigError
+
+    truth, _, _, net = _scene()
+    with pytest.raises(ConfigError, match="mode"):
+        cls(mode, net, *_init(truth))

@@ -43,6 +43,7 @@ from scipy.optimize import minimize
 from scipy.special import logsumexp
 
 from ..core.beliefs import Gaussian, GaussianMixture
+from ..core.errors import ConfigError, invalid
 from ..core.measurement import Measurement
 from ..core.resampling import systematic
 from ..motion import ConstantVelocity
@@ -327,21 +328,30 @@ class _Tracker:
         raise NotImplementedError
 
 
-class Particle3DTracker(_Tracker):
-    """T0, T1 and T2: synchronised 3-D particles, fused as weights, mixtures, or in-network."""
+class _ModalTracker(_Tracker):
+    """A tracker family whose variants (the paper's T0..T4) differ by ``mode`` only."""
+
+    modes: tuple[str, ...] = ()
 
     def __init__(
         self,
-        mode: Literal["T0", "T1", "T2"],
+        mode: str,
         net: CameraNetwork,
         position: Array,
         velocity: Array,
         quaternion: Array,
         settings: TrackerSettings = TrackerSettings(),
     ) -> None:
+        if mode not in self.modes:
+            raise ConfigError(invalid("mode", mode, f"one of {list(self.modes)}"))
         super().__init__(net, position, velocity, quaternion, settings)
-        self.name = mode
-        self.mode = mode
+        self.name = self.mode = mode
+
+
+class Particle3DTracker(_ModalTracker):
+    """T0, T1 and T2: synchronised 3-D particles, fused as weights, mixtures, or in-network."""
+
+    modes = ("T0", "T1", "T2")
 
     def step(self, frames: Sequence[FeatureImage], rng: np.random.Generator) -> StepReport:
         s = self.s
@@ -412,21 +422,10 @@ def _aggregate(
     return _product_all(inbox[-1], k * k * 4), sent
 
 
-class ImagePlaneTracker(_Tracker):
+class ImagePlaneTracker(_ModalTracker):
     """T3 (lift to 3-D, in-network) and T4 (2-D mixtures to the base, MAP)."""
 
-    def __init__(
-        self,
-        mode: Literal["T3", "T4"],
-        net: CameraNetwork,
-        position: Array,
-        velocity: Array,
-        quaternion: Array,
-        settings: TrackerSettings = TrackerSettings(),
-    ) -> None:
-        super().__init__(net, position, velocity, quaternion, settings)
-        self.name = mode
-        self.mode = mode
+    modes = ("T3", "T4")
 
     def _camera_mixture(
         self, n: int, frame: FeatureImage, x0: Array, rng: np.random.Generator
