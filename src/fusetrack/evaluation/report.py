@@ -95,6 +95,7 @@ class Outcome:
     report: str
     runs: int
     title: str = ""
+    beyond_the_paper: dict[str, Any] = field(default_factory=dict)  # summary.json, not claims
 
 
 def _jsonable(v: Any) -> Any:
@@ -152,6 +153,8 @@ def write_outputs(
         "quick": ctx.quick,
         "engine": ctx.engine,
     }
+    if outcome.beyond_the_paper:
+        summary["beyond_the_paper"] = _jsonable(outcome.beyond_the_paper)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     held = sum(c.holds for c in outcome.claims)
     header = [
