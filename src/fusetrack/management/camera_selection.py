@@ -68,19 +68,21 @@ def visibility_probabilities(
     occluders: OccluderPriors | ArrayLike | None,
     diameter: float,
     prior_mode: str,
+    exclusion: float = 0.0,
 ) -> tuple[Array, Array]:
     """``P{eta_i = 1}`` ``(N,)`` and ``P{eta_i = 1, eta_j = 1}`` ``(N, N)`` over the particle cloud.
 
     ``sum_l w_l P{...| u_l}``, with the conditional probabilities of Eq. 8 (``Q = {i}`` or
     ``{i, j}``) on the cameras assigned to each particle, or the deterministic visibility of the
-    extreme priors (Sec. 6.1).
+    extreme priors (Sec. 6.1). ``exclusion``: Eq. 7's rectangles end this far before the particle,
+    the option of :class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`
+    (both call :func:`~fusetrack.world.occlusion.occlusion_probability`'s per-triple kernel).
     """
-    len(cameras)
     assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
     if prior_mode == "gaussian":
         if not isinstance(occluders, OccluderPriors):
             raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
-        q = occlusion_probability(cameras.positions, x, occluders, diameter)  # (N, L, M)
+        q = occlusion_probability(cameras.positions, x, occluders, diameter, exclusion)  # (N, L, M)
         p1, p2 = pair_visibility_kernel(q, np.ascontiguousarray(assigned), np.ascontiguousarray(w))
         return p1, p2
     if prior_mode == "perfect":
@@ -104,8 +106,12 @@ def selection_moments(
     diameter: float,
     prior_mode: str = "gaussian",
     models: Sequence[str] = ("perspective", "weak"),
+    exclusion: float = 0.0,
 ) -> SelectionMoments:
-    """Moments of the LMMSE metric from the predicted cloud ``x (L, 2)``, weights ``w (L,)``."""
+    """Moments of the LMMSE metric from the predicted cloud ``x (L, 2)``, weights ``w (L,)``.
+
+    ``exclusion``: shortened Eq. 7 rectangles, as in the likelihood (see
+    :func:`visibility_probabilities`)."""
     x = cast(Array, np.asarray(x, float)[:, :2])
     w_in = np.asarray(w, float)
     if w_in.shape != (len(x),):
@@ -114,7 +120,9 @@ def selection_moments(
     mu = w @ x
     dx = x - mu
     sigma_x = (dx * w[:, None]).T @ dx
-    p1, p2 = visibility_probabilities(cameras, room, x, w, occluders, diameter, prior_mode)
+    p1, p2 = visibility_probabilities(
+        cameras, room, x, w, occluders, diameter, prior_mode, exclusion
+    )
     cov_zx: dict[str, Array] = {}
     cov_z: dict[str, Array] = {}
     f = cameras.focals

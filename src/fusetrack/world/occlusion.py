@@ -94,19 +94,28 @@ class OccluderPriors:
 
 
 def occlusion_probability(
-    viewers: ArrayLike, points: ArrayLike, priors: OccluderPriors, diameter: float
+    viewers: ArrayLike,
+    points: ArrayLike,
+    priors: OccluderPriors,
+    diameter: float,
+    exclusion: float = 0.0,
 ) -> Array:
     """``q[i, l, j]``: probability that occluder ``j`` hides ``points[l]`` from ``viewers[i]``.
 
     ``viewers (K, 2)``, ``points (L, 2)``; returns ``(K, L, M)``. Frame-free form of
     Ercan et al. 2013, Eq. 7 (see the module docstring); Numba kernel, values below 1e-12 set
-    to 0 (:func:`occlusion_probability_reference` is the NumPy reference).
+    to 0 (:func:`occlusion_probability_reference` is the NumPy reference). ``exclusion``: the
+    rectangle ``A_i(x)`` ends this far before the point (0: Eq. 7 as printed); the same
+    per-triple function as the fused likelihood kernel, so camera selection and the likelihood
+    agree for the same option.
     """
+    if not 0 <= exclusion < np.inf:
+        raise ConfigError(invalid("exclusion", exclusion, "a finite length >= 0"))
     c = np.ascontiguousarray(np.asarray(viewers, float).reshape(-1, 2))
     x = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 2))
     return np.asarray(
         occlusion_probability_kernel(
-            c, x, priors.mean, np.ascontiguousarray(priors.cov), float(diameter)
+            c, x, priors.mean, np.ascontiguousarray(priors.cov), float(diameter), float(exclusion)
         )
     )
 

@@ -87,24 +87,31 @@ def _phi_fast(t: float) -> float:  # pragma: no cover - jit
 
 @numba.njit(cache=True, nogil=True)
 def occlusion_probability_kernel(
-    cams: np.ndarray, x: np.ndarray, mu: np.ndarray, cov: np.ndarray, diameter: float
+    cams: np.ndarray,
+    x: np.ndarray,
+    mu: np.ndarray,
+    cov: np.ndarray,
+    diameter: float,
+    exclusion: float = 0.0,
 ) -> np.ndarray:  # pragma: no cover - jit
-    """q[i, l, j] of Ercan et al. 2013, Eq. 7 (frame-free form), with far triples skipped."""
+    """q[i, l, j] of Ercan et al. 2013, Eq. 7 (frame-free form), with far triples skipped.
+
+    Every triple goes through :func:`_q_one`, the function the fused likelihood kernel uses, so
+    the likelihood and camera selection share one formula (and one ``exclusion`` option)."""
     K, L, M = cams.shape[0], x.shape[0], mu.shape[0]
     out = np.zeros((K, L, M))
     half = 0.5 * diameter
     p11 = np.empty(M)
     p12 = np.empty(M)
     p22 = np.empty(M)
+    iso = np.empty(M, dtype=np.bool_)
+    inv_sd = np.empty(M)
+    reach = np.empty(M)
     for j in range(M):
         det = cov[j, 0, 0] * cov[j, 1, 1] - cov[j, 0, 1] * cov[j, 0, 1]
         p11[j] = cov[j, 1, 1] / det
         p12[j] = -cov[j, 0, 1] / det
         p22[j] = cov[j, 0, 0] / det
-    iso = np.empty(M, dtype=np.bool_)
-    inv_sd = np.empty(M)
-    reach = np.empty(M)
-    for j in range(M):
         iso[j] = cov[j, 0, 1] == 0.0 and cov[j, 0, 0] == cov[j, 1, 1]
         sd = math.sqrt(cov[j, 0, 0])
         inv_sd[j] = 1.0 / sd
@@ -125,33 +132,12 @@ def occlusion_probability_kernel(
             r = math.sqrt(rx * rx + ry * ry)
             if r <= 0.0:
                 continue
-            u1, u2 = rx / r, ry / r
             for j in range(M):
-                phi = -u2 * m1[j] + u1 * m2[j]
-                if iso[j]:  # isotropic prior (the Kalman priors): both spreads are sqrt(var)
-                    if abs(phi) - half > reach[j]:
-                        continue
-                    isp = inv_sd[j]
-                    isa = inv_sd[j]
-                    m_a = u1 * m1[j] + u2 * m2[j]
-                else:
-                    sp2 = (
-                        cov[j, 0, 0] * u2 * u2
-                        - 2.0 * cov[j, 0, 1] * u1 * u2
-                        + cov[j, 1, 1] * u1 * u1
-                    )
-                    if (abs(phi) - half) ** 2 > CUTOFF * CUTOFF * sp2 and abs(phi) > half:
-                        continue
-                    isp = 1.0 / math.sqrt(sp2)
-                    a = p11[j] * u1 * u1 + 2.0 * p12[j] * u1 * u2 + p22[j] * u2 * u2
-                    isa = math.sqrt(a)
-                    m_a = (u1 * pm1[j] + u2 * pm2[j]) / a
-                across = _phi_fast((half - phi) * isp) - _phi_fast((-half - phi) * isp)
-                if across < 1e-9:
-                    continue
-                along = _phi_fast((r - m_a) * isa) - _phi_fast(-m_a * isa)
-                v = along * across
-                out[i, l, j] = min(max(v, 0.0), 1.0)
+                out[i, l, j] = _q_one(
+                    rx, ry, r, m1[j], m2[j], pm1[j], pm2[j],
+                    cov[j, 0, 0], cov[j, 0, 1], cov[j, 1, 1],
+                    p11[j], p12[j], p22[j], iso[j], inv_sd[j], reach[j], half, exclusion,
+                )  # fmt: skip
     return out
 
 
@@ -314,8 +300,9 @@ def _q_one(
     half: float,
     exclusion: float,
 ) -> float:  # pragma: no cover - jit
-    """q for one (camera, point, occluder) triple: the body of :func:`occlusion_probability_kernel`
-    with the rectangle ending ``exclusion`` before the point and far triples skipped."""
+    """q for one (camera, point, occluder) triple (Eq. 7, frame-free form), with the rectangle
+    ending ``exclusion`` before the point and far triples skipped; shared by
+    :func:`occlusion_probability_kernel` (camera selection) and :func:`camera_likelihood_kernel`."""
     u1, u2 = rx / r, ry / r
     phi = -u2 * m1 + u1 * m2
     r_eff = r - exclusion

@@ -198,6 +198,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                     scene.diameter,
                     prior,
                     (cfg["model"],),
+                    exclusion=likelihood.exclusion,
                 )
                 pick = greedy_selection if method == "greedy" else brute_force_selection
                 selected = np.array(pick(mom, k, cfg["model"]))
