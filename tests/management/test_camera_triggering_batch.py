@@ -12,6 +12,7 @@ import numpy as np
 
 from fusetrack.filters.multi_model_pf import turn_models
 from fusetrack.management.camera_triggering import (
+    AcousticTracker,
     CooperationPolicy,
     run_cooperation,
     run_periodic_batch,
@@ -44,9 +45,7 @@ def test_kernel_equals_reference_in_run_cooperation():
             SIGMA,
             CooperationPolicy.triggering(),
             np.random.default_rng(5),
-            n_particles=60,
-            engine=e,
-            **KW,
+            tracker=AcousticTracker(n_particles=60, engine=e, **KW),
         )
         for e in ("numba", "numpy")
     }
@@ -64,9 +63,7 @@ def test_kernel_equals_reference_in_the_batch():
             SIGMA,
             periods,
             np.random.default_rng(2),
-            n_particles=40,
-            engine=e,
-            **KW,
+            tracker=AcousticTracker(n_particles=40, engine=e, **KW),
         )
         for e in ("numba", "numpy")
     )
@@ -85,14 +82,19 @@ def test_batch_has_the_law_of_run_cooperation():
         [
             run_cooperation(
                 truth, present, present, (0.0, 0.0), SIGMA, CooperationPolicy(period=period),
-                np.random.default_rng(100 + r), n_particles=60, **KW,
+                np.random.default_rng(100 + r), tracker=AcousticTracker(n_particles=60, **KW),
             ).estimates
             for r in range(n)
         ]
     )  # fmt: skip
     rms_single = np.sqrt(np.sum((single[..., :2] - truth[None, ..., :2]) ** 2, -1).mean(1))
     batch = run_periodic_batch(
-        truth, (0.0, 0.0), SIGMA, np.full(n, period), np.random.default_rng(7), n_particles=60, **KW
+        truth,
+        (0.0, 0.0),
+        SIGMA,
+        np.full(n, period),
+        np.random.default_rng(7),
+        tracker=AcousticTracker(n_particles=60, **KW),
     )
     rms_batch = batch.rms(truth)
     assert rms_batch.shape == (n, 2)
@@ -103,6 +105,6 @@ def test_batch_has_the_law_of_run_cooperation():
     # and the camera period matters in the batch as it should: T_v = 1 is far better than none
     both = run_periodic_batch(
         truth, (0.0, 0.0), SIGMA, np.array([1] * 8 + [0] * 8), np.random.default_rng(8),
-        n_particles=60, **KW,
+        tracker=AcousticTracker(n_particles=60, **KW),
     ).rms(truth)  # fmt: skip
     assert both[:8].mean() < 0.5 * both[8:].mean()

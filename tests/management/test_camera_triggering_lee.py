@@ -8,6 +8,7 @@ import pytest
 from fusetrack.core.errors import ConfigError, MeasurementError
 from fusetrack.filters.multi_model_pf import MultiModelBearingPF, turn_models
 from fusetrack.management.camera_triggering import (
+    AcousticTracker,
     CooperationPolicy,
     bearing_gate_trigger,
     count_trigger,
@@ -83,7 +84,7 @@ def test_triggered_cooperation_beats_none_and_camera_silence_is_survived():
         truth[k, :, :2] += truth[k - 1, :, 2:]
     present = np.ones((T, 2), bool)
     present[40:, 1] = False  # object 2 leaves
-    kw = {"models": turn_models(1.0, 0.01), "dt": 1.0, "n_particles": 100}
+    kw = {"tracker": AcousticTracker(turn_models(1.0, 0.01), dt=1.0, n_particles=100)}
     none = run_cooperation(
         truth,
         present,

@@ -28,6 +28,7 @@ from ..evaluation.plots import save
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters.multi_model_pf import turn_models
 from ..management.camera_triggering import (
+    AcousticTracker,
     CooperationPolicy,
     run_cooperation,
     run_periodic_batch,
@@ -161,6 +162,16 @@ def _object_rows(
     return rows
 
 
+def _tracker_33(n_particles: int, sigma: float | None = None) -> AcousticTracker:
+    """The filter of Sec. 3.3 (E3.1-E3.4): known initial state, tight velocity prior; with the
+    bearing std ``sigma`` the filter assumes at least 0.1 deg^2 of variance."""
+    floor = None if sigma is None else max(sigma, math.sqrt(0.1) * DEG)
+    return AcousticTracker(
+        turn_models(ALPHA_33, SIGMA_A_33), dt=1.0, n_particles=n_particles, sigma_filter=floor,
+        known_initial_velocity=True, init_velocity_std=0.02,
+    )  # fmt: skip
+
+
 def run_batch(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     """E3.1/E3.2: ``trials`` runs for each camera period in ``periods`` (0 = none), as one batch.
 
@@ -172,8 +183,7 @@ def run_batch(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     sigma = math.sqrt(float(config["variance_deg2"])) * DEG
     res = run_periodic_batch(
         truth, (0.0, 0.0), sigma, periods, np.random.default_rng(seed),
-        models=turn_models(ALPHA_33, SIGMA_A_33), dt=1.0, n_particles=int(config["n_particles"]),
-        sigma_filter=max(sigma, math.sqrt(0.1) * DEG), known_initial_velocity=True, init_velocity_std=0.02,
+        _tracker_33(int(config["n_particles"]), sigma),
     )  # fmt: skip
     rms = res.rms(truth)
     first = int(config["chunk"]) * int(config["trials"])
@@ -215,16 +225,14 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         sigma = math.sqrt(float(config["variance_deg2"])) * DEG
         res = run_cooperation(
             truth, present, present, (0.0, 0.0), sigma, _policy(config["policy"]), rng,
-            models=turn_models(ALPHA_33, SIGMA_A_33), dt=1.0, n_particles=n,
-            sigma_filter=max(sigma, math.sqrt(0.1) * DEG), known_initial_velocity=True, init_velocity_std=0.02,
+            _tracker_33(n, sigma),
         )  # fmt: skip
         return _object_rows(part, config, res, truth)
     if part == "E3.4":
         truth, present = truth_e33()
         res = run_cooperation(
             truth, present, present, (25.0, 25.0), math.sqrt(3.0) * DEG, _policy(config["policy"]), rng,
-            models=turn_models(ALPHA_33, SIGMA_A_33), dt=1.0, n_particles=n,
-            known_initial_velocity=True, init_velocity_std=0.02,
+            _tracker_33(n),
         )  # fmt: skip
         rows = _object_rows(part, config, res, truth)
         rows.append(
@@ -245,8 +253,9 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     policy = CooperationPolicy.triggering(apply_fixes=coop)
     res = run_cooperation(
         truth, present, audible, SENSORS_35[sensor], math.sqrt(3.0) * DEG, policy, rng,
-        models=turn_models(0.3, 0.1), dt=DT_35, n_particles=n, sigma_r=0.05,
-        known_initial_velocity=True, init_velocity_std=0.05, oracle_births=not coop,
+        AcousticTracker(turn_models(0.3, 0.1), DT_35, n, sigma_r=0.05, known_initial_velocity=True,
+                        init_velocity_std=0.05),
+        oracle_births=not coop,
     )  # fmt: skip
     rows = _object_rows(part, config, res, truth)
     fired = res.fired_any.astype(np.int8)

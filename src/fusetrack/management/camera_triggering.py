@@ -97,6 +97,44 @@ class CooperationPolicy:
         return cls(count=True, gate=True, ellipse=True, **kw)
 
 
+@dataclass(frozen=True)
+class AcousticTracker:
+    """The per-object multi-model bearing PF of Lee 2009 Sec. 3.3 and how objects are started.
+
+    ``sigma_filter`` (default: the measurement's ``sigma``) is the bearing std the filter assumes;
+    ``sigma_r`` the std of a camera fix; ``dz_critical`` the separation below which two bearings
+    merge (Eq. 3.4); ``known_initial_velocity``: filters started at step 0 or by an oracle birth
+    begin at the true velocity (the text's "initial state given"), camera-started ones never;
+    ``engine`` "numba": the fused kernel, "numpy": the reference (same draws, equal to rounding).
+    """
+
+    models: tuple
+    dt: float
+    n_particles: int = 500
+    sigma_filter: float | None = None
+    sigma_r: float = 0.1
+    dz_critical: float = math.radians(2.0)
+    init_velocity_std: float = 0.3
+    known_initial_velocity: bool = False
+    engine: str = "numba"
+
+    def __post_init__(self) -> None:
+        if self.engine not in ("numba", "numpy"):
+            raise ConfigError(invalid("engine", self.engine, "'numba' or 'numpy'"))
+
+    def build(self, sensor: tuple[float, float], sigma: float) -> MultiModelBearingPF:
+        """The filter for a sensor at ``sensor`` whose bearings have std ``sigma``."""
+        return MultiModelBearingPF(
+            self.models, sensor, self.sigma_filter or sigma, self.n_particles
+        )
+
+    @property
+    def start_std(self) -> Array:
+        """Std of a new filter's particles around a camera fix: ``(x, y, vx, vy)``."""
+        r, v = self.sigma_r, self.init_velocity_std
+        return np.array([r, r, v, v])
+
+
 @dataclass
 class CooperationResult:
     estimates: Array  # (T, O, 4) NaN when the object is not tracked
@@ -117,18 +155,10 @@ def run_cooperation(
     sigma: float,
     policy: CooperationPolicy,
     rng: np.random.Generator,
+    tracker: AcousticTracker,
     *,
-    models: tuple,
-    dt: float,
-    n_particles: int = 500,
-    sigma_filter: float | None = None,
-    sigma_r: float = 0.1,
-    dz_critical: float = math.radians(2.0),
-    init_velocity_std: float = 0.3,
     oracle_births: bool | None = None,
     camera_available: Array | None = None,
-    known_initial_velocity: bool = False,
-    engine: str = "numba",
 ) -> CooperationResult:
     """Track ``O`` objects over ``T`` steps with one acoustic sensor and camera cooperation.
 
@@ -139,13 +169,8 @@ def run_cooperation(
     then) objects are started from a noisy camera-like fix when they appear and dropped when
     they leave, so that errors are defined and comparable.
     ``camera_available`` ``(T,)`` False: the cameras do not answer at that step (request lost).
-    ``known_initial_velocity``: filters started at step 0 or by an oracle birth begin at the
-    true velocity (the text's "initial state given"); camera-started filters never know it.
-    ``engine`` "numba": each filter step through the fused kernel of :func:`run_periodic_batch`
-    (same draws as :meth:`MultiModelBearingPF.step`, equal to rounding); "numpy": that method.
+    ``tracker``: the filter and how objects start (:class:`AcousticTracker`).
     """
-    if engine not in ("numba", "numpy"):
-        raise ConfigError(invalid("engine", engine, "'numba' or 'numpy'"))
     truth = np.asarray(truth, float)
     T, O = truth.shape[:2]
     present = np.asarray(present, bool)
@@ -157,7 +182,7 @@ def run_cooperation(
     can_discover = policy.apply_fixes and (policy.count or policy.period is not None)
     births = (not can_discover) if oracle_births is None else oracle_births
     answer = np.ones(T, bool) if camera_available is None else np.asarray(camera_available, bool)
-    filt = MultiModelBearingPF(models, sensor, sigma_filter or sigma, n_particles)
+    filt = tracker.build(sensor, sigma)
     parts: dict[int, Array] = {}
     res = CooperationResult(
         np.full((T, O, 4), np.nan),
@@ -169,24 +194,24 @@ def run_cooperation(
     )
 
     def start(o: int, k: int, known: bool = False) -> tuple[Array, Array]:
-        fix = truth[k, o, :2] + sigma_r * rng.standard_normal(2)
+        fix = truth[k, o, :2] + tracker.sigma_r * rng.standard_normal(2)
         v0 = truth[k, o, 2:] if known else np.zeros(2)
         mean = np.array([fix[0], fix[1], v0[0], v0[1]])
-        std = np.array([sigma_r, sigma_r, init_velocity_std, init_velocity_std])
+        std = tracker.start_std
         return filt.initialize(mean, std, rng), fix
 
     for o in range(O):  # step 0: the cameras find every present object
         if present[0, o]:
-            parts[o], _ = start(o, 0, known_initial_velocity)
+            parts[o], _ = start(o, 0, tracker.known_initial_velocity)
     n_tracked_prev = len(parts)
     for k in range(T):
-        z = simulate_bearings(truth[k, :, :2], audible[k], sensor, sigma, rng, dz_critical)
+        z = simulate_bearings(truth[k, :, :2], audible[k], sensor, sigma, rng, tracker.dz_critical)
         res.n_bearings[k] = len(z)
         est: dict[int, Array] = {}
         steps = {}
         if k > 0:
             for o, p in list(parts.items()):
-                parts[o], st = _filter_step(filt, p, z, dt, rng, engine)
+                parts[o], st = _filter_step(filt, p, z, tracker.dt, rng, tracker.engine)
                 est[o], steps[o] = st.estimate, st
         else:
             for o, p in parts.items():
@@ -213,8 +238,8 @@ def run_cooperation(
             for o in targets:
                 if present[k, o]:
                     if o in parts:
-                        fix = truth[k, o, :2] + sigma_r * rng.standard_normal(2)
-                        parts[o] = filt.reset_to_fix(parts[o], fix, sigma_r, rng)
+                        fix = truth[k, o, :2] + tracker.sigma_r * rng.standard_normal(2)
+                        parts[o] = filt.reset_to_fix(parts[o], fix, tracker.sigma_r, rng)
                         vel = est[o][2:] if o in est else parts[o][:, 2:].mean(0)
                     else:
                         parts[o], fix = start(o, k)
@@ -227,7 +252,7 @@ def run_cooperation(
         if births:
             for o in range(O):
                 if present[k, o] and o not in parts:
-                    parts[o], fix = start(o, k, known_initial_velocity)
+                    parts[o], fix = start(o, k, tracker.known_initial_velocity)
                     est[o] = parts[o].mean(axis=0)
                     est[o][:2] = fix
                 elif not present[k, o] and o in parts:
@@ -398,16 +423,7 @@ def run_periodic_batch(
     sigma: float,
     periods: Array,
     rng: np.random.Generator,
-    *,
-    models: tuple,
-    dt: float,
-    n_particles: int = 500,
-    sigma_filter: float | None = None,
-    sigma_r: float = 0.1,
-    dz_critical: float = math.radians(2.0),
-    init_velocity_std: float = 0.3,
-    known_initial_velocity: bool = False,
-    engine: str = "numba",
+    tracker: AcousticTracker,
 ) -> PeriodicBatchResult:
     """:func:`run_cooperation` for ``B`` independent runs at once, periodic cameras only.
 
@@ -415,44 +431,44 @@ def run_periodic_batch(
     audible throughout, the cameras asked every ``periods[b]`` steps (0: never). Each run's
     filters are the same multi-model PF (:class:`MultiModelBearingPF`), with every array
     carrying the batch axis; the law of each run equals :func:`run_cooperation` with
-    ``CooperationPolicy(period=periods[b])`` (tested), not its random stream. ``engine``
+    ``CooperationPolicy(period=periods[b])`` (tested), not its random stream. ``tracker.engine``
     "numba" fuses prediction, weights and estimate in one kernel; "numpy" is the reference
     (same draws, results equal to rounding).
     """
-    if engine not in ("numba", "numpy"):
-        raise ConfigError(invalid("engine", engine, "'numba' or 'numpy'"))
     truth = np.asarray(truth, float)
     periods = np.asarray(periods, int).reshape(-1)
     T, O = truth.shape[:2]
-    B, L = len(periods), n_particles
-    filt = MultiModelBearingPF(models, sensor, sigma_filter or sigma, n_particles)
+    B, L = len(periods), tracker.n_particles
+    filt = tracker.build(sensor, sigma)
     inv_var = 1.0 / filt.sigma**2
-    J = len(models)
-    alphas = _kernel_bank(models)
-    sigma_a = float(models[0].sigma_a)
+    J = len(tracker.models)
+    alphas = _kernel_bank(tracker.models)
+    sigma_a = float(tracker.models[0].sigma_a)
     sensor_xy = np.asarray(sensor, float)
-    v0 = truth[0, :, 2:] if known_initial_velocity else np.zeros((O, 2))
-    fix = truth[0, :, :2] + sigma_r * rng.standard_normal((B, O, 2))
+    v0 = truth[0, :, 2:] if tracker.known_initial_velocity else np.zeros((O, 2))
+    fix = truth[0, :, :2] + tracker.sigma_r * rng.standard_normal((B, O, 2))
     mean = np.concatenate([fix, np.broadcast_to(v0, (B, O, 2))], axis=-1)
-    std = np.array([sigma_r, sigma_r, init_velocity_std, init_velocity_std])
+    std = tracker.start_std
     parts = mean[:, :, None, :] + std * rng.standard_normal((B, O, L, 4))
     res = PeriodicBatchResult(np.zeros((T, B, O, 4)), np.zeros((T, B, O), bool))
     res.estimates[0] = parts.mean(axis=2)
     all_audible = np.ones(O, bool)
     for k in range(1, T):
-        b = merge_close(true_bearings(truth[k, :, :2], sensor)[all_audible], dz_critical)
+        b = merge_close(true_bearings(truth[k, :, :2], sensor)[all_audible], tracker.dz_critical)
         z = b + sigma * rng.standard_normal((B, len(b)))  # order is irrelevant to the filter
-        if engine == "numba" and alphas is not None:
+        if tracker.engine == "numba" and alphas is not None:
             shape = (J, B, O, L, 2)  # the reference's draw (none when sigma_a = 0)
             eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
             pred = np.empty((B, O, J, L, 4))
             w_ml = np.empty((B, O, J, L))
             est = np.empty((B, O, 4))
             res.degenerate_steps += _predict_weigh_kernel(
-                parts, eta, alphas, dt, sensor_xy, z, inv_var, pred, w_ml, est
+                parts, eta, alphas, tracker.dt, sensor_xy, z, inv_var, pred, w_ml, est
             )
         else:
-            pred = np.moveaxis(filt._propagate(parts, dt, rng), 0, 2)  # (B, O, J, L, 4)  Eq. 3.3
+            pred = np.moveaxis(
+                filt._propagate(parts, tracker.dt, rng), 0, 2
+            )  # (B, O, J, L, 4)  Eq. 3.3
             r = filt.bearing(pred)[..., None] - z[:, None, None, None, :]  # Eqs. 3.4-3.5
             wrap_angle_inplace(r)
             logw = -0.5 * inv_var * r * r
@@ -468,8 +484,8 @@ def run_periodic_batch(
         parts = np.take_along_axis(flat, idx[..., None], axis=2)
         ask = (periods > 0) & (k % np.maximum(periods, 1) == 0)
         if ask.any():
-            fixes = truth[k, :, :2] + sigma_r * rng.standard_normal((B, O, 2))
-            moved = fixes[:, :, None, :] + sigma_r * rng.standard_normal((B, O, L, 2))
+            fixes = truth[k, :, :2] + tracker.sigma_r * rng.standard_normal((B, O, 2))
+            moved = fixes[:, :, None, :] + tracker.sigma_r * rng.standard_normal((B, O, L, 2))
             parts[ask, :, :, :2] = moved[ask]
             est[ask, :, :2] = fixes[ask]
             res.camera_updates[k, ask] = True
