@@ -132,6 +132,7 @@ def camera_readings(scene: Scene, obj: Array, occ: Array, seed: int) -> Array:
 
 def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     """One run of Algorithm 3; one row with the run's RMSEs, costs and counters."""
+    cpu0 = time.process_time()
     cfg, scene = _resolve(config)
     steps, m = int(cfg["steps"]), int(cfg["n_occluders"])
     obj, occ, z_all = world_and_readings(scene, m, steps, seed)
@@ -235,6 +236,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         "fallbacks": asir.stats.first_stage_fallbacks,
         "ignored_steps": asir.stats.ignored_steps,
         "reinitialisations": asir.stats.reinitialisations,
+        "cpu_seconds": time.process_time() - cpu0,
     }
     if gaps:
         row["greedy_over_brute_mse"] = float(np.mean(gaps))
