@@ -22,13 +22,20 @@ from ..core import Gaussian
 from ..evaluation import plots
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter
-from ..filters.imm import InteractingMultipleModel
 from ..filters.sis import ProposalParticleFilter
 from ..filters.sp_pekf import SPPEKFProposal
-from ..filters.unscented_proposal import UnscentedProposal
 from ..motion import ConstantVelocity, CoordinatedTurn
 from ..sensors import Bearing
 from .zhai2007_common import timed_gaussian, timed_sis
+from .zhai2007_comparators import (
+    COMPARATORS,
+    Scenario,
+    calibration_note,
+    compare,
+    equal_time_particles,
+    per_run_scores,
+    run_comparators,
+)
 
 METHODS = (
     "EKF",
@@ -86,42 +93,51 @@ def simulate(
     return np.array(xs), zs
 
 
-def imm_ekf(scn: Mapping[str, Any], sensor: Bearing) -> InteractingMultipleModel:
-    """Beyond the paper: IMM-EKF with CV and left/right coordinated turns at ``imm_omega``."""
+def imm_models(scn: Mapping[str, Any]) -> list[ConstantVelocity | CoordinatedTurn]:
+    """Beyond the paper: the IMM-EKF's CV and left/right coordinated turns at ``imm_omega``."""
     w, q = float(scn["imm_omega"]), float(scn["q"])
-    models = [ConstantVelocity(q=q), CoordinatedTurn(omega=w, q=q), CoordinatedTurn(omega=-w, q=q)]
-    return InteractingMultipleModel(models, IMM_TRANSITION, [sensor])
+    return [ConstantVelocity(q=q), CoordinatedTurn(omega=w, q=q), CoordinatedTurn(omega=-w, q=q)]
 
 
-def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    scn = scenario(str(config["scenario"]))
+def comparator_scenario(name: str, seed: int) -> Scenario:
+    """Run ``seed``'s truth, bearings and prior as a :class:`Scenario` (filters' CV model)."""
+    scn = scenario(name)
     rng = np.random.default_rng(seed)
     truth, zs = simulate(scn, rng)
     prior = Gaussian(scn["x0"] + rng.multivariate_normal(np.zeros(4), scn["p0"]), scn["p0"])
-    motion = ConstantVelocity(
-        q=scn["q"], noise="continuous"
-    )  # full rank for Eq. 13 (spec Sec. 2.5)
+    motion = ConstantVelocity(q=scn["q"], noise="continuous")  # full rank for Eq. 13 (spec 2.5)
     sensor = Bearing("radar", position=[0.0, 0.0], sigma=scn["sigma"])
-    n, dt = int(config["n_particles"]), scn["dt"]
+    return Scenario(motion, [sensor], prior, zs, scn["dt"], truth, imm_models(scn), IMM_TRANSITION)
+
+
+def sp_pekf(cs: Scenario, n: int, **kw: Any) -> ProposalParticleFilter:
+    return ProposalParticleFilter(cs.motion, cs.sensors, SPPEKFProposal(20), n_particles=n, **kw)
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    cs = comparator_scenario(str(config["scenario"]), seed)
+    motion, sensor, prior, zs, dt, truth = (
+        cs.motion,
+        cs.sensors[0],
+        cs.prior,
+        cs.zs,
+        cs.dt,
+        cs.truth,
+    )
+    n = int(config["n_particles"])
     estimates: dict[str, tuple[np.ndarray, float]] = {
         "EKF": timed_gaussian(ExtendedKalmanFilter(motion, [sensor]), prior, zs, ["radar"], dt),
         "UKF": timed_gaussian(UnscentedKalmanFilter(motion, [sensor]), prior, zs, ["radar"], dt),
-        "IMM-EKF": timed_gaussian(imm_ekf(scn, sensor), prior, zs, ["radar"], dt),
     }
     pfs = {
         "bootstrap": ProposalParticleFilter(motion, [sensor], n_particles=n),
-        "PF-SP-PEKF": ProposalParticleFilter(motion, [sensor], SPPEKFProposal(20), n_particles=n),
-        "bootstrap equal time": ProposalParticleFilter(
-            motion, [sensor], n_particles=int(config["n_equal"])
-        ),
-        "UPF": ProposalParticleFilter(motion, [sensor], UnscentedProposal(), n_particles=n),
-        "PF-SP-PEKF marginal": ProposalParticleFilter(
-            motion, [sensor], SPPEKFProposal(20), n_particles=n, transition="marginal"
-        ),
+        "PF-SP-PEKF": sp_pekf(cs, n),
+        "PF-SP-PEKF marginal": sp_pekf(cs, n, transition="marginal"),
     }
     for k, (name, f) in enumerate(pfs.items()):
         est, secs, _ = timed_sis(f, prior, zs, dt, np.random.default_rng([seed, k]))
         estimates[name] = (est, secs)
+    estimates.update(run_comparators(cs, seed, config["n_equal"]))
     rows = []
     for name, (est, secs) in estimates.items():
         err = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])  # Eq. 36
@@ -144,10 +160,20 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=100, quick=8)
-    n_equal = 1000  # bootstrap particles costing about PF-SP-PEKF(200) here (see seconds/run)
+    n_equal, target = {}, {}
+    for s in ("E2", "E3"):  # particles at PF-SP-PEKF(200)'s time, on run 0's scenario
+        cs = comparator_scenario(s, ctx.seed)
+        n_equal[s], target[s] = equal_time_particles(
+            cs,
+            lambda cs=cs: timed_sis(
+                sp_pekf(cs, 200), cs.prior, cs.zs, cs.dt, np.random.default_rng(0)
+            ),
+            ("UPF", "bootstrap equal time"),
+            repeats=2 if ctx.quick else 3,
+        )
     df = ctx.monte_carlo(
         run_once,
-        [{"scenario": s, "n_particles": 200, "n_equal": n_equal} for s in ("E2", "E3")],
+        [{"scenario": s, "n_particles": 200, "n_equal": n_equal[s]} for s in ("E2", "E3")],
         runs,
     )
     claims: list[Claim] = []
@@ -207,9 +233,23 @@ def run(ctx: RunContext) -> Outcome:
             title=f"{s}: run 0" + (" (Fig 11)" if s == "E2" else ""),
         ).name
     winner = {
-        s: tables[s]["RMSE all t"].drop(["UKF", "PF-SP-PEKF marginal", "UPF"]).idxmin()
+        s: tables[s]["RMSE all t"].drop(["UKF", "PF-SP-PEKF marginal", *COMPARATORS]).idxmin()
         for s in tables
     }
+    cmp = compare(
+        per_run_scores(df, ["scenario"], "sq_err"),
+        "PF-SP-PEKF",
+        ctx.figure_path("error_vs_seconds"),
+        by=["scenario"],
+        ylabel="position RMSE per run (mean over runs)",
+        calibration=calibration_note(n_equal, target),
+        notes=[
+            "IMM-EKF: CV and left/right coordinated turns (E2 0.1 rad/s, E3 3 deg/s), regime "
+            f"matrix {IMM_TRANSITION.tolist()}.",
+            "UPF: the shared-covariance unscented proposal (filters/unscented_proposal.py).",
+        ],
+        n_particles=n_equal,
+    )
     sp_vs_bs = {
         s: float(tables[s].loc["PF-SP-PEKF", "RMSE t>30"] / tables[s].loc["bootstrap", "RMSE t>30"])
         for s in tables
@@ -223,9 +263,7 @@ full-rank continuous white-noise-acceleration covariance (same q) because Eq. 13
 transition density and the thesis's Gamma Q Gamma^T is rank 2; the truth uses the thesis's model.
 E3 is a simulated substitute for the private NWRT radar data (aircraft ~25 km from the radar, CV,
 a 3 deg/s right turn for 30 s, CV; bearing sigma 0.5 deg every 2 s; prior position error 1.5 km).
-"bootstrap equal time" has {n_equal} particles (about PF-SP-PEKF(200)'s run time). "IMM-EKF"
-(beyond the paper) runs one EKF for CV and one for each turn direction (E2: 0.1 rad/s, E3: 3 deg/s),
-regime matrix {IMM_TRANSITION.tolist()}.
+UPF, IMM-EKF and "bootstrap equal time" are beyond the paper (last section).
 
 ## E2 (Figs 10-11)
 
@@ -250,7 +288,7 @@ regime matrix {IMM_TRANSITION.tolist()}.
   all, so every filter's error is set by its prior and its model and grows with time. The
   comparison is therefore one of how each filter spreads its belief along the unobservable
   direction, which is what the ordering above measures. Lowest mean RMSE over all steps (EKF,
-  bootstrap, PF-SP-PEKF, bootstrap at equal time): E2 {winner["E2"]}, E3 {winner["E3"]}.
+  bootstrap, PF-SP-PEKF): E2 {winner["E2"]}, E3 {winner["E3"]}.
 * PF-SP-PEKF does worse than the bootstrap here (RMSE after t = 30 is {sp_vs_bs["E2"]:.2f}x the
   bootstrap's in E2, {sp_vs_bs["E3"]:.2f}x in E3). Its proposal is one Gaussian moment-matched from
   EKF channels; along the unobservable range direction the channels are as overconfident as an
@@ -262,5 +300,6 @@ regime matrix {IMM_TRANSITION.tolist()}.
 * Run times are per run in one process; the thesis's are MATLAB and not comparable.
 * E3 uses a simulated aircraft instead of the NWRT recordings, which are not public; only the
   qualitative claim (the new method stays closest) can be compared.
-"""
-    return Outcome(df, claims, body, runs)
+
+{cmp.section}"""
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)

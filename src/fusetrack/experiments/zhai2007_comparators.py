@@ -376,3 +376,33 @@ def compare(
     return Comparison(
         table, winners, section, beyond_summary(table, winners, reference=reference, **info)
     )
+
+
+def per_run_scores(
+    rows: pd.DataFrame, by: Sequence[str], sq_error: str, seconds: str = "seconds"
+) -> pd.DataFrame:
+    """Per-step rows -> one row per (``by``, method, run): ``error`` = RMSE over the run's steps
+    (``sqrt(mean(sq_error))``) and its ``seconds``, the input of :func:`beyond_table`."""
+    g = rows.groupby([*by, "method", "run"], sort=False)
+    out = pd.DataFrame({"error": g[sq_error].mean().pow(0.5), "seconds": g[seconds].first()})
+    return out.reset_index()
+
+
+def calibration_note(
+    n_particles: Mapping[Any, Mapping[str, int]], target_seconds: Mapping[Any, float]
+) -> str:
+    """One sentence per configuration: the calibrated particle counts and the target time."""
+    parts = [
+        f"{key}: target {target_seconds[key]:.3g} s -> "
+        + ", ".join(f"{m} N = {n}" for m, n in ns.items())
+        for key, ns in n_particles.items()
+    ]
+    return (
+        "Equal time: before the runs the reference was timed on run 0's scenario (fastest of a few "
+        "repeats), each particle comparator at two pilot particle counts, and N solved from the "
+        "affine cost t(N) = a + bN through the two pilots (rounded). "
+        + "; ".join(parts)
+        + ". The IMM-EKF has no N to tune (it is far cheaper). Seconds per run below are the "
+        "timings inside the Monte Carlo runs (two worker processes on a shared machine), so the "
+        "'time / reference' column shows how well the pilot's equal time held."
+    )
