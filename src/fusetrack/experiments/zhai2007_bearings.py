@@ -13,6 +13,7 @@ sigma = 0.5 deg every 2 s (spec Sec. 7, substitute (a)).
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,7 @@ from .zhai2007_comparators import (
     equal_time_particles,
     per_run_scores,
     run_comparators,
+    sis_reference,
 )
 
 METHODS = (
@@ -165,9 +167,7 @@ def run(ctx: RunContext) -> Outcome:
         cs = comparator_scenario(s, ctx.seed)
         n_equal[s], target[s] = equal_time_particles(
             cs,
-            lambda cs=cs: timed_sis(
-                sp_pekf(cs, 200), cs.prior, cs.zs, cs.dt, np.random.default_rng(0)
-            ),
+            sis_reference(cs, partial(sp_pekf, cs, 200)),
             ("UPF", "bootstrap equal time"),
             repeats=2 if ctx.quick else 3,
         )

@@ -406,3 +406,14 @@ def calibration_note(
         "timings inside the Monte Carlo runs (two worker processes on a shared machine), so the "
         "'time / reference' column shows how well the pilot's equal time held."
     )
+
+
+def sis_reference(
+    scn: Scenario, make: Callable[[], ProposalParticleFilter]
+) -> Callable[[], object]:
+    """A reference for :func:`equal_time_particles`: a fresh ``make()`` filter run over ``scn``."""
+
+    def run() -> object:
+        return timed_sis(make(), scn.prior, scn.zs, scn.dt, np.random.default_rng(0))
+
+    return run
