@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Circle, Polygon, Wedge
 
+from ...core.errors import ConfigError, invalid
 from ...evaluation.report import RunContext
 from .scenes import Scene
 
@@ -34,6 +35,28 @@ def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[
     if ctx.quick:
         return {"steps": 150, "particles": 600, "burn_in": 15}
     return {"steps": steps, "particles": particles, "burn_in": 0}
+
+
+SIZE_OPTIONS = ("steps", "particles", "burn_in")
+
+
+def size_options(ctx: RunContext, size: dict[str, int]) -> dict[str, int]:
+    """``size`` with ``--set steps=N`` / ``particles=L`` / ``burn_in=B`` applied (a full-size run
+    that must fit a time budget: fewer steps per run, the paper's number of runs)."""
+    out = dict(size)
+    for key in SIZE_OPTIONS:
+        if key in ctx.extra:
+            raw = ctx.extra[key]
+            try:
+                value = int(raw)
+            except (TypeError, ValueError):
+                value = -1
+            if value < (0 if key == "burn_in" else 1):
+                raise ConfigError(invalid(f"--set {key}", raw, "a positive integer"))
+            out[key] = value
+    if out["burn_in"] >= out["steps"]:
+        raise ConfigError(invalid("--set burn_in", out["burn_in"], f"< steps = {out['steps']}"))
+    return out
 
 
 def mean_std(df: pd.DataFrame, by: Sequence[str], value: str = "rmse_tr") -> pd.DataFrame:

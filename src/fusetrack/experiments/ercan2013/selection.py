@@ -14,9 +14,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, md, mean_std, room_plot, sizes, smoke
+from .common import curve_plot, fmt, md, mean_std, room_plot, size_options, sizes, smoke
 from .scenes import Scene, l_scene, load_scene
 from .simulation import run_tracking, simulate_world
 
@@ -65,6 +66,7 @@ def run(ctx: RunContext) -> Outcome:
     size = sizes(ctx)
     if ctx.quick and not smoke():  # 15 configurations: shorter tracks keep --quick near a minute
         size = {"steps": 100, "particles": 400, "burn_in": 10}
+    size = size_options(ctx, size)
     runs = ctx.n_runs(full=10, quick=2)
     cfg_path = ctx.extra.get("config")
     scene = load_scene(cfg_path) if cfg_path else None
@@ -120,16 +122,20 @@ def run(ctx: RunContext) -> Outcome:
             piv.loc[k0, "fixed"] >= piv.loc[k0].drop("fixed").max(),
         )
     )
-    weak_gap = float(
-        (
-            (piv["greedy-weak"] - piv["greedy-perspective"]).abs()
-            / np.maximum(sd["greedy-perspective"], 1e-12)
-        ).max()
+    weak_gap = max(
+        float(
+            (
+                (piv[f"{meth}-weak"] - piv[f"{meth}-perspective"]).abs()
+                / np.maximum(np.maximum(sd[f"{meth}-weak"], sd[f"{meth}-perspective"]), 1e-12)
+            ).max()
+        )
+        for meth in ("greedy", "brute")
     )
     claims.append(
         Claim(
             "C8_weak_within_std",
-            "greedy with the weak-perspective metric is within one std of the perspective one (largest |diff| / std)",
+            "greedy and brute force with the weak-perspective metric are within one std of the perspective "
+            "ones (largest |mean difference| / larger std, over k and both searches)",
             "< 1",
             weak_gap,
             "< 1",
@@ -172,6 +178,15 @@ def run(ctx: RunContext) -> Outcome:
             tb > tg,
         )
     )
+    rmse_occ = float(df["rmse_occ"].mean())
+    rmse_max = float(df["rmse_max"].mean())
+    if scene is None:  # the paper's numbers belong to its L room
+        claims += [
+            Claim("rmse_occ_L", "RMSE_occ of the Gaussian occluder priors (units)", 11.5, rmse_occ,
+                  "+-15%", abs(rmse_occ / 11.5 - 1) <= 0.15),
+            Claim("rmse_max_L", "RMSE_max: the object assumed at the room's centre (units)", 47.9,
+                  rmse_max, "+-15%", abs(rmse_max / 47.9 - 1) <= 0.15),
+        ]  # fmt: skip
     curve_plot(
         ctx.figure_path("fig12_selection"),
         table,
@@ -179,7 +194,7 @@ def run(ctx: RunContext) -> Outcome:
         "label",
         xlabel="number of selected cameras k",
         ylabel="RMSE_tr (units)",
-        title=f"Fig. 12: {shown.name} room, M = {m}, T = 5, {runs} runs x {size['steps']} steps",
+        title=f"Fig. 12: {shown.name} room, M = {m}, T = 5,\n{runs} runs x {size['steps']} steps",
         hlines={f"all {n} cameras = {all_mean:.2f}": all_mean},
     )
     rep_cfg = {
@@ -192,43 +207,78 @@ def run(ctx: RunContext) -> Outcome:
     room_plot(
         ctx.figure_path("fig11_room"),
         shown,
-        title=f"Fig. 11: {shown.name} room, {n} cameras, M = {m} (snapshot); greedy k = {kmax}, one run",
+        title=f"Fig. 11: {shown.name} room, {n} cameras, M = {m} (snapshot)\n"
+        f"track: greedy k = {kmax}, one run of {rep_cfg['steps']} steps",
         occluders=occ[-1],
         truth=np.array(trace["trace_true"]),
         estimate=np.array(trace["trace_est"]),
     )
-    rmse_occ = float(df["rmse_occ"].mean())
-    rmse_max = float(df["rmse_max"].mean())
-    wide = piv.reset_index()
+    wide = (
+        table.assign(cell=[f"{a:.3g} ± {b:.2g}" for a, b in zip(table["mean"], table["std"])])
+        .pivot(index="k", columns="label", values="cell")
+        .reset_index()
+    )
+    layout = pd.DataFrame(
+        {
+            "camera": [i + 1 for i in range(n)],
+            "x": shown.cameras.positions[:, 0],
+            "y": shown.cameras.positions[:, 1],
+            "yaw (deg)": np.round(np.degrees(shown.cameras.yaws), 1),
+            "fov (deg)": np.round(np.degrees(shown.cameras.fovs), 1),
+        }
+    )
+    fixed_list = ", ".join(str(i + 1) for i in shown.fixed_order)
     timing = t.unstack("method").reset_index()
+    where = (
+        f"User scene from `{cfg_path}`"
+        if cfg_path
+        else "L-shaped room of spec §7.2 (the paper gives only a picture, Fig. 11)"
+    )
+    full_size = not ctx.quick and size["steps"] == 4000 and runs == 10
     report = f"""
 ## Setup
 
-{"User scene from `" + str(cfg_path) + "`" if cfg_path else "L-shaped room of spec §7.2 (the paper gives only a picture)"}, {n} cameras, M = {m}, D = {shown.diameter:g},
-Gaussian occluder priors with RMSE_occ = {fmt(rmse_occ)} (paper 11.5), selection every 5 steps, {runs} runs x
-{size["steps"]} steps, L = {size["particles"]}. RMSE_max = {fmt(rmse_max)} (paper 47.9).
+{where}: {n} cameras, M = {m} moving occluders (D = {shown.diameter:g}), Gaussian occluder priors from random-walk
+Kalman filters (sigma_psi = {SIGMA_PSI:g}) with RMSE_occ = {fmt(rmse_occ)} (paper 11.5), a new subset every T = 5 steps,
+{runs} runs x {size["steps"]} steps (paper: 10 x 4000{"" if full_size else "; this run is smaller, see below"}), L = {size["particles"]}
+particles, burn-in {size["burn_in"]} steps. RMSE_max = {fmt(rmse_max)} (paper 47.9; the object assumed at the room's centre).
+Every method sees the same people walking and the same camera noise in a given run (common random numbers), so
+differences between methods within a run are the method's alone.
+
+Tracker and selection use the same occlusion model: Eq. 7 with the rectangles ending one diameter D before the
+particle (`exclusion` = 1 D, an occluder cannot overlap the object) and p(eta | u) floored at 1e-3 for particles the
+reporting cameras can see (`floor`); both are corrections to the printed model, explained in
+`fusetrack.filters.occlusion_likelihood`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
+likelihood's p(eta | u) for the same option (tested).
+
+Camera layout (reconstructed; the paper draws it only). Fixed list: {fixed_list}.
+
+{md(layout)}
 
 ![Fig. 11](fig11_room.png)
 
-## Fig. 12: mean RMSE_tr per method and k (paper: curves only)
+## Fig. 12: RMSE_tr (mean ± std over runs) per method and k (paper: curves only, no printed values)
 
 {md(wide)}
 
-All {n} cameras: {fmt(all_mean)} +- {fmt(all_std)}.
+All {n} cameras: {fmt(all_mean)} ± {fmt(all_std)}.
 
 ![Fig. 12](fig12_selection.png)
 
 Greedy picked the brute-force subset in {100 * same:.0f}% of the selection epochs; its subset MSE was on average
-{fmt(ratio, 4)} times the optimum. Selection time per epoch (ms):
+{fmt(ratio, 4)} times the optimum. Selection time per epoch (ms; includes the metric's moments from the predicted
+cloud):
 
 {md(timing)}
 
 ## Differences and their causes
 
-* Room and camera coordinates are reconstructed (spec §7.2); RMSE_max = {fmt(rmse_max)} against the paper's 47.9
-  supports the reconstruction's size.
+* Room and camera coordinates are reconstructed (spec §7.2): RMSE_max = {fmt(rmse_max)} against the paper's 47.9
+  measures how close the reconstruction's size and the object's wandering are to the paper's.
 * The perspective metric clips h/d to the image bounds and averages the noise over the particles in view (the
   paper leaves both open, spec §8 item 13); the weak-perspective metric is as printed.
-* With few runs, differences between the good methods are within the run-to-run spread, as in the paper.
+* The paper prints no values for Fig. 12, only the ordering; the claims above check that ordering, with the
+  paper's "within one standard deviation" read as: the mean difference is smaller than the larger of the two
+  standard deviations over runs.
 """
     return Outcome(df, claims, report, runs=runs)
