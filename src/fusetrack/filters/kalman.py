@@ -45,7 +45,14 @@ for ``R`` independent Monte Carlo runs or targets — and measurement values may
 Python loop over ``R``.
 
 **Measurements.** Several measurements at one time are applied one after the other (for
-independent noises this equals one stacked update). The measurement covariance is
+independent noises and linear models this equals one stacked update). With ``joint=True`` the
+measurements of one :meth:`~GaussianFilter.update` call are fused as *one* stacked measurement
+(:class:`~fusetrack.sensors.StackedSensor`: ``z = [z_1; ...; z_n]``, ``H`` the stacked
+Jacobians, ``R = blkdiag(R_i)``): one gain for all of them, linearised once at the prior mean
+(the joint EKF) instead of after each reading; identical for linear models, and for ``n``
+bearings a few array operations instead of ``n`` updates (the fusion node's default).
+A call in which some measurement is unusable in some batch rows, or whose batch axes do not
+broadcast, falls back to the sequential updates. The measurement covariance is
 ``Measurement.covariance`` when given, else ``sensor.noise_cov(x^-)``. A value with NaN or
 infinite entries is skipped (the belief is unchanged in that run) and counted in
 ``filter.stats.skipped_measurements``; an unknown ``sensor_id`` raises
@@ -78,6 +85,7 @@ from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, ShapeError, check_positive, invalid
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
+from ..sensors.stacked import StackedSensor
 from .stats import FilterStats, ValidatedMeasurement, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]
@@ -208,10 +216,12 @@ class GaussianFilter:
         steps (singular innovation covariance, covariance that lost positive definiteness).
     """
 
-    def __init__(self, motion: MotionModel, sensors: Sensors) -> None:
+    def __init__(self, motion: MotionModel, sensors: Sensors, *, joint: bool = False) -> None:
         self.motion = motion
         self.sensors = as_sensor_map(sensors)
         self.stats = FilterStats()
+        self.joint = bool(joint)
+        self._stacks: dict[tuple[str, ...], Any] = {}  # joint updates: stacked sensors by ids
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(motion={self.motion!r}, sensors={sorted(self.sensors)})"
@@ -278,10 +288,18 @@ class GaussianFilter:
             measurements = [measurements]
         mean, cov = _broadcast(belief.mean, belief.cov)
         loglik: Array = np.zeros(mean.shape[:-1])
-        for meas in measurements:
-            checked = validate_measurement(meas, self.sensors, self.stats)
-            if not checked.usable.any():
-                continue
+        validated = [
+            (meas, validate_measurement(meas, self.sensors, self.stats)) for meas in measurements
+        ]
+        validated = [(m, c) for m, c in validated if c.usable.any()]
+        if self.joint and len(validated) > 1 and all(c.usable.all() for _, c in validated):
+            try:
+                validated = [
+                    (validated[0][0], _stacked([c for _, c in validated], mean, self._stacks))
+                ]
+            except ValueError:  # batch axes that do not broadcast: raised below, per measurement
+                pass
+        for meas, checked in validated:
             try:
                 np.broadcast_shapes(checked.value.shape[:-1], mean.shape[:-1])
             except ValueError:
@@ -315,12 +333,16 @@ class GaussianFilter:
             r = np.where(usable[..., None, None], r, np.eye(r.shape[-1]))
         s = _sym(mom.pzz + r)
         y = np.asarray(sensor.residual(z, mom.z_pred), dtype=float)
-        # K = P_xz S^-1, computed as (S^-1 P_xz^T)^T with S symmetric
-        try:
-            kt = _solve_small(s, _t(mom.pxz))
-        except np.linalg.LinAlgError:
-            self.stats.degenerate_steps += 1
-            kt = np.linalg.pinv(s, hermitian=True) @ _t(mom.pxz)
+        kt = None
+        if mom.jacobian is not None and mom.lin_error is None and r.shape[-1] > mean.shape[-1]:
+            kt = _gain_many_readings(cov, mom.jacobian, r)
+        if kt is None:
+            # K = P_xz S^-1, computed as (S^-1 P_xz^T)^T with S symmetric
+            try:
+                kt = _solve_small(s, _t(mom.pxz))
+            except np.linalg.LinAlgError:
+                self.stats.degenerate_steps += 1
+                kt = np.linalg.pinv(s, hermitian=True) @ _t(mom.pxz)
         k = _t(kt)
         new_mean = mean + _mv(k, y)
         h = mom.jacobian
@@ -349,6 +371,60 @@ class GaussianFilter:
             new_cov = np.where(usable[..., None, None], new_cov, cov)
         new_mean, new_cov = _broadcast(new_mean, new_cov)
         return new_mean, new_cov, ll
+
+
+def _gain_many_readings(cov: Array, h: Array, r: Array) -> Array | None:
+    """``K^T`` for more readings than states (``m > d``) and a diagonal ``R``, without the
+    ``m x m`` solve: ``K = P H^T S^-1 = (I + P H^T R^-1 H)^-1 P H^T R^-1``, since
+    ``(I + P H^T R^-1 H) P H^T = P H^T R^-1 (R + H P H^T)`` (a ``d x d`` solve; the Woodbury
+    identity without ``P^-1``). None when ``R`` is not diagonal or the solve fails."""
+    r_diag = np.diagonal(r, axis1=-2, axis2=-1)
+    if np.any(r != r_diag[..., :, None] * np.eye(r.shape[-1])) or not np.all(r_diag > 0):
+        return None
+    ht_rinv = _t(h) / r_diag[..., None, :]  # H^T R^-1, (..., d, m)
+    p_ht_rinv = cov @ ht_rinv
+    try:
+        k = np.linalg.solve(np.eye(cov.shape[-1]) + p_ht_rinv @ h, p_ht_rinv)
+    except np.linalg.LinAlgError:
+        return None
+    return _t(k)
+
+
+def _stacked(
+    parts: Sequence[ValidatedMeasurement], mean: Array, cache: dict[tuple[str, ...], Any]
+) -> ValidatedMeasurement:
+    """Several usable measurements of one time as one: values concatenated, the sensors
+    stacked (one :class:`StackedSensor` per combination of sensors, kept in ``cache``), the
+    covariance block-diagonal (a measurement's own covariance where it has one)."""
+    ids = tuple(str(c.sensor.sensor_id) for c in parts)
+    sensor = cache.get(ids)
+    if sensor is None:
+        if len(cache) > 1024:  # bounded: the combinations seen last are the likely ones
+            cache.clear()
+        sensor = cache[ids] = StackedSensor("+".join(ids), [c.sensor for c in parts])
+    shapes = {c.value.shape[:-1] for c in parts}
+    if len(shapes) == 1:
+        batch = shapes.pop()
+        value = np.concatenate([c.value for c in parts], axis=-1)
+    else:
+        batch = np.broadcast_shapes(*shapes)
+        value = np.concatenate(
+            [np.broadcast_to(c.value, (*batch, c.value.shape[-1])) for c in parts], axis=-1
+        )
+    cov = None
+    if any(c.covariance is not None for c in parts):
+        blocks = [
+            np.asarray(c.sensor.noise_cov(mean) if c.covariance is None else c.covariance, float)
+            for c in parts
+        ]
+        cov_batch = np.broadcast_shapes(*(b.shape[:-2] for b in blocks))
+        cov = np.zeros((*cov_batch, sensor.dim, sensor.dim))
+        i = 0
+        for b in blocks:
+            m = b.shape[-1]
+            cov[..., i : i + m, i : i + m] = b
+            i += m
+    return ValidatedMeasurement(sensor, value, cov, np.ones(batch, dtype=bool))
 
 
 class KalmanFilter(GaussianFilter):
@@ -386,7 +462,7 @@ class KalmanFilter(GaussianFilter):
         True
     """
 
-    def __init__(self, motion: MotionModel, sensors: Sensors) -> None:
+    def __init__(self, motion: MotionModel, sensors: Sensors, *, joint: bool = False) -> None:
         if not callable(getattr(motion, "transition_matrix", None)):
             raise ConfigError(
                 invalid(
@@ -396,7 +472,7 @@ class KalmanFilter(GaussianFilter):
                     "(use ExtendedKalmanFilter or UnscentedKalmanFilter for nonlinear motion)",
                 )
             )
-        super().__init__(motion, sensors)
+        super().__init__(motion, sensors, joint=joint)
 
     def propagate_motion(self, mean: Array, cov: Array, dt: float) -> tuple[Array, Array]:
         f = np.asarray(cast(_LinearMotion, self.motion).transition_matrix(dt), dtype=np.float64)
@@ -439,8 +515,8 @@ class ExtendedKalmanFilter(KalmanFilter):
         (4,)
     """
 
-    def __init__(self, motion: MotionModel, sensors: Sensors) -> None:
-        GaussianFilter.__init__(self, motion, sensors)
+    def __init__(self, motion: MotionModel, sensors: Sensors, *, joint: bool = False) -> None:
+        GaussianFilter.__init__(self, motion, sensors, joint=joint)
 
     def propagate_motion(self, mean: Array, cov: Array, dt: float) -> tuple[Array, Array]:
         f = _constant(np.asarray(self.motion.jacobian(mean, dt), dtype=float))
@@ -514,8 +590,10 @@ class UnscentedKalmanFilter(GaussianFilter):
         alpha: float = 1.0,
         beta: float = 2.0,
         kappa: float | None = None,
+        *,
+        joint: bool = False,
     ) -> None:
-        super().__init__(motion, sensors)
+        super().__init__(motion, sensors, joint=joint)
         n = int(motion.dim)
         self.alpha = check_positive("alpha", alpha)
         self.beta = float(beta)

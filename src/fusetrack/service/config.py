@@ -163,6 +163,11 @@ class TrackerConfig(_Section):
     """Which filter fuses the readings, with which motion model and prior."""
 
     filter: Literal["ekf", "ukf", "pf"] = "ekf"
+    update: Literal["joint", "sequential"] = Field(
+        default="joint",
+        description="ekf/ukf: fuse the readings of one time as one stacked measurement (one "
+        "gain) or one after the other",
+    )
     particles: int = Field(default=1000, ge=10, le=1_000_000)
     seed: int = Field(default=0, ge=0)
     motion: MotionConfig = MotionConfig()

@@ -30,14 +30,14 @@ _TIME_TOLERANCE = 1e-9
 def build_filter(cfg: NetworkConfig) -> Any:
     """The configured filter over the configured sensors."""
     motion, sensors = cfg.tracker.motion.build(), cfg.sensor_models()
-    kind = cfg.tracker.filter
+    kind, joint = cfg.tracker.filter, cfg.tracker.update == "joint"
     if kind == "ukf":
-        return UnscentedKalmanFilter(motion, sensors)
+        return UnscentedKalmanFilter(motion, sensors, joint=joint)
     if kind == "pf":
         return BootstrapFilter(
             motion, sensors, n_particles=cfg.tracker.particles, ess_threshold=0.5
         )
-    return ExtendedKalmanFilter(motion, sensors)
+    return ExtendedKalmanFilter(motion, sensors, joint=joint)
 
 
 def as_measurements(readings: Sequence[Reading], at: float | None = None) -> list[Measurement]:
