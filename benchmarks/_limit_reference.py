@@ -35,7 +35,7 @@ import numba
 import numpy as np
 
 from _scenario import Array, Scenario, cv_matrices
-from fusetrack.filters.fused import _abs_angle
+from fusetrack.filters.fused import _abs_angle, passive_threads
 
 PARALLEL_MIN = 1 << 16
 STREAMS = 4
@@ -153,6 +153,8 @@ class LimitReferencePF:
         n = self.n
         x = self.scn.prior_mean + rng.standard_normal((n, 4)) @ self.L0.T
         streams = tuple(rng.spawn(STREAMS)) if n >= PARALLEL_MIN else None
+        if streams is not None:
+            passive_threads()  # as fusetrack's threaded kernels: OpenMP threads sleep when idle
         anc = np.arange(n)
         x_new = np.empty((n, 4))
         logw = np.empty(n)

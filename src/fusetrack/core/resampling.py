@@ -48,39 +48,46 @@ def _inverse_cdf_sorted(weights: np.ndarray, u: np.ndarray) -> np.ndarray:  # pr
     return out
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def systematic_row(weights, u0, out, counts):  # pragma: no cover - jit
+    """Systematic ancestors of one weight row ``(N,)`` into ``out`` ``(N,)``, ``u_k = (k + u0) / N``,
+    without divisions and without the merge's unpredictable branch: particle ``i`` (cumulative
+    weight ``C_i``) is the ancestor of the ``u_k < C_i`` not taken by ``i - 1``, and there are
+    ``K_i = ceil(C_i n / total - u0)`` such ``k`` (clipped to ``[0, n]``); so the ancestor of
+    ``k`` is the number of particles with ``K_i <= k``: a histogram of the ``K_i`` and its running
+    sum. The same indices as :func:`inverse_cdf` of those ``u`` except where a ``u_k`` and a
+    cumulative weight agree to rounding (one comparison in ~1e16); only particles before the last
+    positive weight are counted, so trailing zero-weight particles are never chosen. ``counts``
+    is scratch of ``N + 1`` integers. Shared by :func:`systematic` and the batched kernels of
+    :mod:`fusetrack.filters.run_streams` (the same code: the same indices)."""
+    n = weights.shape[0]
+    total = 0.0
+    last = 0
+    for i in range(n):
+        wi = weights[i]
+        total += wi
+        last = i if wi > 0.0 else last
+    scale = n / total
+    counts[:] = 0
+    c = 0.0
+    for i in range(last):
+        c += weights[i]
+        k = min(max(math.ceil(c * scale - u0), 0.0), float(n))
+        counts[int(k)] += 1
+    a = 0
+    for k in range(n):
+        a += counts[k]
+        out[k] = a
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _systematic_sorted(weights: np.ndarray, u0: np.ndarray) -> np.ndarray:  # pragma: no cover - jit
-    """Systematic ancestors, ``u_k = (k + u0[r]) / n``, without divisions and without the
-    merge's unpredictable branch: particle ``i`` (cumulative weight ``C_i``) is the ancestor of
-    the ``u_k < C_i`` not taken by ``i - 1``, and there are ``K_i = ceil(C_i n / total - u0)``
-    such ``k`` (clipped to ``[0, n]``); so the ancestor of ``k`` is the number of particles with
-    ``K_i <= k``: a histogram of the ``K_i`` and its running sum. The same indices as
-    :func:`inverse_cdf` of those ``u`` except where a ``u_k`` and a cumulative weight agree to
-    rounding (one comparison in ~1e16); only particles before the last positive weight are
-    counted, so trailing zero-weight particles are never chosen.
-    """
+    """:func:`systematic_row` for every row of ``weights`` ``(R, N)``, row ``r`` with ``u0[r]``."""
     rows, n = weights.shape
     out = np.empty((rows, n), dtype=np.intp)
     counts = np.empty(n + 1, dtype=np.intp)
     for r in range(rows):
-        total = 0.0
-        last = 0
-        for i in range(n):
-            wi = weights[r, i]
-            total += wi
-            last = i if wi > 0.0 else last
-        scale = n / total
-        u = u0[r]
-        counts[:] = 0
-        c = 0.0
-        for i in range(last):
-            c += weights[r, i]
-            k = min(max(math.ceil(c * scale - u), 0.0), float(n))
-            counts[int(k)] += 1
-        a = 0
-        for k in range(n):
-            a += counts[k]
-            out[r, k] = a
+        systematic_row(weights[r], u0[r], out[r], counts)
     return out
 
 

@@ -29,7 +29,8 @@ operations whatever the batch size, so a run in a batch is bit-identical to the 
 
 Threads: loops over at least :data:`PARALLEL_MIN` particles in total use ``numba.prange``
 (``parallel=True``), smaller ones the serial compilation of the same code (thread start-up
-costs more than it saves below that). ``numba.set_num_threads`` limits the threads.
+costs more than it saves below that). ``numba.set_num_threads`` limits the threads. Threaded kernels are called through
+:func:`threaded`, which first makes the OpenMP threads wait passively (:func:`passive_threads`).
 """
 
 from __future__ import annotations
@@ -39,13 +40,6 @@ import os
 import types
 from collections.abc import Callable
 from typing import Any
-
-# Threads that wait for work sleep instead of spinning (unless the user chose otherwise). GNU
-# OpenMP, Numba's default threading layer here, spins by default: on a machine whose cores are
-# busy with other processes the spinning threads take the CPU from the working ones, and the
-# threaded loops ran 2.5x slower than serial ones (likelihood loop at N = 1e5, load 12: 32 ms
-# spinning, 12 ms passive, 11 ms serial). Read when the layer starts (the first threaded loop).
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numba
 import numpy as np
@@ -78,9 +72,11 @@ __all__ = [
     "linear_gaussian_draw",
     "linear_gaussian_step",
     "log_likelihood_sum",
+    "passive_threads",
     "sensor_params",
     "split_bounds",
     "standard_normals",
+    "threaded",
 ]
 
 
@@ -117,6 +113,33 @@ def sensor_params(
         li = np.asarray(chol_inv, dtype=float)
         p[10 : 10 + li.shape[0] * (li.shape[0] + 1) // 2] = li[np.tril_indices(li.shape[0])]
     return p
+
+
+def passive_threads() -> None:
+    """Make Numba's OpenMP threads sleep while they wait for work, unless the environment already
+    chose (``OMP_WAIT_POLICY``). GNU OpenMP, Numba's threading layer here, spins by default: on a
+    machine whose cores are busy with other processes the spinning threads take the CPU from the
+    working ones, and the threaded loops ran 2.5x slower than serial ones (likelihood loop at
+    N = 1e5, load 12: 32 ms spinning, 12 ms passive, 11 ms serial). OpenMP reads the variable
+    once, when Numba starts its threading layer: at the first call of a threaded kernel (or of
+    ``numba.get_num_threads``), which is why :func:`threaded` calls this first. Set here rather
+    than at import so that importing fusetrack does not change the environment of a process that
+    never runs a threaded kernel."""
+    global _PASSIVE_DONE
+    if not _PASSIVE_DONE:
+        os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+        _PASSIVE_DONE = True
+
+
+_PASSIVE_DONE = False
+
+
+def threaded(kernel: Any) -> Any:
+    """``kernel`` (a ``parallel=True`` dispatcher), after :func:`passive_threads`: call every
+    threaded kernel through this."""
+    if not _PASSIVE_DONE:
+        passive_threads()
+    return kernel
 
 
 def _twins(py: Callable[..., Any]) -> tuple[Any, Any]:
@@ -177,7 +200,7 @@ def linear_gaussian_step(
     anc = np.zeros((x.shape[0], 0), dtype=np.intp) if ancestors is None else ancestors
     anc = np.ascontiguousarray(anc, dtype=np.intp)
     out = np.empty(e.shape)
-    fn = _step_parallel if e.shape[0] * e.shape[1] >= PARALLEL_MIN else _step_serial
+    fn = threaded(_step_parallel) if e.shape[0] * e.shape[1] >= PARALLEL_MIN else _step_serial
     fn(x, anc, np.ascontiguousarray(F, float), np.ascontiguousarray(G, float), e, out)
     return out
 
@@ -248,7 +271,7 @@ def linear_gaussian_draw(
     x = np.ascontiguousarray(states, dtype=np.float64)
     anc = _NO_ANCESTORS if ancestors is None else np.ascontiguousarray(ancestors, dtype=np.intp)
     out = np.empty(x.shape if ancestors is None else (x.shape[0], anc.shape[1], x.shape[2]))
-    fn = _draw_step_parallel if len(streams) > 1 else _draw_step_serial
+    fn = threaded(_draw_step_parallel) if len(streams) > 1 else _draw_step_serial
     fn(tuple(streams), x, anc, np.ascontiguousarray(F, float), np.ascontiguousarray(G, float), out)
     return out
 
@@ -468,7 +491,7 @@ def log_likelihood_sum(
     nch = (n + CHUNK - 1) // CHUNK
     out = np.empty((rows, n))
     cmax = np.empty((rows, nch, kinds.shape[0]))
-    (_llsum_parallel if rows * n >= PARALLEL_MIN else _llsum_serial)(
+    (threaded(_llsum_parallel) if rows * n >= PARALLEL_MIN else _llsum_serial)(
         x,
         np.ascontiguousarray(log_w, dtype=np.float64),
         kinds,

@@ -108,7 +108,7 @@ from ..core.errors import (
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import Resampler, get_resampler
-from . import fused, kernels
+from . import fused, kernels, run_streams
 from .stats import FilterStats, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]
@@ -272,6 +272,7 @@ class ParticleFilter:
         self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...]]] = {}
         self._fused_sets: dict[tuple[int, ...], tuple[tuple[Any, ...], Any]] = {}
         self._everyone: dict[int, NDArray[np.bool_]] = {}  # read-only all-True "usable" rows
+        self._runs: run_streams.RunStreams | None = None  # handles of the last per-run gens
 
     def __repr__(self) -> str:
         return (
@@ -326,6 +327,10 @@ class ParticleFilter:
         gens = self._generators(rng, particles.batch_shape)
         W = self._weights(particles)
         n, d = particles.states.shape[-2:]
+        if not isinstance(gens, np.random.Generator):
+            fast = self._predict_runs(particles, W, dt, gens)
+            if fast is not None:
+                return fast
         if (
             type(self)._regularize is ParticleFilter._regularize
             and self._fused_motion(dt) is not None
@@ -339,6 +344,44 @@ class ParticleFilter:
             return self._particles(new.reshape(particles.states.shape), self._uniform(rows.size, n))
         states, W = self._maybe_resample(particles.states, W, gens)
         return self._particles(self._sample_motion(states, dt, gens), W)
+
+    def _predict_runs(
+        self, particles: Particles, W: _Weights, dt: float, gens: list[np.random.Generator]
+    ) -> Particles | None:
+        """:meth:`predict` of a batch with one generator per run in one threaded Numba loop
+        over the runs (:func:`fusetrack.filters.run_streams.linear_gaussian_runs`: each run's
+        resampling uniform, ancestors, normals and propagation, from its own generator, in the
+        order a separate run draws them). None when it does not apply (engine "numpy", a motion
+        model without ``fused_transition``, a regularised filter, child noise streams from
+        :data:`~fusetrack.filters.fused.SPLIT_MIN` particles per run)."""
+        n, d = particles.states.shape[-2:]
+        fg = self._fused_motion(dt)
+        if (
+            self.engine != "numba"
+            or fg is None
+            or n >= fused.SPLIT_MIN
+            or type(self)._regularize is not ParticleFilter._regularize
+        ):
+            return None
+        need = W.ess < self.ess_threshold * n
+        anc = None
+        if not need.any():
+            mode = np.full(need.size, run_streams.KEEP, dtype=np.int64)
+        elif self._resample is resampling.systematic:  # drawn and merged inside the loop
+            mode = np.where(need, run_streams.SYSTEMATIC, run_streams.KEEP)
+        else:  # another scheme draws its uniforms first, as a separate run does
+            mode = np.where(need, run_streams.GATHER, run_streams.KEEP)
+            rows = np.flatnonzero(need)
+            anc = np.zeros(W.w.shape, dtype=np.intp)
+            anc[rows] = self._ancestors(W.w, rows, gens)
+        runs = self._runs
+        if runs is None or not runs.matches(gens):
+            runs = self._runs = run_streams.RunStreams(gens)
+        s2 = particles.states.reshape(-1, n, d)
+        new = run_streams.linear_gaussian_runs(runs, s2, fg[0], fg[1], mode, W.w, anc)
+        if need.any():
+            self.stats.resample_count += 1
+        return self._particles(new.reshape(particles.states.shape), self._resampled(W, need))
 
     def update(
         self,
@@ -584,9 +627,18 @@ class ParticleFilter:
             return new.reshape(states.shape), self._uniform(rows.size, n)
         out = s2.copy()
         out[rows] = new
+        return out.reshape(states.shape), self._resampled(W, need)
+
+    def _resampled(self, W: _Weights, need: NDArray[np.bool_]) -> _Weights:
+        """``W`` with the rows ``need`` (resampled runs) made uniform."""
+        if not need.any():
+            return W
+        rows, n = W.lw.shape
+        if need.all():
+            return self._uniform(rows, n)
         lw, w, ess = W.lw.copy(), W.w.copy(), W.ess.copy()
-        lw[rows], w[rows], ess[rows] = -math.log(n), 1.0 / n, float(n)
-        return out.reshape(states.shape), _Weights(lw, w, ess)
+        lw[need], w[need], ess[need] = -math.log(n), 1.0 / n, float(n)
+        return _Weights(lw, w, ess)
 
     def _regularize(
         self,
@@ -916,6 +968,7 @@ def _fill_normals(gens: list[np.random.Generator], eps: Array) -> None:
     over a few threads (each generator fills its own rows, so the numbers do not depend on the
     threads; NumPy releases the GIL while it draws)."""
     global _POOL
+    fused.passive_threads()  # get_num_threads starts Numba's threading layer
     threads = min(numba.get_num_threads(), len(gens))
     if threads < 2 or eps.size < _THREADED_DRAW_MIN:
         for j, g in enumerate(gens):

@@ -1,0 +1,112 @@
+"""Per-run generators inside one Numba loop (``run_streams``): the same numbers as NumPy's
+generators, the same particles as the NumPy reference and as separate runs, bit for bit."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+import pytest
+
+from fusetrack.core import Gaussian, Measurement
+from fusetrack.filters import BootstrapFilter, run_streams
+from fusetrack.motion import ConstantVelocity
+from fusetrack.sensors import Bearing
+
+
+@numba.njit
+def _draw(handles, normals, uniforms):  # pragma: no cover - jit
+    for r in range(handles.shape[0]):
+        bg = run_streams._bitgen(handles[r])
+        uniforms[r] = run_streams.next_double(bg)
+        for i in range(normals.shape[1]):
+            normals[r, i] = run_streams.random_standard_normal(bg)
+
+
+@pytest.mark.parametrize("bitgen", [np.random.PCG64, np.random.Philox, np.random.MT19937])
+def test_handles_draw_numpys_numbers_and_advance_the_generators(bitgen):
+    gens = [np.random.Generator(bitgen(s)) for s in (3, 4, 5)]
+    refs = [np.random.Generator(bitgen(s)) for s in (3, 4, 5)]
+    normals, uniforms = np.empty((3, 5000)), np.empty(3)
+    _draw(run_streams.generator_handles(gens), normals, uniforms)
+    for r, g in enumerate(refs):
+        assert uniforms[r] == g.random()
+        np.testing.assert_array_equal(normals[r], g.standard_normal(5000))
+        assert gens[r].standard_normal() == g.standard_normal()  # the state moved on
+
+
+def _case(rows, n, seed=0):
+    rng = np.random.default_rng(seed)
+    x = rng.normal(0, 5, (rows, n, 4))
+    w = rng.uniform(0, 1, (rows, n)) ** 4
+    w /= w.sum(axis=1, keepdims=True)
+    F = np.eye(4) + np.diag([1.0, 1.0], 2)
+    G = np.linalg.cholesky(np.array([[2, 0, 1, 0], [0, 2, 0, 1], [1, 0, 1, 0], [0, 1, 0, 1.0]]))
+    anc = rng.integers(0, n, (rows, n))
+    mode = np.arange(rows) % 3  # KEEP, GATHER, SYSTEMATIC
+    return x, w, F, G, anc, mode
+
+
+@pytest.mark.parametrize("rows, n", [(3, 50), (70, 1000)])  # serial, threaded (>= 65536)
+def test_linear_gaussian_runs_equals_reference(rows, n):
+    x, w, F, G, anc, mode = _case(rows, n)
+    gens = [np.random.default_rng([7, r]) for r in range(rows)]
+    refs = [np.random.default_rng([7, r]) for r in range(rows)]
+    got = run_streams.linear_gaussian_runs(run_streams.RunStreams(gens), x, F, G, mode, w, anc)
+    want = run_streams.linear_gaussian_runs_reference(refs, x, F, G, mode, w, anc)
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-12)
+    for g, h in zip(gens, refs):  # every stream advanced exactly as the reference's
+        assert g.random() == h.random()
+
+
+def test_linear_gaussian_runs_does_not_depend_on_the_threads():
+    x, w, F, G, anc, mode = _case(70, 1000)
+    outs = []
+    for threads in (1, numba.config.NUMBA_NUM_THREADS):
+        numba.set_num_threads(threads)
+        gens = [np.random.default_rng([8, r]) for r in range(70)]
+        outs.append(
+            run_streams.linear_gaussian_runs(run_streams.RunStreams(gens), x, F, G, mode, w, anc)
+        )
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    np.testing.assert_array_equal(outs[0], outs[1])
+
+
+def test_missing_weights_or_ancestors_are_refused():
+    x, w, F, G, anc, mode = _case(3, 10)
+    streams = run_streams.RunStreams([np.random.default_rng(r) for r in range(3)])
+    with pytest.raises(ValueError, match="weights"):
+        run_streams.linear_gaussian_runs(streams, x, F, G, mode, None, anc)
+    with pytest.raises(ValueError, match="ancestors"):
+        run_streams.linear_gaussian_runs(streams, x, F, G, mode, w, None)
+
+
+@pytest.mark.parametrize("resampler", ["systematic", "stratified"])
+@pytest.mark.parametrize("runs, n", [(4, 200), (80, 1000)])  # serial and threaded kernels
+def test_batch_of_runs_is_bit_identical_to_separate_runs(resampler, runs, n):
+    sensors = [Bearing(f"s{i}", p, sigma=0.02) for i, p in enumerate([[0, 0], [400, 0]])]
+    kw = {"n_particles": n, "resampler": resampler, "ess_threshold": 0.6}
+    prior = Gaussian(np.array([150.0, 100.0, 1.5, 1.0]), np.diag([400.0, 400.0, 1.0, 1.0]))
+    truth = np.random.default_rng(1).normal([150, 100], 10, (runs, 2))
+    z = np.arctan2(truth[:, 1:2] - [[0, 0]], truth[:, :1] - [[0, 400]])  # (runs, 2)
+    batch_pf = BootstrapFilter(ConstantVelocity(ndim=2, q=0.05), sensors, **kw)
+    gens = [np.random.default_rng([9, r]) for r in range(runs)]
+    p = batch_pf.initialize(prior, gens, (runs,))
+    for k in range(4):
+        ms = [
+            Measurement(k + 1.0, s.sensor_id, z[:, i : i + 1] + 0.01 * k)
+            for i, s in enumerate(sensors)
+        ]
+        p = batch_pf.update(batch_pf.predict(p, 1.0, gens), ms, gens)
+    for r in range(0, runs, max(1, runs // 4)):
+        pf = BootstrapFilter(ConstantVelocity(ndim=2, q=0.05), sensors, **kw)
+        g = np.random.default_rng([9, r])
+        q = pf.initialize(prior, g)
+        for k in range(4):
+            ms = [
+                Measurement(k + 1.0, s.sensor_id, z[r, i : i + 1] + 0.01 * k)
+                for i, s in enumerate(sensors)
+            ]
+            q = pf.update(pf.predict(q, 1.0, g), ms, g)
+        np.testing.assert_array_equal(p.states[r], q.states)
+        np.testing.assert_array_equal(p.log_weights[r], q.log_weights)
+    assert batch_pf.stats.resample_count >= 3
