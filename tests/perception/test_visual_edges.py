@@ -97,3 +97,27 @@ def test_simulated_outline_is_seen_where_it_was_drawn():
     np.testing.assert_array_equal(
         s.detection_probability(np.array([[5.0, 5.0], [-3.0, 5.0]])), [1, 0]
     )
+
+
+def test_an_ekf_reads_the_frame_as_the_centre_pseudo_measurement():
+    """One EKF update with the edge frame moves the mean exactly as an update with the position
+    fix ``c + residual(z, c)`` and covariance ``noise_cov`` would (the sensor is linear in the
+    centre); between two centres the residual is their difference (UKF sigma points)."""
+    from fusetrack.core.measurement import Measurement
+    from fusetrack.filters import ExtendedKalmanFilter
+    from fusetrack.sensors import PositionFix
+
+    s = EllipseEdgeSensor("e", 80, 100, axes=(14.0, 18.0))
+    z = s.measurement(_outline(80, 100, (53, 36), (14, 18)))
+    prior = Gaussian(np.array([50.0, 38.0, 0.0, 0.0]), np.diag([4.0, 4.0, 1.0, 1.0]))
+    ekf = ExtendedKalmanFilter(ConstantVelocity(q=1.0), [s])
+    post = ekf.update(prior, [Measurement(0.0, "e", z)])
+    fix = PositionFix("e", cov=s.noise_cov())
+    c = prior.mean[:2]
+    ref = ExtendedKalmanFilter(ConstantVelocity(q=1.0), [fix]).update(
+        prior, [Measurement(0.0, "e", c + s.residual(z, c))]
+    )
+    np.testing.assert_allclose(post.mean, ref.mean, atol=1e-12)
+    np.testing.assert_allclose(post.cov, ref.cov, atol=1e-12)
+    assert abs(post.mean[0] - 53) < 1.0 and abs(post.mean[1] - 36) < 1.0
+    np.testing.assert_allclose(s.residual(np.array([[3.0, 4.0]]), np.array([1.0, 1.0])), [[2, 3]])

@@ -61,3 +61,25 @@ def test_mmpf_sp_with_the_edge_sensor():
     assert tk.estimates.shape == (20, 6)
     assert np.sqrt(np.mean(err**2)) < 2.0
     assert tk.info["degenerate_steps"] == 0
+
+
+def test_gaussian_and_unscented_proposal_trackers_follow_a_clean_head():
+    """The beyond-the-paper comparators on the edge sensor: an IMM-EKF (MMPF models) through
+    GaussianFrameFilter and the UPF (UKF proposal on the centre pseudo-measurement)."""
+    from fusetrack.experiments.zhai2007_visual import PI_B, _prior6, mm_models
+    from fusetrack.filters.imm import InteractingMultipleModel
+    from fusetrack.filters.unscented_proposal import UnscentedProposal
+    from fusetrack.perception.visual_tracking import GaussianFrameFilter
+
+    seq, sensor, fe = _sequence()
+    prior = Gaussian(seq.truth[0], np.diag([4, 4, 1, 1.0]))
+    imm = GaussianFrameFilter(InteractingMultipleModel(mm_models(), PI_B, [sensor]), ["head"])
+    tk = track_frames(imm, _prior6(prior), seq.frames, fe, np.random.default_rng(3))
+    err = np.hypot(*(tk.estimates[:, :2] - seq.truth[:, :2]).T)
+    assert tk.estimates.shape == (20, 6)
+    assert np.sqrt(np.mean(err**2)) < 2.0
+    _, _, fe2 = _sequence()
+    upf = ProposalParticleFilter(Langevin(), [sensor], UnscentedProposal(), 100)
+    tk = track_frames(upf, prior, seq.frames, fe2, np.random.default_rng(4))
+    err = np.hypot(*(tk.estimates[:, :2] - seq.truth[:, :2]).T)
+    assert np.sqrt(np.mean(err**2)) < 2.0

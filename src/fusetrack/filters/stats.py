@@ -119,7 +119,9 @@ def validate_measurement(
             + f" (measurement at time={measurement.time})"
         ) from None
     value = np.asarray(measurement.value, dtype=float)
-    m = int(sensor.dim)
+    # a sensor whose raw value is not its m-vector (an edge frame read through ``residual`` as a
+    # linearised pseudo-measurement) says how long the value is in ``value_size``
+    m = int(getattr(sensor, "value_size", sensor.dim))
     if value.shape[-1] != m:
         raise MeasurementError(
             invalid(

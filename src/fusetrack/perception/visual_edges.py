@@ -141,9 +141,15 @@ class EllipseEdgeSensor:
         thick = cv2.dilate((e > 0).astype(np.uint8), _CROSS)  # see the module docstring
         return np.pad(thick.astype(np.float64), self.pad).reshape(-1)
 
+    @property
+    def value_size(self) -> int:
+        """Length of ``z`` (the padded edge frame), which the Gaussian filters check instead of
+        ``dim``: they read ``z`` only through :meth:`residual`."""
+        return (self.height + 2 * self.pad) * (self.width + 2 * self.pad)
+
     def _edges(self, z: ArrayLike) -> Array:
         e = np.asarray(z, dtype=np.float64)
-        n = (self.height + 2 * self.pad) * (self.width + 2 * self.pad)
+        n = self.value_size
         if e.shape[-1] != n or e.size != n:
             raise ShapeError(
                 invalid("z.shape", e.shape, f"one padded edge frame of {n} values (no run batch)")
@@ -239,8 +245,11 @@ class EllipseEdgeSensor:
         """Least-squares centre correction from the nearest edge on each ray around ``z_pred``.
 
         ``z_pred (..., 2)`` predicted centres; rays without an edge are left out; with fewer than
-        three rays found the correction is 0 (no information).
+        three rays found the correction is 0 (no information). Between two centres ``z (..., 2)``
+        (the UKF's sigma-point spread) it is their difference.
         """
+        if np.shape(z)[-1] == 2:
+            return np.asarray(np.asarray(z, np.float64) - np.asarray(z_pred, np.float64))
         edges = self._edges(z)
         c = np.asarray(z_pred, dtype=np.float64)
         flat = c.reshape(-1, 2)

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.beliefs import Gaussian
+from ..core.measurement import Measurement
 
 Array = NDArray[np.float64]
 
@@ -82,6 +83,50 @@ def track_frames(
     stats = getattr(filt, "stats", None)
     info: dict[str, Any] = dict(stats.as_dict()) if stats is not None else {}
     return Track(np.array(est), time.perf_counter() - t0, info)
+
+
+@dataclass(frozen=True)
+class GaussianFrameState:
+    """A Gaussian filter's belief (or an IMM's) and its point estimate."""
+
+    belief: Any
+    estimate: Array
+
+
+@dataclass
+class GaussianFrameFilter:
+    """A fusetrack Gaussian filter (EKF, UKF, or an IMM over them) as a frame filter: per frame
+    ``predict``, then ``update`` with the front end's measurements that are not ``None``. The
+    sensors' ``predict``/``residual`` must give a measurement function of the state (e.g. the
+    ellipse-edge sensor's centre pseudo-measurement, or a cue location)."""
+
+    filt: Any
+    sensor_ids: Sequence[str]
+
+    def initialize(self, prior: Gaussian, rng: np.random.Generator) -> GaussianFrameState:
+        belief = self.filt.initialize(prior) if hasattr(self.filt, "initialize") else prior
+        return GaussianFrameState(belief, np.asarray(belief.mean, float))
+
+    def step(
+        self,
+        state: GaussianFrameState,
+        zs: Sequence[Array | None],
+        dt: float,
+        rng: np.random.Generator,
+    ) -> GaussianFrameState:
+        belief = self.filt.predict(state.belief, dt)
+        ms = [
+            Measurement(0.0, sid, np.atleast_1d(np.asarray(z, float)))
+            for sid, z in zip(self.sensor_ids, zs)
+            if z is not None and np.all(np.isfinite(z))
+        ]
+        if ms:
+            belief = self.filt.update(belief, ms)
+        return GaussianFrameState(belief, np.asarray(belief.mean, float))
+
+    @property
+    def stats(self) -> Any:
+        return getattr(self.filt, "stats", None)
 
 
 @dataclass
