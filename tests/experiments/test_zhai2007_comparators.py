@@ -150,5 +150,5 @@ def test_compare_writes_figure_section_and_summary(tmp_path):
     c = compare(_per_run()[lambda d: d.scn == "A"], "ref", tmp_path / "f.png", calibration="c")
     assert (tmp_path / "f.png").exists()
     assert "Beyond the paper" in c.section and "f.png" in c.section
-    assert c.summary["winners"]["0"]["winner at equal time"] == "bs"
+    assert c.summary["winners"]["all"]["winner at equal time"] == "bs"
     assert c.summary["methods"]["UPF"]["seconds_per_run"] == 3.0

@@ -243,8 +243,7 @@ def beyond_table(
         )
     table["time / reference"] = pd.concat(rel)
     winners = pd.DataFrame(rows)
-    if by:
-        winners = winners.set_index(list(by))
+    winners = winners.set_index(list(by)) if by else winners.set_axis(["all"])
     return table, winners
 
 
@@ -261,6 +260,7 @@ def error_vs_seconds_figure(
     index levels before ``method``; methods listed in a ``families`` entry are joined by a line
     (e.g. a bootstrap at several particle counts)."""
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     from ..evaluation import plots
 
@@ -275,6 +275,7 @@ def error_vs_seconds_figure(
             pts = t.loc[[m for m in members if m in t.index]].sort_values("seconds/run")
             ax.plot(pts["seconds/run"], pts["mean"], "k:", lw=1)
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
         if logy and bool((t["mean"] > 0).all()):
             ax.set_yscale("log")
         ax.set(xlabel="seconds per run", ylabel=ylabel)
@@ -355,10 +356,14 @@ def compare(
     calibration: str = "",
     notes: Sequence[str] = (),
     families: Mapping[str, Sequence[str]] | None = None,
+    methods: Sequence[str] | None = None,
     **info: Any,
 ) -> Comparison:
     """:func:`beyond_table` + :func:`error_vs_seconds_figure` + :func:`beyond_section` +
-    :func:`beyond_summary` in one call."""
+    :func:`beyond_summary` in one call; ``methods`` (default all) selects the rows compared
+    (e.g. leave out ablations)."""
+    if methods is not None:
+        per_run = per_run[per_run["method"].isin(list(methods))]
     table, winners = beyond_table(per_run, reference, by=by, error=error, better=better)
     fig = None
     if figure_path is not None:
