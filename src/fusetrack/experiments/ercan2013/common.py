@@ -40,20 +40,27 @@ def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[
 SIZE_OPTIONS = ("steps", "particles", "burn_in")
 
 
+def number_option(
+    ctx: RunContext, key: str, default: float, kind: type = int, least: float = 1
+) -> Any:
+    """``--set key=value`` as ``kind`` (int or float), at least ``least``; ``default`` if unset."""
+    if key not in ctx.extra:
+        return default
+    raw = ctx.extra[key]
+    try:
+        value = kind(raw)
+    except (TypeError, ValueError):
+        value = None
+    if value is None or not np.isfinite(value) or value < least:
+        what = "an integer" if kind is int else "a number"
+        raise ConfigError(invalid(f"--set {key}", raw, f"{what} >= {least:g}"))
+    return value
+
+
 def size_options(ctx: RunContext, size: dict[str, int]) -> dict[str, int]:
     """``size`` with ``--set steps=N`` / ``particles=L`` / ``burn_in=B`` applied (a full-size run
     that must fit a time budget: fewer steps per run, the paper's number of runs)."""
-    out = dict(size)
-    for key in SIZE_OPTIONS:
-        if key in ctx.extra:
-            raw = ctx.extra[key]
-            try:
-                value = int(raw)
-            except (TypeError, ValueError):
-                value = -1
-            if value < (0 if key == "burn_in" else 1):
-                raise ConfigError(invalid(f"--set {key}", raw, "a positive integer"))
-            out[key] = value
+    out = {k: number_option(ctx, k, v, int, 0 if k == "burn_in" else 1) for k, v in size.items()}
     if out["burn_in"] >= out["steps"]:
         raise ConfigError(invalid("--set burn_in", out["burn_in"], f"< steps = {out['steps']}"))
     return out

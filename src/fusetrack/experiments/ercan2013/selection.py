@@ -17,7 +17,17 @@ import numpy as np
 import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, md, mean_std, room_plot, size_options, sizes, smoke
+from .common import (
+    curve_plot,
+    fmt,
+    md,
+    mean_std,
+    number_option,
+    room_plot,
+    size_options,
+    sizes,
+    smoke,
+)
 from .scenes import Scene, l_scene, load_scene
 from .simulation import run_tracking, simulate_world
 
@@ -36,12 +46,12 @@ METHODS = {
 
 
 def _configs(
-    scene: Scene | None, ks: list[int], size: dict[str, int], m: int
+    scene: Scene | None, ks: list[int], size: dict[str, int], m: int, sigma_psi: float = SIGMA_PSI
 ) -> list[dict[str, Any]]:
     base: dict[str, Any] = {
         "n_occluders": m,
         "prior": "gaussian",
-        "sigma_psi": SIGMA_PSI,
+        "sigma_psi": sigma_psi,
         "period": 5,
         **size,
     }
@@ -62,6 +72,15 @@ def _configs(
     return out
 
 
+def selection_sizes(n_cameras: int, quick: bool) -> list[int]:
+    """The k compared: 2..6 as in Fig. 12 (quick: 2 and 6), below the number of cameras (so that
+    selecting differs from using all of them); a room with one or two cameras compares k = 1."""
+    top = min(6, n_cameras - 1)
+    if top < 2:
+        return [1]
+    return sorted({2, top}) if quick else list(range(2, top + 1))
+
+
 def run(ctx: RunContext) -> Outcome:
     size = sizes(ctx)
     if ctx.quick and not smoke():  # 15 configurations: shorter tracks keep --quick near a minute
@@ -72,9 +91,12 @@ def run(ctx: RunContext) -> Outcome:
     scene = load_scene(cfg_path) if cfg_path else None
     shown = scene or l_scene()
     n = len(shown.cameras)
-    ks = [k for k in ([2, 6] if ctx.quick else [2, 3, 4, 5, 6]) if k < n] or [max(1, n - 1)]
-    m = 40 if scene is None else int(ctx.extra.get("occluders", 20))
-    df = ctx.monte_carlo(run_tracking, _configs(scene, ks, size, m), runs, desc="E6 selection")
+    ks = selection_sizes(n, ctx.quick)
+    m = number_option(ctx, "occluders", 40 if scene is None else 20, int, 0)
+    sigma_psi = number_option(ctx, "sigma_psi", SIGMA_PSI, float, 0.01)
+    df = ctx.monte_carlo(
+        run_tracking, _configs(scene, ks, size, m, sigma_psi), runs, desc="E6 selection"
+    )
     df = df.drop(columns=[c for c in ("scene_obj",) if c in df.columns])
     table = mean_std(df[df["label"] != "all"], ["label", "k"])
     all_row = df[df["label"] == "all"]["rmse_tr"]
@@ -198,7 +220,7 @@ def run(ctx: RunContext) -> Outcome:
         hlines={f"all {n} cameras = {all_mean:.2f}": all_mean},
     )
     rep_cfg = {
-        **_configs(scene, [kmax], {**size, "steps": min(size["steps"], 400)}, m)[0],
+        **_configs(scene, [kmax], {**size, "steps": min(size["steps"], 400)}, m, sigma_psi)[0],
         "trace": True,
         "metric_gap": False,
     }
@@ -239,7 +261,7 @@ def run(ctx: RunContext) -> Outcome:
 ## Setup
 
 {where}: {n} cameras, M = {m} moving occluders (D = {shown.diameter:g}), Gaussian occluder priors from random-walk
-Kalman filters (sigma_psi = {SIGMA_PSI:g}) with RMSE_occ = {fmt(rmse_occ)} (paper 11.5), a new subset every T = 5 steps,
+Kalman filters (sigma_psi = {sigma_psi:g}) with RMSE_occ = {fmt(rmse_occ)} (paper 11.5), a new subset every T = 5 steps,
 {runs} runs x {size["steps"]} steps (paper: 10 x 4000{"" if full_size else "; this run is smaller, see below"}), L = {size["particles"]}
 particles, burn-in {size["burn_in"]} steps. RMSE_max = {fmt(rmse_max)} (paper 47.9; the object assumed at the room's centre).
 Every method sees the same people walking and the same camera noise in a given run (common random numbers), so
