@@ -10,13 +10,15 @@ position grid, Algorithm 5 with the corrected prediction). Example 2 (Fig 47): t
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from functools import partial
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
 
 from ..core import Gaussian
 from ..evaluation import plots
+from ..evaluation.montecarlo import run_seed
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter
 from ..filters.grid_proposals import GalerkinProposal
@@ -24,6 +26,15 @@ from ..filters.sis import ProposalParticleFilter
 from ..motion import ConstantVelocity, CoordinatedTurn
 from ..sensors import Bearing
 from .zhai2007_common import timed_gaussian, timed_sis
+from .zhai2007_comparators import (
+    Scenario,
+    calibration_note,
+    compare,
+    equal_time_particles,
+    per_run_scores,
+    run_comparators,
+    sis_reference,
+)
 
 PAPER = pd.DataFrame(
     {
@@ -64,13 +75,33 @@ def x0(example: int) -> np.ndarray:
     )
 
 
-def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    example = int(config["example"])
+# beyond the paper: the IMM-EKF's models (CV and left/right turns at example 2's rate) and regimes
+IMM_OMEGA = np.pi / 6
+IMM_TRANSITION = np.array([[0.9, 0.05, 0.05], [0.1, 0.9, 0.0], [0.1, 0.0, 0.9]])
+
+
+def comparator_scenario(example: int, seed: int) -> Scenario:
+    """Run ``seed``'s truth, bearings and prior as a :class:`Scenario` (the filters' CV model)."""
     rng = np.random.default_rng(seed)
     truth, zs = simulate(example, rng)
     prior = Gaussian(x0(example) + rng.multivariate_normal(np.zeros(4), P0), P0)
     motion = ConstantVelocity(q=0.05, noise="continuous")
     sensor = Bearing("s", position=[0.0, 0.0], sigma=0.1)
+    imm = [motion, *(CoordinatedTurn(omega=w, q=0.05) for w in (IMM_OMEGA, -IMM_OMEGA))]
+    return Scenario(motion, [sensor], prior, zs, 1.0, truth, imm, IMM_TRANSITION)
+
+
+def galerkin_pf(
+    cs: Scenario, weight: Literal["exact", "projected"] = "exact"
+) -> ProposalParticleFilter:
+    """Algorithm 5 with 200 particles on a 100 x 100 grid (Table 9's Galerkin PF)."""
+    return ProposalParticleFilter(cs.motion, cs.sensors, GalerkinProposal(100, weight=weight), 200)
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    example = int(config["example"])
+    cs = comparator_scenario(example, seed)
+    motion, sensor, prior, zs, truth = cs.motion, cs.sensors[0], cs.prior, cs.zs, cs.truth
     est: dict[str, tuple[np.ndarray, float]] = {
         "EKF": timed_gaussian(ExtendedKalmanFilter(motion, [sensor]), prior, zs, ["s"], 1.0),
         "UKF": timed_gaussian(UnscentedKalmanFilter(motion, [sensor]), prior, zs, ["s"], 1.0),
@@ -79,20 +110,16 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         f"bootstrap {n}": ProposalParticleFilter(motion, [sensor], n_particles=n)
         for n in (200, 500, 1000, 2000)
     }
-    pfs["Galerkin PF 200"] = ProposalParticleFilter(motion, [sensor], GalerkinProposal(100), 200)
+    pfs["Galerkin PF 200"] = galerkin_pf(cs)
     if config.get("extras", False):
-        pfs["Galerkin PF 200 (projected weight)"] = ProposalParticleFilter(
-            motion, [sensor], GalerkinProposal(100, weight="projected"), 200
-        )
-        pfs["bootstrap equal time"] = ProposalParticleFilter(
-            motion, [sensor], n_particles=int(config["n_equal"])
-        )
+        pfs["Galerkin PF 200 (projected weight)"] = galerkin_pf(cs, "projected")
     grid_small = 0
     for k, (name, f) in enumerate(pfs.items()):
         e, secs, _ = timed_sis(f, prior, zs, 1.0, np.random.default_rng([seed, k]))
         est[name] = (e, secs)
         if name == "Galerkin PF 200":
             grid_small = f.stats.grid_too_small
+    est.update(run_comparators(cs, seed, config["n_equal"]))
     rows = []
     for name, (e, secs) in est.items():
         dx, dy = e[:, 0] - truth[:, 0], e[:, 1] - truth[:, 1]
@@ -120,11 +147,24 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=200, quick=4)
     runs2 = max(2, runs // 10)
-    n_equal = 2000 if ctx.quick else 10000
+    n_equal, target = {}, {}
+    for ex in (1, 2):  # UPF and bootstrap particles at the Galerkin PF's time, on run 0
+        cs = comparator_scenario(ex, run_seed(ctx.seed, 0))
+        n_equal[f"example {ex}"], target[f"example {ex}"] = equal_time_particles(
+            cs,
+            sis_reference(cs, partial(galerkin_pf, cs)),
+            ("UPF", "bootstrap equal time"),
+            repeats=2 if ctx.quick else 3,
+        )
     df1 = ctx.monte_carlo(
-        run_once, [{"example": 1, "extras": True, "n_equal": n_equal}], runs, desc="example 1"
+        run_once,
+        [{"example": 1, "extras": True, "n_equal": n_equal["example 1"]}],
+        runs,
+        desc="example 1",
     )
-    df2 = ctx.monte_carlo(run_once, [{"example": 2, "extras": False}], runs2, desc="example 2")
+    df2 = ctx.monte_carlo(
+        run_once, [{"example": 2, "n_equal": n_equal["example 2"]}], runs2, desc="example 2"
+    )
     df = pd.concat([df1, df2], ignore_index=True)
     per_run = df1[df1["step"] == 1]
     g = per_run.groupby("method")
@@ -249,7 +289,7 @@ runs: {gs}.
 
 {table.to_markdown(floatfmt=".3f")}
 
-Beyond the paper (same runs; "bootstrap equal time" has {n_equal} particles):
+Other filters on the same runs (the comparators at equal time are in the last section):
 
 {extra.to_markdown(floatfmt=".3f")}
 
@@ -273,4 +313,22 @@ Beyond the paper (same runs; "bootstrap equal time" has {n_equal} particles):
   projection filter as the thesis describes it, row "projected weight") keeps the grid's error and
   adds position noise of a cell per step, which is worse.
 """
-    return Outcome(df, claims, body, runs)
+    d = df.assign(sq_err=df["sq_ex"] + df["sq_ey"])
+    d["example"] = d["example"].map(lambda e: f"example {int(e)}")
+    cmp = compare(
+        per_run_scores(d, ["example"], "sq_err"),
+        "Galerkin PF 200",
+        ctx.figure_path("error_vs_seconds"),
+        by=["example"],
+        ylabel="position RMSE per run (mean over runs)",
+        calibration=calibration_note(n_equal, target),
+        notes=[
+            "IMM-EKF: CV and left/right coordinated turns at pi/6 rad/step (example 2's turn), "
+            f"q = 0.05, regime matrix {IMM_TRANSITION.tolist()}.",
+            "UPF: the shared-covariance unscented proposal (filters/unscented_proposal.py).",
+            f"Example 2 has {runs2} runs.",
+        ],
+        families={"bootstrap": [f"bootstrap {n}" for n in (200, 500, 1000, 2000)]},
+        n_particles=n_equal,
+    )
+    return Outcome(df, claims, body + "\n" + cmp.section, runs, beyond_the_paper=cmp.summary)
