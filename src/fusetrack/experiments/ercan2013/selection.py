@@ -256,14 +256,15 @@ def run(ctx: RunContext) -> Outcome:
         if cfg_path
         else "L-shaped room of spec §7.2 (the paper gives only a picture, Fig. 11)"
     )
+    paper_occ, paper_max = ("", "") if cfg_path else (" (paper 11.5)", "; paper 47.9")
     full_size = not ctx.quick and size["steps"] == 4000 and runs == 10
     report = f"""
 ## Setup
 
 {where}: {n} cameras, M = {m} moving occluders (D = {shown.diameter:g}), Gaussian occluder priors from random-walk
-Kalman filters (sigma_psi = {sigma_psi:g}) with RMSE_occ = {fmt(rmse_occ)} (paper 11.5), a new subset every T = 5 steps,
-{runs} runs x {size["steps"]} steps (paper: 10 x 4000{"" if full_size else "; this run is smaller, see below"}), L = {size["particles"]}
-particles, burn-in {size["burn_in"]} steps. RMSE_max = {fmt(rmse_max)} (paper 47.9; the object assumed at the room's centre).
+Kalman filters (sigma_psi = {sigma_psi:g}) with RMSE_occ = {fmt(rmse_occ)}{paper_occ}, a new subset every T = 5 steps,
+{runs} runs x {size["steps"]} steps (paper: 10 x 4000{"" if full_size else "; smaller here"}), L = {size["particles"]}
+particles, burn-in {size["burn_in"]} steps. RMSE_max = {fmt(rmse_max)} (the object assumed at the room's centre{paper_max}).
 Every method sees the same people walking and the same camera noise in a given run (common random numbers), so
 differences between methods within a run are the method's alone.
 
