@@ -3,12 +3,16 @@ generators, the same particles as the NumPy reference and as separate runs, bit 
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numba
 import numpy as np
 import pytest
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.filters import BootstrapFilter, run_streams
+from fusetrack.filters import BootstrapFilter, kernels, run_streams
 from fusetrack.motion import ConstantVelocity
 from fusetrack.sensors import Bearing
 
@@ -110,3 +114,30 @@ def test_batch_of_runs_is_bit_identical_to_separate_runs(resampler, runs, n):
         np.testing.assert_array_equal(p.states[r], q.states)
         np.testing.assert_array_equal(p.log_weights[r], q.log_weights)
     assert batch_pf.stats.resample_count >= 3
+
+
+def test_threaded_normalisation_of_a_batch_equals_each_row_alone():
+    rng = np.random.default_rng(4)
+    lw = rng.normal(0, 30, (70, 1000))  # 70 000 particles: the threaded twin
+    lw[3] = -np.inf  # a degenerate row
+    x = rng.normal(0, 1, (70, 1000, 4))
+    got = kernels.normalize_with_mean(lw.copy(), lw.max(axis=1), x)
+    for r in (0, 3, 69):
+        one = kernels.normalize_with_mean(
+            lw[r : r + 1].copy(), lw[r : r + 1].max(axis=1), x[r : r + 1]
+        )
+        for a, b in zip(got, one):
+            np.testing.assert_array_equal(a[r], b[0])
+
+
+def test_openmp_wait_policy_is_set_at_the_first_threaded_call_not_at_import():
+    code = (
+        "import os; os.environ.pop('OMP_WAIT_POLICY', None)\n"
+        "import fusetrack.filters as f\n"
+        "print(os.environ.get('OMP_WAIT_POLICY'))\n"
+        "f.fused.threaded(None)\n"
+        "print(os.environ.get('OMP_WAIT_POLICY'))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.stdout.split() == ["None", "PASSIVE"], out.stderr

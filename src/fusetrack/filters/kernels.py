@@ -25,7 +25,9 @@ A row whose largest log-weight after the update is not finite (every particle's 
 are the raw sums ``log w + log p`` (NaN read as ``-inf``), its weights and ESS are 0 and its
 log-evidence is that largest value (``-inf`` or ``+inf``).
 
-The kernels are serial (``parallel=False``). Threaded twins were measured on the 2-core
+The kernels are serial (``parallel=False``), except :func:`normalize_with_mean` on a batch of
+many runs (threaded over the runs, from :data:`~fusetrack.filters.fused.PARALLEL_MIN` particles
+in all). Threaded twins over the particles of one row were measured on the 2-core
 machines this project runs on and were slower than the serial loops at N = 1e5 and no faster
 at 1e6: the passes are memory-bound, and Monte Carlo studies already keep every core busy with
 one run per worker (threads inside a kernel would only oversubscribe them).
@@ -38,6 +40,8 @@ import math
 import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from .fused import PARALLEL_MIN, _twins, threaded
 
 Array = NDArray[np.float64]
 
@@ -397,16 +401,16 @@ def weighted_mean_cov_reference(states: ArrayLike, weights: ArrayLike) -> tuple[
 # ---------------------------------------------------------------------------------------------
 
 
-@numba.njit(cache=True, fastmath=False, nogil=True)
-def _normalize_mean_rows(v, e, rowmax, x, lse, ess, mean):  # pragma: no cover - jit
+def _normalize_mean_py(v, e, rowmax, x, lse, ess, mean):  # pragma: no cover - jit
     """Per row, given ``e = exp(v - max)``: ``s = sum e``, ``sum e^2`` and ``sum e x`` in one
     pass; then ``lse = max + log s``, ``v -= lse``, ``e *= 1/s`` (the
     weights), ``ess = s^2 / sum e^2``, ``mean = sum e x / s``. Rows with a non-finite maximum:
-    ``e = 0``, ``ess = 0``, ``lse = max``, ``mean = NaN``, ``v`` left raw."""
+    ``e = 0``, ``ess = 0``, ``lse = max``, ``mean = NaN``, ``v`` left raw. Rows are independent
+    work items (threaded over the rows of a batch; each row's arithmetic is the same)."""
     rows, n, d = x.shape
-    part = np.empty(d)
-    acc = np.empty(d)
-    for r in range(rows):
+    for r in numba.prange(rows):
+        part = np.empty(d)
+        acc = np.empty(d)
         m = rowmax[r]
         if not math.isfinite(m):
             for i in range(n):
@@ -444,6 +448,9 @@ def _normalize_mean_rows(v, e, rowmax, x, lse, ess, mean):  # pragma: no cover -
             mean[r, k] = acc[k] * inv
 
 
+_normalize_mean_rows, _normalize_mean_parallel = _twins(_normalize_mean_py)
+
+
 def normalize_with_mean(
     log_w: Array, rowmax: Array, states: Array
 ) -> tuple[Array, Array, Array, Array, Array]:
@@ -461,5 +468,8 @@ def normalize_with_mean(
     lse = np.empty(rows)
     ess = np.empty(rows)
     mean = np.empty((rows, x.shape[2]))
-    _normalize_mean_rows(v, e, m, x, lse, ess, mean)
+    threads = rows > 1 and rows * n >= PARALLEL_MIN  # one row: serial (memory-bound, see above)
+    (threaded(_normalize_mean_parallel) if threads else _normalize_mean_rows)(
+        v, e, m, x, lse, ess, mean
+    )
     return v, e, lse, ess, mean

@@ -49,10 +49,11 @@ from numba.np.random.generator_core import next_double
 from numpy.typing import NDArray
 
 from ..core.resampling import systematic_row
-from .fused import PARALLEL_MIN, _affine, _twins, threaded
+from .fused import PARALLEL_MIN, _twins, threaded
 
 Array = NDArray[np.float64]
 
+BLOCK = 256  # particles per block of the propagation (columns that stay in L1)
 KEEP, GATHER, SYSTEMATIC = 0, 1, 2
 """Per-run modes of :func:`linear_gaussian_runs`: propagate every particle, propagate the given
 ancestors, resample systematically first."""
@@ -127,10 +128,31 @@ def _bitgen(tyctx, handle):  # pragma: no cover - compile time
     return sig, codegen
 
 
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _affine_block(F, G, xs, es, ms, orow, lo):  # pragma: no cover - jit
+    """``orow[lo + i] = F xs[:, i] + G es[:, i]`` for the ``B`` particles of a block given as
+    columns ``xs``, ``es`` ``(d, B)`` (``ms`` ``(B,)`` scratch). Each component is summed in the
+    order of :func:`fusetrack.filters.fused._affine` (the same bits), but the loop over the
+    block's particles is innermost and contiguous, so the compiler vectorises it and ``F``, ``G``
+    are read once per block rather than once per particle."""
+    d, nb = xs.shape
+    for a in range(d):
+        ms[:nb] = 0.0
+        for b in range(d):
+            f = F[a, b]
+            g = G[a, b]
+            xb = xs[b]
+            eb = es[b]
+            for i in range(nb):
+                ms[i] += f * xb[i] + g * eb[i]
+        for i in range(nb):
+            orow[lo + i, a] = ms[i]
+
+
 def _runs_py(handles, x, F, G, w, mode, anc, out):  # pragma: no cover - jit
     """Run ``r`` (one work item): by ``mode[r]``, systematic ancestors from ``w[r]`` with
     ``u0`` from the run's stream, the given ``anc[r]``, or none; then ``d`` normals per particle
-    from the run's stream and ``out[r, i] = F x[r, a_i] + G eps_i``."""
+    from the run's stream and ``out[r, i] = F x[r, a_i] + G eps_i``, block by block."""
     rows, n, d = out.shape
     for r in numba.prange(rows):
         bg = _bitgen(handles[r])
@@ -138,13 +160,18 @@ def _runs_py(handles, x, F, G, w, mode, anc, out):  # pragma: no cover - jit
         a = anc[r] if m == GATHER else np.empty(n if m == SYSTEMATIC else 0, dtype=np.intp)
         if m == SYSTEMATIC:
             systematic_row(w[r], next_double(bg), a, np.empty(n + 1, dtype=np.intp))
-        e = np.empty(d)
+        xs = np.empty((d, BLOCK))
+        es = np.empty((d, BLOCK))
+        ms = np.empty(BLOCK)
         xr = x[r]
-        orow = out[r]
-        for i in range(n):
-            for k in range(d):
-                e[k] = random_standard_normal(bg)
-            _affine(F, G, xr[a[i] if m != KEEP else i], e, orow[i])
+        for lo in range(0, n, BLOCK):
+            nb = min(BLOCK, n - lo)
+            for i in range(nb):
+                j = a[lo + i] if m != KEEP else lo + i
+                for k in range(d):
+                    es[k, i] = random_standard_normal(bg)
+                    xs[k, i] = xr[j, k]
+            _affine_block(F, G, xs[:, :nb], es[:, :nb], ms, out[r], lo)
 
 
 _runs_serial, _runs_parallel = _twins(_runs_py)
