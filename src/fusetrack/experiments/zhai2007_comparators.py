@@ -207,8 +207,9 @@ def beyond_table(
     """``(table, winners)`` from one row per (configuration ``by``, method, run) with columns
     ``method``, ``error`` (the experiment's score per run) and ``seconds``.
 
-    ``table`` (index ``(*by, method)``): mean and median score, runs, seconds per run and seconds
-    relative to ``reference``. ``winners`` (one row per configuration): the best method at equal
+    ``table`` (index ``(*by, method)``): mean and median score, runs, seconds per run (the median
+    over runs: robust to a first run's compile time and to load spikes) and seconds relative to
+    ``reference``. ``winners`` (one row per configuration): the best method at equal
     time (seconds <= ``slack`` x the reference's), the best overall, and their scores.
     """
     keys = [*by, "method"]
@@ -218,7 +219,7 @@ def beyond_table(
             "mean": g[error].mean(),
             "median": g[error].median(),
             "runs": g[error].count(),
-            "seconds/run": g["seconds"].mean(),
+            "seconds/run": g["seconds"].median(),
         }
     )
     groups = table.groupby(level=list(by), sort=False) if by else [((), table)]
@@ -371,7 +372,9 @@ def compare(
             figure_path,
             table,
             ylabel=ylabel,
-            title="error against computing time",
+            title="error against computing time"
+            if better == "lower"
+            else "score against computing time",
             families=families,
             logy=better == "lower",
         ).name
@@ -409,7 +412,8 @@ def calibration_note(
         + "; ".join(parts)
         + ". The IMM-EKF has no N to tune (it is far cheaper). Seconds per run below are the "
         "timings inside the Monte Carlo runs (two worker processes on a shared machine), so the "
-        "'time / reference' column shows how well the pilot's equal time held."
+        "'time / reference' column shows how well the pilot's equal time held (median seconds "
+        "over runs)."
     )
 
 

@@ -10,7 +10,8 @@ Images: "Lena" is not shipped with any package we may use, so the spec's substit
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,7 @@ from ..perception.pf_dwt import (
     median3,
     ti_threshold,
 )
+from .zhai2007_comparators import compare
 
 PAPER = {
     ("lena", "PF"): 3.1991,
@@ -42,20 +44,63 @@ def load(name: str) -> np.ndarray:
     )
 
 
+def practitioner_denoisers() -> dict[str, Callable[[np.ndarray], np.ndarray]]:
+    """Beyond the paper: what a practitioner would run today on a grey image in [0, 255], each
+    with its library's usual settings and the noise level estimated from the noisy image
+    (``estimate_sigma``, robust MAD of the finest wavelet band); nothing tuned on the clean image."""
+    from scipy.signal import wiener
+    from skimage.restoration import (
+        denoise_nl_means,
+        denoise_tv_chambolle,
+        denoise_wavelet,
+        estimate_sigma,
+    )
+
+    def unit(f: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
+        return lambda y: 255.0 * np.asarray(f(np.clip(y, 0, 255) / 255.0), float)
+
+    def nl_means(u: np.ndarray) -> np.ndarray:
+        sigma = float(estimate_sigma(u))
+        return np.asarray(
+            denoise_nl_means(u, h=0.8 * sigma, sigma=sigma, patch_size=5, patch_distance=6),
+            float,
+        )
+
+    def bayes_shrink(u: np.ndarray) -> np.ndarray:
+        return np.asarray(denoise_wavelet(u, method="BayesShrink", rescale_sigma=True), float)
+
+    return {
+        "wavelet BayesShrink": unit(bayes_shrink),
+        "median 3x3 + BayesShrink": unit(lambda u: bayes_shrink(median3(u))),
+        "NL-means": unit(nl_means),
+        "median 3x3 + NL-means": unit(lambda u: nl_means(median3(u))),
+        "TV Chambolle": unit(lambda u: denoise_tv_chambolle(u, weight=float(estimate_sigma(u)))),
+        "Wiener 5x5": lambda y: np.asarray(wiener(y, (5, 5)), float),
+    }
+
+
 def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     clean = load(str(config["image"]))
     noisy = add_mixed_noise(clean, np.random.default_rng(seed))
     q1 = float(config["q1"])
     shifts = int(config["shifts"])
+    t0 = time.perf_counter()
     pf = RasterParticleFilter(q1=q1, r=max(400.0, q1))(noisy, seed=seed % (2**31))
+    t_pf = time.perf_counter() - t0
+    t0 = time.perf_counter()
     med = median3(noisy)
-    out = {
-        "PF": pf,
-        "PF + TI hard": ti_threshold(pf, "hard", shifts=shifts),
-        "PF + TI soft": ti_threshold(pf, "soft", shifts=shifts),
-        "median 3x3": med,
-        "median 3x3 + TI hard": ti_threshold(med, "hard", shifts=shifts),
-    }
+    t_med = time.perf_counter() - t0
+    out: dict[str, tuple[np.ndarray, float]] = {"PF": (pf, t_pf), "median 3x3": (med, t_med)}
+    for name, base in (("PF", pf), ("median 3x3", med)):
+        for mode in ("hard", "soft") if name == "PF" else ("hard",):
+            t0 = time.perf_counter()
+            img = ti_threshold(base, mode, shifts=shifts)
+            out[f"{name} + TI {mode}"] = (img, out[name][1] + time.perf_counter() - t0)
+    if config.get("comparators", False):
+        for name, f in practitioner_denoisers().items():
+            t0 = time.perf_counter()
+            img = f(noisy)
+            out[name] = (img, time.perf_counter() - t0)
     resid = pf - clean
     kurt = float(np.mean(resid**4) / np.mean(resid**2) ** 2 - 3.0)
     noise = noisy - clean
@@ -64,10 +109,11 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         {
             "method": m,
             "isnr_db": isnr(clean, noisy, img),
+            "seconds": secs,
             "pf_residual_excess_kurtosis": kurt,
             "noise_excess_kurtosis": kurt_noise,
         }
-        for m, img in out.items()
+        for m, (img, secs) in out.items()
     ]
 
 
@@ -79,12 +125,37 @@ def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=10, quick=1)
     shifts = 4 if ctx.quick else 8
     cfgs = [
-        {"image": im, "q1": q, "shifts": shifts}
+        {"image": im, "q1": q, "shifts": shifts, "comparators": q == 1000.0}
         for im in ("lena", "cameraman")
         for q in (1000.0, 100.0)
     ]
     df = ctx.monte_carlo(run_once, cfgs, runs)
-    g = df.groupby(["image", "q1", "method"])["isnr_db"]
+    cmp = compare(
+        df[df["q1"] == 1000.0].rename(columns={"isnr_db": "error"}),
+        "PF + TI hard",
+        ctx.figure_path("isnr_vs_seconds"),
+        by=["image"],
+        better="higher",
+        ylabel="ISNR (dB, mean over seeds)",
+        calibration=(
+            "The denoisers have no particle count to tune: each ran once per noisy image with its "
+            "library's usual settings and the noise level estimated from the noisy image; the "
+            "winner at equal time is the best ISNR among those that took at most 1.5x PF-DWT's "
+            "time (PF stage + TI hard thresholding). Score: ISNR in dB, higher is better."
+        ),
+        notes=[
+            "UPF, IMM-EKF, equal-time bootstrap: do not apply as such. The PF stage is a raster-scan "
+            "filter per pixel on an AR image model whose Kalman proposal is already the exact "
+            "optimal proposal for the Gaussian part; for a denoiser the practitioner's comparators "
+            "are other denoisers, compared at equal time here.",
+            "NL-means: h = 0.8 sigma_est, 5x5 patches, 13x13 search window; TV: weight = "
+            "sigma_est (image in [0, 1]); BayesShrink: db1 default, 'rescale_sigma'; Wiener: "
+            "scipy.signal.wiener 5x5. 'median 3x3 + X' removes the Cauchy impulses first.",
+        ],
+        q1=1000.0,
+    )
+    own = df[~df["method"].isin(list(practitioner_denoisers()))]  # the paper's and PF variants
+    g = own.groupby(["image", "q1", "method"])["isnr_db"]
     tab = pd.DataFrame({"mean ISNR (dB)": g.mean(), "std": g.std()})
     main = tab.xs(1000.0, level="q1")["mean ISNR (dB)"]
     claims = []
@@ -192,5 +263,6 @@ All results (mean and std over seeds):
   comparable; clipping the noisy image to [0, 255] also changes the ISNR's denominator.
 * Beyond the paper: a 3 x 3 median filter, with and without the same TI thresholding, is the
   obvious practitioner's baseline for impulsive noise and is shown in the table.
-"""
-    return Outcome(df, claims, body, runs)
+
+{cmp.section}"""
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
