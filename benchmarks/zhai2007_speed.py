@@ -1,12 +1,19 @@
-"""Per-step cost of the Zhai 2007 filters against the bootstrap filter at equal N, and the
+"""Per-step cost of every Zhai 2007 filter against the bootstrap filter at equal N, and the
 complexity statement of Sec. 3.5.4 (MMPF-SP costs O(4 N K) + 3 O(N_s): linear in particles and in
 channels; claim C18).
 
-    python benchmarks/zhai2007_speed.py [--N 200 1000] [--steps 30] [--json]
+    python benchmarks/zhai2007_speed.py [--N 200 1000] [--steps 30] [--json] [--plot PATH]
 
 Scenario: 2-D CV target, one bearing sensor at the origin (the E2/E13 set-up), ``steps`` steps;
 every filter filters the same measurements. Time per step = median over ``--repeats`` runs of
-the whole run divided by ``steps`` (the first run warms up Numba).
+the whole run divided by ``steps`` (one untimed run first: Numba compilation, caches). The
+IMM-EKF has no particles: its cost is the same at every N (three EKFs).
+
+Filters (Zhai 2007 algorithm in brackets): bootstrap; PF-SP-PEKF (Alg. 1, 20 channels); CPF-SP
+(Alg. 2, one bank per active sensor: here one); MM-bootstrap (Alg. 3); MMPF-SP (Alg. 4, 20
+channels per model); Galerkin PF (Alg. 5, 100 x 100 grid); discretisation PF (Alg. 6) and its
+multiple-model form (Alg. 7); bootstrap + MH-prior / random-walk / independence move (Algs.
+8-10); beyond the paper: the unscented-proposal PF and the IMM-EKF (CV + two turns).
 """
 
 from __future__ import annotations
@@ -20,12 +27,16 @@ from collections.abc import Callable
 import numpy as np
 
 from fusetrack.core import Gaussian
+from fusetrack.experiments.zhai2007_common import timed_gaussian
+from fusetrack.filters.cpf_sp import CPFSPProposal
 from fusetrack.filters.grid_proposals import DiscretisationProposal, GalerkinProposal
-from fusetrack.filters.mcmc_moves import RandomWalkMove
+from fusetrack.filters.imm import InteractingMultipleModel
+from fusetrack.filters.mcmc_moves import IndependenceMove, MHPriorMove, RandomWalkMove
 from fusetrack.filters.multiple_model import MultipleModelParticleFilter, run_mm
 from fusetrack.filters.sis import ProposalParticleFilter, run_sis
 from fusetrack.filters.sp_pekf import SPPEKFProposal
-from fusetrack.motion import ConstantVelocity
+from fusetrack.filters.unscented_proposal import UnscentedProposal
+from fusetrack.motion import ConstantVelocity, CoordinatedTurn
 from fusetrack.motion.maneuver import ManeuverTurn
 from fusetrack.sensors import Bearing
 
@@ -64,14 +75,22 @@ def builders(n: int, channels: int = 20) -> dict[str, Callable[[], Callable[...,
             models, PI4, [sensor], n, proposal=proposal, n_channels=channels
         )
 
+    turns = [CoordinatedTurn(omega=w, q=0.05) for w in (0.1, -0.1)]
+    imm = [[0.9, 0.05, 0.05], [0.1, 0.9, 0.0], [0.1, 0.0, 0.9]]
     return {
         "bootstrap": sis(),
         "PF-SP-PEKF": sis(SPPEKFProposal(channels)),
-        "PF-RWM": sis(None, move=RandomWalkMove(0.2)),
-        "Galerkin PF": sis(GalerkinProposal(100)),
-        "discretisation PF": sis(DiscretisationProposal()),
+        "CPF-SP": sis(CPFSPProposal(channels)),
         "MM-bootstrap": mm("prior"),
         "MMPF-SP": mm("sp-pekf"),
+        "Galerkin PF": sis(GalerkinProposal(100)),
+        "discretisation PF": sis(DiscretisationProposal()),
+        "discretisation MMPF": mm("cells"),
+        "PF + MH-prior move": sis(None, move=MHPriorMove()),
+        "PF + RWM move": sis(None, move=RandomWalkMove(0.2)),
+        "PF + MIS move": sis(None, move=IndependenceMove(0.15)),
+        "UPF": sis(UnscentedProposal()),
+        "IMM-EKF": lambda: InteractingMultipleModel([motion, *turns], imm, [sensor]),
     }
 
 
@@ -84,32 +103,61 @@ def time_filter(make: Callable[[], object], steps: int, repeats: int) -> float:
         t0 = time.perf_counter()
         if isinstance(f, MultipleModelParticleFilter):
             run_mm(f, prior, zs, 1.0, rng)
+        elif isinstance(f, InteractingMultipleModel):
+            timed_gaussian(f, prior, zs, ["s"], 1.0)
         else:
             run_sis(f, prior, zs, 1.0, rng)  # type: ignore[arg-type]
         out.append((time.perf_counter() - t0) / steps)
     return statistics.median(out[1:])
 
 
+def linear_fit(x: list[int], y: list[float]) -> dict[str, float]:
+    """Least-squares ``y = intercept + slope x`` and its R^2."""
+    a, b = np.polyfit(x, y, 1)
+    pred = a * np.asarray(x) + b
+    ss = np.sum((np.asarray(y) - np.mean(y)) ** 2)
+    return {"slope": float(a), "intercept": float(b), "r2": float(1 - np.sum((y - pred) ** 2) / ss)}
+
+
 def scaling(steps: int, repeats: int) -> dict[str, object]:
-    """C18: MMPF-SP seconds per step against N_s (K fixed) and K (N_s fixed), with linear fits."""
-    ns, ks = [200, 400, 800, 1600], [5, 10, 20, 40]
+    """C18: MMPF-SP seconds per step against particles N_s (10 channels per bank) and against
+    channels N per bank (N_s = 200), with linear fits."""
+    ns, ks = [200, 400, 800, 1600, 3200], [5, 10, 20, 40, 80]
     t_n = [time_filter(builders(n, 10)["MMPF-SP"], steps, repeats) for n in ns]
     t_k = [time_filter(builders(200, k)["MMPF-SP"], steps, repeats) for k in ks]
-
-    def fit(x, y):
-        a, b = np.polyfit(x, y, 1)
-        pred = a * np.asarray(x) + b
-        r2 = 1 - np.sum((np.asarray(y) - pred) ** 2) / np.sum((np.asarray(y) - np.mean(y)) ** 2)
-        return {"slope": a, "intercept": b, "r2": r2}
-
     return {
         "N_s": ns,
         "sec_vs_N_s": t_n,
-        "fit_N_s": fit(ns, t_n),
-        "K": ks,
-        "sec_vs_K": t_k,
-        "fit_K": fit(ks, t_k),
+        "fit_N_s": linear_fit(ns, t_n),
+        "channels": ks,
+        "sec_vs_channels": t_k,
+        "fit_channels": linear_fit(ks, t_k),
     }
+
+
+def plot_scaling(sc: dict[str, object], path: str) -> None:
+    """Two panels: seconds per step against N_s and against channels, points and linear fit."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
+    for ax, key, label in zip(axes, ("N_s", "channels"), ("particles N_s", "EKF channels N")):
+        x = np.asarray(sc[key], float)
+        y = np.asarray(sc[f"sec_vs_{key}"], float) * 1e3
+        f = sc[f"fit_{key}"]
+        ax.plot(x, y, "o", label="measured")
+        ax.plot(
+            x, (f["intercept"] + f["slope"] * x) * 1e3, "-", label=f"linear fit, R² {f['r2']:.3f}"
+        )
+        ax.set(xlabel=label, ylabel="ms per step")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    axes[0].set_title("MMPF-SP, 4 models x 10 channels", fontsize=9)
+    axes[1].set_title("MMPF-SP, 4 models, N_s = 200", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -120,6 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--filters", nargs="+", default=None)
     ap.add_argument("--no-scaling", action="store_true")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--plot", default=None, help="write the C18 scaling figure to this PNG")
     args = ap.parse_args(argv)
     results: dict[str, object] = {}
     for n in args.N:
@@ -138,19 +187,12 @@ def main(argv: list[str] | None = None) -> int:
     if not args.no_scaling:
         sc = scaling(args.steps, args.repeats)
         results["C18_scaling"] = sc
+        if args.plot:
+            plot_scaling(sc, args.plot)
         if not args.json:
-            print(
-                "C18 MMPF-SP: s/step vs N_s",
-                [f"{t:.4f}" for t in sc["sec_vs_N_s"]],
-                "fit",
-                sc["fit_N_s"],
-            )
-            print(
-                "C18 MMPF-SP: s/step vs K  ",
-                [f"{t:.4f}" for t in sc["sec_vs_K"]],
-                "fit",
-                sc["fit_K"],
-            )
+            for key in ("N_s", "channels"):
+                ms = ", ".join(f"{t * 1e3:.2f}" for t in sc[f"sec_vs_{key}"])  # type: ignore[attr-defined]
+                print(f"C18 MMPF-SP ms/step vs {key} {sc[key]}: {ms}; fit {sc[f'fit_{key}']}")
     if args.json:
         print(json.dumps(results, default=float))
     return 0
