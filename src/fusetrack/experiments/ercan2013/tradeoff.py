@@ -20,20 +20,22 @@ from .prior_accuracy import _prior
 from .simulation import DEFAULTS, run_tracking
 
 TARGET = 3.0
+PAPER_PERFECT_K4 = 3.1
+"""The paper's RMSE_tr with perfect priors at N = 4, M = 40 (implied by Sec. 6.1: 7.2 / 2.34)."""
 PRINTED_PREFIX = "printed "
 PRINTED_KS_FULL = (4, 8)
 PRINTED_KS_QUICK = (8,)
 """Camera counts also run with the likelihood as printed (floor 0, full Eq. 7 rectangles)."""
 
 
-def tolerated(grp: pd.DataFrame, rmse_max: float) -> float:
-    """RMSE_occ at which the mean RMSE_tr of one camera count reaches TARGET (see the module)."""
+def tolerated(grp: pd.DataFrame, rmse_max: float, target: float = TARGET) -> float:
+    """RMSE_occ at which the mean RMSE_tr of one camera count reaches ``target`` (see the module)."""
     g = grp.sort_values("rmse_occ")
-    if g["mean"].iloc[-1] <= TARGET:
+    if g["mean"].iloc[-1] <= target:
         return rmse_max
-    if g["mean"].iloc[0] > TARGET:
+    if g["mean"].iloc[0] > target:
         return float("nan")
-    return interpolate_crossing(g["rmse_occ"].to_numpy(), g["mean"].to_numpy(), TARGET)
+    return interpolate_crossing(g["rmse_occ"].to_numpy(), g["mean"].to_numpy(), target)
 
 
 def _grid(df: pd.DataFrame) -> pd.DataFrame:
@@ -86,6 +88,13 @@ def run(ctx: RunContext) -> Outcome:
         [{"k": k, "tolerated_rmse_occ": tolerated(g, rmse_max)} for k, g in table.groupby("k")]
     )
     hard_curve = {k: tolerated(g, rmse_max) for k, g in hard_table.groupby("k")}
+    # Our tracker is more accurate than the paper's; the same trade-off at a target scaled by the
+    # ratio of the perfect-prior RMSEs at k = 4 (ours / the paper's implied 3.1)
+    perfect_k4 = table[(table["k"] == 4) & (table["label"] == "0")]["mean"]
+    scaled = TARGET * float(perfect_k4.iloc[0]) / PAPER_PERFECT_K4 if len(perfect_k4) else TARGET
+    curve[f"tolerated at scaled target {scaled:.2f}"] = [
+        tolerated(g, rmse_max, scaled) for _, g in table.groupby("k")
+    ]
     curve["tolerated (printed likelihood)"] = curve["k"].map(hard_curve)
     vals = curve["tolerated_rmse_occ"].fillna(-1.0).to_numpy()
     steps_ok = np.diff(vals) >= -0.1 * rmse_max
@@ -109,6 +118,18 @@ def run(ctx: RunContext) -> Outcome:
             top / rmse_max >= 0.99,
         ),
     ]
+    scaled_vals = curve[f"tolerated at scaled target {scaled:.2f}"].fillna(-1.0).to_numpy()
+    scaled_ok = np.diff(scaled_vals) >= -0.1 * rmse_max
+    claims.append(
+        Claim(
+            "C5_monotone_scaled_target",
+            f"as C5_monotone, at the target scaled to our tracker ({scaled:.2f})",
+            "non-decreasing",
+            float(scaled_ok.mean()) if len(scaled_ok) else float("nan"),
+            ">= 0.75 (dips under 10% of RMSE_max allowed)",
+            bool(len(scaled_ok) and scaled_ok.mean() >= 0.75),
+        )
+    )
     hard_top = float(hard_curve.get(ks[-1], float("nan")))
     claims.append(
         Claim(
@@ -133,6 +154,13 @@ def run(ctx: RunContext) -> Outcome:
         mfc="none",
         label="likelihood as printed",
     )
+    sc = curve.dropna(subset=[f"tolerated at scaled target {scaled:.2f}"])
+    ax.plot(
+        sc[f"tolerated at scaled target {scaled:.2f}"],
+        sc["k"],
+        "^--",
+        label=f"corrected, scaled target {scaled:.2f}",
+    )
     ax.legend(fontsize=8)
     ax.axvline(rmse_max, ls=":", color="k", lw=1)
     ax.annotate("RMSE_max (no priors)", (rmse_max, ks[0]), fontsize=8, ha="right")
@@ -156,6 +184,11 @@ Square room without the static occluder, M = 40, first k of the fixed camera lis
 ## Tolerated prior accuracy (Fig. 8)
 
 {md(curve.assign(**{"tolerated / RMSE_max": curve["tolerated_rmse_occ"] / rmse_max}))}
+
+Scaled target: our tracker is more accurate than the paper's (perfect priors, k = 4: ours
+{fmt(float(perfect_k4.iloc[0])) if len(perfect_k4) else "n/a"} against the paper's implied {PAPER_PERFECT_K4:g}), so
+RMSE_tr = {TARGET:g} may be reached without priors at every camera count; the scaled target {TARGET:g} x ours / {PAPER_PERFECT_K4:g} =
+{scaled:.2f} asks the same of our tracker as the paper's 3 asked of its own.
 
 NaN: even perfect priors miss RMSE_tr = {TARGET:g} with that many cameras. RMSE_max = {fmt(rmse_max)}.
 "printed likelihood": the same sweep at k in {list(printed_ks)} with p(eta | u) not floored and Eq. 7 rectangles up
