@@ -91,3 +91,19 @@ def ordering_holds(values: pd.Series, order: Sequence[str]) -> bool:
 
 def fmt_order(values: pd.Series, order: Sequence[str]) -> str:
     return " < ".join(f"{k} {float(values[k]):.3g}" for k in order)
+
+
+def timed_mm(
+    filt: Any,
+    prior: Gaussian,
+    zs: Sequence[Sequence[Array | None]],
+    dt: float,
+    rng: np.random.Generator,
+) -> tuple[Array, Array, float]:
+    """A multiple-model particle filter run (:func:`~fusetrack.filters.multiple_model.run_mm`):
+    estimates ``(T, d)``, model probabilities ``(T, M)`` and seconds."""
+    from ..filters.multiple_model import run_mm
+
+    t0 = time.perf_counter()
+    est, probs = run_mm(filt, prior, zs, dt, rng)
+    return est, probs, time.perf_counter() - t0

@@ -197,7 +197,7 @@ def equal_time_particles(
 
 def beyond_table(
     per_run: pd.DataFrame,
-    reference: str,
+    reference: str | Mapping[Any, str],
     *,
     by: Sequence[str] = (),
     error: str = "error",
@@ -211,6 +211,8 @@ def beyond_table(
     over runs: robust to a first run's compile time and to load spikes) and seconds relative to
     ``reference``. ``winners`` (one row per configuration): the best method at equal
     time (seconds <= ``slack`` x the reference's), the best overall, and their scores.
+    ``reference`` may differ per configuration: a mapping from the configuration's key (the
+    value of ``by`` when it has one column, else the tuple) to the method.
     """
     keys = [*by, "method"]
     g = per_run.groupby(keys, sort=False)
@@ -226,12 +228,17 @@ def beyond_table(
     rel, rows = [], []
     for key, full in groups:
         t = full.droplevel(list(by)) if by else full  # index: method
-        r = t["seconds/run"] / float(t.loc[reference, "seconds/run"])
-        rel.append(full["seconds/run"] / float(t.loc[reference, "seconds/run"]))
+        key_t = key if isinstance(key, tuple) else (key,)
+        ref = (
+            reference
+            if isinstance(reference, str)
+            else reference[key_t[0] if len(key_t) == 1 else key_t]
+        )
+        r = t["seconds/run"] / float(t.loc[ref, "seconds/run"])
+        rel.append(full["seconds/run"] / float(t.loc[ref, "seconds/run"]))
         ok = t.loc[r <= slack, "mean"]
         eq = ok.idxmin() if better == "lower" else ok.idxmax()
         best = t["mean"].idxmin() if better == "lower" else t["mean"].idxmax()
-        key_t = key if isinstance(key, tuple) else (key,)
         rows.append(
             {
                 **dict(zip(by, key_t)),
@@ -239,7 +246,10 @@ def beyond_table(
                 "score": float(t.loc[eq, "mean"]),
                 "winner overall": best,
                 "score overall": float(t.loc[best, "mean"]),
-                f"{reference} score": float(t.loc[reference, "mean"]),
+                **({} if isinstance(reference, str) else {"reference": ref}),
+                f"{reference if isinstance(reference, str) else 'reference'} score": float(
+                    t.loc[ref, "mean"]
+                ),
             }
         )
     table["time / reference"] = pd.concat(rel)
@@ -292,7 +302,7 @@ def beyond_section(
     table: pd.DataFrame,
     winners: pd.DataFrame,
     *,
-    reference: str,
+    reference: str | Mapping[Any, str],
     figure: str | None,
     calibration: str,
     notes: Sequence[str] = (),
@@ -302,7 +312,12 @@ def beyond_section(
     lines = [
         "## Beyond the paper: comparators at equal computing time",
         "",
-        f"Not paper claims. Reference (the paper's method the time is matched to): **{reference}**. "
+        "Not paper claims. Reference (the paper's method the time is matched to): "
+        + (
+            f"**{reference}**. "
+            if isinstance(reference, str)
+            else "; ".join(f"{k}: **{v}**" for k, v in reference.items()) + ". "
+        )
         + calibration,
         "",
         "Who wins (best mean score among the methods that took at most 1.5x the reference's "
@@ -347,7 +362,7 @@ class Comparison:
 
 def compare(
     per_run: pd.DataFrame,
-    reference: str,
+    reference: str | Mapping[Any, str],
     figure_path: Path | None,
     *,
     by: Sequence[str] = (),

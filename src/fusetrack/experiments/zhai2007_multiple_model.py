@@ -22,11 +22,11 @@ import pandas as pd
 
 from ..core import Gaussian
 from ..evaluation import plots
+from ..evaluation.montecarlo import run_seed
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters.imm import InteractingMultipleModel
 from ..filters.multiple_model import (
     MultipleModelParticleFilter,
-    run_mm,
     sample_regimes,
     stationary_distribution,
 )
@@ -34,7 +34,16 @@ from ..filters.sis import ProposalParticleFilter
 from ..motion import ConstantVelocity
 from ..motion.maneuver import ManeuverTurn
 from ..sensors import Bearing
-from .zhai2007_common import timed_gaussian, timed_sis, track_rows
+from .zhai2007_common import timed_gaussian, timed_mm, timed_sis, track_rows
+from .zhai2007_comparators import (
+    Comparison,
+    Scenario,
+    calibration_note,
+    compare,
+    equal_time_particles,
+    per_run_scores,
+    run_comparators,
+)
 
 PI_A = np.array(
     [[0.7, 0.1, 0.1, 0.1], [0.4, 0.5, 0.05, 0.05], [0.4, 0.3, 0.2, 0.1], [0.4, 0.3, 0.2, 0.1]]
@@ -83,9 +92,11 @@ def bearings(
 # ----------------------------------------------------------------------------- E7
 
 
-def run_e7(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+def e7_scenario(config: Mapping[str, Any], seed: int) -> Scenario:
+    """Run ``seed``'s E7 truth, bearing and prior as a :class:`Scenario` (CV for the single-model
+    comparators; the IMM uses the three filter models and ``PI_3``)."""
     rng = np.random.default_rng(seed)
-    q, a_m, n = 0.01, 0.5, int(config["n_particles"])
+    q, a_m = 0.01, 0.5
     x0 = np.array([10.0, 30.0, 1.0, 0.0])
     truth = simulate_turns(x0, E7_STEPS, {k: 1 for k in E7_TURN}, a_m, q, rng)
     sensor = Bearing("s0", position=[0.0, 0.0], sigma=float(config["sigma"]))
@@ -93,6 +104,26 @@ def run_e7(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     p0 = np.diag([1.0, 1.0, 0.1, 0.1])
     prior = Gaussian(x0 + rng.multivariate_normal(np.zeros(4), p0), p0)
     models = filter_models(q, a_m)
+    return Scenario(models[0], [sensor], prior, zs, 1.0, truth, models, PI_3)
+
+
+def run_e7(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    cs = e7_scenario(config, seed)
+    if "n_equal" in config:  # beyond the paper only (fewer runs)
+        found = run_comparators(cs, seed, config["n_equal"], ("UPF", "bootstrap equal time"))
+        return [
+            r
+            for m, t in found.items()
+            for r in track_rows(m, t.estimates, cs.truth, seconds=t.seconds)
+        ]
+    n, sensor, prior, zs, truth = (
+        int(config["n_particles"]),
+        cs.sensors[0],
+        cs.prior,
+        cs.zs,
+        cs.truth,
+    )
+    models = list(cs.imm_models)
     rows: list[dict[str, Any]] = []
     runs = {
         "MM-bootstrap": MultipleModelParticleFilter(models, PI_3, [sensor], n),
@@ -101,15 +132,15 @@ def run_e7(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         ),
     }
     for k, (name, filt) in enumerate(runs.items()):
-        est, probs = run_mm(filt, prior, zs, 1.0, np.random.default_rng([seed, k]))
-        rows += track_rows(name, est, truth, **model_columns(probs))
+        est, probs, secs = timed_mm(filt, prior, zs, 1.0, np.random.default_rng([seed, k]))
+        rows += track_rows(name, est, truth, seconds=secs, **model_columns(probs))
     imm_probs: list[np.ndarray] = []
     imm = InteractingMultipleModel(models, PI_3, [sensor])
-    est, _ = timed_gaussian(imm, prior, zs, ["s0"], 1.0, imm_probs)
-    rows += track_rows("IMM-EKF", est, truth, **model_columns(np.array(imm_probs)))
+    est, secs = timed_gaussian(imm, prior, zs, ["s0"], 1.0, imm_probs)
+    rows += track_rows("IMM-EKF", est, truth, seconds=secs, **model_columns(np.array(imm_probs)))
     bs = ProposalParticleFilter(models[0], [sensor], n_particles=n)
-    est, _, _ = timed_sis(bs, prior, zs, 1.0, np.random.default_rng([seed, 9]))
-    return rows + track_rows("bootstrap CV", est, truth)
+    est, secs, _ = timed_sis(bs, prior, zs, 1.0, np.random.default_rng([seed, 9]))
+    return rows + track_rows("bootstrap CV", est, truth, seconds=secs)
 
 
 def model_columns(probs: np.ndarray) -> dict[str, np.ndarray]:
@@ -136,9 +167,10 @@ def fuse_by_reflectivity(estimates: np.ndarray, sensor_pos: np.ndarray) -> np.nd
     return np.asarray(np.sum(w[..., None] * estimates, axis=0))
 
 
-def run_e8(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+def e8_scenario(seed: int) -> Scenario:
+    """Run ``seed``'s E8 truth, three bearings and prior as a :class:`Scenario` (centralised)."""
     rng = np.random.default_rng(seed)
-    q, a_m, n = 0.01, float(np.deg2rad(10.0)), int(config["n_particles"])
+    q, a_m = 0.01, float(np.deg2rad(10.0))
     x0 = np.array([15.0, 20.0, 0.8, 0.3])
     truth = simulate_turns(x0, E8_STEPS, E8_TURNS, a_m * float(np.hypot(0.8, 0.3)), q, rng)
     sensors = [Bearing(f"s{i}", position=list(p), sigma=0.05) for i, p in enumerate(E8_SENSORS)]
@@ -146,34 +178,57 @@ def run_e8(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     p0 = np.diag([1.0, 1.0, 0.1, 0.1])
     prior = Gaussian(x0 + rng.multivariate_normal(np.zeros(4), p0), p0)
     models = filter_models(q, 0.15)
-    out: dict[str, np.ndarray] = {}
-    per_sensor = []
-    for i, s in enumerate(sensors):
-        mm = MultipleModelParticleFilter(models, PI_3, [s], n)
-        est, _ = run_mm(mm, prior, [[z[i]] for z in zs], 1.0, np.random.default_rng([seed, i]))
+    return Scenario(models[0], sensors, prior, zs, 1.0, truth, models, PI_3)
+
+
+def fused_mmpf(cs: Scenario, n: int, seed: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """One MM-bootstrap per sensor fused by reflectivity: ``(fused, sensor 0's, seconds)``."""
+    per_sensor, secs = [], 0.0
+    for i, s in enumerate(cs.sensors):
+        mm = MultipleModelParticleFilter(list(cs.imm_models), PI_3, [s], n)
+        zi = [[z[i]] for z in cs.zs]
+        est, _, t = timed_mm(mm, cs.prior, zi, 1.0, np.random.default_rng([seed, i]))
         per_sensor.append(est)
-    out["MMPF single sensor"] = per_sensor[0]
-    out["MMPF multi-sensor (fused)"] = fuse_by_reflectivity(
-        np.array(per_sensor), np.array(E8_SENSORS)
-    )
+        secs += t
+    fused = fuse_by_reflectivity(np.array(per_sensor), np.array(E8_SENSORS))
+    return fused, per_sensor[0], secs
+
+
+def run_e8(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    cs = e8_scenario(seed)
+    if "n_equal" in config:  # beyond the paper only (fewer runs): centralised comparators
+        found = run_comparators(cs, seed, config["n_equal"], ("UPF", "bootstrap equal time"))
+        return [
+            r
+            for m, t in found.items()
+            for r in track_rows(f"{m} centralised", t.estimates, cs.truth, seconds=t.seconds)
+        ]
+    n, sensors, prior, zs, truth = int(config["n_particles"]), cs.sensors, cs.prior, cs.zs, cs.truth
+    models = list(cs.imm_models)
+    out: dict[str, tuple[np.ndarray, float]] = {}
+    fused, single, secs = fused_mmpf(cs, n, seed)
+    out["MMPF single sensor"] = (single, secs / len(sensors))
+    out["MMPF multi-sensor (fused)"] = (fused, secs)
     bs = ProposalParticleFilter(models[0], [sensors[0]], n_particles=n)
+    z0 = [[z[0]] for z in zs]
     out["bootstrap single sensor"] = timed_sis(
-        bs, prior, [[z[0]] for z in zs], 1.0, np.random.default_rng([seed, 5])
-    )[0]
+        bs, prior, z0, 1.0, np.random.default_rng([seed, 5])
+    )[:2]
     central = MultipleModelParticleFilter(models, PI_3, sensors, n)
-    out["MMPF centralised"] = run_mm(central, prior, zs, 1.0, np.random.default_rng([seed, 6]))[0]
+    e, _, t = timed_mm(central, prior, zs, 1.0, np.random.default_rng([seed, 6]))
+    out["MMPF centralised"] = (e, t)
     bsc = ProposalParticleFilter(models[0], sensors, n_particles=n)
     out["bootstrap centralised"] = timed_sis(bsc, prior, zs, 1.0, np.random.default_rng([seed, 7]))[
-        0
+        :2
     ]
     ids = [s.sensor_id for s in sensors]
-    single = InteractingMultipleModel(models, PI_3, [sensors[0]])
-    out["IMM-EKF single sensor"] = timed_gaussian(
-        single, prior, [[z[0]] for z in zs], ids[:1], 1.0
-    )[0]
+    single_imm = InteractingMultipleModel(models, PI_3, [sensors[0]])
+    out["IMM-EKF single sensor"] = timed_gaussian(single_imm, prior, z0, ids[:1], 1.0)
     imm = InteractingMultipleModel(models, PI_3, sensors)
-    out["IMM-EKF centralised"] = timed_gaussian(imm, prior, zs, ids, 1.0)[0]
-    return [row for name, est in out.items() for row in track_rows(name, est, truth)]
+    out["IMM-EKF centralised"] = timed_gaussian(imm, prior, zs, ids, 1.0)
+    return [
+        row for name, (est, t) in out.items() for row in track_rows(name, est, truth, seconds=t)
+    ]
 
 
 # ----------------------------------------------------------------------------- report
@@ -202,6 +257,61 @@ def e6_tracks(
                 xs.append(x)
             out[f"{label} a_m={a:g}"] = np.array(xs)
     return out
+
+
+CMP_RUNS = 30  # runs with the UPF and equal-time bootstrap (beyond the paper) at full size
+
+
+def comparators(
+    ctx: RunContext, df: pd.DataFrame, runs: int, n_part: int, sigmas: tuple[float, ...]
+) -> Comparison:
+    """Beyond the paper: UPF and bootstrap (CV) calibrated to the paper's filter's time (E7:
+    MM-bootstrap; E8: the fused per-sensor MMPFs, against centralised comparators), on the first
+    ``CMP_RUNS`` runs; the IMM-EKF rows come from every run."""
+    k, reps = min(runs, CMP_RUNS), 2 if ctx.quick else 3
+    seed0 = run_seed(ctx.seed, 0)
+    n_equal, target, parts = {}, {}, []
+    for sig in sigmas:
+        cs = e7_scenario({"sigma": sig}, seed0)
+        key = f"E7 sigma {sig:g}"
+
+        def mm_ref(cs: Scenario = cs) -> object:
+            f = MultipleModelParticleFilter(list(cs.imm_models), PI_3, cs.sensors, n_part)
+            return timed_mm(f, cs.prior, cs.zs, 1.0, np.random.default_rng(0))
+
+        n_equal[key], target[key] = equal_time_particles(
+            cs, mm_ref, ("UPF", "bootstrap equal time"), repeats=reps
+        )
+        cfg = {"experiment": "E7", "sigma": sig, "n_equal": n_equal[key]}
+        parts.append(ctx.monte_carlo(run_e7, [cfg], k, desc=f"comparators {key}").assign(label=key))
+    cs8 = e8_scenario(seed0)
+    n_equal["E8"], target["E8"] = equal_time_particles(
+        cs8, lambda: fused_mmpf(cs8, n_part, 0), ("UPF", "bootstrap equal time"), repeats=reps
+    )
+    cfg8 = {"experiment": "E8", "n_equal": n_equal["E8"]}
+    parts.append(ctx.monte_carlo(run_e8, [cfg8], k, desc="comparators E8").assign(label="E8"))
+    label = np.where(
+        df["experiment"] == "E8", "E8", "E7 sigma " + df["sigma"].map(lambda v: f"{v:g}")
+    )
+    rows = pd.concat([df[df["run"] < k].assign(label=label[df["run"] < k]), *parts])
+    return compare(
+        per_run_scores(rows, ["label"], "sq_pos_err"),
+        {k: "MMPF multi-sensor (fused)" if k == "E8" else "MM-bootstrap" for k in n_equal},
+        ctx.figure_path("error_vs_seconds"),
+        by=["label"],
+        ylabel="position RMSE per run (mean)",
+        calibration=calibration_note(n_equal, target)
+        + f" UPF and the equal-time bootstrap ran on the first {k} of the {runs} runs (same "
+        "truths); the table compares every method on those runs. E8's reference is the fused "
+        "multi-sensor MMPF (three filters); its comparators use all three bearings "
+        "(centralised).",
+        notes=[
+            "IMM-EKF: the same three models (CV, CCW, CW) and matrix as the MMPFs, one EKF each.",
+            "UPF and the equal-time bootstrap use the CV model (a single-model filter).",
+        ],
+        n_particles=n_equal,
+        runs=k,
+    )
 
 
 def run(ctx: RunContext) -> Outcome:
@@ -364,6 +474,7 @@ def run(ctx: RunContext) -> Outcome:
     )
 
     df = pd.concat([df7, df8], ignore_index=True)
+    cmp = comparators(ctx, df, runs, n_part, sigmas)
     t7 = pd.DataFrame(
         {
             "position RMSE (all t)": df7.groupby(["sigma", "method"])["sq_pos_err"].mean().pow(0.5),
@@ -449,5 +560,6 @@ with the same models and matrix, on the first sensor alone and on all three bear
 * The fusion rule (weights ∝ 1/d², distances to each sensor's own estimate) is the thesis's
   "reflectivity"; a centralised filter using all three bearings (beyond the paper) is the
   statistically efficient alternative and is shown for comparison.
-"""
-    return Outcome(df, claims, body, runs)
+
+{cmp.section}"""
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
