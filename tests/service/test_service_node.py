@@ -31,7 +31,7 @@ def test_each_bad_message_is_refused_with_its_reason(network):
         (
             msg("array-west", 4, "mic_west", 1.0, "image_position", [3.0, 1.0]),
             "array-west",
-            "unfusable",
+            "wrong_kind",  # image positions are fused, but this sensor reports bearings
         ),
         (
             msg("tag-reader", 1, "tag", 1.0, "position_fix", [1.0, 2.0, 3.0]),

@@ -87,7 +87,8 @@ def _cv_matrices(dt: float, q: float) -> tuple[NDArray[np.float64], NDArray[np.f
 
 @dataclass
 class MCMCDA:
-    """Online MCMCDA. Feed each step's observations with :meth:`step`; read :meth:`tracks`."""
+    """Online MCMCDA. Feed each step's observations with :meth:`step`; read :meth:`tracks`
+    (committed, at the end) or :meth:`current_tracks` (the current estimates, after each step)."""
 
     config: MCMCDAConfig = field(default_factory=MCMCDAConfig)
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
@@ -112,6 +113,13 @@ class MCMCDA:
 
     def _kalman(self, track: TrackKey) -> tuple[float, list[tuple[int, NDArray[np.float64]]]]:
         """Innovation log-likelihood of a track and its filtered states at its observations."""
+        ll, states = self._kalman_full(track)
+        return ll, [(t, x) for t, x, _ in states]
+
+    def _kalman_full(
+        self, track: TrackKey
+    ) -> tuple[float, list[tuple[int, NDArray[np.float64], NDArray[np.float64]]]]:
+        """:meth:`_kalman` with the filtered covariances too: ``(ll, [(t, x, P), ...])``."""
         c = self.config
         f1, q1 = _cv_matrices(c.dt, c.accel_std)
         r = c.obs_std**2 * np.eye(2)
@@ -119,7 +127,7 @@ class MCMCDA:
         x = np.array([y0[0], y0[1], 0.0, 0.0])
         p = np.diag([c.obs_std**2, c.obs_std**2, c.init_speed_std**2, c.init_speed_std**2])
         ll = 0.0
-        states = [(track[0][0], x.copy())]
+        states = [(track[0][0], x.copy(), p.copy())]
         for prev, cur in itertools.pairwise(track):
             for _ in range(cur[0] - prev[0]):
                 x = f1 @ x
@@ -133,7 +141,7 @@ class MCMCDA:
             k = p[:, :2] @ sinv
             x = x + k @ innov
             p = p - k @ p[:2, :]
-            states.append((cur[0], x.copy()))
+            states.append((cur[0], x.copy(), p.copy()))
         return ll, states
 
     def track_score(self, track: TrackKey, t_end: int) -> float:
@@ -419,6 +427,29 @@ class MCMCDA:
             for o in tr:
                 if o[0] == t and tr in self.ids:
                     self.committed.setdefault(self.ids[tr], {})[t] = o[1]
+
+    def current_tracks(
+        self, max_age: int | None = None
+    ) -> dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        """The tracks of the current MAP hypothesis, now: id -> ``(x, P)``, the constant-velocity
+        state ``[x, y, vx, vy]`` and covariance filtered through the track's observations in the
+        window and predicted to the latest step. Tracks whose last observation is more than
+        ``max_age`` steps old (default ``max_gap``) are left out. Call after :meth:`step`."""
+        c = self.config
+        now = len(self.observations) - 1
+        age_limit = c.max_gap if max_age is None else max_age
+        f1, q1 = _cv_matrices(c.dt, c.accel_std)
+        out = {}
+        for tr in self.best:
+            ident = self.ids.get(tr)
+            if ident is None or now - tr[-1][0] > age_limit:
+                continue
+            _, states = self._kalman_full(tr)
+            t, x, p = states[-1]
+            for _ in range(now - t):
+                x, p = f1 @ x, f1 @ p @ f1.T + q1
+            out[ident] = (x, 0.5 * (p + p.T))
+        return dict(sorted(out.items()))
 
     def finish(self) -> None:
         """Commit every observation still in the window (end of the data)."""

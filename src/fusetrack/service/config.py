@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -24,13 +25,24 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, invalid
 from ..motion import ConstantVelocity, CoordinatedTurnRate
-from ..sensors import AzimuthPolar, Bearing, PositionFix, Range, RangeBearing
+from ..sensors import AzimuthPolar, Bearing, HomographyCamera, PositionFix, Range, RangeBearing
+from ..sensors.detection_function import AngularSampling
 from .auth import MIN_KEY_BYTES, bearer_token
 from .schema import _NAME
 
-FUSED_KINDS: tuple[str, ...] = ("bearing", "doa", "range", "range_bearing", "position_fix")
-"""Reading kinds the configured trackers fuse (the schema has more; those are rejected as
-``unfusable`` by this node until a tracker that uses them is configured)."""
+FUSED_KINDS: tuple[str, ...] = (
+    "bearing",
+    "doa",
+    "range",
+    "range_bearing",
+    "position_fix",
+    "image_position",
+    "detection_function",
+)
+"""Reading kinds a node may be configured for. ``detection_function`` readings need the grid
+tracker (``tracker.filter: grid``); every other kind is fused by every tracker."""
+
+GRID_ONLY_KINDS: tuple[str, ...] = ("detection_function",)
 
 
 class _Section(BaseModel):
@@ -56,7 +68,15 @@ class SensorConfig(_Section):
     """One sensor: its id, kind, geometry and noise (SI units, radians)."""
 
     id: str = Field(pattern=_NAME)
-    kind: Literal["bearing", "doa", "range", "range_bearing", "position_fix"]
+    kind: Literal[
+        "bearing",
+        "doa",
+        "range",
+        "range_bearing",
+        "position_fix",
+        "image_position",
+        "detection_function",
+    ]
     position: list[float] | None = Field(default=None, min_length=2, max_length=3)
     heading: float = 0.0
     fov: float = Field(default=2 * math.pi, gt=0.0, le=2 * math.pi)
@@ -67,6 +87,19 @@ class SensorConfig(_Section):
     sigma_azimuth: float | None = Field(default=None, gt=0.0)
     sigma_polar: float | None = Field(default=None, gt=0.0)
     cov: list[list[float]] | None = None
+    homography: list[list[float]] | None = Field(
+        default=None, description="image_position: 3x3 ground plane (m) -> image (px)"
+    )
+    sigma_px: float | None = Field(default=None, gt=0.0, description="image_position noise")
+    image_size: list[int] = Field(default=[640, 480], min_length=2, max_length=2)
+    cells: int | None = Field(
+        default=None,
+        ge=2,
+        le=4096,
+        description="detection_function: samples per reading, over the full circle when fov "
+        "is 2 pi (microphone beams, the first at the heading) or else over the field of view "
+        "(camera column bins, centred)",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -82,6 +115,8 @@ class SensorConfig(_Section):
             "range": ("position", "sigma"),
             "range_bearing": ("position", "sigma_range", "sigma_bearing"),
             "position_fix": ("cov",),
+            "image_position": ("homography", "sigma_px"),
+            "detection_function": ("position", "cells"),
         }[self.kind]
         missing = [n for n in need if getattr(self, n) is None]
         if missing:
@@ -117,8 +152,46 @@ class SensorConfig(_Section):
                     sigma_bearing=s.sigma_bearing,
                     **geometry,
                 )
+            case "image_position":
+                return HomographyCamera(
+                    s.id,
+                    foot_homography=np.array(s.homography),
+                    variant="foot",
+                    sigma_px=s.sigma_px,
+                    image_size=(s.image_size[0], s.image_size[1]),
+                )
+            case "detection_function":
+                return DetectionFunctionSensor(s.id, s.position, s.heading, self.sampling())
             case _:
                 return PositionFix(s.id, cov=np.array(s.cov), position=s.position)
+
+    def sampling(self) -> AngularSampling:
+        """Where a detection function's samples lie, in the sensor's frame."""
+        if self.cells is None:
+            raise ConfigError(invalid(f"sensors[{self.id}].cells", None, "a number of samples"))
+        if self.fov >= 2 * math.pi - 1e-9:
+            return AngularSampling.beams(self.cells)
+        return AngularSampling.camera_bins(self.fov, self.cells)
+
+
+@dataclass(frozen=True)
+class DetectionFunctionSensor:
+    """A sensor that reports a detection function (Kushwaha 2010, Ch. III): beam energies of a
+    microphone array or per-column foreground scores of a camera, ``dim`` = its samples. Only the
+    grid tracker fuses it (:mod:`fusetrack.service.grid_engine`)."""
+
+    sensor_id: str
+    position: list[float]
+    heading: float
+    sampling: AngularSampling
+
+    @property
+    def dim(self) -> int:
+        return self.sampling.size
+
+    @property
+    def position_index(self) -> tuple[int, int]:
+        return (0, 1)
 
 
 class NodeConfig(_Section):
@@ -159,10 +232,40 @@ class MotionConfig(_Section):
         return ConstantVelocity(ndim=self.ndim, q=self.q)
 
 
+class GridConfig(_Section):
+    """The grid tracker (``filter: grid``; Kushwaha 2010, Ch. III): cells over ``area``, the
+    directional motion's box half-width ``delta`` (m per tick) and the fusion rule of the
+    sensors' per-cell likelihoods (``product``, Eq. 30, or quality-weighted ``sum``, Eq. 31)."""
+
+    cell: float = Field(default=1.0, gt=0.0)
+    delta: float = Field(default=1.5, ge=0.0)
+    fusion: Literal["product", "sum"] = "product"
+    max_speed: float = Field(default=20.0, gt=0.0, description="m/s, clips the grid's velocity")
+
+
+class AssociationConfig(_Section):
+    """Several targets (``method: mcmcda``): each tick's position detections -- position fixes,
+    range-bearing plots converted to positions, and with the grid tracker the peaks of the
+    tick's fused likelihood -- are associated by online MCMCDA (Oh et al. 2009, as Kushwaha 2010
+    uses it); each track is published with its own id."""
+
+    method: Literal["none", "mcmcda"] = "none"
+    n_mc: int = Field(default=300, ge=1, le=100_000)
+    window: int = Field(default=8, ge=2, le=1000)
+    max_gap: int = Field(default=3, ge=1)
+    max_speed: float = Field(default=20.0, gt=0.0)
+    p_detect: float = Field(default=0.8, gt=0.0, lt=1.0)
+    p_terminate: float = Field(default=0.05, gt=0.0, lt=1.0)
+    birth_rate: float = Field(default=0.05, gt=0.0, description="per tick, whole area")
+    false_alarm_rate: float = Field(default=0.1, gt=0.0, description="per tick, whole area")
+    obs_std: float = Field(default=1.0, gt=0.0, description="m")
+    accel_std: float = Field(default=2.0, gt=0.0, description="m/s^2")
+
+
 class TrackerConfig(_Section):
     """Which filter fuses the readings, with which motion model and prior."""
 
-    filter: Literal["ekf", "ukf", "pf"] = "ekf"
+    filter: Literal["ekf", "ukf", "pf", "grid"] = "ekf"
     update: Literal["joint", "sequential"] = Field(
         default="joint",
         description="ekf/ukf: fuse the readings of one time as one stacked measurement (one "
@@ -173,6 +276,8 @@ class TrackerConfig(_Section):
     motion: MotionConfig = MotionConfig()
     prior_mean: list[float]
     prior_std: list[float]
+    grid: GridConfig = GridConfig()
+    association: AssociationConfig = AssociationConfig()
 
     @model_validator(mode="after")
     def _prior(self) -> TrackerConfig:
@@ -293,6 +398,29 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
             f"{source}: "
             + invalid("tracker.prior_mean", cfg.tracker.prior_mean, f"{expect} entries")
         )
+    grid_only = [s.id for s in cfg.sensors if s.kind in GRID_ONLY_KINDS]
+    if grid_only and cfg.tracker.filter != "grid":
+        raise ConfigError(
+            f"{source}: "
+            + invalid(
+                "tracker.filter",
+                cfg.tracker.filter,
+                f"'grid': sensors {grid_only} report detection functions, which only the "
+                "grid tracker fuses",
+            )
+        )
+    if cfg.tracker.association.method == "mcmcda" and cfg.tracker.filter != "grid":
+        localising = [s.id for s in cfg.sensors if s.kind in ("position_fix", "range_bearing")]
+        if not localising:
+            raise ConfigError(
+                f"{source}: "
+                + invalid(
+                    "tracker.association",
+                    "mcmcda",
+                    "position detections: position_fix or range_bearing sensors, or the grid "
+                    "tracker (whose fused likelihood gives them)",
+                )
+            )
     motion = cfg.tracker.motion.build()
     for sid, model in models.items():  # each sensor must read positions of the tracker's state
         idx = tuple(getattr(model, "_idx", ()) or model.position_index)

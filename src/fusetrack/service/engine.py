@@ -13,7 +13,7 @@ With ``alignment="closest"`` each reading is fused as if taken at the tick time.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -99,6 +99,10 @@ class FusionEngine:
             readings=len(readings),
         )
 
+    def step_all(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]:
+        """:meth:`step` as the list every engine returns (one track here)."""
+        return [self.step(tick, t, readings)]
+
     def _initial(self) -> Any:
         prior = self.cfg.tracker.prior()
         init = getattr(self.filter, "initialize", None)
@@ -109,3 +113,25 @@ class FusionEngine:
         if dt > _TIME_TOLERANCE:
             self.belief = self.filter.predict(self.belief, dt, self.rng)
             self.time = t
+
+
+class Engine(Protocol):
+    """What the node needs of a tracker: one call per tick, the tracks it publishes."""
+
+    resets: int
+
+    def step_all(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]: ...
+
+
+def build_engine(cfg: NetworkConfig, start: float) -> Engine:
+    """The configured tracker: several targets through the association layer
+    (:mod:`.multi_engine`), the grid tracker (:mod:`.grid_engine`) or one filter (this module)."""
+    if cfg.tracker.association.method == "mcmcda":
+        from .multi_engine import MultiTargetEngine
+
+        return MultiTargetEngine(cfg, start)
+    if cfg.tracker.filter == "grid":
+        from .grid_engine import GridEngine
+
+        return GridEngine(cfg, start)
+    return FusionEngine(cfg, start)

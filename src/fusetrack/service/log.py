@@ -4,8 +4,9 @@ One SQLite file (write-ahead journal) with three tables:
 
 * ``messages(id, node, seq, sensor, time, received, body)``: each accepted message, ``body`` its
   JSON exactly as validated; ``id`` is the reading's arrival number;
-* ``ticks(tick, time, message_ids, body)``: each published :class:`~.schema.TrackState` and the
-  ids of the readings that tick fused, in fusion order;
+* ``ticks(tick, time, message_ids, body)``: each fusion tick, the ids of the readings it fused
+  (in fusion order) and what it published: one :class:`~.schema.TrackState` (a single-target
+  tracker), or a JSON list of them (the multi-target tracker: none, one or several);
 * ``meta(key, value)``: the tick grid's ``start``.
 
 :func:`replay_log` recomputes the tracks offline from the messages and the tick assignment and
@@ -26,7 +27,7 @@ import numpy as np
 
 from .alignment import Reading
 from .config import NetworkConfig
-from .engine import FusionEngine
+from .engine import Engine, build_engine
 from .schema import SensorMessage, TrackState
 
 _TABLES = """
@@ -75,10 +76,22 @@ class DurableLog:
             ),
         )
 
-    def append_tick(self, state: TrackState, message_ids: Sequence[int]) -> None:
+    def append_tick(
+        self,
+        tick: int,
+        time: float,
+        states: Sequence[TrackState],
+        message_ids: Sequence[int],
+        single: bool = True,
+    ) -> None:
+        """Log one tick; ``single``: the tracker publishes exactly one state per tick."""
+        if single and len(states) == 1:
+            body = states[0].model_dump_json()
+        else:
+            body = "[" + ",".join(st.model_dump_json() for st in states) + "]"
         self.db.execute(
             "INSERT INTO ticks VALUES (?, ?, ?, ?)",
-            (state.tick, state.time, json.dumps(list(message_ids)), state.model_dump_json()),
+            (tick, time, json.dumps(list(message_ids)), body),
         )
 
     def set_meta(self, key: str, value: str) -> None:
@@ -101,25 +114,46 @@ class DurableLog:
         for rid, body in self.db.execute("SELECT id, body FROM messages ORDER BY id"):
             yield int(rid), SensorMessage.model_validate_json(body)
 
+    def tick_rows(self) -> Iterator[tuple[int, float, list[TrackState], list[int]]]:
+        """``(tick, time, published states, fused message ids)`` of every logged tick."""
+        rows = self.db.execute("SELECT tick, time, message_ids, body FROM ticks ORDER BY tick")
+        for tick, time, ids, body in rows:
+            if body.startswith("["):
+                states = [TrackState.model_validate(d) for d in json.loads(body)]
+            else:
+                states = [TrackState.model_validate_json(body)]
+            yield int(tick), float(time), states, json.loads(ids)
+
     def ticks(self) -> Iterator[tuple[TrackState, list[int]]]:
-        for ids, body in self.db.execute("SELECT message_ids, body FROM ticks ORDER BY tick"):
-            yield TrackState.model_validate_json(body), json.loads(ids)
+        """Each published state with the ids its tick fused (a tick of several tracks gives
+        several; a tick of none, none)."""
+        for _, _, states, ids in self.tick_rows():
+            for st in states:
+                yield st, ids
 
     def highest_seq(self) -> dict[str, int]:
         rows = self.db.execute("SELECT node, MAX(seq) FROM messages GROUP BY node")
         return {str(n): int(s) for n, s in rows}
 
 
-def replay_log(cfg: NetworkConfig, log: DurableLog) -> tuple[FusionEngine, list[TrackState]]:
+def replay_log(cfg: NetworkConfig, log: DurableLog) -> tuple[Engine, list[TrackState]]:
     """Recompute every logged tick from the logged messages; the engine ends where the node was.
 
     The recomputed states equal the logged ones (the node's engine is deterministic); compare
-    them with ``log.ticks()`` to check a log.
+    them with ``[s for s, _ in log.ticks()]`` to check a log.
     """
-    start = float(log.meta("start") or cfg.fusion.start)
-    engine = FusionEngine(cfg, start)
-    readings = {rid: reading_of(m, rid) for rid, m in log.messages()}
-    states = []
-    for logged, ids in log.ticks():
-        states.append(engine.step(logged.tick, logged.time, [readings[i] for i in ids]))
+    engine, states, _ = replay_ticks(cfg, log)
     return engine, states
+
+
+def replay_ticks(cfg: NetworkConfig, log: DurableLog) -> tuple[Engine, list[TrackState], int]:
+    """:func:`replay_log`, and the last logged tick (0: none)."""
+    start = float(log.meta("start") or cfg.fusion.start)
+    engine = build_engine(cfg, start)
+    readings = {rid: reading_of(m, rid) for rid, m in log.messages()}
+    states: list[TrackState] = []
+    last = 0
+    for tick, time, _, ids in log.tick_rows():
+        states.extend(engine.step_all(tick, time, [readings[i] for i in ids]))
+        last = tick
+    return engine, states, last

@@ -19,6 +19,7 @@ engine, logs and publishes each :class:`~.schema.TrackState`.
 from __future__ import annotations
 
 import asyncio
+import json
 import math
 import time
 from collections import Counter, deque
@@ -33,8 +34,8 @@ from prometheus_client import Counter as PromCounter
 from .alignment import Aligner
 from .auth import Rejected, SequenceWindow, node_of_token, open_frame
 from .config import FUSED_KINDS, NetworkConfig
-from .engine import FusionEngine
-from .log import DurableLog, reading_of, replay_log
+from .engine import build_engine
+from .log import DurableLog, reading_of, replay_ticks
 from .schema import SchemaRejection, SensorMessage, TrackState, decode_messages
 
 MAX_TICKS_PER_ADVANCE = 1000  # a long catch-up is done in slices, the loop stays responsive
@@ -156,13 +157,16 @@ class FusionNode:
             fusion.lag,
             cfg.limits.buffer_size,
         )
-        self.engine = FusionEngine(cfg, start)
+        self.engine = build_engine(cfg, start)
+        self.single = cfg.tracker.association.method == "none"  # one track, every tick
         self.next_id = log.next_id() if log is not None else 1
         self.watermark = -math.inf  # latest accepted reading time (data clock)
         self.accepted: Counter[str] = Counter()
         self.rejected: Counter[str] = Counter()
         self.last: dict[str, dict[str, Any]] = {}
         self.history: deque[TrackState] = deque(maxlen=cfg.limits.history)
+        self.latest: list[TrackState] = []  # what the last tick published
+        self.latest_time: float | None = None
         self.recent_accepts: deque[float] = deque(maxlen=100_000)
         self.subscribers: set[asyncio.Queue[str]] = set()
         self.metrics = _Metrics(list(self.models))
@@ -304,23 +308,25 @@ class FusionNode:
         for k in self.aligner.due(clock, limit):
             t0 = time.perf_counter()
             readings = self.aligner.take(k)
+            t = self.aligner.tick_time(k)
             try:
-                state = self.engine.step(k, self.aligner.tick_time(k), readings)
+                published = self.engine.step_all(k, t, readings)
             except Exception as err:  # a tick that cannot fuse its readings predicts only
                 self.tick_errors += 1
                 self.last_tick_error = f"tick {k}: {type(err).__name__}: {err}"
                 readings = []
-                state = self.engine.step(k, self.aligner.tick_time(k), readings)
+                published = self.engine.step_all(k, t, readings)
             self.metrics.tick_seconds.observe(time.perf_counter() - t0)
             if self.cfg.fusion.clock == "wall":
                 due = self.aligner.window_end(k) + self.aligner.lag
                 self.metrics.tick_delay.observe(max(0.0, self.wall() - due))
             if self.log is not None:
-                self.log.append_tick(state, [r.id for r in readings])
-            self.history.append(state)
+                self.log.append_tick(k, t, published, [r.id for r in readings], self.single)
+            self.history.extend(published)
+            self.latest, self.latest_time = published, t
             self.metrics.ticks.inc()
-            self._publish(state)
-            states.append(state)
+            self._publish(k, t, published)
+            states.extend(published)
         if states:
             self.commit()
         return states
@@ -328,13 +334,15 @@ class FusionNode:
     def resume(self, log: DurableLog) -> None:
         """Rebuild the state from the durable log: re-run its ticks, re-buffer unfused readings,
         restore the replay windows."""
-        engine, states = replay_log(self.cfg, log)
-        if states:
+        engine, states, last = replay_ticks(self.cfg, log)
+        if last:
             self.engine = engine
             self.history.extend(states)
-            self.aligner.last_tick = states[-1].tick
-            self.resumed_ticks = len(states)
-        fused = {i for _, ids in log.ticks() for i in ids}
+            self.aligner.last_tick = last
+            self.latest = [s for s in states if s.tick == last]
+            self.latest_time = self.aligner.tick_time(last)
+            self.resumed_ticks = last
+        fused = {i for _, _, _, ids in log.tick_rows() for i in ids}
         for rid, m in log.messages():
             self.watermark = max(self.watermark, m.time)
             if rid not in fused and not self.aligner.is_late(m.time):
@@ -354,10 +362,14 @@ class FusionNode:
         self.subscribers.discard(q)
         self.metrics.subscribers.set(len(self.subscribers))
 
-    def _publish(self, state: TrackState) -> None:
+    def _publish(self, tick: int, t: float, states: list[TrackState]) -> None:
+        """One WebSocket frame per tick: ``tracks`` (all), ``track`` (the first, or null)."""
         if not self.subscribers:
             return
-        text = '{"type":"tick","track":' + state.model_dump_json() + "}"
+        tracks = [s.model_dump_json() for s in states]
+        head = json.dumps({"type": "tick", "tick": tick, "time": t})[:-1]
+        first = tracks[0] if tracks else "null"
+        text = f'{head},"track":{first},"tracks":[{",".join(tracks)}]}}'
         for q in self.subscribers:
             if q.full():  # a slow reader loses old ticks, never slows the node
                 q.get_nowait()
@@ -375,11 +387,14 @@ class FusionNode:
         return n / window
 
     def tracks_view(self, history: int = 200) -> dict[str, Any]:
-        latest = self.history[-1] if self.history else None
-        trail = list(self.history)[-history:]
+        """The last tick's tracks and the recent trail (``history`` states, all tracks)."""
+        trail = list(self.history)[-history:] if history > 0 else []
         return {
-            "tracks": [] if latest is None else [latest.model_dump()],
-            "history": [{"tick": s.tick, "time": s.time, "position": s.position} for s in trail],
+            "tracks": [s.model_dump() for s in self.latest],
+            "history": [
+                {"track": s.track, "tick": s.tick, "time": s.time, "position": s.position}
+                for s in trail
+            ],
         }
 
     def sensors_view(self) -> list[dict[str, Any]]:
@@ -411,13 +426,13 @@ class FusionNode:
             for s in self.models
             if s not in self.last or now - self.last[s]["received"] > self.cfg.fusion.silent_after
         ]
-        latest = self.history[-1] if self.history else None
         return {
             "status": "ok" if not silent else "degraded",
             "uptime": now - self.started,
             "clock": self.cfg.fusion.clock,
             "tick": self.aligner.last_tick,
-            "time": None if latest is None else latest.time,
+            "time": self.latest_time,
+            "tracks": len(self.latest),
             "silent_sensors": silent,
             "accepted": sum(self.accepted.values()),
             "rejected": dict(self.rejected),

@@ -1,9 +1,21 @@
 // fusetrack fusion node dashboard: read-only; draws the field, sensors (with fields of view),
-// the track with its 2-sigma ellipse and trail; lists each sensor's last reading and its age.
+// the tracks (one, or several with the association layer) with their 2-sigma ellipses and
+// trails; lists each sensor's last reading and its age.
 // Data: WebSocket /ws/tracks (one frame per tick) and polling /sensors and /health.
 "use strict";
 
-const state = { area: [0, 100, 0, 100], sensors: [], track: null, trail: [], health: null };
+const state = { area: [0, 100, 0, 100], sensors: [], tracks: [], trails: new Map(), tick: null,
+                time: null, health: null };
+const COLORS = ["#c81e1e", "#1e7a1e", "#7a1ec8", "#c8781e", "#1e9ac8", "#c81e9a"];
+const colorOf = (id) => COLORS[(id - 1) % COLORS.length];
+const MAX_TRAIL = 600;
+
+function remember(id, position) {
+  if (!state.trails.has(id)) state.trails.set(id, []);
+  const trail = state.trails.get(id);
+  trail.push(position);
+  if (trail.length > MAX_TRAIL) trail.shift();
+}
 const canvas = document.getElementById("field");
 const ctx = canvas.getContext("2d");
 const $ = (id) => document.getElementById(id);
@@ -73,36 +85,54 @@ function draw() {
       ctx.stroke();
     }
   }
-  if (state.trail.length > 1) {
-    ctx.strokeStyle = "rgba(200,30,30,0.6)"; ctx.lineWidth = 2; ctx.beginPath();
-    state.trail.forEach((p, i) => (i ? ctx.lineTo : ctx.moveTo).call(ctx, v.px(p[0]), v.py(p[1])));
-    ctx.stroke(); ctx.lineWidth = 1;
+  for (const [id, trail] of state.trails) {
+    if (trail.length < 2) continue;
+    ctx.strokeStyle = colorOf(id); ctx.globalAlpha = 0.6; ctx.lineWidth = 2; ctx.beginPath();
+    trail.forEach((p, i) => (i ? ctx.lineTo : ctx.moveTo).call(ctx, v.px(p[0]), v.py(p[1])));
+    ctx.stroke(); ctx.lineWidth = 1; ctx.globalAlpha = 1;
   }
-  const t = state.track;
-  if (t) {
-    ctx.fillStyle = "#c81e1e";
+  for (const t of state.tracks) {
+    ctx.fillStyle = colorOf(t.track);
     ctx.beginPath(); ctx.arc(v.px(t.position[0]), v.py(t.position[1]), 5, 0, 2 * Math.PI); ctx.fill();
-    ellipse(v, t.position, t.position_covariance, "#c81e1e");
+    ellipse(v, t.position, t.position_covariance, colorOf(t.track));
+    if (state.tracks.length > 1) ctx.fillText(`#${t.track}`, v.px(t.position[0]) + 7, v.py(t.position[1]) + 12);
   }
 }
 
 function showTrack() {
-  const t = state.track;
-  if (!t) return;
-  $("tick").textContent = t.tick;
-  $("time").textContent = fmt(t.time, 1);
-  const sd = t.position_covariance.map((row, i) => Math.sqrt(row[i]));
-  $("track").innerHTML =
-    `<tr><th>position (m)</th><td>${fmt(t.position[0])}, ${fmt(t.position[1])}</td></tr>` +
-    `<tr><th>σ (m)</th><td>${fmt(sd[0])}, ${fmt(sd[1])}</td></tr>` +
-    `<tr><th>state</th><td>${t.state.map((x) => fmt(x, 3)).join(", ")}</td></tr>` +
-    `<tr><th>fused this tick</th><td>${t.readings} from ${t.sensors.join(", ") || "none"}</td></tr>`;
+  if (state.tick === null) return;
+  $("tick").textContent = state.tick;
+  $("time").textContent = fmt(state.time, 1);
+  const ts = state.tracks;
+  if (ts.length === 0) {
+    $("track").innerHTML = "<tr><td>no track this tick</td></tr>";
+  } else if (ts.length === 1) {
+    const t = ts[0];
+    const sd = t.position_covariance.map((row, i) => Math.sqrt(row[i]));
+    $("track").innerHTML =
+      `<tr><th>position (m)</th><td>${fmt(t.position[0])}, ${fmt(t.position[1])}</td></tr>` +
+      `<tr><th>σ (m)</th><td>${fmt(sd[0])}, ${fmt(sd[1])}</td></tr>` +
+      `<tr><th>state</th><td>${t.state.map((x) => fmt(x, 3)).join(", ")}</td></tr>` +
+      `<tr><th>fused this tick</th><td>${t.readings} from ${t.sensors.join(", ") || "none"}</td></tr>`;
+  } else {
+    $("track").innerHTML = `<tr><th>track</th><th>position (m)</th><th>σ (m)</th></tr>` +
+      ts.map((t) => {
+        const sd = t.position_covariance.map((row, i) => Math.sqrt(row[i]));
+        return `<tr class="track"><td style="color:${colorOf(t.track)}">#${t.track}</td>` +
+               `<td>${fmt(t.position[0])}, ${fmt(t.position[1])}</td>` +
+               `<td>${fmt(sd[0])}, ${fmt(sd[1])}</td></tr>`;
+      }).join("") +
+      `<tr><th>fused this tick</th><td colspan="2">${ts[0].readings} readings</td></tr>`;
+  }
 }
 
 function showSensors() {
   $("sensors").innerHTML = state.sensors.map((s) => {
     const age = s.last ? s.last.age : null;
-    const value = s.last ? s.last.value.map((x) => fmt(x, 3)).join(", ") : "none";
+    const vals = s.last ? s.last.value : null;
+    const value = !vals ? "none" : vals.length > 6 // a detection function: its size and peak
+      ? `${vals.length} values, peak ${fmt(Math.max(...vals), 3)} at #${vals.indexOf(Math.max(...vals))}`
+      : vals.map((x) => fmt(x, 3)).join(", ");
     const cls = age === null || age > 5 ? ' class="silent"' : "";
     return `<tr${cls}><td>${s.id}</td><td>${s.kind}</td><td>${s.node}</td><td>${value}</td>` +
            `<td>${age === null ? "never" : fmt(age, 1)}</td><td>${s.accepted}</td></tr>`;
@@ -139,12 +169,15 @@ function connect() {
     const msg = JSON.parse(ev.data);
     if (msg.type === "hello") {
       state.area = msg.area;
-      state.trail = msg.history.map((p) => p.position);
-      state.track = msg.tracks[0] || null;
+      state.trails = new Map();
+      for (const h of msg.history) remember(h.track ?? 1, h.position);
+      state.tracks = msg.tracks;
+      if (msg.tracks.length) { state.tick = msg.tracks[0].tick; state.time = msg.tracks[0].time; }
     } else if (msg.type === "tick") {
-      state.track = msg.track;
-      state.trail.push(msg.track.position);
-      if (state.trail.length > 600) state.trail.shift();
+      state.tracks = msg.tracks ?? (msg.track ? [msg.track] : []);
+      state.tick = msg.tick ?? (msg.track && msg.track.tick);
+      state.time = msg.time ?? (msg.track && msg.track.time);
+      for (const t of state.tracks) remember(t.track, t.position);
     }
     showTrack(); draw();
   };
