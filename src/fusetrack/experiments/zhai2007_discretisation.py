@@ -19,17 +19,29 @@ import pandas as pd
 
 from ..core import Gaussian
 from ..evaluation import plots
+from ..evaluation.montecarlo import run_seed
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter
 from ..filters.grid_proposals import DiscretisationProposal
 from ..filters.imm import InteractingMultipleModel
-from ..filters.multiple_model import MultipleModelParticleFilter, PaddedModel, run_mm
+from ..filters.multiple_model import MultipleModelParticleFilter, PaddedModel
 from ..filters.sis import ProposalParticleFilter
 from ..motion import ConstantAcceleration, ConstantVelocity, CoordinatedTurn
 from ..motion.maneuver import ManeuverTurn
 from ..sensors import Bearing, RangeBearing
 from . import zhai2007_galerkin as e13
-from .zhai2007_common import timed_gaussian, timed_sis, track_rows
+from .zhai2007_common import timed_gaussian, timed_mm, timed_sis, track_rows
+from .zhai2007_comparators import (
+    COMPARATORS,
+    Comparison,
+    Scenario,
+    calibration_note,
+    compare,
+    equal_time_particles,
+    per_run_scores,
+    run_comparators,
+    sis_reference,
+)
 
 PI_B = np.array(
     [[0.7, 0.1, 0.1, 0.1], [0.4, 0.2, 0.2, 0.2], [0.4, 0.2, 0.2, 0.2], [0.4, 0.2, 0.2, 0.2]]
@@ -41,12 +53,27 @@ E17_STEPS = 50
 # ----------------------------------------------------------------------------- E16
 
 
-def run_e16(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+def e16_scenario(seed: int) -> Scenario:
+    """Run ``seed``'s E16 truth, bearings and prior as a :class:`Scenario` (one model: IMM = EKF)."""
     rng = np.random.default_rng(seed)
     truth, zs = e13.simulate(1, rng)
     prior = Gaussian(e13.x0(1) + rng.multivariate_normal(np.zeros(4), e13.P0), e13.P0)
-    motion = ConstantVelocity(q=0.05)
     sensor = Bearing("s", position=[0.0, 0.0], sigma=0.1)
+    return Scenario(ConstantVelocity(q=0.05), [sensor], prior, zs, 1.0, truth)
+
+
+def run_e16(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    cs = e16_scenario(seed)
+    truth, zs, prior, motion, sensor = cs.truth, cs.zs, cs.prior, cs.motion, cs.sensors[0]
+    if "n_equal" in config:  # beyond the paper only (fewer runs)
+        found = run_comparators(cs, seed, config["n_equal"], ("UPF", "bootstrap equal time"))
+        return [
+            row
+            for m, t in found.items()
+            for row in track_rows(
+                m, finite(t.estimates), truth, experiment="E16", seconds=t.seconds
+            )
+        ]
     est = {"EKF": timed_gaussian(ExtendedKalmanFilter(motion, [sensor]), prior, zs, ["s"], 1.0)}
     pfs = {
         "bootstrap 200": ProposalParticleFilter(motion, [sensor], n_particles=200),
@@ -109,7 +136,9 @@ def e17_models(q: float, a_m: float = 3.0) -> list[Any]:
     ]
 
 
-def run_e17(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+def e17_scenario(config: Mapping[str, Any], seed: int) -> Scenario:
+    """Run ``seed``'s E17 truth, range-bearings and prior as a :class:`Scenario` (CA for the
+    single-model comparators; the IMM uses the four models and ``PI_B``)."""
     rng = np.random.default_rng(seed)
     scenario, case = str(config["scenario"]), str(config["case"])
     truth = e17_truth(scenario, rng)
@@ -125,25 +154,43 @@ def run_e17(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     x0 = truth[0] - np.r_[truth[0, 2:4], truth[0, 4:6], np.zeros(2)]  # roughly the state at t = 0
     prior = Gaussian(x0 + rng.multivariate_normal(np.zeros(6), p0), p0)
     q = {"S1": 4.0, "S2": 0.1, "S3": 0.05}[scenario]
-    n = int(config["n_particles"])
     models = e17_models(max(q, 0.1))
-    out = {}
-    mm = MultipleModelParticleFilter(models, PI_B, [sensor], n, proposal="cells")
-    out["discretisation MMPF"] = run_mm(mm, prior, zs, 1.0, np.random.default_rng([seed, 0]))[0]
-    bs = ProposalParticleFilter(ConstantAcceleration(q=0.5), [sensor], n_particles=n)
-    out["bootstrap CA"] = timed_sis(bs, prior, zs, 1.0, np.random.default_rng([seed, 1]))[0]
-    mmb = MultipleModelParticleFilter(models, PI_B, [sensor], n)
-    out["MM-bootstrap"] = run_mm(mmb, prior, zs, 1.0, np.random.default_rng([seed, 2]))[0]
-    imm = InteractingMultipleModel(models, PI_B, [sensor])
-    out["IMM-EKF"] = timed_gaussian(imm, prior, zs, ["rb"], 1.0)[0]
+    return Scenario(ConstantAcceleration(q=0.5), [sensor], prior, zs, 1.0, truth, models, PI_B)
+
+
+def discretisation_mmpf(cs: Scenario, n: int) -> MultipleModelParticleFilter:
+    return MultipleModelParticleFilter(list(cs.imm_models), PI_B, cs.sensors, n, proposal="cells")
+
+
+def run_e17(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    cs = e17_scenario(config, seed)
+    truth, zs, prior, sensor = cs.truth, cs.zs, cs.prior, cs.sensors[0]
+    models = list(cs.imm_models)
+    out: dict[str, tuple[np.ndarray, float]] = {}
+    if "n_equal" in config:  # beyond the paper only (fewer runs)
+        found = run_comparators(cs, seed, config["n_equal"], ("UPF", "bootstrap equal time"))
+        out = {m: (t.estimates, t.seconds) for m, t in found.items()}
+    else:
+        n = int(config["n_particles"])
+        mm = discretisation_mmpf(cs, n)
+        e, _, t = timed_mm(mm, prior, zs, 1.0, np.random.default_rng([seed, 0]))
+        out["discretisation MMPF"] = (e, t)
+        bs = ProposalParticleFilter(cs.motion, [sensor], n_particles=n)
+        out["bootstrap CA"] = timed_sis(bs, prior, zs, 1.0, np.random.default_rng([seed, 1]))[:2]
+        mmb = MultipleModelParticleFilter(models, PI_B, [sensor], n)
+        e, _, t = timed_mm(mmb, prior, zs, 1.0, np.random.default_rng([seed, 2]))
+        out["MM-bootstrap"] = (e, t)
+        imm = InteractingMultipleModel(models, PI_B, [sensor])
+        out["IMM-EKF"] = timed_gaussian(imm, prior, zs, ["rb"], 1.0)
     rows = []
-    for name, e in out.items():
+    for name, (e, secs) in out.items():
         d = finite(e) - truth
         rows += track_rows(
             name,
             finite(e),
             truth,
             experiment="E17",
+            seconds=secs,
             sq_vel_err=np.sum(d[:, 2:4] ** 2, axis=1),
             sq_acc_err=np.sum(d[:, 4:6] ** 2, axis=1),
         )
@@ -174,6 +221,90 @@ def e15_demo(rng: np.random.Generator, n: int = 2000) -> dict[str, Any]:
         "truth": truth,
         "sensor": sensor,
     }
+
+
+CMP_RUNS = {"E16": 30, "E17": 10}  # runs with UPF / equal-time bootstrap at full size
+
+
+def comparators(
+    ctx: RunContext,
+    df16: pd.DataFrame,
+    df17: pd.DataFrame,
+    cfgs17: list[dict[str, Any]],
+    runs: tuple[int, int],
+) -> Comparison:
+    """Beyond the paper: UPF and bootstrap calibrated to the discretisation PF (E16) and the
+    discretisation MMPF (E17, per scenario and case), on the first ``CMP_RUNS`` runs; the
+    IMM-EKF (E17: four models, Pi_B; E16: one model, i.e. the EKF) comes from every run."""
+    reps, seed0 = 2, run_seed(ctx.seed, 0)
+    k16, k17 = min(runs[0], CMP_RUNS["E16"]), min(runs[1], CMP_RUNS["E17"])
+    n_equal, target, parts, ref = {}, {}, [], {}
+    cs = e16_scenario(seed0)
+    n_equal["E16"], target["E16"] = equal_time_particles(
+        cs,
+        sis_reference(
+            cs,
+            lambda: ProposalParticleFilter(cs.motion, cs.sensors, DiscretisationProposal(), 200),
+        ),
+        ("UPF", "bootstrap equal time"),
+        repeats=reps,
+    )
+    ref["E16"] = "discretisation PF 200"
+    parts.append(
+        ctx.monte_carlo(
+            run_e16, [{"experiment": "E16", "n_equal": n_equal["E16"]}], k16, desc="comparators"
+        ).assign(label="E16")
+    )
+    for c in cfgs17:
+        key = f"E17 {c['scenario']}{c['case']}"
+        cs17 = e17_scenario(c, seed0)
+
+        def mm_ref(cs17: Scenario = cs17, n: int = int(c["n_particles"])) -> object:
+            f = discretisation_mmpf(cs17, n)
+            return timed_mm(f, cs17.prior, cs17.zs, 1.0, np.random.default_rng(0))
+
+        n_equal[key], target[key] = equal_time_particles(
+            cs17, mm_ref, ("UPF", "bootstrap equal time"), repeats=reps
+        )
+        ref[key] = "discretisation MMPF"
+        parts.append(
+            ctx.monte_carlo(run_e17, [{**c, "n_equal": n_equal[key]}], k17, desc=key).assign(
+                label=key
+            )
+        )
+    d16 = df16[df16["run"] < k16].assign(label="E16")
+    d17 = df17[df17["run"] < k17]
+    d17 = d17.assign(label="E17 " + d17["scenario"] + d17["case"])
+    rows = pd.concat([d16, d17, *parts], ignore_index=True)
+    return compare(
+        per_run_scores(rows, ["label"], "sq_pos_err"),
+        ref,
+        ctx.figure_path("error_vs_seconds"),
+        by=["label"],
+        ylabel="position RMSE per run (mean)",
+        calibration=calibration_note(n_equal, target)
+        + f" UPF and the equal-time bootstrap ran on the first {k16} (E16) and {k17} (E17) runs "
+        "(same truths as the paper's filters' runs; E17's are few because each equal-time "
+        "comparator costs as much as the discretisation MMPF); the table compares every method "
+        "on those runs.",
+        notes=[
+            "E16 IMM-EKF: one motion model, so the one-model IMM is the EKF (row 'EKF').",
+            "E17 IMM-EKF: the MMPF's four models (CV, CCW, CW padded to 6-D; CA) and Pi_B.",
+            "UPF and the equal-time bootstrap: E16 the CV model, E17 the CA model.",
+        ],
+        methods=[
+            "EKF",
+            "bootstrap 200",
+            "discretisation PF 200",
+            "bootstrap 2000",
+            "discretisation MMPF",
+            "bootstrap CA",
+            "MM-bootstrap",
+            *COMPARATORS,
+        ],
+        n_particles=n_equal,
+        runs={"E16": k16, "E17": k17},
+    )
 
 
 def run(ctx: RunContext) -> Outcome:
@@ -286,6 +417,7 @@ def run(ctx: RunContext) -> Outcome:
             ).name
         )
     df = pd.concat([df16, df17], ignore_index=True)
+    cmp = comparators(ctx, df16, df17, cfgs, (runs16, runs17))
     body = f"""
 ## E15: discretised prior and one bearing (Figs 50-52)
 
@@ -320,5 +452,6 @@ The IMM-EKF (beyond the paper) runs one EKF per model with the same four models 
 * The discretisation MMPF draws each regime's particles from that regime's cells (Eq. 84) and
   weights them with the exact marginal weight over ancestors and regime transitions, so cells only
   shape the proposal. The single-model bootstrap uses the CA model (it must estimate acceleration).
-"""
-    return Outcome(df, claims, body, runs16)
+
+{cmp.section}"""
+    return Outcome(df, claims, body, runs16, beyond_the_paper=cmp.summary)
