@@ -27,6 +27,14 @@ EXPECTED = {
         "C8_acceleration_change",
     },
 }
+BEYOND = {
+    "zhai2007-scalar",
+    "zhai2007-mcmc",
+    "zhai2007-multiple-model",
+    "zhai2007-bearings",
+    "zhai2007-discretisation",
+    "zhai2007-sensor-network",
+}
 
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))
@@ -49,6 +57,10 @@ def test_experiment_quick_end_to_end(name, tmp_path):
     assert summary["experiment"] == name
     ids = {c["id"] for c in summary["claims"]}
     assert EXPECTED[name] <= ids
+    if name in BEYOND:  # issue 5's comparators: a summary entry beside the claims, a section
+        winners = summary["beyond_the_paper"]["winners"]
+        assert winners and all("winner at equal time" in w for w in winners.values())
+        assert "## Beyond the paper" in (out / "report.md").read_text()
     for c in summary["claims"]:
         assert set(c) >= {"id", "statement", "paper", "ours", "tolerance", "holds"}
         assert isinstance(c["holds"], bool)
