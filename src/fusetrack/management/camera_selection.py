@@ -20,6 +20,14 @@ variance ``E_x var(v_i | x)`` is taken over the particles in the camera's field 
 ``Sigma_Z`` is inverted with a pseudo-inverse (a camera that sees no particle contributes
 nothing). Every moment for all N cameras is computed once per selection epoch; a subset's MSE
 then costs a k x k solve, so greedy (Algorithm 2) and brute force share the same numbers.
+
+Bad input: a selection size outside ``[1, N]`` is a :class:`~fusetrack.core.errors.ConfigError`.
+A camera that can see none of the predicted particles (its field of view holds none, or walls
+and static occluders hide them all) gets ``P{eta} = 0``, a zero row in ``Sigma_Z`` and
+``Sigma_Zx``: it lowers no subset's MSE, so the searches pick it only when k leaves no other
+choice (ties go to the lowest index), and the MSE stays finite. Cameras outside the room or
+seeing no free floor at all are refused earlier, when the scene is built
+(:class:`fusetrack.experiments.ercan2013.scenes.Scene`).
 """
 
 from __future__ import annotations
