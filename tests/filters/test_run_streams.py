@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.filters import BootstrapFilter, kernels, run_streams
+from fusetrack.filters import BootstrapFilter, kernels, rng_handles, run_streams
 from fusetrack.motion import ConstantVelocity
 from fusetrack.sensors import Bearing
 
@@ -20,10 +20,10 @@ from fusetrack.sensors import Bearing
 @numba.njit
 def _draw(handles, normals, uniforms):  # pragma: no cover - jit
     for r in range(handles.shape[0]):
-        bg = run_streams._bitgen(handles[r])
-        uniforms[r] = run_streams.next_double(bg)
+        bg = rng_handles._bitgen(handles[r])
+        uniforms[r] = rng_handles.next_double(bg)
         for i in range(normals.shape[1]):
-            normals[r, i] = run_streams.random_standard_normal(bg)
+            normals[r, i] = rng_handles.random_standard_normal(bg)
 
 
 @pytest.mark.parametrize("bitgen", [np.random.PCG64, np.random.Philox, np.random.MT19937])
@@ -31,7 +31,7 @@ def test_handles_draw_numpys_numbers_and_advance_the_generators(bitgen):
     gens = [np.random.Generator(bitgen(s)) for s in (3, 4, 5)]
     refs = [np.random.Generator(bitgen(s)) for s in (3, 4, 5)]
     normals, uniforms = np.empty((3, 5000)), np.empty(3)
-    _draw(run_streams.generator_handles(gens), normals, uniforms)
+    _draw(rng_handles.generator_handles(gens), normals, uniforms)
     for r, g in enumerate(refs):
         assert uniforms[r] == g.random()
         np.testing.assert_array_equal(normals[r], g.standard_normal(5000))
@@ -55,7 +55,7 @@ def test_linear_gaussian_runs_equals_reference(rows, n):
     x, w, F, G, anc, mode = _case(rows, n)
     gens = [np.random.default_rng([7, r]) for r in range(rows)]
     refs = [np.random.default_rng([7, r]) for r in range(rows)]
-    got = run_streams.linear_gaussian_runs(run_streams.RunStreams(gens), x, F, G, mode, w, anc)
+    got = run_streams.linear_gaussian_runs(rng_handles.RunStreams(gens), x, F, G, mode, w, anc)
     want = run_streams.linear_gaussian_runs_reference(refs, x, F, G, mode, w, anc)
     np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-12)
     for g, h in zip(gens, refs):  # every stream advanced exactly as the reference's
@@ -69,7 +69,7 @@ def test_linear_gaussian_runs_does_not_depend_on_the_threads():
         numba.set_num_threads(threads)
         gens = [np.random.default_rng([8, r]) for r in range(70)]
         outs.append(
-            run_streams.linear_gaussian_runs(run_streams.RunStreams(gens), x, F, G, mode, w, anc)
+            run_streams.linear_gaussian_runs(rng_handles.RunStreams(gens), x, F, G, mode, w, anc)
         )
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
     np.testing.assert_array_equal(outs[0], outs[1])
@@ -77,7 +77,7 @@ def test_linear_gaussian_runs_does_not_depend_on_the_threads():
 
 def test_missing_weights_or_ancestors_are_refused():
     x, w, F, G, anc, mode = _case(3, 10)
-    streams = run_streams.RunStreams([np.random.default_rng(r) for r in range(3)])
+    streams = rng_handles.RunStreams([np.random.default_rng(r) for r in range(3)])
     with pytest.raises(ValueError, match="weights"):
         run_streams.linear_gaussian_runs(streams, x, F, G, mode, None, anc)
     with pytest.raises(ValueError, match="ancestors"):

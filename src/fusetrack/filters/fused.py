@@ -45,6 +45,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from .rng_handles import RunStreams, _bitgen, random_standard_normal
+
 Array = NDArray[np.float64]
 
 BEARING = 0
@@ -54,6 +56,7 @@ POSITION = 3
 N_PARAMS = 16
 PARALLEL_MIN = 1 << 16  # particles (all runs together) from which the threaded loops pay
 CHUNK = 4096  # particles per work item of the threaded loops
+BLOCK = 256  # particles per block of the propagation (its columns stay in L1)
 NOISE_STREAMS = 4  # generators that share a large draw of process noise (fixed: not the threads)
 SPLIT_MIN = PARALLEL_MIN  # particles per generator from which the noise is drawn by the streams
 
@@ -187,6 +190,27 @@ def _step_py(x, anc, F, G, eps, out):  # pragma: no cover - jit
 _step_serial, _step_parallel = _twins(_step_py)
 
 
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _affine_block(F, G, xs, es, ms, orow, lo):  # pragma: no cover - jit
+    """``orow[lo + i] = F xs[:, i] + G es[:, i]`` for the ``B`` particles of a block given as
+    columns ``xs``, ``es`` ``(d, B)`` (``ms`` ``(B,)`` scratch). Each component is summed in the
+    order of :func:`_affine` (the same bits), but the loop over the block's particles is
+    innermost and contiguous, so the compiler vectorises it and ``F``, ``G`` are read once per
+    block rather than once per particle (about 1 ms less per step at N = 1e5)."""
+    d, nb = xs.shape
+    for a in range(d):
+        ms[:nb] = 0.0
+        for b in range(d):
+            f = F[a, b]
+            g = G[a, b]
+            xb = xs[b]
+            eb = es[b]
+            for i in range(nb):
+                ms[i] += f * xb[i] + g * eb[i]
+        for i in range(nb):
+            orow[lo + i, a] = ms[i]
+
+
 def linear_gaussian_step(
     states: Array, F: Array, G: Array, eps: Array, ancestors: NDArray[np.intp] | None = None
 ) -> Array:
@@ -209,25 +233,37 @@ def linear_gaussian_step(
 # propagation with the draw inside the loop: x'_i = F x_{a_i} + G eps_i, eps_i from streams
 
 
-def _draw_step_py(streams, x, anc, F, G, out):  # pragma: no cover - jit
+def _draw_step_py(handles, x, anc, F, G, out):  # pragma: no cover - jit
     """:func:`_step_py` with ``eps`` drawn in the loop: the particles of all rows, flattened
-    (run-major), are cut into ``len(streams)`` contiguous equal parts and part ``c`` draws its
-    ``d`` normals per particle, in order, from ``streams[c]`` (what ``standard_normal`` of
-    that part's shape ``(m, d)`` would return)."""
+    (run-major), are cut into ``len(handles)`` contiguous equal parts and part ``c`` draws its
+    ``d`` normals per particle, in order, from generator ``c`` (what ``standard_normal`` of
+    that part's shape ``(m, d)`` would return; generators as :mod:`.rng_handles` handles).
+    Block by block: the block's normals and parents as columns, then :func:`_affine_block`."""
     rows, n, d = out.shape
+    nx = x.shape[1]
+    xf = x.reshape(rows * nx, d)
+    of = out.reshape(rows * n, d)
     total = rows * n
-    nst = len(streams)
+    nst = handles.shape[0]
     per = (total + nst - 1) // nst
     gather = anc.shape[1] > 0
     for c in numba.prange(nst):
-        g = streams[c]
-        e = np.empty(d)
-        for p in range(c * per, min(total, (c + 1) * per)):
-            r = p // n
-            i = p - r * n
-            for a in range(d):
-                e[a] = g.standard_normal()
-            _affine(F, G, x[r, anc[r, i] if gather else i], e, out[r, i])
+        bg = _bitgen(handles[c])
+        xs = np.empty((d, BLOCK))
+        es = np.empty((d, BLOCK))
+        ms = np.empty(BLOCK)
+        end = min(total, (c + 1) * per)
+        for lo in range(c * per, end, BLOCK):
+            nb = min(BLOCK, end - lo)
+            for k in range(nb):
+                p = lo + k
+                r = p // n
+                i = p - r * n
+                j = r * nx + (anc[r, i] if gather else i)
+                for a in range(d):
+                    es[a, k] = random_standard_normal(bg)
+                    xs[a, k] = xf[j, a]
+            _affine_block(F, G, xs[:, :nb], es[:, :nb], ms, of, lo)
 
 
 _draw_step_serial, _draw_step_parallel = _twins(_draw_step_py)
@@ -258,21 +294,24 @@ def linear_gaussian_draw(
     states: Array,
     F: Array,
     G: Array,
-    streams: tuple[np.random.Generator, ...],
+    streams: tuple[np.random.Generator, ...] | RunStreams,
     ancestors: NDArray[np.intp] | None = None,
 ) -> Array:
     """``F x_{a_i} + G eps_i`` for states ``(R, N, d)`` with ``eps`` drawn inside the loop from
-    the generators ``streams`` (Numba's implementation of ``Generator.standard_normal``, the
-    same numbers as NumPy's). Several streams fill their parts of the particles on parallel
-    threads; the result depends on the streams, never on the number of threads.
+    the generators ``streams`` (or their :class:`~fusetrack.filters.rng_handles.RunStreams`,
+    which a caller keeps to save making the handles at every call; Numba's implementation of
+    ``Generator.standard_normal``, the same numbers as NumPy's). Several streams fill their
+    parts of the particles on parallel threads; the result depends on the streams, never on the
+    number of threads.
 
     The NumPy reference is ``states[r, a] @ F.T + standard_normals(streams, shape) @ G.T``.
     """
+    runs = streams if isinstance(streams, RunStreams) else RunStreams(streams)
     x = np.ascontiguousarray(states, dtype=np.float64)
     anc = _NO_ANCESTORS if ancestors is None else np.ascontiguousarray(ancestors, dtype=np.intp)
     out = np.empty(x.shape if ancestors is None else (x.shape[0], anc.shape[1], x.shape[2]))
-    fn = threaded(_draw_step_parallel) if len(streams) > 1 else _draw_step_serial
-    fn(tuple(streams), x, anc, np.ascontiguousarray(F, float), np.ascontiguousarray(G, float), out)
+    fn = threaded(_draw_step_parallel) if len(runs.gens) > 1 else _draw_step_serial
+    fn(runs.handles, x, anc, np.ascontiguousarray(F, float), np.ascontiguousarray(G, float), out)
     return out
 
 

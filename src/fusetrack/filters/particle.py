@@ -108,7 +108,7 @@ from ..core.errors import (
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import Resampler, get_resampler
-from . import fused, kernels, run_streams
+from . import fused, kernels, rng_handles, run_streams
 from .stats import FilterStats, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]
@@ -269,10 +269,10 @@ class ParticleFilter:
         self._warned = False
         self._fused_dt: tuple[float, tuple[Array, Array] | None] | None = None
         self._fused_ll: dict[int, tuple[SensorModel, tuple[int, Array] | None]] = {}
-        self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...]]] = {}
+        self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...], Any]] = {}
         self._fused_sets: dict[tuple[int, ...], tuple[tuple[Any, ...], Any]] = {}
         self._everyone: dict[int, NDArray[np.bool_]] = {}  # read-only all-True "usable" rows
-        self._runs: run_streams.RunStreams | None = None  # handles of the last per-run gens
+        self._runs: rng_handles.RunStreams | None = None  # handles of the last per-run gens
 
     def __repr__(self) -> str:
         return (
@@ -376,7 +376,7 @@ class ParticleFilter:
             anc[rows] = self._ancestors(W.w, rows, gens)
         runs = self._runs
         if runs is None or not runs.matches(gens):
-            runs = self._runs = run_streams.RunStreams(gens)
+            runs = self._runs = rng_handles.RunStreams(gens)
         s2 = particles.states.reshape(-1, n, d)
         new = run_streams.linear_gaussian_runs(runs, s2, fg[0], fg[1], mode, W.w, anc)
         if need.any():
@@ -511,7 +511,7 @@ class ParticleFilter:
         except (TypeError, ValueError):  # a bit generator without a SeedSequence
             seed = np.random.SeedSequence(gen.integers(0, 2**63, size=4).tolist())
             kids = tuple(np.random.default_rng(s) for s in seed.spawn(fused.NOISE_STREAMS))
-        self._streams[id(gen)] = (gen, kids)
+        self._streams[id(gen)] = (gen, kids, rng_handles.RunStreams(kids))
         return kids
 
     def _sample_motion(
@@ -561,7 +561,8 @@ class ParticleFilter:
         if isinstance(gens, np.random.Generator):
             streams = self._noise_streams(gens, shape[0] * shape[1])
             if numba_engine and len(streams) > 1:  # drawn inside the loop, one thread per stream
-                out = fused.linear_gaussian_draw(s2, F, G, streams, ancestors)
+                handles = self._streams[id(gens)][2]  # the children's, made once
+                out = fused.linear_gaussian_draw(s2, F, G, handles, ancestors)
             elif numba_engine:  # NumPy draws: handing a Generator to Numba costs ~20-50 us
                 out = fused.linear_gaussian_step(s2, F, G, gens.standard_normal(shape), ancestors)
             else:

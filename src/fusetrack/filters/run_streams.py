@@ -2,58 +2,38 @@
 
 Batched Monte Carlo (R runs as one ``(R, N, d)`` array, one :class:`numpy.random.Generator` per
 run) must draw, run by run, exactly what R separate runs draw, so that run ``r`` of the batch is
-bit-identical to the separate run ``r``. Drawing run by run in NumPy costs one generator call per
-run per step; handing the generators to a Numba function costs 20-50 us per generator per call
-(Numba builds each Generator's type and unboxes its ctypes interface), and a ``numba.typed.List``
-of them compiles for about 9 s in every new process (that type does not cache).
-
-Here every generator is reduced, once, to four integers from NumPy's documented C interface of
-its bit generator (``bit_generator.ctypes``: the address of its state and of its ``next_uint64``,
-``next_uint32`` and ``next_double`` functions), a row of a ``(R, 4)`` ``uint64`` array
-(:func:`generator_handles`). Inside a kernel, :func:`_bitgen` rebuilds Numba's bit-generator
-struct from a row, and Numba's own implementations of NumPy's distributions run on it:
-``random_standard_normal`` is NumPy's ziggurat (the same numbers as ``Generator.standard_normal``,
-bit for bit; tested) and ``next_double`` is ``Generator.random``. The arguments are plain arrays,
-so the kernels are cached on disk like any other (no compile in a new process).
-
-:func:`linear_gaussian_runs` is the batch's propagation, one run per work item over both cores
-(``numba.prange`` over the runs), each work item touching only its own run's generator:
+bit-identical to the separate run ``r``. Drawing run by run in NumPy costs one generator call
+per run per step (and keeps the draws on one core). Here the run generators enter one kernel as
+handles (:mod:`fusetrack.filters.rng_handles`: plain integers, cached kernels, no per-generator
+cost per call), and :func:`linear_gaussian_runs`, the batch's propagation, takes one run per
+work item over both cores (``numba.prange`` over the runs), each work item touching only its
+own run's generator:
 
 1. if the run is resampled: its uniform ``u0 = rng.random()`` and the systematic ancestors
-   (:func:`fusetrack.core.resampling.systematic_row`, the code :func:`~fusetrack.core.resampling.systematic`
-   runs);
+   (:func:`fusetrack.core.resampling.systematic_row`, the code of
+   :func:`~fusetrack.core.resampling.systematic`);
 2. per particle, ``d`` standard normals ``eps`` in order and ``x'_i = F x_{a_i} + G eps_i``
-   (:func:`fusetrack.filters.fused._affine`, the code of :func:`~fusetrack.filters.fused.linear_gaussian_step`).
+   (:func:`fusetrack.filters.fused._affine_block`, the arithmetic of
+   :func:`~fusetrack.filters.fused.linear_gaussian_step`).
 
 That is the order in which a separate run draws (``systematic``'s ``rng.random``, then
 ``rng.standard_normal((N, d))``), so the result does not depend on the batch or the threads.
-
-Safety: the handles are raw pointers into the generators' bit generators, valid while those
-objects live; :class:`RunStreams` keeps the generators with their handles. A generator's state
-is advanced by one thread only (its run's work item) and NumPy's per-generator lock is not taken:
-do not draw from the same generators in other Python threads during a call.
 """
 
 from __future__ import annotations
 
-import ctypes
 from collections.abc import Sequence
 
 import numba
 import numpy as np
-from numba import types
-from numba.core import cgutils
-from numba.core.extending import intrinsic
-from numba.np.random.distributions import random_standard_normal
-from numba.np.random.generator_core import next_double
 from numpy.typing import NDArray
 
 from ..core.resampling import systematic_row
-from .fused import PARALLEL_MIN, _twins, threaded
+from .fused import BLOCK, PARALLEL_MIN, _affine_block, _twins, threaded
+from .rng_handles import RunStreams, _bitgen, next_double, random_standard_normal
 
 Array = NDArray[np.float64]
 
-BLOCK = 256  # particles per block of the propagation (columns that stay in L1)
 KEEP, GATHER, SYSTEMATIC = 0, 1, 2
 """Per-run modes of :func:`linear_gaussian_runs`: propagate every particle, propagate the given
 ancestors, resample systematically first."""
@@ -63,90 +43,9 @@ __all__ = [
     "KEEP",
     "SYSTEMATIC",
     "RunStreams",
-    "generator_handles",
     "linear_gaussian_runs",
     "linear_gaussian_runs_reference",
 ]
-
-
-def _address(fn: object) -> int:
-    value = ctypes.cast(fn, ctypes.c_void_p).value  # type: ignore[arg-type]
-    return int(value or 0)
-
-
-def generator_handles(gens: Sequence[np.random.Generator]) -> NDArray[np.uint64]:
-    """``(R, 4)`` rows ``[state, next_uint64, next_uint32, next_double]`` (addresses) of the
-    generators' bit generators, from NumPy's ``bit_generator.ctypes`` interface."""
-    out = np.empty((len(gens), 4), dtype=np.uint64)
-    for j, g in enumerate(gens):
-        c = g.bit_generator.ctypes
-        out[j] = (
-            int(c.state_address),
-            _address(c.next_uint64),
-            _address(c.next_uint32),
-            _address(c.next_double),
-        )
-    return out
-
-
-class RunStreams:
-    """The handles of a sequence of generators, with the generators (which keep the pointed-to
-    states alive). :meth:`matches` tells whether another sequence holds the same objects."""
-
-    def __init__(self, gens: Sequence[np.random.Generator]) -> None:
-        self.gens = tuple(gens)
-        self.handles = generator_handles(self.gens)
-
-    def matches(self, gens: Sequence[np.random.Generator]) -> bool:
-        return len(gens) == len(self.gens) and all(a is b for a, b in zip(gens, self.gens))
-
-
-@intrinsic
-def _bitgen(tyctx, handle):  # pragma: no cover - compile time
-    """Numba's bit-generator struct (what unboxing a ``BitGenerator`` builds) from one row of
-    :func:`generator_handles`."""
-    bg_type = types.NumPyRandomBitGeneratorType("bit_generator")
-    sig = bg_type(handle)
-
-    def codegen(ctx, builder, sig, args):
-        row = ctx.make_array(sig.args[0])(ctx, builder, args[0])
-
-        def item(i: int):
-            idx = [ctx.get_constant(types.intp, i)]
-            return builder.load(cgutils.get_item_pointer(ctx, builder, sig.args[0], row, idx))
-
-        bg = cgutils.create_struct_proxy(bg_type)(ctx, builder)
-        bg.parent = cgutils.get_null_value(bg.parent.type)
-        bg.state_address = item(0)
-        bg.state = item(0)
-        bg.fnptr_next_uint64 = item(1)
-        bg.fnptr_next_uint32 = item(2)
-        bg.fnptr_next_double = item(3)
-        bg.bit_generator = ctx.get_constant(types.uintp, 0)
-        return bg._getvalue()
-
-    return sig, codegen
-
-
-@numba.njit(cache=True, inline="always", error_model="numpy")
-def _affine_block(F, G, xs, es, ms, orow, lo):  # pragma: no cover - jit
-    """``orow[lo + i] = F xs[:, i] + G es[:, i]`` for the ``B`` particles of a block given as
-    columns ``xs``, ``es`` ``(d, B)`` (``ms`` ``(B,)`` scratch). Each component is summed in the
-    order of :func:`fusetrack.filters.fused._affine` (the same bits), but the loop over the
-    block's particles is innermost and contiguous, so the compiler vectorises it and ``F``, ``G``
-    are read once per block rather than once per particle."""
-    d, nb = xs.shape
-    for a in range(d):
-        ms[:nb] = 0.0
-        for b in range(d):
-            f = F[a, b]
-            g = G[a, b]
-            xb = xs[b]
-            eb = es[b]
-            for i in range(nb):
-                ms[i] += f * xb[i] + g * eb[i]
-        for i in range(nb):
-            orow[lo + i, a] = ms[i]
 
 
 def _runs_py(handles, x, F, G, w, mode, anc, out):  # pragma: no cover - jit
