@@ -162,3 +162,13 @@ def test_association_needs_position_detections():
                 },
             }
         )
+
+
+@pytest.mark.parametrize("name", ["network-targets.yaml", "network-grid.yaml"])
+def test_example_configs_load(name):
+    from fusetrack.service.config import load_config
+    from fusetrack.service.engine import build_engine
+
+    cfg = load_config(f"examples/{name}")
+    engine = build_engine(cfg, 0.0)
+    assert engine.step_all(1, 0.25, []) is not None
