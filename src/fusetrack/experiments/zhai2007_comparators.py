@@ -271,14 +271,18 @@ def error_vs_seconds_figure(
     index levels before ``method``; methods listed in a ``families`` entry are joined by a line
     (e.g. a bootstrap at several particle counts)."""
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import NullFormatter
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     from ..evaluation import plots
 
     by = [n for n in table.index.names if n != "method"]
     groups = list(table.groupby(level=by, sort=False)) if by else [((), table)]
-    fig, axes = plt.subplots(1, len(groups), figsize=(4.2 * len(groups) + 1.5, 3.8), squeeze=False)
-    for ax, (key, t) in zip(axes[0], groups):
+    ncols = min(4, len(groups))
+    nrows = -(-len(groups) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols + 1.8, 3.6 * nrows), squeeze=False)
+    for ax in axes.flat[len(groups) :]:
+        ax.set_visible(False)
+    for ax, (key, t) in zip(axes.flat, groups):
         t = t.droplevel(by) if by else t
         for i, (m, row) in enumerate(t.iterrows()):
             ax.plot(row["seconds/run"], row["mean"], "osD^v<>ph*X"[i % 11], ms=6, label=str(m))
@@ -286,13 +290,15 @@ def error_vs_seconds_figure(
             pts = t.loc[[m for m in members if m in t.index]].sort_values("seconds/run")
             ax.plot(pts["seconds/run"], pts["mean"], "k:", lw=1)
         ax.set_xscale("log")
+        ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.2g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
         if logy and bool((t["mean"] > 0).all()):
             ax.set_yscale("log")
         ax.set(xlabel="seconds per run", ylabel=ylabel)
         ax.set_title(", ".join(f"{n}={v}" for n, v in zip(by, np.atleast_1d(key))) or title)
         ax.grid(alpha=0.3, which="both")
-    axes[0][-1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    axes[0][ncols - 1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     if title and by:
         fig.suptitle(title)
     return plots.save(fig, path)
