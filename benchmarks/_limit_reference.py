@@ -17,7 +17,8 @@ The random numbers are NumPy's generator's, drawn exactly as fusetrack draws the
 return the same estimates: below 65536 particles ``rng.standard_normal((N, 4))`` before the pass;
 from 65536 particles the same trick as fusetrack, the particles cut into 4 contiguous parts whose
 normals come from 4 child generators spawned once from ``rng`` (``rng.spawn(4)``), drawn inside the
-parallel pass (Numba's implementation of ``Generator.standard_normal``, bit-identical to NumPy's)
+parallel pass (Numba's implementation of ``Generator.standard_normal``, bit-identical to NumPy's,
+on the children's bit-generator handles of ``fusetrack.filters.rng_handles``, as fusetrack does)
 so that the draws use both cores. The resampling uniform is ``rng.random()`` each step.
 
 The bearing residual is computed as fusetrack computes it (``fused._abs_angle``: the angle between
@@ -36,6 +37,7 @@ import numpy as np
 
 from _scenario import Array, Scenario, cv_matrices
 from fusetrack.filters.fused import _abs_angle, passive_threads
+from fusetrack.filters.rng_handles import RunStreams, _bitgen, random_standard_normal
 
 PARALLEL_MIN = 1 << 16
 STREAMS = 4
@@ -77,11 +79,11 @@ def _with_noise_py(x, anc, F, G, eps, sensors, cz, sz, half_iv, x_out, logw):  #
         _block(x, anc, F, G, eps[lo:hi], lo, hi, sensors, cz, sz, half_iv, x_out, logw, px, py)
 
 
-def _draw_py(streams, x, anc, F, G, sensors, cz, sz, half_iv, x_out, logw):  # pragma: no cover
+def _draw_py(handles, x, anc, F, G, sensors, cz, sz, half_iv, x_out, logw):  # pragma: no cover
     n = x.shape[0]
-    per = (n + len(streams) - 1) // len(streams)
-    for c in numba.prange(len(streams)):
-        g = streams[c]
+    per = (n + handles.shape[0] - 1) // handles.shape[0]
+    for c in numba.prange(handles.shape[0]):
+        g = _bitgen(handles[c])
         eps = np.empty((BLOCK, 4))
         px = np.empty(BLOCK)
         py = np.empty(BLOCK)
@@ -89,7 +91,7 @@ def _draw_py(streams, x, anc, F, G, sensors, cz, sz, half_iv, x_out, logw):  # p
             hi = min(n, (c + 1) * per, lo + BLOCK)
             for k in range(hi - lo):
                 for a in range(4):
-                    eps[k, a] = g.standard_normal()
+                    eps[k, a] = random_standard_normal(g)
             _block(x, anc, F, G, eps, lo, hi, sensors, cz, sz, half_iv, x_out, logw, px, py)
 
 
@@ -152,7 +154,9 @@ class LimitReferencePF:
         rng = np.random.default_rng(seed)
         n = self.n
         x = self.scn.prior_mean + rng.standard_normal((n, 4)) @ self.L0.T
-        streams = tuple(rng.spawn(STREAMS)) if n >= PARALLEL_MIN else None
+        # RunStreams keeps the children alive: their handles are pointers into them
+        kids = RunStreams(rng.spawn(STREAMS)) if n >= PARALLEL_MIN else None
+        streams = None if kids is None else kids.handles
         if streams is not None:
             passive_threads()  # as fusetrack's threaded kernels: OpenMP threads sleep when idle
         anc = np.arange(n)
