@@ -30,6 +30,7 @@ from ..sensors import Bearing
 from .zhai2007_common import timed_gaussian, timed_sis
 from .zhai2007_comparators import (
     COMPARATORS,
+    UPF_NOTE,
     Scenario,
     calibration_note,
     compare,
@@ -246,7 +247,7 @@ def run(ctx: RunContext) -> Outcome:
         notes=[
             "IMM-EKF: CV and left/right coordinated turns (E2 0.1 rad/s, E3 3 deg/s), regime "
             f"matrix {IMM_TRANSITION.tolist()}.",
-            "UPF: the shared-covariance unscented proposal (filters/unscented_proposal.py).",
+            UPF_NOTE,
         ],
         n_particles=n_equal,
     )

@@ -33,6 +33,7 @@ from . import zhai2007_galerkin as e13
 from .zhai2007_common import timed_gaussian, timed_mm, timed_sis, track_rows
 from .zhai2007_comparators import (
     COMPARATORS,
+    UPF_NOTE,
     Comparison,
     Scenario,
     calibration_note,
@@ -291,6 +292,7 @@ def comparators(
             "E16 IMM-EKF: one motion model, so the one-model IMM is the EKF (row 'EKF').",
             "E17 IMM-EKF: the MMPF's four models (CV, CCW, CW padded to 6-D; CA) and Pi_B.",
             "UPF and the equal-time bootstrap: E16 the CV model, E17 the CA model.",
+            UPF_NOTE,
         ],
         methods=[
             "EKF",

@@ -27,6 +27,7 @@ from ..motion.benchmark import ScalarBenchmark
 from ..sensors.power import Power
 from .zhai2007_common import timed_sis
 from .zhai2007_comparators import (
+    UPF_NOTE,
     Scenario,
     calibration_note,
     compare,
@@ -141,7 +142,7 @@ def run(ctx: RunContext) -> Outcome:
             "IMM-EKF: the model has one motion model and a one-model IMM is exactly the EKF; "
             "with y = x^2 and a prior centred on 0 the EKF's Jacobian 2x starts at 0, so it "
             "cannot learn the sign.",
-            "UPF: the shared-covariance unscented proposal (filters/unscented_proposal.py).",
+            UPF_NOTE,
             "n_particles is the particle count of the paper's four filters; the comparators' "
             "counts are the calibrated ones above.",
         ],

@@ -36,6 +36,7 @@ from ..motion.maneuver import ManeuverTurn
 from ..sensors import Bearing
 from .zhai2007_common import timed_gaussian, timed_mm, timed_sis, track_rows
 from .zhai2007_comparators import (
+    UPF_NOTE,
     Comparison,
     Scenario,
     calibration_note,
@@ -308,6 +309,7 @@ def comparators(
         notes=[
             "IMM-EKF: the same three models (CV, CCW, CW) and matrix as the MMPFs, one EKF each.",
             "UPF and the equal-time bootstrap use the CV model (a single-model filter).",
+            UPF_NOTE,
         ],
         n_particles=n_equal,
         runs=k,

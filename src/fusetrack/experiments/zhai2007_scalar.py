@@ -26,6 +26,7 @@ from ..sensors.power import Power
 from .zhai2007_common import fmt_order, ordering_holds, timed_gaussian, timed_sis
 from .zhai2007_comparators import (
     COMPARATORS,
+    UPF_NOTE,
     Scenario,
     calibration_note,
     compare,
@@ -392,7 +393,7 @@ def analyse(
         notes=[
             "IMM-EKF: the scalar model has one motion model, and a one-model IMM is exactly the "
             "EKF (its mixing step is the identity), so the IMM-EKF row equals the EKF row.",
-            "UPF: the shared-covariance unscented proposal (filters/unscented_proposal.py).",
+            UPF_NOTE,
             "Dotted line: the bootstrap at 200, 1000, 2000 particles and at equal time.",
         ],
         families={"bootstrap": ["BS200", "BS1000", "BS2000", "bootstrap equal time"]},

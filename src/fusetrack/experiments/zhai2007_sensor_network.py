@@ -32,6 +32,7 @@ from ..sensors import Bearing
 from ..sensors.acoustic_intensity import AcousticIntensity
 from .zhai2007_comparators import (
     COMPARATORS,
+    UPF_NOTE,
     Comparison,
     Scenario,
     calibration_note,
@@ -252,8 +253,8 @@ def comparators(
         notes=[
             "IMM-EKF: CV and left/right coordinated turns at pi/10 rad/s (the S2 truth's rate), "
             f"regime matrix {IMM_TRANSITION.tolist()}, every active DOA in one update.",
-            "UPF: the shared-covariance unscented proposal (filters/unscented_proposal.py), "
-            "every active DOA in the UKF update.",
+            "UPF: every active DOA in the UKF update.",
+            UPF_NOTE,
         ],
         methods=["CPF-SP (200)", "bootstrap (2000)", "bootstrap (200)", *COMPARATORS],
         n_particles=n_equal,
