@@ -3,6 +3,7 @@ generators, the same particles as the NumPy reference and as separate runs, bit 
 
 from __future__ import annotations
 
+import gc
 import os
 import subprocess
 import sys
@@ -141,3 +142,23 @@ def test_openmp_wait_policy_is_set_at_the_first_threaded_call_not_at_import():
     env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert out.stdout.split() == ["None", "PASSIVE"], out.stderr
+
+
+def test_run_streams_keep_their_generators_alive():
+    streams = rng_handles.RunStreams([np.random.default_rng(s) for s in (1, 2)])
+    gc.collect()  # the list is gone; the generators must not be
+    normals, uniforms = np.empty((2, 10)), np.empty(2)
+    _draw(streams.handles, normals, uniforms)
+    assert uniforms[1] == np.random.default_rng(2).random()
+    assert streams.distinct
+
+
+def test_one_generator_for_several_runs_takes_the_locked_numpy_path():
+    g = np.random.default_rng(3)
+    assert not rng_handles.RunStreams([g, g]).distinct
+    sensors = [Bearing("s0", [0.0, 0.0], sigma=0.02)]
+    pf = BootstrapFilter(ConstantVelocity(ndim=2, q=0.05), sensors, n_particles=50)
+    prior = Gaussian(np.array([150.0, 100.0, 1.5, 1.0]), np.eye(4))
+    p = pf.initialize(prior, [g, g], (2,))
+    p = pf.update(pf.predict(p, 1.0, [g, g]), [Measurement(1.0, "s0", [[0.6], [0.6]])], [g, g])
+    assert np.all(np.isfinite(p.states)) and not np.array_equal(p.states[0], p.states[1])

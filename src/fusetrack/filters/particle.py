@@ -353,7 +353,8 @@ class ParticleFilter:
         resampling uniform, ancestors, normals and propagation, from its own generator, in the
         order a separate run draws them). None when it does not apply (engine "numpy", a motion
         model without ``fused_transition``, a regularised filter, child noise streams from
-        :data:`~fusetrack.filters.fused.SPLIT_MIN` particles per run)."""
+        :data:`~fusetrack.filters.fused.SPLIT_MIN` particles per run, one generator given for
+        several runs)."""
         n, d = particles.states.shape[-2:]
         fg = self._fused_motion(dt)
         if (
@@ -362,6 +363,11 @@ class ParticleFilter:
             or n >= fused.SPLIT_MIN
             or type(self)._regularize is not ParticleFilter._regularize
         ):
+            return None
+        runs = self._runs
+        if runs is None or not runs.matches(gens):
+            runs = self._runs = rng_handles.RunStreams(gens)
+        if not runs.distinct:  # one generator for several runs: NumPy's path, which locks it
             return None
         need = W.ess < self.ess_threshold * n
         anc = None
@@ -374,9 +380,6 @@ class ParticleFilter:
             rows = np.flatnonzero(need)
             anc = np.zeros(W.w.shape, dtype=np.intp)
             anc[rows] = self._ancestors(W.w, rows, gens)
-        runs = self._runs
-        if runs is None or not runs.matches(gens):
-            runs = self._runs = rng_handles.RunStreams(gens)
         s2 = particles.states.reshape(-1, n, d)
         new = run_streams.linear_gaussian_runs(runs, s2, fg[0], fg[1], mode, W.w, anc)
         if need.any():

@@ -57,11 +57,13 @@ def generator_handles(gens: Sequence[np.random.Generator]) -> NDArray[np.uint64]
 
 class RunStreams:
     """The handles of a sequence of generators, with the generators (which keep the pointed-to
-    states alive). :meth:`matches` tells whether another sequence holds the same objects."""
+    states alive). :meth:`matches` tells whether another sequence holds the same objects;
+    ``distinct`` whether no bit generator appears twice (two threads must never advance one)."""
 
     def __init__(self, gens: Sequence[np.random.Generator]) -> None:
         self.gens = tuple(gens)
         self.handles = generator_handles(self.gens)
+        self.distinct = len({int(h) for h in self.handles[:, 0]}) == len(self.gens)
 
     def matches(self, gens: Sequence[np.random.Generator]) -> bool:
         return len(gens) == len(self.gens) and all(a is b for a, b in zip(gens, self.gens))
