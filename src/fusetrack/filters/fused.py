@@ -443,6 +443,17 @@ def _column(x, r, lo, j, col):  # pragma: no cover - jit
         col[i] = x[r, lo + i, j]
 
 
+@numba.njit(cache=True, nogil=True, fastmath={"nnan", "nsz"})
+def _max_no_nan(v):  # pragma: no cover - jit
+    """``max(v)`` (``-inf`` if empty) of values that are never NaN (the loops above turn NaN
+    into ``-inf``): told so, the compiler vectorises the reduction, which it must not for a
+    maximum that has to propagate NaN. The maximum is exact either way."""
+    m = -np.inf
+    for i in range(v.shape[0]):
+        m = max(m, v[i])
+    return m
+
+
 def _llsum_py(x, lw, kinds, params, zc, usable, out, cmax):  # pragma: no cover - jit
     """``out[r, i] = lw[r, i] + sum_k ll_k`` (NaN -> -inf), ``cmax[r, c, k]`` = max over chunk
     ``c`` of the running sum after measurement ``k``. Unusable ``(r, k)`` add 0. ``zc[r, k]`` is
@@ -491,10 +502,7 @@ def _llsum_py(x, lw, kinds, params, zc, usable, out, cmax):  # pragma: no cover 
                 else:
                     dims = 1 + (iy >= 0) + (iz >= 0)
                     _add_position(px, py, pz, dims, z, p, p[9], o)
-            m = -np.inf
-            for i in range(hi - lo):
-                m = max(m, o[i])
-            cmax[r, ch, k] = m
+            cmax[r, ch, k] = _max_no_nan(o)
 
 
 _llsum_serial, _llsum_parallel = _twins(_llsum_py)
