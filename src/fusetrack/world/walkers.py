@@ -18,12 +18,54 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from ..core.errors import check_positive
 from .geometry import Array
 from .room import Room
+
+
+def first_free_heading_reference(
+    cand: Array, ok: NDArray[np.bool_], pos: Array, min_gap2: float
+) -> NDArray[np.intp]:
+    """NumPy reference of :func:`first_free_heading_kernel`: all ``(n, T, n)`` gaps at once."""
+    n = len(pos)
+    diff = cand[:, :, None, :] - pos[None, None, :, :]
+    gap2 = np.einsum("ntmk,ntmk->ntm", diff, diff)  # (n, T, n)
+    gap2[np.arange(n), :, np.arange(n)] = np.inf
+    free = ok & np.all(gap2 >= min_gap2, axis=-1)
+    return np.asarray(np.where(free.any(axis=1), np.argmax(free, axis=1), -1))
+
+
+@numba.njit(cache=True, nogil=True)
+def first_free_heading_kernel(
+    cand: np.ndarray, ok: np.ndarray, pos: np.ndarray, min_gap2: float
+) -> np.ndarray:  # pragma: no cover - jit
+    """Per walker, the first candidate step (in the order of ``_TURNS``) that the room allows and
+    that keeps its centre at least ``sqrt(min_gap2)`` from every other walker; -1 if none. Stops
+    at the first free heading instead of testing all ``(n, T, n)`` gaps."""
+    n, n_turns = cand.shape[0], cand.shape[1]
+    out = np.full(n, -1, dtype=np.intp)
+    for a in range(n):
+        for t in range(n_turns):
+            if not ok[a, t]:
+                continue
+            cx, cy = cand[a, t, 0], cand[a, t, 1]
+            free = True
+            for b in range(n):
+                if b == a:
+                    continue
+                dx, dy = cx - pos[b, 0], cy - pos[b, 1]
+                if dx * dx + dy * dy < min_gap2:
+                    free = False
+                    break
+            if free:
+                out[a] = t
+                break
+    return out
+
 
 _TURNS = np.deg2rad(np.array([0, 15, -15, 30, -30, 45, -45, 60, -60, 75, -75, 90, -90], float))
 
@@ -88,13 +130,13 @@ class WaypointWalkers:
                 pos[change], np.arctan2(d[:, 1], d[:, 0]), noise[change]
             )
         if self.avoid and n > 1:
-            diff = cand[:, :, None, :] - pos[None, None, :, :]
-            gap2 = np.einsum("ntmk,ntmk->ntm", diff, diff)  # (n, T, n)
-            gap2[np.arange(n), :, np.arange(n)] = np.inf
-            ok &= np.all(gap2 >= self.diameter**2, axis=-1)
-        first = np.argmax(ok, axis=1)
-        found = ok[np.arange(n), first]
-        new = np.where(found[:, None], cand[np.arange(n), first], pos)
+            first = first_free_heading_kernel(
+                np.ascontiguousarray(cand), np.ascontiguousarray(ok), pos, self.diameter**2
+            )
+        else:
+            first = np.where(ok.any(axis=1), np.argmax(ok, axis=1), -1)
+        found = first >= 0
+        new = np.where(found[:, None], cand[np.arange(n), np.maximum(first, 0)], pos)
         return new, dest
 
     def _candidates(
