@@ -41,7 +41,9 @@ def run(ctx: RunContext) -> Outcome:
         for c in configs
         if c["prior"] == "perfect"
     ]
-    df_all = ctx.monte_carlo(run_tracking, [*configs, *printed], runs, desc="E4 occluders")
+    # configurations sharing M (hence the simulated worlds, cached per process) run one after another
+    ordered = sorted([*configs, *printed], key=lambda c: c["n_occluders"])
+    df_all = ctx.monte_carlo(run_tracking, ordered, runs, desc="E4 occluders")
     df = df_all[df_all["label"] == "corrected"]
     hard = df_all[df_all["label"] == "printed"]
     table = mean_std(df, ["prior", "n_occluders"])
