@@ -88,6 +88,7 @@ import os
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from itertools import repeat
 from typing import Any, NamedTuple
 
 import numba
@@ -483,7 +484,7 @@ class ParticleFilter:
         if rng is None or isinstance(rng, str | bytes) or not isinstance(rng, Sequence):
             raise ConfigError(invalid("rng", rng, valid))
         gens = list(rng)
-        if len(gens) != runs or not all(isinstance(g, np.random.Generator) for g in gens):
+        if len(gens) != runs or not all(map(isinstance, gens, repeat(np.random.Generator))):
             raise ConfigError(invalid("rng", f"a sequence of {len(gens)} items", valid))
         return gens
 

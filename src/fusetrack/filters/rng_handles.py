@@ -22,6 +22,7 @@ the same generators in other Python threads during a call.
 from __future__ import annotations
 
 import ctypes
+import operator
 from collections.abc import Sequence
 
 import numpy as np
@@ -66,7 +67,7 @@ class RunStreams:
         self.distinct = len({int(h) for h in self.handles[:, 0]}) == len(self.gens)
 
     def matches(self, gens: Sequence[np.random.Generator]) -> bool:
-        return len(gens) == len(self.gens) and all(a is b for a, b in zip(gens, self.gens))
+        return len(gens) == len(self.gens) and all(map(operator.is_, gens, self.gens))
 
 
 @intrinsic
