@@ -54,3 +54,42 @@ def test_dashboard_shows_sensors_and_a_moving_track(network, tmp_path):
     assert "position (m)" in first and first != later  # the track moved
     assert status in ("ok", "degraded")
     assert (out_dir / "dashboard.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(("scenario", "tracks"), [("two-targets", 2), ("grid", 1)])
+def test_dashboard_shows_several_tracks_and_the_grid_estimate(scenario, tracks, tmp_path):
+    """Two targets through MCMCDA give two tracks on the page; the grid tracker's estimate is
+    drawn like any track (screenshots ``dashboard-two-targets.png``, ``dashboard-grid.png``)."""
+    from fusetrack.service.replay import SCENARIOS
+    from fusetrack.service.scenarios import NETWORKS
+
+    cfg = NETWORKS[scenario](idle_flush=0.3)
+    scn = SCENARIOS[scenario](cfg, seed=1, duration=20.0)
+    out_dir = Path(os.environ.get("FUSETRACK_ARTIFACTS", tmp_path))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with RunningNode(build_node(cfg)) as node, playwright.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1400, "height": 800})
+        page.goto(node.url + "/")
+        page.wait_for_function(
+            f"document.querySelectorAll('#sensors tr').length === {len(cfg.sensors)}"
+        )
+        to = f"udp://{node.udp[0]}:{node.udp[1]}"
+        sender = threading.Thread(
+            target=replay, args=(scn.readings, cfg, to), kwargs={"speed": 8.0}
+        )
+        sender.start()
+        page.wait_for_function(
+            "Number(document.getElementById('tick').textContent) >= 60", timeout=40000
+        )
+        text = page.locator("#track").inner_text()
+        shown = page.locator("#track tr.track").count()
+        sender.join(timeout=30)
+        page.wait_for_timeout(800)
+        page.screenshot(path=str(out_dir / f"dashboard-{scenario}.png"))
+        browser.close()
+    if tracks > 1:
+        assert shown == tracks and "#1" in text and "#2" in text
+    else:
+        assert "position (m)" in text
+    assert (out_dir / f"dashboard-{scenario}.png").stat().st_size > 10_000

@@ -164,11 +164,46 @@ def test_association_needs_position_detections():
         )
 
 
-@pytest.mark.parametrize("name", ["network-targets.yaml", "network-grid.yaml"])
-def test_example_configs_load(name):
+@pytest.mark.parametrize(
+    ("name", "network"), [("network-targets.yaml", "two-targets"), ("network-grid.yaml", "grid")]
+)
+def test_example_configs_are_the_scenario_networks(name, network):
     from fusetrack.service.config import load_config
-    from fusetrack.service.engine import build_engine
+    from fusetrack.service.scenarios import NETWORKS
 
-    cfg = load_config(f"examples/{name}")
-    engine = build_engine(cfg, 0.0)
-    assert engine.step_all(1, 0.25, []) is not None
+    cfg, code = load_config(f"examples/{name}"), NETWORKS[network]()
+    assert [s.model_dump() for s in cfg.sensors] == [s.model_dump() for s in code.sensors]
+    assert cfg.tracker == code.tracker and cfg.fusion == code.fusion and cfg.area == code.area
+    assert cfg.owner() == code.owner()
+
+
+def test_two_targets_scenario_is_tracked_with_misses_and_false_plots():
+    """The replayable scenario (radar with 5 % misses and false plots, one tag): two tracks, each
+    on its target, ids kept from the first seconds to the end."""
+    from fusetrack.service.scenarios import two_targets_network, two_targets_scenario
+
+    cfg = two_targets_network(idle_flush=0.3)
+    scn = two_targets_scenario(cfg, seed=2, duration=20.0)
+    clock = [0.0]
+    node = FusionNode(cfg, wall=lambda: clock[0])
+    owner, kinds = cfg.owner(), {s.id: s.kind for s in cfg.sensors}
+    for i, r in enumerate(scn.readings):
+        m = SensorMessage(
+            node=owner[r.sensor],
+            seq=i + 1,
+            sensor=r.sensor,
+            time=r.time,
+            reading=reading_from_vector(kinds[r.sensor], r.value),
+        )
+        assert node.ingest_message(m, owner[r.sensor]).accepted
+    states = node.advance()
+    clock[0] += 1.0
+    states += node.advance()
+    late = [s for s in states if s.time >= 5.0]
+    assert {s.track for s in late} == {1, 2}  # no track lost, split or renamed after 5 s
+    for s in late:
+        k = int(abs(scn.truth_times - s.time).argmin())
+        err = np.linalg.norm(scn.truth[k].reshape(2, 2) - s.position, axis=1)
+        assert err.min() < 2.5, (s.tick, s.track, err)
+    ticks = {s.tick for s in late}
+    assert all(sum(s.tick == k for s in late) == 2 for k in ticks)

@@ -49,6 +49,13 @@ def add_live_options(demo: argparse.ArgumentParser) -> None:
     demo.add_argument(
         "--exit-after-replay", action="store_true", help="--live: stop when the replay ends"
     )
+    demo.add_argument(
+        "--scenario",
+        choices=["demo", "two-targets", "grid"],
+        default="demo",
+        help="--live: the demo's target (EKF), two targets (radar + tag, MCMCDA) or the grid "
+        "tracker (beam energies, camera columns, image positions)",
+    )
 
 
 def main(args: argparse.Namespace) -> int:
@@ -88,29 +95,35 @@ def _replay(args: argparse.Namespace, cfg: Any) -> int:
 
 
 def _live_demo(args: argparse.Namespace) -> int:
-    from .replay import demo_network, demo_scenario, replay
+    from .replay import SCENARIOS, demo_network, replay
+    from .scenarios import NETWORKS
     from .server import RunningNode, build_node
 
-    cfg = demo_network()
-    scenario = demo_scenario(cfg, seed=args.seed, duration=args.duration)
+    name = getattr(args, "scenario", "demo")
+    cfg = demo_network() if name == "demo" else NETWORKS[name]()
+    scenario = SCENARIOS[name](cfg, seed=args.seed, duration=args.duration)
     with RunningNode(build_node(cfg), args.host, args.port, args.udp_port) as running:
         assert running.udp is not None
         host, port = running.udp
         print(f"dashboard: {running.url}/", flush=True)
-        print(f"replaying the demo scenario over udp://{host}:{port} at {args.speed}x", flush=True)
+        print(f"replaying the {name} scenario over udp://{host}:{port} at {args.speed}x", flush=True)  # fmt: skip
         out = replay(scenario.readings, cfg, f"udp://{host}:{port}", speed=args.speed)
-        last = round(scenario.truth_times[-1] * cfg.fusion.rate_hz)
+        last = math.floor(scenario.truth_times[-1] * cfg.fusion.rate_hz + 1e-9)
         deadline = time.monotonic() + cfg.fusion.lag + (cfg.fusion.idle_flush or 0.0) + 2.0
         while running.node.aligner.last_tick < last and time.monotonic() < deadline:
             time.sleep(0.05)  # the node fuses the stream's last readings once it pauses
         state = running.node.history[-1] if running.node.history else None
         err = math.nan
-        if state is not None:
+        if state is not None and name == "demo":
             k = round(state.time / scenario.truth_times[1])
             err = math.dist(state.position, scenario.truth[k, :2])
+        elif state is not None:  # the nearest target at the closest truth time
+            k = int(abs(scenario.truth_times - state.time).argmin())
+            targets = scenario.truth[k].reshape(-1, 2)
+            err = min(math.dist(state.position, p) for p in targets)
         print(
-            f"replay done: {out['sent']} messages sent, {running.node.aligner.last_tick} ticks; "
-            f"final position error {err:.2f} m",
+            f"replay done: {out['sent']} messages sent, {running.node.aligner.last_tick} ticks, "
+            f"{len(running.node.latest)} track(s); final position error {err:.2f} m",
             flush=True,
         )
         if args.exit_after_replay:

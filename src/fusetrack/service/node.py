@@ -417,6 +417,12 @@ class FusionNode:
                     "last": None if last is None else {**last, "age": now - last["received"]},
                 }
             )
+            if s.kind == "detection_function" and last is not None:
+                # the direction of the function's largest sample (world frame), for drawing
+                angles = s.sampling().angles
+                out[-1]["last"]["peak_direction"] = s.heading + float(
+                    angles[int(np.argmax(last["value"]))]
+                )
         return out
 
     def health(self) -> dict[str, Any]:

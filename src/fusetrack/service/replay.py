@@ -3,7 +3,7 @@ separate sensor nodes would (each node signs its own messages with its own key a
 them with its own sequence).
 
 Sources: a scenario name from :data:`SCENARIOS` (``demo``: the demo experiment's target, two
-microphone arrays, a camera and a radio tag), a recording ``.jsonl`` (one message per line, as
+microphone arrays, a camera and a radio tag; ``two-targets`` and ``grid``: :mod:`.scenarios`), a recording ``.jsonl`` (one message per line, as
 the schema has it; ``node`` and ``seq`` are replaced) or a node's durable log ``.sqlite``.
 Destinations: ``udp://HOST:PORT`` (sealed frames, :mod:`.auth`) or ``http://HOST:PORT``
 (``POST /ingest`` with each node's bearer token).
@@ -129,7 +129,23 @@ def demo_scenario(network: NetworkConfig, seed: int = 0, duration: float | None 
     return Scenario(readings, times, truth, network)
 
 
-SCENARIOS: dict[str, Callable[..., Scenario]] = {"demo": demo_scenario}
+def _two_targets(network: NetworkConfig, seed: int = 0, duration: float | None = None) -> Scenario:
+    from .scenarios import two_targets_scenario
+
+    return two_targets_scenario(network, seed, duration)
+
+
+def _grid(network: NetworkConfig, seed: int = 0, duration: float | None = None) -> Scenario:
+    from .scenarios import grid_scenario
+
+    return grid_scenario(network, seed, duration)
+
+
+SCENARIOS: dict[str, Callable[..., Scenario]] = {
+    "demo": demo_scenario,
+    "two-targets": _two_targets,  # for examples/network-targets.yaml (:mod:`.scenarios`)
+    "grid": _grid,  # for examples/network-grid.yaml
+}
 
 
 def load_recording(path: str | Path) -> list[Recorded]:

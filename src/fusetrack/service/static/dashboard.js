@@ -77,8 +77,10 @@ function draw() {
     ctx.fillRect(v.px(sx) - 5, v.py(sy) - 5, 10, 10);
     ctx.fillStyle = "#222";
     ctx.fillText(s.id, v.px(sx) + 8, v.py(sy) - 8);
-    if (s.kind === "bearing" && s.last && age < 5) { // the last bearing as a ray
-      const th = s.heading + s.last.value[0];
+    const ray = s.kind === "bearing" ? s.heading + (s.last ? s.last.value[0] : 0)
+      : s.kind === "detection_function" && s.last ? s.last.peak_direction : null;
+    if (ray !== null && s.last && age < 5) { // the last bearing (or detection peak) as a ray
+      const th = ray;
       ctx.strokeStyle = "rgba(42,109,176,0.5)";
       ctx.beginPath(); ctx.moveTo(v.px(sx), v.py(sy));
       ctx.lineTo(v.px(sx + 2 * reach * Math.cos(th)), v.py(sy + 2 * reach * Math.sin(th)));
