@@ -93,7 +93,14 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
                     listener.drain()  # what has arrived counts for the ticks now due
                 # one tick per turn: a node that fell behind still answers HTTP in between
                 fired = node.advance(limit=1)
-                await asyncio.sleep(0 if fired else poll)
+                wait = node.until_due()
+                if fired:
+                    wait = 0.0
+                elif wait is None:  # data clock: look again soon
+                    wait = poll
+                else:  # wall clock: wake when the next tick falls due, not up to a poll late
+                    wait = min(poll, max(wait, 0.0))
+                await asyncio.sleep(wait)
 
         task = asyncio.create_task(ticker())
         try:

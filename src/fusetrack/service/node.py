@@ -289,6 +289,14 @@ class FusionNode:
         if self.log is not None:
             self.log.commit()
 
+    def until_due(self) -> float | None:
+        """Wall seconds until the next tick falls due (``wall`` clock; None with the ``data``
+        clock, whose ticks follow the readings)."""
+        if self.cfg.fusion.clock != "wall":
+            return None
+        k = self.aligner.last_tick + 1
+        return self.aligner.window_end(k) + self.aligner.lag - self.wall()
+
     def behind(self) -> int:
         """How many ticks are due but not yet fused."""
         clock = self.clock()
@@ -378,12 +386,11 @@ class FusionNode:
     # -- views -------------------------------------------------------------------------------
     def rate(self, window: float = 5.0) -> float:
         """Accepted messages per second over the last ``window`` wall seconds."""
-        now = self.wall()
-        n = (
-            sum(1 for t in reversed(self.recent_accepts) if now - t <= window)
-            if self.recent_accepts
-            else 0
-        )
+        now, n = self.wall(), 0
+        for t in reversed(self.recent_accepts):  # newest first: stop at the window's start
+            if now - t > window:
+                break
+            n += 1
         return n / window
 
     def tracks_view(self, history: int = 200) -> dict[str, Any]:
@@ -399,9 +406,16 @@ class FusionNode:
 
     def sensors_view(self) -> list[dict[str, Any]]:
         now = self.wall()
-        out = []
+        out: list[dict[str, Any]] = []
         for s in self.cfg.sensors:
             last = self.last.get(s.id)
+            shown: dict[str, Any] | None = None
+            if last is not None:
+                shown = {**last, "age": now - last["received"]}
+                if s.kind == "detection_function":  # its largest sample's direction (world)
+                    angles = s.sampling().angles
+                    peak = angles[int(np.argmax(last["value"]))]
+                    shown["peak_direction"] = s.heading + float(peak)
             out.append(
                 {
                     "id": s.id,
@@ -414,15 +428,9 @@ class FusionNode:
                     "accepted": self.accepted[s.id],
                     "buffered": len(self.aligner.buffers[s.id]),
                     "dropped": self.aligner.buffers[s.id].dropped,
-                    "last": None if last is None else {**last, "age": now - last["received"]},
+                    "last": shown,
                 }
             )
-            if s.kind == "detection_function" and last is not None:
-                # the direction of the function's largest sample (world frame), for drawing
-                angles = s.sampling().angles
-                out[-1]["last"]["peak_direction"] = s.heading + float(
-                    angles[int(np.argmax(last["value"]))]
-                )
         return out
 
     def health(self) -> dict[str, Any]:
