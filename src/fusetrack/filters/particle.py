@@ -274,6 +274,7 @@ class ParticleFilter:
         self._fused_sets: dict[tuple[int, ...], tuple[tuple[Any, ...], Any]] = {}
         self._everyone: dict[int, NDArray[np.bool_]] = {}  # read-only all-True "usable" rows
         self._runs: rng_handles.RunStreams | None = None  # handles of the last per-run gens
+        self._one: rng_handles.RunStreams | None = None  # handle of the last single generator
 
     def __repr__(self) -> str:
         return (
@@ -567,8 +568,11 @@ class ParticleFilter:
             if numba_engine and len(streams) > 1:  # drawn inside the loop, one thread per stream
                 handles = self._streams[id(gens)][2]  # the children's, made once
                 out = fused.linear_gaussian_draw(s2, F, G, handles, ancestors)
-            elif numba_engine:  # NumPy draws: handing a Generator to Numba costs ~20-50 us
-                out = fused.linear_gaussian_step(s2, F, G, gens.standard_normal(shape), ancestors)
+            elif numba_engine:  # one stream, drawn inside the serial loop through its handle
+                one = self._one
+                if one is None or one.gens[0] is not gens:  # the last generator only: no hoard
+                    one = self._one = rng_handles.RunStreams((gens,))
+                out = fused.linear_gaussian_draw(s2, F, G, one, ancestors)
             else:
                 src = s2 if ancestors is None else _gather(s2, ancestors)
                 out = src @ F.T + fused.standard_normals(streams, shape) @ G.T
