@@ -40,10 +40,11 @@ CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 """
 
 
-def reading_of(message: SensorMessage, reading_id: int) -> Reading:
-    """The reading an accepted message becomes."""
+def reading_of(message: SensorMessage, reading_id: int, value: np.ndarray | None = None) -> Reading:
+    """The reading an accepted message becomes (``value``: ``message.value()``, if known)."""
     cov = None if message.covariance is None else np.asarray(message.covariance, dtype=float)
-    return Reading(reading_id, message.sensor, message.time, message.value(), cov)
+    z = message.value() if value is None else value
+    return Reading(reading_id, message.sensor, message.time, z, cov)
 
 
 class DurableLog:

@@ -115,8 +115,8 @@ class _Metrics:
             registry=r,
         )
         self.subscribers = Gauge("fusetrack_ws_subscribers", "WebSocket readers", registry=r)
-        for s in sensors:
-            self.accepted.labels(s)
+        # one child per sensor, looked up once (labels() costs microseconds per message)
+        self.accepted_by = {s: self.accepted.labels(s) for s in sensors}
 
 
 class FusionNode:
@@ -269,21 +269,21 @@ class FusionNode:
                 f"time={m.time} is at or before the fused time {self.aligner.fused_until:.3f}",
                 seq,
             )
-        self._accept(m)
+        self._accept(m, value)
         return Outcome(True, seq=seq)
 
-    def _accept(self, m: SensorMessage) -> None:
+    def _accept(self, m: SensorMessage, value: np.ndarray) -> None:
         rid = self.next_id
         self.next_id += 1
         now = self.wall()
         if self.log is not None:
             self.log.append_message(rid, m, now)
-        self.aligner.push(reading_of(m, rid))
+        self.aligner.push(reading_of(m, rid, value))
         self.watermark = max(self.watermark, m.time)
         self.accepted[m.sensor] += 1
-        self.metrics.accepted.labels(m.sensor).inc()
+        self.metrics.accepted_by[m.sensor].inc()
         self.recent_accepts.append(now)
-        self.last[m.sensor] = {"time": m.time, "value": m.value().tolist(), "received": now}
+        self.last[m.sensor] = {"time": m.time, "value": value.tolist(), "received": now}
 
     def commit(self) -> None:
         if self.log is not None:
