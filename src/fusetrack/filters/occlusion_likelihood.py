@@ -17,6 +17,12 @@ or NaN (``eta_i = 0``: out of view or occluded). Since ``eta`` is a function of 
 
 Returned log-likelihoods are ``-inf`` for impossible particles, never NaN.
 
+Bad input: a camera outside the room or inside a static occluder is refused (``ConfigError``). A
+camera whose field of view holds no particle (e.g. one that faces a wall) is assigned to none: its
+NaN readings change nothing, and a reading from it makes every particle impossible (``-inf``), which
+:class:`~fusetrack.filters.waypoint_asir.WaypointASIR` answers by ignoring that step's readings.
+Singular occluder covariances are regularised by :class:`~fusetrack.world.occlusion.OccluderPriors`.
+
 Two corrections to the printed model, both off by default (``floor = 0``, ``exclusion = 0`` is
 the paper as printed):
 
@@ -83,6 +89,17 @@ class OcclusionAwareLikelihood:
             raise ConfigError(invalid("floor", self.floor, "a probability in [0, 1)"))
         if not 0 <= self.exclusion < np.inf:
             raise ConfigError(invalid("exclusion", self.exclusion, "a finite length >= 0"))
+        # A camera behind a wall would look through it: a convex room's walls are not tested
+        # for sight (every inside point sees every other), so such a camera must be refused here.
+        outside = ~self.room.free(self.cameras.positions)
+        if np.any(outside):
+            raise ConfigError(
+                invalid(
+                    "camera position",
+                    [self.cameras.ids[i] for i in np.flatnonzero(outside)],
+                    "cameras inside the room, not in a wall or static occluder",
+                )
+            )
 
     def assigned(self, selected: NDArray[np.intp], x: Array) -> NDArray[np.bool_]:
         """``(K, L)``: camera ``selected[k]`` has particle l in view, not behind a wall or static occluder."""
