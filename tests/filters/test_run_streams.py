@@ -13,7 +13,14 @@ import numpy as np
 import pytest
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.filters import BootstrapFilter, kernels, rng_handles, run_streams
+from fusetrack.filters import (
+    BootstrapFilter,
+    fused,
+    fused_update,
+    kernels,
+    rng_handles,
+    run_streams,
+)
 from fusetrack.motion import ConstantVelocity
 from fusetrack.sensors import Bearing
 
@@ -162,3 +169,40 @@ def test_one_generator_for_several_runs_takes_the_locked_numpy_path():
     p = pf.initialize(prior, [g, g], (2,))
     p = pf.update(pf.predict(p, 1.0, [g, g]), [Measurement(1.0, "s0", [[0.6], [0.6]])], [g, g])
     assert np.all(np.isfinite(p.states)) and not np.array_equal(p.states[0], p.states[1])
+
+
+@numba.njit
+def _exps(v, out):  # pragma: no cover - jit
+    for i in range(v.shape[0]):
+        out[i] = fused_update.exp_nonpositive(v[i])
+
+
+def test_vectorised_exp_is_numpys_to_one_ulp_and_zero_below_minus_708():
+    v = -np.random.default_rng(2).exponential(40.0, 200_000)
+    v = np.concatenate([v, [0.0, -0.0, -1e-300, -0.5, -707.99, -708.0, -708.01, -800.0, -np.inf]])
+    got = np.empty_like(v)
+    _exps(v, got)
+    ref = np.exp(v)
+    ok = v >= -708.0
+    assert np.all(np.abs(got[ok] - ref[ok]) <= np.spacing(ref[ok]))
+    assert np.all(got[~ok] == 0.0) and got[v == 0.0].tolist() == [1.0, 1.0]
+
+
+@pytest.mark.parametrize("rows, n", [(1, 300), (3, 5000), (70, 1000)])  # 5000: two chunks
+def test_one_pass_update_equals_the_three_pass_references(rows, n):
+    rng = np.random.default_rng(6)
+    x = rng.normal([150.0, 100.0, 1.0, 1.0], [40.0, 40.0, 1.0, 1.0], (rows, n, 4))
+    lw = np.log(rng.dirichlet(np.ones(n), rows))
+    sensors = [Bearing("a", [0.0, 0.0], sigma=0.05), Bearing("b", [400.0, 0.0], sigma=0.05)]
+    kinds = np.array([0, 0])
+    params = np.stack([fused.sensor_params(*s.fused_likelihood()) for s in sensors])
+    z = rng.uniform(0.2, 2.5, (rows, 2, 1))
+    usable = np.ones((rows, 2), bool)
+    usable[0, 1] = False
+    got = fused_update.log_weight_update_rows(x, lw, kinds, params, z, usable)
+    acc, maxima = fused.log_likelihood_sum(x, lw, kinds, params, z, usable)
+    np.testing.assert_array_equal(got[5], maxima)  # the same likelihood code: the same bits
+    ref = kernels.normalize_with_mean(acc.copy(), maxima[:, -1], x)  # NumPy's exp
+    for a, b in zip(got[:5], ref):
+        np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-300)
+    assert np.all(np.isfinite(got[3])) and np.all(got[3] <= n)

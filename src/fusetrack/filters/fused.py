@@ -74,7 +74,9 @@ __all__ = [
     "SPLIT_MIN",
     "linear_gaussian_draw",
     "linear_gaussian_step",
+    "llsum_chunk",
     "log_likelihood_sum",
+    "measurement_rows",
     "passive_threads",
     "sensor_params",
     "split_bounds",
@@ -454,58 +456,85 @@ def _max_no_nan(v):  # pragma: no cover - jit
     return m
 
 
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def llsum_chunk(x, r, lo, lw, kinds, params, zc, usable, o, px, py, pz, cm):
+    # pragma: no cover - jit
+    """Particles ``lo .. lo + len(o)`` of run ``r``: ``o = lw + sum_k ll_k`` (NaN -> -inf) and
+    ``cm[k]`` = max of the running sum after measurement ``k`` (``px, py, pz``: scratch columns
+    as long as ``o``). One loop per measurement over contiguous position columns (vectorised).
+    Shared by :func:`_llsum_py` and the one-pass update of :mod:`.fused_update`."""
+    nk = kinds.shape[0]
+    m = o.shape[0]
+    for i in range(m):
+        v = lw[r, lo + i]
+        o[i] = -np.inf if v != v else v
+    have = (-1, -1, -1)  # which state components px, py, pz hold
+    for k in range(nk):
+        if usable[r, k]:
+            p = params[k]
+            kind = kinds[k]
+            ix = int(p[0])
+            iy = int(p[1])
+            iz = int(p[2])
+            if ix != have[0]:
+                _column(x, r, lo, ix, px)
+            if iy >= 0 and iy != have[1]:
+                _column(x, r, lo, iy, py)
+            if iz >= 0 and iz != have[2]:
+                _column(x, r, lo, iz, pz)
+            have = (ix, iy if iy >= 0 else have[1], iz if iz >= 0 else have[2])
+            z = zc[r, k]
+            if kind == 0:
+                _add_bearing(px, py, p[3], p[4], z[3], z[4], 0.5 * p[7], p[9], o)
+            elif kind == 1:
+                pz3 = pz[: m if iz >= 0 else 0]
+                _add_range(px, py, pz3, p[3], p[4], p[5], z[0], 0.5 * p[7], p[9], o)
+            elif kind == 2:
+                _add_range_bearing(
+                    px, py, p[3], p[4], z[0], z[3], z[4], 0.5 * p[7], 0.5 * p[8], p[9], o
+                )
+            else:
+                dims = 1 + (iy >= 0) + (iz >= 0)
+                _add_position(px, py, pz, dims, z, p, p[9], o)
+        cm[k] = _max_no_nan(o)
+
+
 def _llsum_py(x, lw, kinds, params, zc, usable, out, cmax):  # pragma: no cover - jit
     """``out[r, i] = lw[r, i] + sum_k ll_k`` (NaN -> -inf), ``cmax[r, c, k]`` = max over chunk
     ``c`` of the running sum after measurement ``k``. Unusable ``(r, k)`` add 0. ``zc[r, k]`` is
-    ``[z0, z1, z2, cos phi, sin phi]`` with ``phi`` the bearing component plus the heading. One
-    loop per measurement over contiguous position columns of the chunk (vectorised)."""
+    ``[z0, z1, z2, cos phi, sin phi]`` with ``phi`` the bearing component plus the heading.
+    Work items: (run, chunk of :data:`CHUNK` particles), :func:`llsum_chunk` each."""
     rows, n, _ = x.shape
-    nk = kinds.shape[0]
     nch = (n + CHUNK - 1) // CHUNK
     for c in numba.prange(rows * nch):
         r = c // nch
         ch = c % nch
         lo = ch * CHUNK
         hi = min(n, lo + CHUNK)
-        o = out[r, lo:hi]
-        for i in range(hi - lo):
-            v = lw[r, lo + i]
-            o[i] = -np.inf if v != v else v
         px = np.empty(hi - lo)
         py = np.empty(hi - lo)
         pz = np.empty(hi - lo)
-        have = (-1, -1, -1)  # which state components px, py, pz hold
-        for k in range(nk):
-            if usable[r, k]:
-                p = params[k]
-                kind = kinds[k]
-                ix = int(p[0])
-                iy = int(p[1])
-                iz = int(p[2])
-                if ix != have[0]:
-                    _column(x, r, lo, ix, px)
-                if iy >= 0 and iy != have[1]:
-                    _column(x, r, lo, iy, py)
-                if iz >= 0 and iz != have[2]:
-                    _column(x, r, lo, iz, pz)
-                have = (ix, iy if iy >= 0 else have[1], iz if iz >= 0 else have[2])
-                z = zc[r, k]
-                if kind == 0:
-                    _add_bearing(px, py, p[3], p[4], z[3], z[4], 0.5 * p[7], p[9], o)
-                elif kind == 1:
-                    pz3 = pz[: hi - lo if iz >= 0 else 0]
-                    _add_range(px, py, pz3, p[3], p[4], p[5], z[0], 0.5 * p[7], p[9], o)
-                elif kind == 2:
-                    _add_range_bearing(
-                        px, py, p[3], p[4], z[0], z[3], z[4], 0.5 * p[7], 0.5 * p[8], p[9], o
-                    )
-                else:
-                    dims = 1 + (iy >= 0) + (iz >= 0)
-                    _add_position(px, py, pz, dims, z, p, p[9], o)
-            cmax[r, ch, k] = _max_no_nan(o)
+        llsum_chunk(x, r, lo, lw, kinds, params, zc, usable, out[r, lo:hi], px, py, pz, cmax[r, ch])
 
 
 _llsum_serial, _llsum_parallel = _twins(_llsum_py)
+
+
+def measurement_rows(
+    kinds: NDArray[np.int64], params: Array, z: Array
+) -> tuple[NDArray[np.int64], Array, Array]:
+    """The kernels' form of the measurements: contiguous ``kinds``, ``params`` and ``zc``
+    ``(R, K, 5)``, each value padded to 3 components followed by ``cos phi, sin phi`` (``phi``
+    the bearing component plus the sensor's heading)."""
+    kinds = np.ascontiguousarray(kinds, dtype=np.int64)
+    params = np.ascontiguousarray(params, dtype=np.float64)
+    z = np.asarray(z, dtype=np.float64)
+    zc = np.zeros((z.shape[0], kinds.shape[0], 5))
+    zc[..., : z.shape[-1]] = z
+    phi = np.where(kinds == RANGE_BEARING, zc[..., 1], zc[..., 0]) + params[:, 6]
+    np.cos(phi, out=zc[..., 3])
+    np.sin(phi, out=zc[..., 4])
+    return kinds, params, zc
 
 
 def log_likelihood_sum(
@@ -527,14 +556,7 @@ def log_likelihood_sum(
     """
     x = np.ascontiguousarray(states, dtype=np.float64)
     rows, n, _ = x.shape
-    kinds = np.ascontiguousarray(kinds, dtype=np.int64)
-    params = np.ascontiguousarray(params, dtype=np.float64)
-    z = np.asarray(z, dtype=np.float64)
-    zc = np.zeros((rows, kinds.shape[0], 5))
-    zc[..., : z.shape[-1]] = z
-    phi = np.where(kinds == RANGE_BEARING, zc[..., 1], zc[..., 0]) + params[:, 6]
-    np.cos(phi, out=zc[..., 3])
-    np.sin(phi, out=zc[..., 4])
+    kinds, params, zc = measurement_rows(kinds, params, z)
     nch = (n + CHUNK - 1) // CHUNK
     out = np.empty((rows, n))
     cmax = np.empty((rows, nch, kinds.shape[0]))

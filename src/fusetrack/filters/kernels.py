@@ -401,51 +401,57 @@ def weighted_mean_cov_reference(states: ArrayLike, weights: ArrayLike) -> tuple[
 # ---------------------------------------------------------------------------------------------
 
 
-def _normalize_mean_py(v, e, rowmax, x, lse, ess, mean):  # pragma: no cover - jit
-    """Per row, given ``e = exp(v - max)``: ``s = sum e``, ``sum e^2`` and ``sum e x`` in one
-    pass; then ``lse = max + log s``, ``v -= lse``, ``e *= 1/s`` (the
-    weights), ``ess = s^2 / sum e^2``, ``mean = sum e x / s``. Rows with a non-finite maximum:
-    ``e = 0``, ``ess = 0``, ``lse = max``, ``mean = NaN``, ``v`` left raw. Rows are independent
-    work items (threaded over the rows of a batch; each row's arithmetic is the same)."""
-    rows, n, d = x.shape
-    for r in numba.prange(rows):
-        part = np.empty(d)
-        acc = np.empty(d)
-        m = rowmax[r]
-        if not math.isfinite(m):
-            for i in range(n):
-                e[r, i] = 0.0
-            lse[r] = m
-            ess[r] = 0.0
-            for k in range(d):
-                mean[r, k] = np.nan
-            continue
-        s = 0.0
-        q = 0.0
-        acc[:] = 0.0
-        for lo in range(0, n, CHUNK):
-            ps = 0.0
-            pq = 0.0
-            part[:] = 0.0
-            for i in range(lo, min(n, lo + CHUNK)):
-                ei = e[r, i]
-                ps += ei
-                pq += ei * ei
-                for k in range(d):
-                    part[k] += ei * x[r, i, k]
-            s += ps
-            q += pq
-            for k in range(d):
-                acc[k] += part[k]
-        total = m + math.log(s)
-        inv = 1.0 / s
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def normalize_mean_row(v, e, m, x, r, lse, ess, mean):  # pragma: no cover - jit
+    """Row ``r`` of :func:`_normalize_mean_py` (``m`` its maximum): given ``e = exp(v - m)``,
+    ``s = sum e``, ``sum e^2`` and ``sum e x`` in one pass; then ``lse = m + log s``,
+    ``v -= lse``, ``e *= 1/s`` (the weights), ``ess = s^2 / sum e^2``, ``mean = sum e x / s``.
+    A non-finite ``m``: ``e = 0``, ``ess = 0``, ``lse = m``, ``mean = NaN``, ``v`` left raw.
+    Shared with the one-pass update of :mod:`fusetrack.filters.fused_update`."""
+    n = v.shape[1]
+    d = x.shape[2]
+    if not math.isfinite(m):
         for i in range(n):
-            v[r, i] = v[r, i] - total
-            e[r, i] = e[r, i] * inv
-        lse[r] = total
-        ess[r] = s * s / q
+            e[r, i] = 0.0
+        lse[r] = m
+        ess[r] = 0.0
         for k in range(d):
-            mean[r, k] = acc[k] * inv
+            mean[r, k] = np.nan
+        return
+    part = np.empty(d)
+    acc = np.zeros(d)
+    s = 0.0
+    q = 0.0
+    for lo in range(0, n, CHUNK):
+        ps = 0.0
+        pq = 0.0
+        part[:] = 0.0
+        for i in range(lo, min(n, lo + CHUNK)):
+            ei = e[r, i]
+            ps += ei
+            pq += ei * ei
+            for k in range(d):
+                part[k] += ei * x[r, i, k]
+        s += ps
+        q += pq
+        for k in range(d):
+            acc[k] += part[k]
+    total = m + math.log(s)
+    inv = 1.0 / s
+    for i in range(n):
+        v[r, i] = v[r, i] - total
+        e[r, i] = e[r, i] * inv
+    lse[r] = total
+    ess[r] = s * s / q
+    for k in range(d):
+        mean[r, k] = acc[k] * inv
+
+
+def _normalize_mean_py(v, e, rowmax, x, lse, ess, mean):  # pragma: no cover - jit
+    """:func:`normalize_mean_row` for every row; rows are independent work items (threaded
+    over the rows of a batch; each row's arithmetic is the same)."""
+    for r in numba.prange(x.shape[0]):
+        normalize_mean_row(v, e, rowmax[r], x, r, lse, ess, mean)
 
 
 _normalize_mean_rows, _normalize_mean_parallel = _twins(_normalize_mean_py)

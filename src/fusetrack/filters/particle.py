@@ -109,7 +109,7 @@ from ..core.errors import (
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import Resampler, get_resampler
-from . import fused, kernels, rng_handles, run_streams
+from . import fused, fused_update, kernels, rng_handles, run_streams
 from .stats import FilterStats, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]
@@ -845,6 +845,13 @@ class ParticleFilter:
         for k, c in enumerate(checked):
             z[:, k, : c.z.shape[-1]] = c.z
         usable = np.stack([c.usable for c in checked], axis=1)
+        if n < fused.SPLIT_MIN:  # one pass per run (its particles stay in cache)
+            lw, w, _, ess, mean, maxima = fused_update.log_weight_update_rows(
+                s3, W.lw, kinds, params, z, usable
+            )
+            if not self._bound_holds(maxima, usable, n):
+                return None
+            return _Weights(lw, w, ess), mean
         acc, maxima = fused.log_likelihood_sum(s3, W.lw, kinds, params, z, usable)
         if not self._bound_holds(maxima, usable, n):
             return None
