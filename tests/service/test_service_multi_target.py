@@ -207,3 +207,27 @@ def test_two_targets_scenario_is_tracked_with_misses_and_false_plots():
         assert err.min() < 2.5, (s.tick, s.track, err)
     ticks = {s.tick for s in late}
     assert all(sum(s.tick == k for s in late) == 2 for k in ticks)
+
+
+def test_forgetting_the_past_keeps_the_current_tracks_and_memory_flat():
+    plots = _plots(10.0, seed=3)
+    runs = []
+    for forget in (False, True):
+        mc = MCMCDA(MCMCDAConfig(dt=1 / RATE, window=6, n_mc=60, p_detect=0.95, area=6000.0))
+        now = []
+        for k in range(1, 41):
+            y = [
+                [
+                    RADAR[0] + p.value[0] * math.cos(p.value[1]),
+                    RADAR[1] + p.value[0] * math.sin(p.value[1]),
+                ]
+                for p in plots
+                if (k - 1) / RATE < p.time <= k / RATE
+            ]
+            mc.step(np.array(y).reshape(-1, 2))
+            if forget:
+                mc.forget_past()
+                assert sum(len(o) > 0 for o in mc.observations) <= 6 and not mc.committed
+            now.append({i: x.tolist() for i, (x, _) in mc.current_tracks().items()})
+        runs.append(now)
+    assert runs[0] == runs[1]

@@ -99,6 +99,7 @@ class MCMCDA:
     accepted: int = 0
     proposed: int = 0
     _next_id: int = 0
+    _forgotten: int = 0  # observations before this step were freed (forget_past)
     _cache: dict[TrackKey, float] = field(default_factory=dict)
     _gate_cache: dict[tuple[Obs, Obs], bool] = field(default_factory=dict)
 
@@ -450,6 +451,18 @@ class MCMCDA:
                 x, p = f1 @ x, f1 @ p @ f1.T + q1
             out[ident] = (x, 0.5 * (p + p.T))
         return dict(sorted(out.items()))
+
+    def forget_past(self) -> None:
+        """Free what has left the window, for a tracker that runs indefinitely and reads
+        :meth:`current_tracks`: the observations before the window (their steps stay, empty)
+        and the committed associations (:meth:`tracks` then covers only later commits). The
+        current tracks are unchanged: the sampler only looks inside the window."""
+        t_lo = max(0, len(self.observations) - self.config.window)
+        empty = np.empty((0, 2))
+        for t in range(self._forgotten, t_lo):
+            self.observations[t] = empty
+        self._forgotten = max(self._forgotten, t_lo)
+        self.committed.clear()
 
     def finish(self) -> None:
         """Commit every observation still in the window (end of the data)."""

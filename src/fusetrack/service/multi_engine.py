@@ -100,6 +100,7 @@ class MultiTargetEngine:
         """Associate the tick's detections; publish every current track."""
         y = detections(self.cfg, readings, self.cells)
         self.mcmcda.step(y)
+        self.mcmcda.forget_past()  # a node runs for days: memory stays flat
         self.last_detections = y
         self.time = t
         sensors = sorted({r.sensor for r in readings})
