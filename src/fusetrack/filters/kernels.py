@@ -134,7 +134,8 @@ def _exp_shifted(v: Array, rowmax: Array) -> Array:
 
     The one ``exp`` of an update. It is NumPy's: its SIMD ``exp`` is 2-3 times faster than a
     scalar ``math.exp`` loop in Numba (which cannot vectorise it without ``fastmath``), so both
-    engines share this call.
+    engines share this call. (The one-pass update of :mod:`fusetrack.filters.fused_update`, used
+    below 65 536 particles per run, has its own vectorised ``exp`` within 1 ulp of this one.)
     """
     shift = np.where(np.isfinite(rowmax), rowmax, 0.0)
     e = np.subtract(v, shift[..., None])
