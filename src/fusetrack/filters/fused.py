@@ -12,6 +12,13 @@ arithmetic runs in two Numba loops that touch each particle once:
 * :func:`log_likelihood_sum` -- ``v_i = log w_i + sum_k log p(z_k | x_i)`` over all the step's
   measurements, with the running maximum after each measurement (what the filter's degeneracy
   bound needs), one pass over the particles.
+* :func:`linear_gaussian_draw` -- the first with ``eps`` drawn inside the loop from generators
+  given as :mod:`.rng_handles` (one stream, or fixed child streams on both cores), in vectorised
+  blocks (:func:`_affine_block`).
+
+Batches with one generator per run use :mod:`.run_streams` (propagation) and, below
+:data:`SPLIT_MIN` particles per run, :mod:`.fused_update` (the whole update in one pass per run),
+both built from the per-chunk code here.
 
 A model offers a fast path through a small method that returns plain numbers:
 
