@@ -2,9 +2,10 @@
 
 Sensor nodes send authenticated, versioned messages (:mod:`.schema`, :mod:`.auth`) over UDP,
 HTTP or WebSocket; the node buffers and aligns them to its fusion ticks (:mod:`.alignment`),
-runs the configured filter (:mod:`.engine`), logs everything durably (:mod:`.log`) and publishes
+runs the configured tracker (:mod:`.engine`: one filter; :mod:`.grid_engine`: the Kushwaha grid;
+:mod:`.multi_engine`: several targets through MCMCDA), logs everything durably (:mod:`.log`) and publishes
 tracks over REST/WebSocket with a dashboard (:mod:`.app`). :mod:`.replay` plays a simulated
-scenario or a recording into a running node. See DESIGN.md and the README's service section.
+scenario (:mod:`.scenarios`) or a recording into a running node. See DESIGN.md and the README's service section.
 """
 
 from .alignment import Aligner as Aligner
@@ -18,6 +19,7 @@ from .config import NetworkConfig as NetworkConfig
 from .config import load_config as load_config
 from .config import parse_config as parse_config
 from .engine import FusionEngine as FusionEngine
+from .engine import build_engine as build_engine
 from .log import DurableLog as DurableLog
 from .log import replay_log as replay_log
 from .node import FusionNode as FusionNode
