@@ -62,3 +62,24 @@ def test_invalid_regime_probabilities():
         WaypointRegimeDynamics(beta_moving=0.9, lambda_moving=0.2)
     with pytest.raises(ConfigError):
         WaypointRegimeDynamics(sigma_v=-1.0)
+
+
+@pytest.mark.parametrize("sigma_v", [0.0, 0.33])
+def test_numba_sample_equals_the_numpy_reference(sigma_v):
+    """Same random draws, same particles, bit for bit: a mix of moving, reached, waiting and
+    destination-changing particles, some of whose moves leave the free floor."""
+    dyn = WaypointRegimeDynamics(sigma_v=sigma_v)
+    rng = np.random.default_rng(5)
+    u = np.empty((3000, 5))
+    u[:, :2] = rng.uniform(0, 100, (3000, 2))
+    u[:, 2:4] = u[:, :2] + rng.normal(0, 3, (3000, 2))
+    u[:5, 2:4] = u[:5, :2]  # standing on the destination
+    u[:, 4] = rng.uniform(0.2, 2.0, 3000)
+
+    def free(p):
+        return (p[:, 0] > 2) & (p[:, 0] < 98) & ~((np.abs(p[:, 0] - 50) < 10) & (p[:, 1] < 40))
+
+    fast = dyn.sample(u, np.random.default_rng(9), sampler, free)
+    ref = dyn.sample_reference(u, np.random.default_rng(9), sampler, free)
+    assert np.array_equal(fast, ref)
+    assert not np.array_equal(fast[:, :2], u[:, :2])

@@ -17,15 +17,60 @@ stage: the noise-free MTD step, or no move once the destination is reached (spec
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from ..core.errors import ConfigError, check_positive, check_probability, invalid
 
 Array = NDArray[np.float64]
+
+
+@numba.njit(cache=True, nogil=True)
+def regime_move_kernel(
+    u: np.ndarray, cd: np.ndarray, dest: np.ndarray, noise: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - jit
+    """A copy of ``u`` with the new destinations ``dest`` on the rows ``cd`` (in order), and for
+    every particle the MTD step of Eq. 5 towards its (new) destination: the new position and the
+    step length ``|s (tau - x)/|tau - x| + v|``."""
+    n = u.shape[0]
+    out = u.copy()
+    new = np.empty((n, 2))
+    travelled = np.empty(n)
+    c = 0
+    for i in range(n):
+        if cd[i]:
+            out[i, 2] = dest[c, 0]
+            out[i, 3] = dest[c, 1]
+            c += 1
+        tx, ty = out[i, 2] - out[i, 0], out[i, 3] - out[i, 1]
+        dist = math.hypot(tx, ty)
+        if dist > 0.0:
+            tx, ty = tx / dist, ty / dist
+        sx = out[i, 4] * tx + noise[i, 0]
+        sy = out[i, 4] * ty + noise[i, 1]
+        new[i, 0] = out[i, 0] + sx
+        new[i, 1] = out[i, 1] + sy
+        travelled[i] = math.hypot(sx, sy)
+    return out, new, travelled
+
+
+@numba.njit(cache=True, nogil=True)
+def apply_moves_kernel(
+    out: np.ndarray, new: np.ndarray, travelled: np.ndarray, move: np.ndarray, phi: float
+) -> None:  # pragma: no cover - jit
+    """Moving particles take their new position and speed ``(1 - phi) s + phi |step|`` (in place)."""
+    for i in range(out.shape[0]):
+        if move[i]:
+            out[i, 0] = new[i, 0]
+            out[i, 1] = new[i, 1]
+            out[i, 4] = (1.0 - phi) * out[i, 4] + phi * travelled[i]
+
+
 DestinationSampler = Callable[[np.random.Generator, int], Array]
 FreeTest = Callable[[Array], NDArray[np.bool_]]
 
@@ -87,7 +132,39 @@ class WaypointRegimeDynamics:
         sample_free: DestinationSampler,
         free: FreeTest | None = None,
     ) -> Array:
-        """Draw ``u(t) ~ f(u | u(t-1))`` for every particle (Sec. 4.1)."""
+        """Draw ``u(t) ~ f(u | u(t-1))`` for every particle (Sec. 4.1).
+
+        The random draws are made here, in the order of :meth:`sample_reference` (regimes, new
+        destinations, motion noise); the moves themselves are one Numba pass
+        (:func:`regime_move_kernel`), then the free-floor test, then :func:`apply_moves_kernel`.
+        """
+        n = len(u)
+        to = u[:, 2:4] - u[:, :2]
+        reached = np.hypot(to[:, 0], to[:, 1]) < u[:, 4]
+        beta = np.where(reached, self.beta_reached, self.beta_moving)
+        lam = np.where(reached, self.lambda_reached, self.lambda_moving)
+        r = rng.random(n)
+        mtd = r < beta
+        cd = (r >= beta) & (r < beta + lam)
+        dest = sample_free(rng, int(cd.sum())) if cd.any() else np.zeros((0, 2))
+        noise = self.sigma_v * rng.standard_normal((n, 2))
+        out, new, travelled = regime_move_kernel(
+            np.ascontiguousarray(u, dtype=float), cd, np.ascontiguousarray(dest, dtype=float), noise
+        )
+        move = mtd | cd
+        if free is not None:
+            move &= free(new)
+        apply_moves_kernel(out, new, travelled, move, float(self.phi))
+        return out
+
+    def sample_reference(
+        self,
+        u: Array,
+        rng: np.random.Generator,
+        sample_free: DestinationSampler,
+        free: FreeTest | None = None,
+    ) -> Array:
+        """NumPy reference of :meth:`sample` (same random draws, same result)."""
         n = len(u)
         out = u.copy()
         _, dist = self._direction(u)
