@@ -69,9 +69,9 @@ class OccluderPriors:
             raise ConfigError(
                 invalid("occluder priors", "non-finite", "finite means and covariances")
             )
-        if not np.allclose(cov, np.swapaxes(cov, -1, -2), atol=1e-9):
-            raise ConfigError(invalid("occluder cov", cov.tolist(), "symmetric 2x2 matrices"))
         diagonal = bool(np.all(cov[:, 0, 1] == 0) and np.all(cov[:, 1, 0] == 0))
+        if not diagonal and not np.allclose(cov, np.swapaxes(cov, -1, -2), atol=1e-9):
+            raise ConfigError(invalid("occluder cov", cov.tolist(), "symmetric 2x2 matrices"))
         if len(mu) and diagonal and np.all(cov[:, [0, 1], [0, 1]] >= MIN_PRIOR_VARIANCE):
             pass  # already valid (the Kalman priors): keep it exactly, so kernels see it isotropic
         elif len(mu):
