@@ -237,3 +237,12 @@ def test_image_positions_through_the_ekf_equal_run_filter():
 def test_detection_functions_need_the_grid_tracker():
     with pytest.raises(ConfigError, match="grid"):
         _network("ekf")
+
+
+def test_a_grid_too_fine_for_the_area_is_refused():
+    cfg = _network()
+    data = cfg.model_dump()
+    data["tracker"]["grid"]["cell"] = 0.01  # 4000 x 3000 cells
+    data["nodes"] = [dict(n) for n in data["nodes"]]
+    with pytest.raises(ConfigError, match=r"tracker\.grid\.cell"):
+        parse_config(data)

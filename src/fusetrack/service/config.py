@@ -44,6 +44,10 @@ tracker (``tracker.filter: grid``); every other kind is fused by every tracker."
 
 GRID_ONLY_KINDS: tuple[str, ...] = ("detection_function",)
 
+MAX_GRID_CELLS = 250_000
+"""The grid tracker keeps one arc-mean matrix (cells x samples) per detection-function sensor:
+a bound on the cells keeps a config from asking for gigabytes."""
+
 
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
@@ -398,6 +402,22 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
             f"{source}: "
             + invalid("tracker.prior_mean", cfg.tracker.prior_mean, f"{expect} entries")
         )
+    if cfg.tracker.filter == "grid" or cfg.tracker.association.method == "mcmcda":
+        x0, x1, y0, y1 = cfg.area
+        cell = cfg.tracker.grid.cell
+        cells = round((x1 - x0) / cell) * round((y1 - y0) / cell)
+        if cfg.tracker.filter == "grid" and not 4 <= cells <= MAX_GRID_CELLS:
+            raise ConfigError(
+                f"{source}: "
+                + invalid(
+                    "tracker.grid.cell",
+                    cell,
+                    f"a cell size giving 4..{MAX_GRID_CELLS} cells over area {cfg.area} "
+                    f"(this gives {cells})",
+                )
+            )
+        if not (x1 > x0 and y1 > y0):
+            raise ConfigError(f"{source}: " + invalid("area", cfg.area, "x0 < x1 and y0 < y1"))
     grid_only = [s.id for s in cfg.sensors if s.kind in GRID_ONLY_KINDS]
     if grid_only and cfg.tracker.filter != "grid":
         raise ConfigError(
