@@ -188,7 +188,7 @@ def test_vectorised_exp_is_numpys_to_one_ulp_and_zero_below_minus_708():
     assert np.all(got[~ok] == 0.0) and got[v == 0.0].tolist() == [1.0, 1.0]
 
 
-@pytest.mark.parametrize("rows, n", [(1, 300), (3, 5000), (70, 1000)])  # 5000: two chunks
+@pytest.mark.parametrize("rows, n", [(1, 300), (3, 5000), (70, 1000), (1, 70_000), (2, 66_000)])
 def test_one_pass_update_equals_the_three_pass_references(rows, n):
     rng = np.random.default_rng(6)
     x = rng.normal([150.0, 100.0, 1.0, 1.0], [40.0, 40.0, 1.0, 1.0], (rows, n, 4))
@@ -206,3 +206,19 @@ def test_one_pass_update_equals_the_three_pass_references(rows, n):
     for a, b in zip(got[:5], ref):
         np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-300)
     assert np.all(np.isfinite(got[3])) and np.all(got[3] <= n)
+
+
+def test_chunked_update_of_large_runs_equals_the_per_run_update_bit_for_bit(monkeypatch):
+    """From SPLIT_MIN particles the update runs as (run, chunk) work items; with the split moved
+    up, the same rows take the per-run kernel: the chunks and their order are the same."""
+    rng = np.random.default_rng(8)
+    x = rng.normal([150.0, 100.0, 1.0, 1.0], [40.0, 40.0, 1.0, 1.0], (2, 70_000, 4))
+    lw = np.log(rng.dirichlet(np.ones(70_000), 2))
+    sensor = Bearing("a", [0.0, 0.0], sigma=0.05)
+    args = (np.array([0]), fused.sensor_params(*sensor.fused_likelihood())[None])
+    z, usable = np.full((2, 1, 1), 0.6), np.ones((2, 1), bool)
+    chunked = fused_update.log_weight_update_rows(x, lw, *args, z, usable)
+    monkeypatch.setattr(fused_update, "SPLIT_MIN", 10**9)
+    per_run = fused_update.log_weight_update_rows(x, lw, *args, z, usable)
+    for a, b in zip(chunked, per_run):
+        np.testing.assert_array_equal(a, b)

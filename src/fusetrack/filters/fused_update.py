@@ -1,15 +1,20 @@
-"""The weights of a particle step in one pass per run: likelihoods, log-sum-exp, weights, mean.
+"""The weights of a particle step in few passes: likelihoods, log-sum-exp, weights, mean.
 
-The fused update of :class:`~fusetrack.filters.ParticleFilter` makes three passes over the
+The fused update of :class:`~fusetrack.filters.ParticleFilter` made three passes over the
 particles: the log-likelihoods of all the step's measurements
-(:func:`fusetrack.filters.fused.log_likelihood_sum`), NumPy's ``exp``, and the normalisation with
-the weighted mean (:func:`fusetrack.filters.kernels.normalize_with_mean`). For runs of fewer than
-:data:`~fusetrack.filters.fused.SPLIT_MIN` particles a run's particles fit in the core's cache,
-and :func:`log_weight_update_rows` does all of it run by run, one work item per run (threaded
-over the runs of a batch): the same per-chunk likelihood code
-(:func:`fusetrack.filters.fused.llsum_chunk`), then ``exp(v - max)`` by :func:`exp_nonpositive`,
-then the same normalisation code (:func:`fusetrack.filters.kernels.normalize_mean_row`). The
-state is read once instead of twice and the log-weights stay in cache between the three steps.
+(:func:`fusetrack.filters.fused.log_likelihood_sum`, threaded), NumPy's ``exp`` and the
+normalisation with the weighted mean (:func:`fusetrack.filters.kernels.normalize_with_mean`),
+both on one core. :func:`log_weight_update_rows` does the same arithmetic with its own ``exp``:
+
+* runs of fewer than :data:`~fusetrack.filters.fused.SPLIT_MIN` particles: one work item per
+  run (threaded over the runs of a batch) doing all of it while the run's particles are in the
+  core's cache: the per-chunk likelihood code (:func:`fusetrack.filters.fused.llsum_chunk`),
+  ``exp(v - max)`` by :func:`exp_nonpositive`, the normalisation code
+  (:func:`fusetrack.filters.kernels.normalize_mean_row`);
+* larger runs: three threaded loops over (run, chunk) work items: the likelihoods; ``exp`` with
+  each chunk's sums (:func:`~fusetrack.filters.kernels.chunk_moments`); after the chunks' sums
+  are added in chunk order, the normalised log-weights and weights. The chunks and their order
+  are the per-run path's, so both paths give the same bits, whatever the threads.
 
 ``exp`` cannot be NumPy's inside a Numba loop, and libm's scalar ``exp`` costs 13-17 ns per
 particle on this machine (NumPy's SIMD one: under 1 ns), so :func:`exp_nonpositive` is fdlibm's
@@ -32,8 +37,18 @@ from numba import types
 from numba.core.extending import intrinsic
 from numpy.typing import NDArray
 
-from .fused import CHUNK, PARALLEL_MIN, _twins, llsum_chunk, measurement_rows, threaded
-from .kernels import normalize_mean_row
+from .fused import (
+    CHUNK,
+    PARALLEL_MIN,
+    SPLIT_MIN,
+    _llsum_parallel,
+    _llsum_serial,
+    _twins,
+    llsum_chunk,
+    measurement_rows,
+    threaded,
+)
+from .kernels import chunk_moments, finish_moments, normalize_mean_row
 
 Array = NDArray[np.float64]
 
@@ -112,6 +127,46 @@ def _update_py(x, lw, kinds, params, zc, usable, v, e, lse, ess, mean, cmax):
 _update_serial, _update_parallel = _twins(_update_py)
 
 
+def _exp_moments_py(v, m, x, e, parts):  # pragma: no cover - jit
+    """Work item (run ``r``, chunk ``c``): ``e = exp(v - m[r])`` and the chunk's
+    :func:`~fusetrack.filters.kernels.chunk_moments` into ``parts[r, c]`` (0 for a row with a
+    non-finite maximum)."""
+    rows, n = v.shape
+    nch = parts.shape[1]
+    for item in numba.prange(rows * nch):
+        r = item // nch
+        c = item % nch
+        lo = c * CHUNK
+        hi = min(n, lo + CHUNK)
+        mr = m[r]
+        finite = math.isfinite(mr)
+        for i in range(lo, hi):
+            e[r, i] = exp_nonpositive(v[r, i] - mr) if finite else 0.0
+        chunk_moments(e, x, r, lo, hi, parts[r, c])
+
+
+def _finish_py(parts, m, v, e, lse, ess, mean):  # pragma: no cover - jit
+    """Per row, :func:`~fusetrack.filters.kernels.finish_moments` (serial, chunk order), then
+    work items (run, chunk): ``v -= lse``, ``e *= 1 / s``."""
+    rows, n = v.shape
+    nch = parts.shape[1]
+    total = np.empty(rows)
+    inv = np.empty(rows)
+    for r in range(rows):
+        total[r], inv[r] = finish_moments(parts[r], m[r], r, lse, ess, mean)
+    for item in numba.prange(rows * nch):
+        r = item // nch
+        if math.isfinite(m[r]):
+            c = item % nch
+            for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+                v[r, i] = v[r, i] - total[r]
+                e[r, i] = e[r, i] * inv[r]
+
+
+_exp_moments_serial, _exp_moments_parallel = _twins(_exp_moments_py)
+_finish_serial, _finish_parallel = _twins(_finish_py)
+
+
 def log_weight_update_rows(
     states: Array,
     log_w: Array,
@@ -138,19 +193,19 @@ def log_weight_update_rows(
     ess = np.empty(rows)
     mean = np.empty((rows, d))
     cmax = np.empty((rows, nch, kinds.shape[0]))
-    threads = rows > 1 and rows * n >= PARALLEL_MIN
-    (threaded(_update_parallel) if threads else _update_serial)(
-        x,
-        np.ascontiguousarray(log_w, dtype=np.float64),
-        kinds,
-        params,
-        zc,
-        np.ascontiguousarray(usable, dtype=np.bool_),
-        v,
-        e,
-        lse,
-        ess,
-        mean,
-        cmax,
-    )
-    return v, e, lse, ess, mean, cmax.max(axis=1)
+    lw = np.ascontiguousarray(log_w, dtype=np.float64)
+    use = np.ascontiguousarray(usable, dtype=np.bool_)
+    threads = rows * n >= PARALLEL_MIN
+    if n < SPLIT_MIN:  # one work item per run: its particles stay in cache
+        fn = threaded(_update_parallel) if threads and rows > 1 else _update_serial
+        fn(x, lw, kinds, params, zc, use, v, e, lse, ess, mean, cmax)
+        return v, e, lse, ess, mean, cmax.max(axis=1)
+    # large runs: work items (run, chunk) for each of the three steps, on both cores
+    llsum = threaded(_llsum_parallel) if threads else _llsum_serial
+    llsum(x, lw, kinds, params, zc, use, v, cmax)
+    maxima = cmax.max(axis=1)
+    m = np.ascontiguousarray(maxima[:, -1])
+    parts = np.empty((rows, nch, 2 + d))
+    (threaded(_exp_moments_parallel) if threads else _exp_moments_serial)(v, m, x, e, parts)
+    (threaded(_finish_parallel) if threads else _finish_serial)(parts, m, v, e, lse, ess, mean)
+    return v, e, lse, ess, mean, maxima

@@ -403,49 +403,74 @@ def weighted_mean_cov_reference(states: ArrayLike, weights: ArrayLike) -> tuple[
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def normalize_mean_row(v, e, m, x, r, lse, ess, mean):  # pragma: no cover - jit
-    """Row ``r`` of :func:`_normalize_mean_py` (``m`` its maximum): given ``e = exp(v - m)``,
-    ``s = sum e``, ``sum e^2`` and ``sum e x`` in one pass; then ``lse = m + log s``,
-    ``v -= lse``, ``e *= 1/s`` (the weights), ``ess = s^2 / sum e^2``, ``mean = sum e x / s``.
-    A non-finite ``m``: ``e = 0``, ``ess = 0``, ``lse = m``, ``mean = NaN``, ``v`` left raw.
-    Shared with the one-pass update of :mod:`fusetrack.filters.fused_update`."""
-    n = v.shape[1]
+def chunk_moments(e, x, r, lo, hi, out):  # pragma: no cover - jit
+    """``out = [sum e, sum e^2, sum e x_0, ..., sum e x_{d-1}]`` over particles ``lo:hi`` of
+    row ``r`` (in index order; one chunk of :func:`normalize_mean_row`'s sums)."""
     d = x.shape[2]
+    ps = 0.0
+    pq = 0.0
+    for k in range(d):
+        out[2 + k] = 0.0
+    for i in range(lo, hi):
+        ei = e[r, i]
+        ps += ei
+        pq += ei * ei
+        for k in range(d):
+            out[2 + k] += ei * x[r, i, k]
+    out[0] = ps
+    out[1] = pq
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def finish_moments(parts, m, r, lse, ess, mean):  # pragma: no cover - jit
+    """Row ``r`` from its chunks' :func:`chunk_moments` ``parts`` ``(chunks, 2 + d)``, summed in
+    chunk order: ``lse = m + log s``, ``ess = s^2 / sum e^2``, ``mean = sum e x / s``; returns
+    ``(lse, 1 / s)``. A non-finite ``m``: ``lse = m``, ``ess = 0``, ``mean = NaN``, ``(m, 1)``."""
+    d = mean.shape[1]
     if not math.isfinite(m):
-        for i in range(n):
-            e[r, i] = 0.0
         lse[r] = m
         ess[r] = 0.0
         for k in range(d):
             mean[r, k] = np.nan
-        return
-    part = np.empty(d)
-    acc = np.zeros(d)
+        return m, 1.0
     s = 0.0
     q = 0.0
-    for lo in range(0, n, CHUNK):
-        ps = 0.0
-        pq = 0.0
-        part[:] = 0.0
-        for i in range(lo, min(n, lo + CHUNK)):
-            ei = e[r, i]
-            ps += ei
-            pq += ei * ei
-            for k in range(d):
-                part[k] += ei * x[r, i, k]
-        s += ps
-        q += pq
+    acc = np.zeros(d)
+    for c in range(parts.shape[0]):
+        s += parts[c, 0]
+        q += parts[c, 1]
         for k in range(d):
-            acc[k] += part[k]
+            acc[k] += parts[c, 2 + k]
     total = m + math.log(s)
     inv = 1.0 / s
-    for i in range(n):
-        v[r, i] = v[r, i] - total
-        e[r, i] = e[r, i] * inv
     lse[r] = total
     ess[r] = s * s / q
     for k in range(d):
         mean[r, k] = acc[k] * inv
+    return total, inv
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def normalize_mean_row(v, e, m, x, r, lse, ess, mean):  # pragma: no cover - jit
+    """Row ``r`` of :func:`_normalize_mean_py` (``m`` its maximum): given ``e = exp(v - m)``,
+    ``sum e``, ``sum e^2`` and ``sum e x`` in one pass (:func:`chunk_moments` per
+    :data:`CHUNK` particles, :func:`finish_moments`); then ``v -= lse``, ``e *= 1/s`` (the
+    weights). A non-finite ``m``: ``e = 0``, ``ess = 0``, ``lse = m``, ``mean = NaN``, ``v``
+    left raw. Shared with the one-pass update of :mod:`fusetrack.filters.fused_update`."""
+    n = v.shape[1]
+    if not math.isfinite(m):
+        for i in range(n):
+            e[r, i] = 0.0
+        finish_moments(np.zeros((0, 2 + x.shape[2])), m, r, lse, ess, mean)
+        return
+    nch = (n + CHUNK - 1) // CHUNK
+    parts = np.empty((nch, 2 + x.shape[2]))
+    for c in range(nch):
+        chunk_moments(e, x, r, c * CHUNK, min(n, (c + 1) * CHUNK), parts[c])
+    total, inv = finish_moments(parts, m, r, lse, ess, mean)
+    for i in range(n):
+        v[r, i] = v[r, i] - total
+        e[r, i] = e[r, i] * inv
 
 
 def _normalize_mean_py(v, e, rowmax, x, lse, ess, mean):  # pragma: no cover - jit

@@ -845,17 +845,11 @@ class ParticleFilter:
         for k, c in enumerate(checked):
             z[:, k, : c.z.shape[-1]] = c.z
         usable = np.stack([c.usable for c in checked], axis=1)
-        if n < fused.SPLIT_MIN:  # one pass per run (its particles stay in cache)
-            lw, w, _, ess, mean, maxima = fused_update.log_weight_update_rows(
-                s3, W.lw, kinds, params, z, usable
-            )
-            if not self._bound_holds(maxima, usable, n):
-                return None
-            return _Weights(lw, w, ess), mean
-        acc, maxima = fused.log_likelihood_sum(s3, W.lw, kinds, params, z, usable)
+        lw, w, _, ess, mean, maxima = fused_update.log_weight_update_rows(
+            s3, W.lw, kinds, params, z, usable
+        )
         if not self._bound_holds(maxima, usable, n):
             return None
-        lw, w, _, ess, mean = kernels.normalize_with_mean(acc, maxima[:, -1], s3)
         return _Weights(lw, w, ess), mean
 
     def _bound_holds(self, maxima: Array, usable: NDArray[np.bool_], n: int) -> bool:
