@@ -569,7 +569,7 @@ def analyse(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     runs_e10, runs = int(per_run["E10"]), int(per_run.drop("E10").min())
     grid = int(df["grid"].iloc[0]) if "grid" in df else 50
     is_beyond = (
-        df["beyond"].fillna(False).astype(bool)
+        df["beyond"].astype(str).str.lower().isin(["true", "1", "1.0"])  # parquet: "true"/"null"
         if "beyond" in df
         else pd.Series(False, index=df.index)
     )
@@ -638,17 +638,38 @@ def beyond_the_paper(
         tables.append(pd.concat({exp: t}, names=["exp", "method"]))
         winners.append(w)
     table, win = pd.concat(tables), pd.concat(winners)
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    colour = {"UPF": "tab:red", "IMM-EKF": "tab:purple", "bootstrap equal time": "tab:brown"}
     fig, axes = plt.subplots(3, 3, figsize=(13, 10))
     for ax, (exp, t) in zip(axes.ravel(), table.groupby(level="exp", sort=False)):
+        others = iter(["tab:green", "tab:gray", "tab:olive"])
         for m, r in t.droplevel("exp").iterrows():
-            ax.plot(r["seconds/run"], r["mean"], "o", label=f"{m} ({r['loss rate']:.0%})")
+            base = str(m).split(" (")[0] if str(m).startswith("bootstrap equal") else str(m)
+            c = colour.get(base) or (
+                "tab:orange"
+                if m == NEW_METHOD[exp]
+                else "tab:blue"
+                if m == BASELINE.get(exp)
+                else next(others)
+            )
+            mk = "s" if base in colour else "o"
+            lab = f"{m} ({r['loss rate']:.0%})"
+            ax.plot(r["seconds/run"], r["mean"], mk, color=c, ms=7, label=lab)
         ax.set(xscale="log", yscale="log", xlabel="seconds per run", ylabel="mean RMSE (px)")
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_formatter(NullFormatter())
         ax.set_title(f"{exp} ({EXPERIMENTS[exp][0]})", fontsize=9)
         ax.legend(fontsize=6)
         ax.grid(alpha=0.3, which="both")
     for ax in axes.ravel()[len(tables) :]:
         ax.axis("off")
-    fig.suptitle("Mean per-run RMSE against seconds per run (legend: loss rate)")
+    fig.suptitle(
+        "Mean per-run RMSE against seconds per run (legend: loss rate; orange: the thesis's "
+        "tracker, blue: its baseline, squares: comparators)"
+    )
     path = plots.save(fig, ctx.figure_path("beyond_error_vs_seconds"))
     n_runs = first[is_beyond.loc[first.index]].groupby("exp")["run"].nunique()
     notes = [f"{exp}, {m}: not run ({why})." for (exp, m), why in NOT_RUN.items()] + [
