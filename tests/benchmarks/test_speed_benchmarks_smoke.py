@@ -48,3 +48,14 @@ def test_batched_runs_are_bit_identical_to_separate_runs() -> None:
     )
     assert row["bit_identical"] is True
     assert set(row["seconds_per_step"]) == {"separate", "batched"}
+
+
+def test_step_floor_reports_every_phase_and_the_bar() -> None:
+    (row,) = _json_lines("step_floor.py", "--N", "20000", "--repeats", "2", "--steps", "2")
+    phases = {"normals", "propagate", "bearings", "max + NumPy exp", "resample + gather"}
+    assert phases <= set(row["ns_per_particle"])
+    floor = row["floor_ns_per_particle"]["serial"]
+    parts = [v["serial"] for k, v in row["ns_per_particle"].items() if not k.startswith("(")]
+    assert abs(floor - sum(parts)) <= 1e-9 * floor
+    assert abs(row["bar_ms_per_step"] - 107.0 / 30.0) < 1e-12
+    assert set(row["whole_steps"]) == {"fusetrack", "limit_reference"}
