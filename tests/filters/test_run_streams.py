@@ -90,6 +90,11 @@ def test_missing_weights_or_ancestors_are_refused():
         run_streams.linear_gaussian_runs(streams, x, F, G, mode, None, anc)
     with pytest.raises(ValueError, match="ancestors"):
         run_streams.linear_gaussian_runs(streams, x, F, G, mode, w, None)
+    with pytest.raises(ValueError, match="distinct"):
+        g = np.random.default_rng(0)
+        run_streams.linear_gaussian_runs(rng_handles.RunStreams([g, g, g]), x, F, G, mode, w, anc)
+    with pytest.raises(ValueError, match="mode"):
+        run_streams.linear_gaussian_runs(streams, x, F, G, mode + 5, w, anc)
 
 
 @pytest.mark.parametrize("resampler", ["systematic", "stratified"])

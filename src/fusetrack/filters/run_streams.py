@@ -28,7 +28,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.resampling import systematic_row
+from ..core.resampling import systematic_from_uniforms, systematic_row
 from .fused import BLOCK, PARALLEL_MIN, _affine_block, _twins, threaded
 from .rng_handles import RunStreams, _bitgen, next_double, random_standard_normal
 
@@ -95,6 +95,13 @@ def linear_gaussian_runs(
     mode = np.ascontiguousarray(mode, dtype=np.int64)
     w = _EMPTY_W if weights is None else np.ascontiguousarray(weights, dtype=np.float64)
     anc = _EMPTY_A if ancestors is None else np.ascontiguousarray(ancestors, dtype=np.intp)
+    if len(streams.gens) != rows or not streams.distinct:
+        raise ValueError(
+            f"streams: expected {rows} distinct generators (one per run), got "
+            f"{len(streams.gens)}{'' if streams.distinct else ' with repeats'}"
+        )
+    if mode.shape != (rows,) or not np.isin(mode, (KEEP, GATHER, SYSTEMATIC)).all():
+        raise ValueError(f"mode: expected {rows} values in (KEEP, GATHER, SYSTEMATIC)")
     if (mode == SYSTEMATIC).any() and w.shape != (rows, n):
         raise ValueError(f"weights.shape={w.shape} is invalid: expected {(rows, n)}")
     if (mode == GATHER).any() and anc.shape != (rows, n):
@@ -123,8 +130,6 @@ def linear_gaussian_runs_reference(
     """NumPy reference of :func:`linear_gaussian_runs`: run by run, ``rng.random()`` and
     :func:`~fusetrack.core.resampling.systematic_from_uniforms` for a resampled run, then
     ``x[a] @ F.T + rng.standard_normal((N, d)) @ G.T``."""
-    from ..core.resampling import systematic_from_uniforms
-
     x = np.asarray(states, dtype=float)
     out = np.empty_like(x)
     n, d = x.shape[-2:]
