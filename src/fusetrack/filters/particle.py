@@ -59,7 +59,12 @@ bitwise, equivalent to separate runs. The process noise of a linear-Gaussian mot
 cut into :data:`~fusetrack.filters.fused.NOISE_STREAMS` fixed parts whose normals come from as
 many child generators of that generator (``Generator.spawn``, once; the filter keeps them, and a
 reference to their parent, for its lifetime), so that both cores can draw. The split depends on
-the number of particles only, never on the threads: a seed gives the same particles everywhere. ``engine="numba"`` uses the kernels of
+the number of particles only, never on the threads: a seed gives the same particles everywhere.
+With ``engine="numba"`` the generators enter the Numba loops as handles
+(:mod:`~fusetrack.filters.rng_handles`; the same numbers as NumPy's), and a batch with one
+generator per run and fewer than ``SPLIT_MIN`` particles per run draws, resamples and propagates
+all its runs in one threaded loop over the runs (:mod:`~fusetrack.filters.run_streams`), each
+run from its own generator in the order a separate run draws. ``engine="numba"`` uses the kernels of
 :mod:`fusetrack.filters.kernels`, ``engine="numpy"`` their NumPy references (same draws; results
 agree to rounding, about 1e-15). Both use the resampling schemes of
 :mod:`fusetrack.core.resampling`.
