@@ -227,3 +227,10 @@ def test_chunked_update_of_large_runs_equals_the_per_run_update_bit_for_bit(monk
     per_run = fused_update.log_weight_update_rows(x, lw, *args, z, usable)
     for a, b in zip(chunked, per_run):
         np.testing.assert_array_equal(a, b)
+
+
+def test_draw_with_a_repeated_child_stream_is_refused():
+    g = np.random.default_rng(1)
+    x = np.zeros((1, 8, 4))
+    with pytest.raises(ValueError, match="more than once"):
+        fused.linear_gaussian_draw(x, np.eye(4), np.eye(4), (g, g))

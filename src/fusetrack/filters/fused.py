@@ -316,6 +316,8 @@ def linear_gaussian_draw(
     The NumPy reference is ``states[r, a] @ F.T + standard_normals(streams, shape) @ G.T``.
     """
     runs = streams if isinstance(streams, RunStreams) else RunStreams(streams)
+    if not runs.distinct:  # two threads would advance one generator
+        raise ValueError("streams: a generator appears more than once")
     x = np.ascontiguousarray(states, dtype=np.float64)
     anc = _NO_ANCESTORS if ancestors is None else np.ascontiguousarray(ancestors, dtype=np.intp)
     out = np.empty(x.shape if ancestors is None else (x.shape[0], anc.shape[1], x.shape[2]))
