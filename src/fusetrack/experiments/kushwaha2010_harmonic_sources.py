@@ -20,7 +20,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Mapping
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -461,34 +461,11 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             float(by_n.loc[10]) > float(by_n.loc[30]),
         )
     )
-    figs = _figures(ctx, by_m, by_snr, by_sep, by_h, bf, ebl)
-    figs.append(
-        plots.plot_series(
-            ctx.figure_path("error_vs_npsd"),
-            by_n.index.to_numpy(float),
-            {"beamform MAP": by_n.to_numpy()},
-            xlabel="PSD pairs sent (N_PSD)",
-            ylabel="mean error (m)",
-            title="Fig. 32b analogue (two sources)",
-        )
-    )
-    table = _table(by_m, by_snr, by_sep, by_h, bf, ebl)
-    table += "\n\n| PSD pairs | " + " | ".join(str(int(k)) for k in by_n.index) + " |\n"
-    table += (
-        "|---" * (len(by_n) + 1) + "|\n| error (m) | " + " | ".join(f"{v:.3f}" for v in by_n) + " |"
-    )
     alt = df[(df["sweep"] == "sources") & (df["method"] == "beamform, Eq. 43 per node")]
-    if len(alt):
-        per_node = alt.groupby("n_sources")["error"].mean()
-        table = table.replace(
-            "| error (m) | " + " | ".join(f"{v:.3f}" for v in by_m) + " |",
-            "| error (m), powers λ_k²ψ_h fitted | "
-            + " | ".join(f"{v:.3f}" for v in by_m)
-            + " |\n| error (m), Eq. 43 per node | "
-            + " | ".join(f"{v:.3f}" for v in per_node)
-            + " |",
-            1,
-        )
+    per_node = alt.groupby("n_sources")["error"].mean() if len(alt) else None
+    views = _sweep_views(by_m, per_node, by_snr, by_sep, by_h, bf, ebl, by_n)
+    figs = [_plot_sweep(ctx, v) for v in views]
+    table = "\n\n".join(_sweep_table(v) for v in views)
     med = df[df["method"] == "beamform"].groupby(["sweep", "n_sources"])["error"].median()
     gross_share = {
         m: float(
@@ -618,95 +595,120 @@ paper, but not monotone in between with {runs} runs per point (the scatter of th
     return Outcome(df, claims, body, runs)
 
 
-def _table(
+@dataclass(frozen=True)
+class _SweepView:
+    """One sweep's figure and report table: mean error (or ratio) series over the swept values."""
+
+    stem: str  # figure file name
+    column: str  # the table's first header cell
+    xlabel: str
+    title: str
+    curves: dict[str, pd.Series]  # figure legend -> series over the swept values
+    rows: dict[str, pd.Series]  # table row label -> series (values printed with 3 decimals)
+    logy: bool = False
+    ylabel: str = "mean error (m)"
+    ratio_rows: dict[str, pd.Series] = field(default_factory=dict)  # printed with 2 decimals
+
+
+def _sweep_views(
     by_m: pd.Series,
+    per_node: pd.Series | None,
     by_snr: pd.Series,
     by_sep: pd.Series,
     by_h: pd.Series,
     bf: pd.Series,
     ebl: pd.Series,
-) -> str:
-    parts = [
-        "| sources | " + " | ".join(str(int(k)) for k in by_m.index) + " |",
-        "|---" * (len(by_m) + 1) + "|",
-        "| error (m) | " + " | ".join(f"{v:.3f}" for v in by_m) + " |",
-        "",
-        "| SNR (dB) | " + " | ".join(f"{k:g}" for k in by_snr.index) + " |",
-        "|---" * (len(by_snr) + 1) + "|",
-        "| error (m) | " + " | ".join(f"{v:.3f}" for v in by_snr) + " |",
-        "",
-        "| separation (m) | " + " | ".join(f"{k:g}" for k in by_sep.index) + " |",
-        "|---" * (len(by_sep) + 1) + "|",
-        "| error (m) | " + " | ".join(f"{v:.3f}" for v in by_sep) + " |",
-        "| error / separation | " + " | ".join(f"{v / k:.2f}" for k, v in by_sep.items()) + " |",
-        "",
-        "| harmonicity | " + " | ".join(f"{k:g}" for k in by_h.index) + " |",
-        "|---" * (len(by_h) + 1) + "|",
-        "| error (m) | " + " | ".join(f"{v:.3f}" for v in by_h) + " |",
-        "",
-        "| directivity β | " + " | ".join(f"{k:g}" for k in bf.index) + " |",
-        "|---" * (len(bf) + 1) + "|",
-        "| beamform (m) | " + " | ".join(f"{v:.3f}" for v in bf) + " |",
-        "| EBL (m) | " + " | ".join(f"{v:.3f}" for v in ebl) + " |",
-    ]
-    return "\n".join(parts)
-
-
-def _figures(
-    ctx: RunContext,
-    by_m: pd.Series,
-    by_snr: pd.Series,
-    by_sep: pd.Series,
-    by_h: pd.Series,
-    bf: pd.Series,
-    ebl: pd.Series,
-) -> list[Any]:
-    figs = [
-        plots.plot_series(
-            ctx.figure_path("error_vs_sources"),
-            by_m.index.to_numpy(float),
-            {"beamform MAP": by_m.to_numpy()},
-            xlabel="number of sources",
-            ylabel="mean error (m)",
-            title="Fig. 30a analogue",
+    by_n: pd.Series,
+) -> list[_SweepView]:
+    """Figs. 30a-d, 31b, 32a-b: the six sweeps in report order."""
+    per_sep = by_sep / by_sep.index.to_numpy(float)
+    sources_rows = (
+        {"error (m)": by_m}
+        if per_node is None
+        else {"error (m), powers λ_k²ψ_h fitted": by_m, "error (m), Eq. 43 per node": per_node}
+    )
+    two = " (two sources)"
+    return [
+        _SweepView(
+            "error_vs_sources",
+            "sources",
+            "number of sources",
+            "Fig. 30a analogue",
+            {"beamform MAP": by_m},
+            sources_rows,
             logy=True,
         ),
-        plots.plot_series(
-            ctx.figure_path("error_vs_snr"),
-            by_snr.index.to_numpy(float),
-            {"beamform MAP": by_snr.to_numpy()},
-            xlabel="SNR (dB)",
-            ylabel="mean error (m)",
-            title="Fig. 30b analogue (two sources)",
+        _SweepView(
+            "error_vs_snr",
+            "SNR (dB)",
+            "SNR (dB)",
+            "Fig. 30b analogue" + two,
+            {"beamform MAP": by_snr},
+            {"error (m)": by_snr},
         ),
-        plots.plot_series(
-            ctx.figure_path("error_vs_separation"),
-            by_sep.index.to_numpy(float),
-            {
-                "error (m)": by_sep.to_numpy(),
-                "error / separation": (by_sep / by_sep.index.to_numpy(float)).to_numpy(),
-            },
-            xlabel="separation (m)",
+        _SweepView(
+            "error_vs_separation",
+            "separation (m)",
+            "separation (m)",
+            "Figs. 30c-d analogue" + two,
+            {"error (m)": by_sep, "error / separation": per_sep},
+            {"error (m)": by_sep},
+            logy=True,
             ylabel="m, or ratio",
-            title="Figs. 30c-d analogue (two sources)",
+            ratio_rows={"error / separation": per_sep},
+        ),
+        _SweepView(
+            "error_vs_harmonicity",
+            "harmonicity",
+            "harmonicity h (Eq. 59)",
+            "Fig. 31b analogue" + two,
+            {"beamform MAP": by_h},
+            {"error (m)": by_h},
+        ),
+        _SweepView(
+            "error_vs_directivity",
+            "directivity β",
+            "directionality coefficient β",
+            "Fig. 32a analogue" + two,
+            {"beamform MAP": bf, "EBL": ebl},
+            {"beamform (m)": bf, "EBL (m)": ebl},
             logy=True,
         ),
-        plots.plot_series(
-            ctx.figure_path("error_vs_harmonicity"),
-            by_h.index.to_numpy(float),
-            {"beamform MAP": by_h.to_numpy()},
-            xlabel="harmonicity h (Eq. 59)",
-            ylabel="mean error (m)",
-            title="Fig. 31b analogue (two sources)",
-        ),
-        plots.plot_series(
-            ctx.figure_path("error_vs_directivity"),
-            bf.index.to_numpy(float),
-            {"beamform MAP": bf.to_numpy(), "EBL": ebl.to_numpy()},
-            xlabel="directionality coefficient β",
-            ylabel="mean error (m)",
-            title="Fig. 32a analogue (two sources)",
-            logy=True,
+        _SweepView(
+            "error_vs_npsd",
+            "PSD pairs",
+            "PSD pairs sent (N_PSD)",
+            "Fig. 32b analogue" + two,
+            {"beamform MAP": by_n},
+            {"error (m)": by_n},
         ),
     ]
-    return figs
+
+
+def _sweep_table(view: _SweepView) -> str:
+    """A markdown table: the swept values as columns, one row per series."""
+    keys = next(iter(view.curves.values())).index
+    lines = [
+        f"| {view.column} | " + " | ".join(f"{k:g}" for k in keys) + " |",
+        "|---" * (len(keys) + 1) + "|",
+    ]
+    for rows, spec in ((view.rows, ".3f"), (view.ratio_rows, ".2f")):
+        lines += [
+            f"| {label} | " + " | ".join(format(v, spec) for v in series) + " |"
+            for label, series in rows.items()
+        ]
+    return "\n".join(lines)
+
+
+def _plot_sweep(ctx: RunContext, view: _SweepView) -> Any:
+    """The sweep's figure: every curve against the swept values."""
+    first = next(iter(view.curves.values()))
+    return plots.plot_series(
+        ctx.figure_path(view.stem),
+        first.index.to_numpy(float),
+        {label: series.to_numpy() for label, series in view.curves.items()},
+        xlabel=view.xlabel,
+        ylabel=view.ylabel,
+        title=view.title,
+        logy=view.logy,
+    )
