@@ -15,13 +15,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.errors import ConfigError, invalid
+from .scalar_gaussian import ScalarGaussianSensor
 
 Array = np.ndarray
 _MIN_D = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
-class AcousticIntensity:
+class AcousticIntensity(ScalarGaussianSensor):
     """Sound level (dB) received by a sensor at ``position`` from a source at the target position.
 
     >>> s = AcousticIntensity("mic", position=[0.0, 0.0], source_db=70.0)
@@ -48,12 +49,8 @@ class AcousticIntensity:
                 raise ConfigError(invalid(name, v, "a finite number > 0"))
 
     @property
-    def dim(self) -> int:
-        return 1
-
-    @property
-    def angular(self) -> tuple[bool, ...]:
-        return (False,)
+    def noise_sd(self) -> float:
+        return self.sigma_db
 
     def distance(self, x: ArrayLike) -> Array:
         xa = np.asarray(x, dtype=float)
@@ -71,9 +68,6 @@ class AcousticIntensity:
         """Intensity on the linear scale, ``10^(L/10)``."""
         return np.asarray(10.0 ** (np.asarray(level_db, float) / 10.0))
 
-    def residual(self, z: ArrayLike, z_pred: ArrayLike) -> Array:
-        return np.asarray(np.subtract(z, z_pred), dtype=float)
-
     def jacobian(self, x: ArrayLike) -> Array:
         xa = np.asarray(x, dtype=float)
         d = self.distance(xa)
@@ -82,21 +76,3 @@ class AcousticIntensity:
         for k, i in enumerate(self.position_index):
             jac[..., 0, i] = c * (xa[..., i] - self._pos[k])
         return jac
-
-    def noise_cov(self, x: ArrayLike | None = None) -> Array:
-        return np.array([[self.sigma_db**2]])
-
-    def log_likelihood(self, z: ArrayLike, x: ArrayLike) -> Array:
-        r = self.residual(z, self.predict(x))[..., 0] / self.sigma_db
-        return np.asarray(-0.5 * r * r - math.log(self.sigma_db) - 0.5 * math.log(2 * math.pi))
-
-    def simulate(self, x: ArrayLike, rng: np.random.Generator) -> Array:
-        z = self.predict(x)
-        return np.asarray(z + self.sigma_db * rng.standard_normal(z.shape))
-
-    def fisher_information(self, x: ArrayLike) -> Array:
-        H = self.jacobian(x)
-        return np.asarray(np.swapaxes(H, -1, -2) @ H / self.sigma_db**2)
-
-    def detection_probability(self, x: ArrayLike) -> Array:
-        return np.ones(np.asarray(x).shape[:-1])

@@ -9,12 +9,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.errors import ConfigError, ShapeError, invalid
+from .scalar_gaussian import ScalarGaussianSensor
 
 Array = np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
-class Power:
+class Power(ScalarGaussianSensor):
     """``z = scale * x[index]^exponent + v``, ``v ~ N(0, sigma^2)``; ``m = 1``, not angular.
 
     >>> s = Power("cube", exponent=3, sigma=1.0)
@@ -37,12 +38,8 @@ class Power:
             raise ConfigError(invalid("scale", self.scale, "a finite nonzero number"))
 
     @property
-    def dim(self) -> int:
-        return 1
-
-    @property
-    def angular(self) -> tuple[bool, ...]:
-        return (False,)
+    def noise_sd(self) -> float:
+        return self.sigma
 
     def _x(self, x: ArrayLike) -> Array:
         xa = np.asarray(x, dtype=float)
@@ -55,31 +52,9 @@ class Power:
         with np.errstate(over="ignore", invalid="ignore"):
             return np.asarray(self.scale * self._x(x) ** self.exponent)[..., None]
 
-    def residual(self, z: ArrayLike, z_pred: ArrayLike) -> Array:
-        return np.asarray(np.subtract(z, z_pred), dtype=float)
-
     def jacobian(self, x: ArrayLike) -> Array:
         """``p scale x^(p-1)`` at column ``index``, ``(..., 1, d)``."""
         xa = np.asarray(x, dtype=float)
         jac = np.zeros((*xa.shape[:-1], 1, xa.shape[-1]))
         jac[..., 0, self.index] = self.exponent * self.scale * self._x(xa) ** (self.exponent - 1)
         return jac
-
-    def noise_cov(self, x: ArrayLike | None = None) -> Array:
-        return np.array([[self.sigma**2]])
-
-    def log_likelihood(self, z: ArrayLike, x: ArrayLike) -> Array:
-        r = self.residual(z, self.predict(x))[..., 0] / self.sigma
-        with np.errstate(over="ignore", invalid="ignore"):
-            return np.asarray(-0.5 * r * r - math.log(self.sigma) - 0.5 * math.log(2 * math.pi))
-
-    def simulate(self, x: ArrayLike, rng: np.random.Generator) -> Array:
-        z = self.predict(x)
-        return np.asarray(z + self.sigma * rng.standard_normal(z.shape))
-
-    def fisher_information(self, x: ArrayLike) -> Array:
-        H = self.jacobian(x)
-        return np.asarray(np.swapaxes(H, -1, -2) @ H / self.sigma**2)
-
-    def detection_probability(self, x: ArrayLike) -> Array:
-        return np.ones(np.asarray(x).shape[:-1])
