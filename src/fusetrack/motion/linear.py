@@ -128,7 +128,22 @@ class _Kinematic(LinearGaussian):
 
 
 @dataclass(frozen=True)
-class ConstantVelocity(_Kinematic):
+class _PerAxisKinematic(_Kinematic):
+    """Fields of the models with ``ndim`` axes of ``_order`` >= 2 derivatives (CV, CA)."""
+
+    ndim: int = 2
+    q: float = 1.0
+    noise: NoiseKind = "continuous"
+    dim: int = field(init=False, repr=False, compare=False)
+    position_index: tuple[int, ...] = field(init=False, repr=False, compare=False)
+    velocity_index: tuple[int, ...] | None = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        self._derive(check_int_range("ndim", self.ndim, 1, 3))
+
+
+@dataclass(frozen=True)
+class ConstantVelocity(_PerAxisKinematic):
     """Nearly constant velocity in ``ndim`` = 1, 2 or 3 dimensions; state ``[pos(n), vel(n)]``.
 
     ``F = [[I, dt I], [0, I]]``. ``noise="continuous"`` (white-noise acceleration with PSD ``q``,
@@ -142,20 +157,11 @@ class ConstantVelocity(_Kinematic):
     array([2., 4., 1., 2.])
     """
 
-    ndim: int = 2
-    q: float = 1.0
-    noise: NoiseKind = "continuous"
-    dim: int = field(init=False, repr=False, compare=False)
-    position_index: tuple[int, ...] = field(init=False, repr=False, compare=False)
-    velocity_index: tuple[int, ...] | None = field(init=False, repr=False, compare=False)
     _order: ClassVar[int] = 2
-
-    def __post_init__(self) -> None:
-        self._derive(check_int_range("ndim", self.ndim, 1, 3))
 
 
 @dataclass(frozen=True)
-class ConstantAcceleration(_Kinematic):
+class ConstantAcceleration(_PerAxisKinematic):
     """Nearly constant acceleration in 1-3 dimensions; state ``[pos(n), vel(n), acc(n)]``.
 
     ``F = [[I, dt I, dt^2/2 I], [0, I, dt I], [0, 0, I]]``. ``noise="continuous"`` (white jerk,
@@ -165,16 +171,7 @@ class ConstantAcceleration(_Kinematic):
     ``q`` each step): ``Q = q g g^T``, ``g = [dt^2/2, dt, 1]`` (Sec. 6.3.3), rank ``ndim``.
     """
 
-    ndim: int = 2
-    q: float = 1.0
-    noise: NoiseKind = "continuous"
-    dim: int = field(init=False, repr=False, compare=False)
-    position_index: tuple[int, ...] = field(init=False, repr=False, compare=False)
-    velocity_index: tuple[int, ...] | None = field(init=False, repr=False, compare=False)
     _order: ClassVar[int] = 3
-
-    def __post_init__(self) -> None:
-        self._derive(check_int_range("ndim", self.ndim, 1, 3))
 
 
 @dataclass(frozen=True)
