@@ -30,9 +30,8 @@ from .kushwaha2010_scene import (
     audio_prior,
     default_layout,
     fusion_input,
-    random_pass,
     run_sbe,
-    simulate_recording,
+    simulate_single_pass,
     track_start,
 )
 
@@ -106,14 +105,9 @@ def match_tracks(
 
 
 def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    rng = np.random.default_rng(seed)
     layout = default_layout()
-    vehicle = random_pass(rng, layout.grid)
-    t0, t1 = vehicle.field_interval(layout.grid)
-    from .kushwaha2010_scene import SceneConfig
-
-    rec = simulate_recording(layout, [vehicle], t0, t1, SceneConfig(), rng)
-    truth = np.array([tr[0] for tr in rec.truth()])
+    sim = simulate_single_pass(layout, np.random.default_rng(seed))
+    rec, truth = sim.rec, sim.truth
     fin = fusion_input(rec, np.random.default_rng(seed + 7))
     liks = all_likelihoods(layout, fin)
     start = track_start(fin, rec.audio_threshold)

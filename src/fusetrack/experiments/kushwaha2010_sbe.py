@@ -34,10 +34,9 @@ from .kushwaha2010_scene import (
     audio_prior,
     default_layout,
     fusion_input,
-    random_pass,
     run_particle_backend,
     run_sbe,
-    simulate_recording,
+    simulate_single_pass,
     track_end,
     track_start,
 )
@@ -73,14 +72,12 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     """One pass under ``config["condition"]``: one row per (approach, sensor set, packet loss)."""
     rng = np.random.default_rng(seed)
     layout = default_layout()
-    vehicle = random_pass(rng, layout.grid)
-    t0, t1 = vehicle.field_interval(layout.grid)
     condition = str(config["condition"])
-    rec = simulate_recording(
-        layout, [vehicle], t0, t1 + TAIL, scene_config(condition, 0.5 * (t0 + t1)), rng
+    sim = simulate_single_pass(
+        layout, rng, lambda t0, t1: scene_config(condition, 0.5 * (t0 + t1)), tail=TAIL
     )
-    truth = np.array([tr[0] for tr in rec.truth()])
-    exit_tick = int(np.searchsorted(rec.ticks, t1, side="right"))  # first tick outside the field
+    vehicle, rec, truth = sim.vehicle, sim.rec, sim.truth
+    exit_tick = int(np.searchsorted(rec.ticks, sim.t1, side="right"))  # first tick outside
     rows: list[dict[str, Any]] = []
 
     def add(

@@ -21,6 +21,7 @@ looking at the road centre with a 60° field of view. This module simulates one 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Any
@@ -457,6 +458,36 @@ VARIANTS: dict[str, tuple[tuple[str, ...], str, str]] = {
     "AVCP": (("audio", "video"), "product", "centralized"),
     "AVHP": (("audio", "video"), "product", "hybrid"),
 }
+
+
+@dataclass(frozen=True)
+class SinglePass:
+    """One simulated single-vehicle pass: the vehicle, the times ``t0``, ``t1`` at which it
+    enters and leaves the field, the recording and the true centre of mass per tick ``(T, 2)``."""
+
+    vehicle: VehiclePass
+    t0: float
+    t1: float
+    rec: Recording
+    truth: NDArray[np.float64]
+
+
+def simulate_single_pass(
+    layout: Layout,
+    rng: np.random.Generator,
+    scene: Callable[[float, float], SceneConfig] | None = None,
+    tail: float = 0.0,
+) -> SinglePass:
+    """A :func:`random_pass` simulated from entering the field to ``tail`` s after leaving it.
+
+    ``scene(t0, t1)`` gives the conditions from the field interval (default: ``SceneConfig()``).
+    Draws from ``rng`` in order: the pass, then the recording."""
+    vehicle = random_pass(rng, layout.grid)
+    t0, t1 = vehicle.field_interval(layout.grid)
+    config = SceneConfig() if scene is None else scene(t0, t1)
+    rec = simulate_recording(layout, [vehicle], t0, t1 + tail, config, rng)
+    truth = np.array([tr[0] for tr in rec.truth()])
+    return SinglePass(vehicle, t0, t1, rec, truth)
 
 
 def all_likelihoods(layout: Layout, fin: FusionInput) -> list[SensorLikelihoods]:

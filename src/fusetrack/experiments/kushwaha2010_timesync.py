@@ -20,14 +20,12 @@ import numpy as np
 from ..evaluation import plots
 from ..evaluation.report import Claim, Outcome, RunContext
 from .kushwaha2010_scene import (
-    SceneConfig,
     all_likelihoods,
     audio_prior,
     default_layout,
     fusion_input,
-    random_pass,
     run_sbe,
-    simulate_recording,
+    simulate_single_pass,
     track_start,
 )
 
@@ -36,12 +34,9 @@ VARIANTS = ("AVCP", "AVCS", "AP", "VP")
 
 
 def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    rng = np.random.default_rng(seed)
     layout = default_layout()
-    vehicle = random_pass(rng, layout.grid)
-    t0, t1 = vehicle.field_interval(layout.grid)
-    rec = simulate_recording(layout, [vehicle], t0, t1, SceneConfig(), rng)
-    truth = np.array([tr[0] for tr in rec.truth()])
+    sim = simulate_single_pass(layout, np.random.default_rng(seed))
+    rec, truth = sim.rec, sim.truth
     audio = np.array([p.sensor_id.startswith("A") for p in rec.packets])
     res = np.abs(rec.sync_residuals)
     rows: list[dict[str, Any]] = [
