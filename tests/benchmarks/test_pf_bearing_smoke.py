@@ -5,15 +5,10 @@ No timing assertions: speed is measured by running the benchmark, not by the tes
 
 from __future__ import annotations
 
-import json
 import math
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
-
-SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "pf_bearing.py"
+from _bench_json import bench_json
 
 
 def _has_bootstrap_filter() -> bool:
@@ -25,12 +20,8 @@ def _has_bootstrap_filter() -> bool:
 
 
 def _run(libs: list[str]) -> list[dict]:
-    cmd = [sys.executable, str(SCRIPT), "--N", "200", "300", "--steps", "4", "--repeats", "1"]
-    out = subprocess.run(
-        [*cmd, "--libs", *libs, "--json"], capture_output=True, text=True, timeout=300, check=False
-    )
-    assert out.returncode == 0, out.stderr
-    return [json.loads(line) for line in out.stdout.splitlines() if line.strip()]
+    args = ("--N", "200", "300", "--steps", "4", "--repeats", "1", "--libs", *libs)
+    return bench_json("pf_bearing.py", *args, timeout=300)
 
 
 def _check_shape(rows: list[dict], libs: list[str]) -> None:
