@@ -130,6 +130,12 @@ def claims_table(claims: Sequence[Claim]) -> str:
     return "\n".join(lines)
 
 
+def _option_flags(extra: dict[str, Any]) -> str:
+    """``--config`` and ``--set`` options as they were given, for the report's command line."""
+    flags = [f" --config {v}" if k == "config" else f" --set {k}={v}" for k, v in extra.items()]
+    return "".join(flags)
+
+
 def write_outputs(
     ctx: RunContext, outcome: Outcome, seconds: float, memory_mb: float
 ) -> dict[str, Any]:
@@ -161,7 +167,7 @@ def write_outputs(
         f"# {outcome.title or ctx.name}",
         "",
         f"`fusetrack run {ctx.name}{' --quick' if ctx.quick else ''} --runs {outcome.runs} --seed {ctx.seed}"
-        f" --engine {ctx.engine}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
+        f" --engine {ctx.engine}{_option_flags(ctx.extra)}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
         f"{' (quick run: fewer runs, wider tolerances)' if ctx.quick else ''}.",
         "",
         f"## Claims ({held} of {len(outcome.claims)} hold)",
