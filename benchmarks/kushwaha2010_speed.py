@@ -18,26 +18,10 @@ import time
 
 import numpy as np
 
+from fusetrack.experiments.kushwaha2010_beamformer import realtime_factor
 from fusetrack.experiments.kushwaha2010_scene import default_layout, tick_likelihoods
 from fusetrack.filters.grid import GridTracker
 from fusetrack.management.fusion_scheduler import Packet
-from fusetrack.perception.audio_beamforming import Beamformer
-
-
-def beamformer_realtime_factor(repeats: int, nodes: int = 6) -> float:
-    """Seconds of processing per second of audio for ``nodes`` nodes (best of ``repeats``)."""
-    rng = np.random.default_rng(0)
-    bfs = [Beamformer() for _ in range(nodes)]
-    n = bfs[0].window + bfs[0].preroll
-    windows_per_second = 100e3 / bfs[0].window  # contiguous 2^14-sample windows (the FPGA's rate)
-    x = rng.standard_normal((4, n))
-    best = np.inf
-    for _ in range(repeats):
-        tic = time.perf_counter()
-        for bf in bfs:
-            bf.process(x)
-        best = min(best, time.perf_counter() - tic)
-    return float(best * windows_per_second)
 
 
 def fusion_step_seconds(repeats: int) -> float:
@@ -66,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", action="store_true")
     args = p.parse_args(argv)
     result = {
-        "beamformer_realtime_factor_6_nodes": beamformer_realtime_factor(args.repeats),
+        "beamformer_realtime_factor_6_nodes": realtime_factor(nodes=6, repeats=args.repeats),
         "fusion_step_ms_9_sensors_2800_cells": 1e3 * fusion_step_seconds(args.repeats),
     }
     result["fusion_rate_hz"] = 1e3 / result["fusion_step_ms_9_sensors_2800_cells"]
