@@ -189,11 +189,14 @@ def run(ctx: RunContext) -> Outcome:
         )
     )
     t = df.groupby(["method", "k"])["selection_ms_per_epoch"].mean()
-    tg, tb = float(t[("greedy", kmax)]), float(t[("brute", kmax)])
+    searched = df[df["method"].isin(["greedy", "brute"])]
+    t_search = searched.groupby(["method", "k"])["search_ms_per_epoch"].mean()
+    tg, tb = float(t_search[("greedy", kmax)]), float(t_search[("brute", kmax)])
     claims.append(
         Claim(
             "C9_greedy_cheaper",
-            f"greedy selection is cheaper than brute force at k = {kmax} (brute / greedy time per epoch)",
+            f"greedy search is cheaper than brute force over all C({n}, {kmax}) subsets at k = {kmax} "
+            "(brute / greedy search time per epoch, from the same moments)",
             "> 1",
             tb / max(tg, 1e-12),
             "> 1",
@@ -250,7 +253,18 @@ def run(ctx: RunContext) -> Outcome:
         }
     )
     fixed_list = ", ".join(str(i + 1) for i in shown.fixed_order)
-    timing = t.unstack("method").reset_index()
+    timing = (
+        pd.concat(
+            {"epoch ms": t, "search ms": t_search}, axis=1
+        )  # epoch: propagate + moments + search
+        .unstack("method")
+        .dropna(axis=1, how="all")
+        .reset_index()
+    )
+    timing.columns = [
+        c if isinstance(c, str) else (c[0] if not c[1] else f"{c[1]} {c[0]}")
+        for c in timing.columns
+    ]
     where = (
         f"User scene from `{cfg_path}`"
         if cfg_path
@@ -295,8 +309,10 @@ All {n} cameras: {fmt(all_mean)} ± {fmt(all_std)}.
 ![Fig. 12](fig12_selection.png)
 
 Greedy picked the brute-force subset in {100 * same:.0f}% of the selection epochs; its subset MSE was on average
-{fmt(ratio, 4)} times the optimum. Selection time per epoch (ms; includes the metric's moments from the predicted
-cloud):
+{fmt(ratio, 4)} times the optimum. Selection time per epoch (ms): "epoch" is all of it (one
+prediction step of the cloud, the moments P{{eta}}, Sigma_Z, Sigma_Zx for all {n} cameras, then the search), "search"
+the greedy or brute-force search alone from those moments. The moments dominate and are the same for both, so
+the epochs differ far less than the searches; epoch times are wall clock in parallel workers on a shared machine.
 
 {md(timing)}
 

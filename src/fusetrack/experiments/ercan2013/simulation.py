@@ -169,7 +169,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         else np.array(fixed_selection(scene.fixed_order, k) if method == "fixed" else [])
     )
     est = np.empty((steps, 2))
-    lik_time = sel_time = 0.0
+    lik_time = sel_time = search_time = 0.0
     n_seen = 0
     gaps: list[float] = []
     for t in range(1, steps + 1):
@@ -202,7 +202,9 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                     exclusion=likelihood.exclusion,
                 )
                 pick = greedy_selection if method == "greedy" else brute_force_selection
+                t_search = time.perf_counter()
                 selected = np.array(pick(mom, k, cfg["model"]))
+                search_time += time.perf_counter() - t_search
             sel_time += time.perf_counter() - t0
             if cfg.get("metric_gap") and method == "greedy":  # not timed: a check, not the method
                 best = brute_force_selection(mom, k, cfg["model"])
@@ -232,6 +234,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         "selection_ms_per_epoch": 1e3 * sel_time / max(1, -(-steps // period))
         if method not in ("fixed", "all")
         else 0.0,
+        "search_ms_per_epoch": 1e3 * search_time / max(1, -(-steps // period)),
         "readings_per_step": n_seen / steps,
         "fallbacks": asir.stats.first_stage_fallbacks,
         "ignored_steps": asir.stats.ignored_steps,
