@@ -113,48 +113,45 @@ def _extra_options(args: argparse.Namespace) -> dict[str, str]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    try:
+        return _dispatch(args)
+    except FusetrackError as err:
+        print(f"fusetrack: error: {err}", file=sys.stderr)
+        return 2
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    """Run the parsed command; a :class:`FusetrackError` becomes exit status 2 in :func:`main`."""
     from .evaluation.report import RunContext
     from .experiments import REGISTRY, run_experiment
 
     if args.command in ("serve", "replay") or getattr(args, "live", False):
         from .service.commands import main as service_main
 
-        try:
-            return service_main(args)
-        except FusetrackError as err:
-            print(f"fusetrack: error: {err}", file=sys.stderr)
-            return 2
+        return service_main(args)
     if args.command == "track-video":
         from .tools.track_video import main as track_video_main
 
-        try:
-            return track_video_main(args)
-        except FusetrackError as err:
-            print(f"fusetrack: error: {err}", file=sys.stderr)
-            return 2
+        return track_video_main(args)
     if args.command == "list":
         width = max(len(n) for n in REGISTRY)
         for name, info in REGISTRY.items():
             print(f"{name:<{width}}  {info.title}")
         return 0
     name = "demo" if args.command == "demo" else args.name
-    try:
-        ctx = RunContext(
-            name=name,
-            out_dir=args.out,
-            quick=args.quick,
-            runs=args.runs,
-            seed=args.seed,
-            engine=args.engine,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            progress=False if args.no_progress else None,
-            extra=_extra_options(args),
-        )
-        summary = run_experiment(ctx)
-    except FusetrackError as err:
-        print(f"fusetrack: error: {err}", file=sys.stderr)
-        return 2
+    ctx = RunContext(
+        name=name,
+        out_dir=args.out,
+        quick=args.quick,
+        runs=args.runs,
+        seed=args.seed,
+        engine=args.engine,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        progress=False if args.no_progress else None,
+        extra=_extra_options(args),
+    )
+    summary = run_experiment(ctx)
     _print_summary(summary, ctx.out_dir)
     return 0
 
