@@ -54,6 +54,7 @@ def test_example_room_runs_end_to_end(tmp_path, monkeypatch):
     for fig in ("fig11_room.png", "fig12_selection.png"):
         assert (out / fig).stat().st_size > 10_000
     report = (out / "report.md").read_text()
+    assert f"--config {EXAMPLE} --set occluders=5`" in report.splitlines()[2]  # rerunnable command
     assert "ercan2013_room.yaml" in report and "yaw (deg)" in report and "paper 11.5" not in report
 
 
