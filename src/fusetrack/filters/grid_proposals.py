@@ -108,8 +108,24 @@ def _grid_states(centres: Array, fill: Array, pos: list[int]) -> Array:
     return X
 
 
+class _PositionGridProposal:
+    """What both grid proposals share: one particle set, a weight log-ratio, no state."""
+
+    returns_log_ratio = True
+
+    def initialize(self, prior: Any, particles: Array, rng: np.random.Generator) -> None:
+        if particles.ndim != 2:
+            raise ShapeError(
+                invalid("particles.shape", particles.shape, "(N, d): one set (no batch)")
+            )
+        return None
+
+    def feedback(self, state: Any, particles: Array, estimate: Array, filt: Any) -> None:
+        return None
+
+
 @dataclass
-class GalerkinProposal:
+class GalerkinProposal(_PositionGridProposal):
     """Galerkin-projection proposal on an ``n_grid``-per-axis position grid (Algorithm 5).
 
     ``prediction="galerkin"``: FFT circular convolution of the histogram of predicted particle
@@ -125,20 +141,12 @@ class GalerkinProposal:
     prediction: Literal["galerkin", "mixture"] = "galerkin"
     weight: Literal["exact", "projected"] = "exact"
     border_mass: float = 1e-3
-    returns_log_ratio = True
 
     def __post_init__(self) -> None:
         if isinstance(self.n_grid, bool) or int(self.n_grid) != self.n_grid or self.n_grid < 4:
             raise ConfigError(invalid("n_grid", self.n_grid, "an integer >= 4"))
         if self.prediction not in ("galerkin", "mixture"):
             raise ConfigError(invalid("prediction", self.prediction, "'galerkin' or 'mixture'"))
-
-    def initialize(self, prior: Any, particles: Array, rng: np.random.Generator) -> None:
-        if particles.ndim != 2:
-            raise ShapeError(
-                invalid("particles.shape", particles.shape, "(N, d): one set (no batch)")
-            )
-        return None
 
     def grid_density(
         self, prev: Array, zs: Zs, dt: float, filt: Any
@@ -208,12 +216,9 @@ class GalerkinProposal:
             log_pred = np.log(np.maximum(pred.reshape(-1)[idx], 1e-300))
         return x, log_pred - log_q, None
 
-    def feedback(self, state: Any, particles: Array, estimate: Array, filt: Any) -> None:
-        return None
-
 
 @dataclass
-class DiscretisationProposal:
+class DiscretisationProposal(_PositionGridProposal):
     """State-space discretisation proposal (Algorithm 6): weighted position cells.
 
     Cell side ``Δ = cell_scale * std`` of the predicted positions per axis (spec choice 0.5),
@@ -223,14 +228,6 @@ class DiscretisationProposal:
     cell_scale: float = 0.5
     threshold: float = 1e-4
     max_cells: int = 400
-    returns_log_ratio = True
-
-    def initialize(self, prior: Any, particles: Array, rng: np.random.Generator) -> None:
-        if particles.ndim != 2:
-            raise ShapeError(
-                invalid("particles.shape", particles.shape, "(N, d): one set (no batch)")
-            )
-        return None
 
     def cells(self, prev: Array, zs: Zs, dt: float, filt: Any) -> tuple[Array, Array, Array]:
         """Propagated cell centres ``(C, d)``, their posterior weights ``(C,)`` and side ``Δ (k,)``."""
@@ -274,6 +271,3 @@ class DiscretisationProposal:
         p, log_q = sample_cells(centre[:, pos], w, delta, prev.shape[0], rng)
         x, log_pred = complete_from_ancestors(p, prev, filt.motion, dt, rng)
         return x, log_pred - log_q, None
-
-    def feedback(self, state: Any, particles: Array, estimate: Array, filt: Any) -> None:
-        return None
