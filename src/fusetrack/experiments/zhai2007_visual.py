@@ -693,9 +693,10 @@ def beyond_the_paper(
     cal = (
         "Equal time: before the runs, the proposed tracker and the bootstrap at 100 and 1000 "
         "particles are timed on run 0's sequence (the faster of two runs each); the "
-        "bootstrap's particle count is solved from the affine cost through the two pilots (`calibrate_particles`), and when it is above "
-        "1000 solved again through pilots at 1000 and that count (the small pilots misjudge the "
-        f"cost at large N); at most {N_EQUAL_MAX} particles. The bootstrap uses the same "
+        "bootstrap's particle count is solved from the affine cost through the two pilots "
+        "(`calibrate_particles`), and when it is above 1000 solved again through pilots at 1000 "
+        "and that count (the small pilots misjudge the cost at large N); at most "
+        f"{N_EQUAL_MAX} particles. The bootstrap uses the same "
         "measurements as the comparators; 'time / reference' shows how well equal time held."
     )
     section = "\n" + beyond_section(
