@@ -3,28 +3,11 @@ and their equality checks hold. No timing assertions (speed is measured by the b
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
-
-
-def _json_lines(script: str, *args: str) -> list[dict]:
-    out = subprocess.run(
-        [sys.executable, str(BENCH / script), *args, "--json"],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=False,
-    )
-    assert out.returncode == 0, out.stderr
-    return [json.loads(line) for line in out.stdout.splitlines() if line.strip()]
+from _bench_json import bench_json
 
 
 def test_pf_bearing_limit_reference_matches_fusetrack_rmse() -> None:
-    (row,) = _json_lines(
+    (row,) = bench_json(
         "pf_bearing.py", "--N", "300", "--steps", "4", "--repeats", "1",
         "--libs", "fusetrack", "limit_reference",
     )  # fmt: skip
@@ -35,7 +18,7 @@ def test_pf_bearing_limit_reference_matches_fusetrack_rmse() -> None:
 
 
 def test_kalman_batch_equals_filterpy() -> None:
-    rows = _json_lines("kalman_batch.py", "--tracks", "6", "--steps", "4", "--repeats", "1")
+    rows = bench_json("kalman_batch.py", "--tracks", "6", "--steps", "4", "--repeats", "1")
     assert [r["filter"] for r in rows] == ["ekf", "ukf"]
     for r in rows:
         assert set(r["seconds_per_step"]) == {"fusetrack", "filterpy"}
@@ -43,7 +26,7 @@ def test_kalman_batch_equals_filterpy() -> None:
 
 
 def test_batched_runs_are_bit_identical_to_separate_runs() -> None:
-    (row,) = _json_lines(
+    (row,) = bench_json(
         "batched_runs.py", "--runs", "3", "--N", "64", "--steps", "3", "--repeats", "1"
     )
     assert row["bit_identical"] is True
@@ -51,7 +34,7 @@ def test_batched_runs_are_bit_identical_to_separate_runs() -> None:
 
 
 def test_step_floor_reports_every_phase_and_the_bar() -> None:
-    (row,) = _json_lines("step_floor.py", "--N", "20000", "--repeats", "2", "--steps", "2")
+    (row,) = bench_json("step_floor.py", "--N", "20000", "--repeats", "2", "--steps", "2")
     phases = {"normals", "propagate", "bearings", "max + NumPy exp", "resample + gather"}
     assert phases <= set(row["ns_per_particle"])
     floor = row["floor_ns_per_particle"]["serial"]
