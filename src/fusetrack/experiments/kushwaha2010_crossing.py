@@ -69,21 +69,23 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     audio_obs = observations(layout, liks, ("audio",), "product")
     gap = np.abs(truth[:, 0, 0] - truth[:, 2, 0])
     crossing = gap < 4.0
-    near = lambda obs, k: sum(  # noqa: E731
-        1
-        for o in obs[k]
-        if min(np.linalg.norm(o - truth[k, 0]), np.linalg.norm(o - truth[k, 2])) < 5.0
-    )
-    audio_near = (
-        float(np.mean([near(audio_obs, k) for k in np.flatnonzero(crossing)]))
-        if crossing.any()
-        else np.nan
-    )
-    video_near = (
-        float(np.mean([near(video_obs, k) for k in np.flatnonzero(crossing)]))
-        if crossing.any()
-        else np.nan
-    )
+
+    def peaks_at_crossing(obs: list[np.ndarray]) -> float:
+        """Mean number of peaks within 5 m of either crossing vehicle over the crossing ticks."""
+        if not crossing.any():
+            return np.nan
+        near = [
+            sum(
+                1
+                for o in obs[k]
+                if min(np.linalg.norm(o - truth[k, 0]), np.linalg.norm(o - truth[k, 2])) < 5.0
+            )
+            for k in np.flatnonzero(crossing)
+        ]
+        return float(np.mean(near))
+
+    audio_near = peaks_at_crossing(audio_obs)
+    video_near = peaks_at_crossing(video_obs)
     for i, j in zip(rows_i, cols_j):
         matched = cost[i, j] < 1e3
         cover = 0.0
