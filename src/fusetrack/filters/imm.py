@@ -50,7 +50,7 @@ from ..core.errors import ConfigError, ShapeError, invalid
 from ..core.measurement import Measurement
 from ..core.models import MotionModel
 from .kalman import Array, ExtendedKalmanFilter, GaussianFilter, Sensors
-from .multiple_model import check_transition
+from .multiple_model import check_initial_probs, check_transition
 from .stats import FilterStats
 
 
@@ -147,16 +147,7 @@ class InteractingMultipleModel:
         self.models = tuple(models)
         self.transition = check_transition(transition, len(models))
         self.filters = [filter_cls(m, sensors) for m in self.models]
-        p0 = (
-            np.full(len(models), 1.0 / len(models))
-            if initial_probs is None
-            else np.asarray(initial_probs, float)
-        )
-        if p0.shape != (len(models),) or np.any(p0 < 0) or not np.isclose(p0.sum(), 1.0):
-            raise ConfigError(
-                invalid("initial_probs", p0.tolist(), f"{len(models)} probabilities summing to 1")
-            )
-        self.initial_probs = p0
+        self.initial_probs = check_initial_probs(initial_probs, len(models))
         self.stats = FilterStats()
 
     def __repr__(self) -> str:

@@ -49,6 +49,20 @@ def check_transition(transition: ArrayLike, n_models: int) -> Array:
     return p
 
 
+def check_initial_probs(initial_probs: ArrayLike | None, n_models: int) -> Array:
+    """Regime probabilities ``(M,)`` (uniform for None), else :class:`ConfigError`."""
+    p0 = (
+        np.full(n_models, 1.0 / n_models)
+        if initial_probs is None
+        else np.asarray(initial_probs, float)
+    )
+    if p0.shape != (n_models,) or np.any(p0 < 0) or not np.isclose(p0.sum(), 1.0):
+        raise ConfigError(
+            invalid("initial_probs", p0.tolist(), f"{n_models} probabilities summing to 1")
+        )
+    return p0
+
+
 def sample_regimes(modes: IntArray, transition: Array, rng: np.random.Generator) -> IntArray:
     """``r_t ~ Categorical(transition[r_{t-1}])`` for every entry of ``modes`` (Eq. 47)."""
     cdf = np.cumsum(transition, axis=1)
@@ -166,13 +180,7 @@ class MultipleModelParticleFilter:
         self.cell_proposal = DiscretisationProposal()
         self.proposal = proposal
         self.resample = get_resampler(resampler)
-        m = len(self.models)
-        p0 = np.full(m, 1.0 / m) if initial_probs is None else np.asarray(initial_probs, float)
-        if p0.shape != (m,) or np.any(p0 < 0) or not np.isclose(p0.sum(), 1.0):
-            raise ConfigError(
-                invalid("initial_probs", p0.tolist(), f"{m} probabilities summing to 1")
-            )
-        self.initial_probs = p0
+        self.initial_probs = check_initial_probs(initial_probs, len(self.models))
         self.stats = SISStats()
         self.banks = (
             [SPPEKFBank(mod, self.sensors, n_channels, stats=self.stats) for mod in self.models]
