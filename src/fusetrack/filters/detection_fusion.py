@@ -100,9 +100,9 @@ def quality_weighted_statistic(
 
 
 def quality(g_cameras: ArrayLike, g_pred: ArrayLike, sigma2: float) -> Array:
-    """``W^j = exp(-|g^j - g_pred|^2 / (2 sigma^2))`` (Lee 2009, Eq. 4.20), ``(..., J)``."""
-    d = np.asarray(g_cameras, float) - np.asarray(g_pred, float)[..., None, :]
-    return np.exp(-np.sum(d * d, axis=-1) / (2.0 * sigma2))
+    """``W^j = exp(-|g^j - g_pred|^2 / (2 sigma^2))`` (Lee 2009, Eq. 4.20), ``(..., J)``: the
+    :func:`presence_prior` kernel of every camera's position."""
+    return presence_prior(g_cameras, np.asarray(g_pred, float)[..., None, :], sigma2)
 
 
 def fused_position(g_cameras: ArrayLike, w: ArrayLike) -> Array:
