@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.errors import ConfigError, ShapeError, check_probability, invalid
+from ..sensors.camera_geometry import apply_homography
 
 Array = np.ndarray
 
@@ -121,11 +122,9 @@ def presence_prior(g: ArrayLike, g_pred: ArrayLike, sigma2: float) -> Array:
 
 
 def to_ground(homography: ArrayLike, local: ArrayLike) -> Array:
-    """Image point(s) ``(..., 2)`` to the ground plane with a 3x3 homography."""
-    h = np.asarray(homography, float)
-    p = np.asarray(local, float)
-    q = np.concatenate([p, np.ones((*p.shape[:-1], 1))], axis=-1) @ h.T
-    return q[..., :2] / q[..., 2:3]
+    """Image point(s) ``(..., 2)`` to the ground plane with a 3x3 homography
+    (:func:`~fusetrack.sensors.camera_geometry.apply_homography`)."""
+    return apply_homography(homography, local)
 
 
 def to_image(homography: ArrayLike, ground: ArrayLike) -> Array:
