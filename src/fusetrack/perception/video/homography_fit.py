@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...core.errors import ConfigError, ShapeError, invalid
+from ...sensors.camera_geometry import apply_homography
 
 Array = NDArray[np.float64]
 
@@ -129,8 +130,7 @@ def fit_homography(
         svr = dlt(w[inliers], im[inliers])[1]
     else:
         raise ConfigError(invalid("method", method, "'dlt' or 'ransac'"))
-    q = w @ H[:, :2].T + H[:, 2]
-    err = np.linalg.norm(q[:, :2] / q[:, 2:3] - im, axis=1)
+    err = reprojection_errors(H, w, im)
     return HomographyFit(
         H, float(np.sqrt(np.mean(err[inliers] ** 2))), spread, svr, inliers, len(w)
     )
@@ -138,10 +138,8 @@ def fit_homography(
 
 def reprojection_errors(H: ArrayLike, world: ArrayLike, image: ArrayLike) -> Array:
     """Pixel distances between ``pi(H [world; 1])`` and ``image``, ``(n,)``."""
-    h = np.asarray(H, float)
-    w = np.asarray(world, float)
-    q = w @ h[:, :2].T + h[:, 2]
-    return np.asarray(np.linalg.norm(q[:, :2] / q[:, 2:3] - np.asarray(image, float), axis=1))
+    projected = apply_homography(H, world)
+    return np.asarray(np.linalg.norm(projected - np.asarray(image, float), axis=1))
 
 
 @dataclass(frozen=True)
