@@ -39,24 +39,14 @@ import numpy as np
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
+from _scenario import cv_matrices, wrap
+
 Array = NDArray[np.float64]
 
 DT = 1.0
 Q_PSD = 0.05
 SIGMA_RANGE = 0.5  # m
 SIGMA_BEARING = 0.01  # rad
-TWO_PI = 2.0 * np.pi
-
-
-def _wrap(a: Array) -> Array:
-    return (a + np.pi) % TWO_PI - np.pi
-
-
-def cv_matrices(dt: float = DT, q: float = Q_PSD) -> tuple[Array, Array]:
-    i2 = np.eye(2)
-    F = np.block([[i2, dt * i2], [np.zeros((2, 2)), i2]])
-    Q = q * np.block([[dt**3 / 3 * i2, dt**2 / 2 * i2], [dt**2 / 2 * i2, dt * i2]])
-    return F, Q
 
 
 class Problem:
@@ -64,7 +54,7 @@ class Problem:
 
     def __init__(self, tracks: int, steps: int, seed: int = 7) -> None:
         rng = np.random.default_rng(seed)
-        F, Q = cv_matrices()
+        F, Q = cv_matrices(DT, Q_PSD)
         LQ = np.linalg.cholesky(Q)
         angle = rng.uniform(-np.pi, np.pi, tracks)
         dist = rng.uniform(50.0, 300.0, tracks)
@@ -83,7 +73,7 @@ class Problem:
             x = x @ F.T + rng.standard_normal((tracks, 4)) @ LQ.T
             truth[k] = x
             z[k, :, 0] = np.hypot(x[:, 0], x[:, 1]) + SIGMA_RANGE * rng.standard_normal(tracks)
-            z[k, :, 1] = _wrap(
+            z[k, :, 1] = wrap(
                 np.arctan2(x[:, 1], x[:, 0]) + SIGMA_BEARING * rng.standard_normal(tracks)
             )
         self.tracks, self.steps = tracks, steps
@@ -142,7 +132,7 @@ def _h_jacobian(x: Array) -> Array:
 
 def _residual(a: Array, b: Array) -> Array:
     y = np.subtract(a, b)
-    y[1] = _wrap(y[1])
+    y[1] = wrap(y[1])
     return y
 
 
@@ -159,7 +149,7 @@ class FilterpyLoop:
         from filterpy.kalman import UnscentedKalmanFilter as FpUKF
 
         self.kind, self.prob = kind, prob
-        F, Q = cv_matrices()
+        F, Q = cv_matrices(DT, Q_PSD)
         self.F, self.Q = F, Q
 
         def make() -> object:
