@@ -84,38 +84,23 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         ]
         return float(np.mean(near))
 
-    audio_near = peaks_at_crossing(audio_obs)
-    video_near = peaks_at_crossing(video_obs)
+    scene = {  # the same in every vehicle's row
+        "n_tracks": len(ids),
+        "audio_peaks_at_crossing": peaks_at_crossing(audio_obs),
+        "video_peaks_at_crossing": peaks_at_crossing(video_obs),
+        "crossing_ticks": int(crossing.sum()),
+    }
     for i, j in zip(rows_i, cols_j):
         matched = cost[i, j] < 1e3
         cover = 0.0
         if matched:
             times, _ = tracks[ids[j]]
             cover = float(np.isin(np.flatnonzero(inside[:, i]), times).mean())
-        rows.append(
-            {
-                "vehicle": int(i),
-                "error": float(cost[i, j]) if matched else np.nan,
-                "coverage": cover,
-                "n_tracks": len(ids),
-                "audio_peaks_at_crossing": audio_near,
-                "video_peaks_at_crossing": video_near,
-                "crossing_ticks": int(crossing.sum()),
-            }
-        )
+        error = float(cost[i, j]) if matched else np.nan
+        rows.append({"vehicle": int(i), "error": error, "coverage": cover, **scene})
     for i in range(len(cars)):
         if i not in rows_i:
-            rows.append(
-                {
-                    "vehicle": i,
-                    "error": np.nan,
-                    "coverage": 0.0,
-                    "n_tracks": len(ids),
-                    "audio_peaks_at_crossing": audio_near,
-                    "video_peaks_at_crossing": video_near,
-                    "crossing_ticks": int(crossing.sum()),
-                }
-            )
+            rows.append({"vehicle": i, "error": np.nan, "coverage": 0.0, **scene})
     for r in rows[:1]:  # for the figure; dropped from results.parquet
         r["tracks"] = {int(k): [v[0].tolist(), v[1].tolist()] for k, v in tracks.items()}
         r["truth"] = truth.tolist()
