@@ -230,7 +230,7 @@ sigma_psi = inf runs are shared.
 
 * Absolute RMSEs depend on the reconstructed camera layout and on details the paper leaves open (tracker motion
   noise, initial particles, the Kalman filter of the priors); the ratios are the comparable quantities.
-* The crossing is read off the piecewise-linear mean curve; with few sweep points (quick run: {len(sweep)}) it is coarse.
+* The crossing is read off the piecewise-linear mean curve; with {len(sweep)} sweep points it is coarse.
 * The perfect-prior likelihood of Sec. 6.1 is all-or-nothing: a particle survives only if every camera's
   seen/not-seen report matches the known discs exactly. When the object is barely hidden the consistent region
   is a thin shadow; when the predicted cloud misses it, every weight is 0, the step's readings are lost and the
