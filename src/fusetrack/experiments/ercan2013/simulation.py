@@ -142,12 +142,20 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         kf = RandomWalkPriorFilter(float(cfg["sigma_psi"]), q=scene.prior_q)
         means, var = kf.run(occ[1:], center, np.random.default_rng([seed, 1]))
         rmse_occ = rmse_per_coordinate(means, occ[1:]) if m else 0.0
+        # calibration of the priors: mean squared error over the variance they claim (1 = calibrated)
+        prior_nees = (
+            float(np.mean(np.sum((means - occ[1:]) ** 2, axis=-1) / (2 * var[:, None])))
+            if m and np.all(var > 0)
+            else float("nan")
+        )
     elif prior == "perfect":
         rmse_occ = 0.0
+        prior_nees = float("nan")
     else:
         rmse_occ = (
             rmse_per_coordinate(np.broadcast_to(center, occ[1:].shape), occ[1:]) if m else 0.0
         )
+        prior_nees = float("nan")
     likelihood = OcclusionAwareLikelihood(
         scene.cameras,
         scene.room,
@@ -229,6 +237,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         "rmse_tr": rmse_per_coordinate(est[b:], obj[1 + b :]),
         "rmse_tr_euclid": float(np.sqrt(np.mean(np.sum(err**2, axis=1)))),
         "rmse_occ": rmse_occ,
+        "prior_nees": prior_nees,
         "rmse_max": rmse_per_coordinate(np.broadcast_to(center, obj[1 + b :].shape), obj[1 + b :]),
         "likelihood_ms_per_step": 1e3 * lik_time / steps,
         "selection_ms_per_epoch": 1e3 * sel_time / max(1, -(-steps // period))
