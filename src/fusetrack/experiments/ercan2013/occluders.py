@@ -154,8 +154,8 @@ as printed (hard zeros, "perfect printed"); the no-prior likelihood has neither 
   paper's tracker with perfect priors had RMSE ~3.1 at M = 40, N = 4 (implied by Sec. 6.1); ours
   {fmt(float(piv.loc[40, "perfect"])) if 40 in piv.index else "n/a"} with the floor and
   {fmt(float(hard_table.set_index("n_occluders")["mean"].get(40, float("nan"))))} as printed.
-* Error bars are one standard deviation over {runs} runs; quick runs use short tracks ({size["steps"]} steps) with
-  {size["particles"]} particles, where the all-or-nothing perfect-prior likelihood sometimes leaves no consistent
+* Error bars are one standard deviation over {runs} runs; these runs track {size["steps"]} steps with
+  {size["particles"]} particles; the all-or-nothing perfect-prior likelihood sometimes leaves no consistent
   particle (such steps are skipped and counted in the results' `ignored_steps` column).
 """
     return Outcome(df_all, claims, report, runs=runs)
