@@ -7,6 +7,8 @@ moderate number, and smaller again when occluders hide the object most of the ti
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pandas as pd
 
@@ -22,7 +24,7 @@ def run(ctx: RunContext) -> Outcome:
     size = sizes(ctx)
     runs = ctx.n_runs(full=5, quick=2)
     ms = M_QUICK if ctx.quick else M_FULL
-    configs = [
+    configs: list[dict[str, Any]] = [
         {
             "scene": "square-open",
             "n_occluders": m,
