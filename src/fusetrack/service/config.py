@@ -28,17 +28,9 @@ from ..motion import ConstantVelocity, CoordinatedTurnRate
 from ..sensors import AzimuthPolar, Bearing, HomographyCamera, PositionFix, Range, RangeBearing
 from ..sensors.detection_function import AngularSampling
 from .auth import MIN_KEY_BYTES, bearer_token
-from .schema import _NAME
+from .schema import _NAME, READING_KINDS
 
-FUSED_KINDS: tuple[str, ...] = (
-    "bearing",
-    "doa",
-    "range",
-    "range_bearing",
-    "position_fix",
-    "image_position",
-    "detection_function",
-)
+FUSED_KINDS: tuple[str, ...] = READING_KINDS
 """Reading kinds a node may be configured for. ``detection_function`` readings need the grid
 tracker (``tracker.filter: grid``); every other kind is fused by every tracker."""
 

@@ -77,17 +77,8 @@ class MultiTargetEngine:
         self.mcmcda = MCMCDA(
             MCMCDAConfig(
                 dt=1.0 / cfg.fusion.rate_hz,
-                max_speed=a.max_speed,
-                max_gap=a.max_gap,
-                window=a.window,
-                n_mc=a.n_mc,
-                p_detect=a.p_detect,
-                p_terminate=a.p_terminate,
-                birth_rate=a.birth_rate,
-                false_alarm_rate=a.false_alarm_rate,
                 area=(x1 - x0) * (y1 - y0),
-                accel_std=a.accel_std,
-                obs_std=a.obs_std,
+                **a.model_dump(exclude={"method"}),  # the section's fields are MCMCDAConfig's
             ),
             rng=np.random.default_rng(cfg.tracker.seed),
         )
