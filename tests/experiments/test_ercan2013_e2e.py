@@ -12,6 +12,7 @@ EXPERIMENTS = [
     "ercan2013-cameras",
     "ercan2013-prior-accuracy",
     "ercan2013-tradeoff",
+    "ercan2013-prior-calibration",
     "ercan2013-occluders",
     "ercan2013-likelihood-cost",
     "ercan2013-selection",

@@ -145,6 +145,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Ercan, El Gamal, Guibas 2013 (seed 002)",
         ),
         ExperimentInfo(
+            "ercan2013-prior-calibration",
+            "ercan2013.prior_calibration:run",
+            "Ercan 2013, beyond the paper: why Gaussian occluder priors lose to none (overconfident vs persistent errors)",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
             "ercan2013-tradeoff",
             "ercan2013.tradeoff:run",
             "Ercan 2013 E3 (Fig. 8): cameras vs occluder-prior accuracy needed for RMSE_tr = 3",

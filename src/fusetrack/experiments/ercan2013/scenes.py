@@ -34,6 +34,7 @@ class Scene:
     speed: float = 1.0
     motion_noise: float = 0.33
     prior_q: float = 3.0  # process noise of the occluder-prior Kalman filters (units^2/step)
+    prior_q_cv: float = 0.03  # white acceleration of the constant-velocity prior filters (calibrated: NEES ~1)
     object_path: Array | None = None  # scripted object positions (lab), or None: a walker
 
     def __post_init__(self) -> None:
@@ -140,6 +141,7 @@ def lab_scene() -> Scene:
         speed=3.6,
         motion_noise=1.2,
         prior_q=39.0,
+        prior_q_cv=0.03 * 3.6**2,  # the sim's, scaled by the lab's 3.6 inches per unit
         object_path=lab_path(),
     )
 
@@ -224,6 +226,7 @@ def scene_from_mapping(spec: Mapping[str, Any], name: str = "custom") -> Scene:
         speed=float(spec.get("speed", 1.0)),
         motion_noise=float(spec.get("motion_noise", 0.33)),
         prior_q=float(spec.get("prior_q", 3.0)),
+        prior_q_cv=float(spec.get("prior_q_cv", 0.03)),
     )
 
 

@@ -6,7 +6,8 @@ camera noise, filter, random selection), so two configurations with the same see
 people walking and the same camera noise: differences between them are the method's alone.
 
 Config keys (defaults in :data:`DEFAULTS`): ``scene`` (name or a :class:`Scene`), ``n_occluders``,
-``prior`` ("perfect", "gaussian", "none"), ``sigma_psi``, ``k``, ``method`` (greedy, brute,
+``prior`` ("perfect", "gaussian", "none"), ``sigma_psi``, ``prior_filter`` (how Gaussian priors are
+made: :data:`~fusetrack.world.occluder_priors.PRIOR_FILTERS`), ``k``, ``method`` (greedy, brute,
 fixed, random, closest, all), ``model`` (perspective, weak), ``period`` T, ``steps``,
 ``particles`` L, ``burn_in``, ``trace`` (keep per-step estimates), ``floor`` (least p(eta | u) of a
 particle the reporting cameras can see; 0 = the paper's hard zeros) and ``exclusion`` (the
@@ -39,7 +40,13 @@ from ...management.camera_selection import (
 )
 from ...motion.waypoint_regime import WaypointRegimeDynamics
 from ...world.geometry import Array
-from ...world.occluder_priors import RandomWalkPriorFilter, rmse_per_coordinate
+from ...world.occluder_priors import (
+    PRIOR_FILTERS,
+    RandomWalkPriorFilter,
+    prior_nees,
+    prior_track,
+    rmse_per_coordinate,
+)
 from ...world.occlusion import OccluderPriors, disks_block
 from ...world.walkers import WaypointWalkers
 from .scenes import Scene, get_scene
@@ -49,6 +56,7 @@ DEFAULTS: dict[str, Any] = {
     "n_occluders": 40,
     "prior": "gaussian",
     "sigma_psi": 17.0,
+    "prior_filter": "random-walk",
     "k": 4,
     "method": "fixed",
     "model": "perspective",
@@ -68,6 +76,8 @@ def _resolve(config: Mapping[str, Any]) -> tuple[dict[str, Any], Scene]:
     if unknown:
         raise ConfigError(invalid("config keys", sorted(unknown), f"keys among {sorted(DEFAULTS)}"))
     scene = cfg.get("scene_obj") or get_scene(cfg["scene"])
+    if cfg["prior_filter"] not in PRIOR_FILTERS:
+        raise ConfigError(invalid("prior_filter", cfg["prior_filter"], f"one of {PRIOR_FILTERS}"))
     if cfg["method"] not in SELECTION_METHODS:
         raise ConfigError(invalid("method", cfg["method"], f"one of {SELECTION_METHODS}"))
     n = len(scene.cameras)
@@ -139,23 +149,26 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     center = scene.room.center
     prior = cfg["prior"]
     if prior == "gaussian":
-        kf = RandomWalkPriorFilter(float(cfg["sigma_psi"]), q=scene.prior_q)
-        means, var = kf.run(occ[1:], center, np.random.default_rng([seed, 1]))
-        rmse_occ = rmse_per_coordinate(means, occ[1:]) if m else 0.0
-        # calibration of the priors: mean squared error over the variance they claim (1 = calibrated)
-        prior_nees = (
-            float(np.mean(np.sum((means - occ[1:]) ** 2, axis=-1) / (2 * var[:, None])))
-            if m and np.all(var > 0)
-            else float("nan")
+        means, var = prior_track(
+            cfg["prior_filter"],
+            float(cfg["sigma_psi"]),
+            scene.prior_q,
+            occ[1:],
+            center,
+            np.random.default_rng([seed, 1]),
+            q_cv=scene.prior_q_cv,
         )
+        rmse_occ = rmse_per_coordinate(means, occ[1:]) if m else 0.0
+        # calibration: squared error over the variance the priors claim (1 = calibrated)
+        nees = prior_nees(means, var, occ[1:])
     elif prior == "perfect":
         rmse_occ = 0.0
-        prior_nees = float("nan")
+        nees = float("nan")
     else:
         rmse_occ = (
             rmse_per_coordinate(np.broadcast_to(center, occ[1:].shape), occ[1:]) if m else 0.0
         )
-        prior_nees = float("nan")
+        nees = float("nan")
     likelihood = OcclusionAwareLikelihood(
         scene.cameras,
         scene.room,
@@ -237,7 +250,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         "rmse_tr": rmse_per_coordinate(est[b:], obj[1 + b :]),
         "rmse_tr_euclid": float(np.sqrt(np.mean(np.sum(err**2, axis=1)))),
         "rmse_occ": rmse_occ,
-        "prior_nees": prior_nees,
+        "prior_nees": nees,
         "rmse_max": rmse_per_coordinate(np.broadcast_to(center, obj[1 + b :].shape), obj[1 + b :]),
         "likelihood_ms_per_step": 1e3 * lik_time / steps,
         "selection_ms_per_epoch": 1e3 * sel_time / max(1, -(-steps // period))

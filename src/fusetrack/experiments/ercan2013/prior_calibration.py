@@ -1,0 +1,173 @@
+"""Why Gaussian occluder priors can lose to no priors (Ercan et al. 2013; beyond the paper).
+
+The paper's Figs. 6-7 put every Gaussian-prior curve between perfect priors and none. Ours does
+not: with the random-walk Kalman priors, intermediate priors are often worse than none (E1's C3
+ordering, E2's curve). Two causes are possible, and this experiment separates them by how the
+priors are made, at the same virtual-reading noise ``sigma_psi``
+(:func:`fusetrack.world.occluder_priors.prior_track`):
+
+* ``random-walk``: the filter every other experiment uses; it lags walkers that keep their heading,
+  so its priors are overconfident (squared error / claimed variance 1.1-2);
+* ``constant-velocity``: a Kalman filter that follows the heading; calibrated (ratio ~1);
+* ``calibrated-random-walk`` (oracle): the random walk's track with its covariance scaled until
+  the ratio is 1 -- if this fixes the ordering, overconfidence was the cause;
+* ``white`` (oracle): the random walk's accuracy and calibration, but fresh errors every step --
+  if only this fixes it, the cause is that a prior's error persists over many steps while the
+  likelihood treats each step's occlusion evidence as new (Eq. 6 conditions on the current
+  priors only).
+
+Two settings: E2's (open room, k = 4) and E1's (static occluder, k = 3, where E1's Gaussian priors
+lost most). The claims are the paper's ordering (perfect <= Gaussian <= none) per construction.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...world.occluder_priors import PRIOR_FILTERS
+from .common import curve_plot, fmt, md, mean_std, sizes
+from .simulation import run_tracking
+
+SETTINGS = {"E2": ("square-open", 4), "E1": ("square", 3)}
+"""Setting label: (scene, k cameras of the fixed list)."""
+SIGMA_PSI_FULL = (2.0, 8.0, 16.0, 32.0)
+SIGMA_PSI_QUICK = (8.0, 32.0)
+M = 40
+
+
+def _configs(sweep: tuple[float, ...], size: dict[str, int]) -> list[dict]:
+    out = []
+    for setting, (scene, k) in SETTINGS.items():
+        base = {"scene": scene, "n_occluders": M, "k": k, "method": "fixed", **size}
+        out.append({**base, "prior": "perfect", "sigma_psi": 0.0, "label": f"{setting}|perfect|0"})
+        out.append({**base, "prior": "none", "sigma_psi": 0.0, "label": f"{setting}|none|inf"})
+        for kind in PRIOR_FILTERS:
+            for s in sweep:
+                out.append(
+                    {
+                        **base,
+                        "prior": "gaussian",
+                        "sigma_psi": s,
+                        "prior_filter": kind,
+                        "label": f"{setting}|{kind}|{s:g}",
+                    }
+                )
+    return out
+
+
+def _ordering(table: pd.DataFrame, setting: str, kind: str) -> tuple[float, float]:
+    """Share of sigma_psi with perfect <= Gaussian <= none (means), and with Gaussian <= none."""
+    t = table[table["setting"] == setting]
+    perfect = float(t[t["series"] == "perfect"]["mean"].iloc[0])
+    none = float(t[t["series"] == "none"]["mean"].iloc[0])
+    g = t[t["series"] == kind]["mean"].to_numpy()
+    return float(np.mean((perfect <= g) & (g <= none))), float(np.mean(g <= none))
+
+
+def run(ctx: RunContext) -> Outcome:
+    size = sizes(ctx)
+    runs = ctx.n_runs(full=5, quick=2)
+    sweep = SIGMA_PSI_QUICK if ctx.quick else SIGMA_PSI_FULL
+    df = ctx.monte_carlo(run_tracking, _configs(sweep, size), runs, desc="prior calibration")
+    parts = df["label"].str.split("|", expand=True)
+    df = df.assign(setting=parts[0], series=parts[1], sigma=parts[2])
+    table = mean_std(df, ["setting", "series", "sigma"])
+    extra = df.groupby(["setting", "series", "sigma"])[["rmse_occ", "prior_nees"]].mean()
+    table = table.join(extra, on=["setting", "series", "sigma"])
+    claims: list[Claim] = []
+    verdict: dict[str, dict[str, float]] = {}
+    for setting, (scene, k) in SETTINGS.items():
+        verdict[setting] = {}
+        for kind in PRIOR_FILTERS:
+            share, beats = _ordering(table, setting, kind)
+            verdict[setting][kind] = beats
+            oracle = " (oracle)" if kind in ("calibrated-random-walk", "white") else ""
+            claims.append(
+                Claim(
+                    f"ordering_{setting}_{kind}",
+                    f"{setting} setting ({scene}, k = {k}), {kind}{oracle} priors: perfect <= "
+                    "Gaussian <= none in mean RMSE_tr (share of sigma_psi)",
+                    "all (Figs. 6-7)",
+                    share,
+                    ">= 0.75",
+                    share >= 0.75,
+                )
+            )
+    figures = []
+    for setting, (scene, k) in SETTINGS.items():
+        t = table[table["setting"] == setting]
+        refs = {
+            row.series: float(row.mean)
+            for row in t[t["series"].isin(["perfect", "none"])].itertuples()
+        }
+        gauss = t[~t["series"].isin(["perfect", "none"])]
+        stem = f"rmse_vs_prior_{setting}"
+        curve_plot(
+            ctx.figure_path(stem),
+            gauss,
+            "rmse_occ",
+            "series",
+            xlabel="RMSE_occ (units)",
+            ylabel="RMSE_tr (units)",
+            title=f"{setting} setting: {scene}, k = {k}, M = {M}, {runs} runs x {size['steps']} steps",
+            hlines={f"{name} priors {fmt(v)}": v for name, v in refs.items()},
+        )
+        figures.append(f"![{setting}]({stem}.png)")
+    show = table.assign(sigma_psi=table["sigma"])[
+        ["setting", "series", "sigma_psi", "rmse_occ", "prior_nees", "mean", "std"]
+    ].rename(
+        columns={
+            "series": "priors",
+            "prior_nees": "sq. error / claimed var",
+            "mean": "RMSE_tr mean",
+            "std": "RMSE_tr std",
+        }
+    )
+    show = show.sort_values(["setting", "priors", "rmse_occ"])
+
+    def wins(kind: str) -> str:
+        return ", ".join(f"{s}: {verdict[s][kind]:.0%}" for s in SETTINGS)
+
+    rw, cv, cal, white = PRIOR_FILTERS
+    overconfidence = all(verdict[s][cal] > verdict[s][rw] for s in SETTINGS)
+    persistence = all(verdict[s][white] > verdict[s][cal] for s in SETTINGS)
+    report = f"""
+## Question
+
+Figs. 6-7 of the paper put the Gaussian-prior curves between perfect priors and none; ours (E1, E2) lose to
+none at intermediate accuracy. Is it because the random-walk priors are overconfident, or because their error
+persists over many steps while the likelihood counts each step's occlusion evidence afresh? Same worlds and
+seeds for every construction; only the priors differ.
+
+## Setup
+
+{", ".join(f"{s}: {sc}, k = {k}" for s, (sc, k) in SETTINGS.items())} (first k of the fixed list), M = {M},
+sigma_psi {", ".join(f"{s:g}" for s in sweep)}, {runs} runs x {size["steps"]} steps, L = {size["particles"]}, the
+corrected likelihood of the other experiments. Prior constructions: {", ".join(PRIOR_FILTERS)} (see the module;
+the last two use the truth and exist only for this diagnosis).
+
+## Results
+
+Share of sigma_psi at which the Gaussian priors beat no priors (mean RMSE_tr <= none's):
+
+| priors | {" | ".join(SETTINGS)} |
+|---|{"---|" * len(SETTINGS)}
+{chr(10).join(f"| {kind} | " + " | ".join(f"{verdict[s][kind]:.0%}" for s in SETTINGS) + " |" for kind in PRIOR_FILTERS)}
+
+{md(show)}
+
+{chr(10).join(figures)}
+
+## Differences from the paper and their causes
+
+* Overconfidence (calibrated-random-walk beats none more often than random-walk in both settings):
+  {"yes" if overconfidence else "no"} ({wins(rw)} -> {wins(cal)}).
+* Persistent errors (white beats none more often than calibrated-random-walk in both settings):
+  {"yes" if persistence else "no"} ({wins(cal)} -> {wins(white)}).
+* The practical constant-velocity filter (calibrated without the truth): {wins(cv)}.
+* The paper does not say how its priors were made beyond "a Kalman filter"; if its filter followed the walkers
+  (or its errors were nearly white), the ordering it plots is what this experiment predicts for such priors.
+"""
+    return Outcome(df.drop(columns=["setting", "series", "sigma"]), claims, report, runs=runs)
