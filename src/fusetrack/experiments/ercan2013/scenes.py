@@ -34,7 +34,9 @@ class Scene:
     speed: float = 1.0
     motion_noise: float = 0.33
     prior_q: float = 3.0  # process noise of the occluder-prior Kalman filters (units^2/step)
-    prior_q_cv: float = 0.03  # white acceleration of the constant-velocity prior filters (calibrated: NEES ~1)
+    prior_q_cv: float = (
+        0.03  # white acceleration of the constant-velocity prior filters (calibrated: NEES ~1)
+    )
     object_path: Array | None = None  # scripted object positions (lab), or None: a walker
 
     def __post_init__(self) -> None:
