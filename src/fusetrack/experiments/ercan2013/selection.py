@@ -81,6 +81,31 @@ def selection_sizes(n_cameras: int, quick: bool) -> list[int]:
     return sorted({2, top}) if quick else list(range(2, top + 1))
 
 
+def _paired_with_all(df: pd.DataFrame, k: int) -> str:
+    """Greedy (perspective) with ``k`` cameras against all cameras, paired by run: RMSE ratio,
+    readings per step, and how large the run-to-run spread is beside the mean."""
+    g = df[(df["label"] == "greedy-perspective") & (df["k"] == k)].set_index("run")
+    a = df[df["label"] == "all"].set_index("run")
+    runs = g.index.intersection(a.index)
+    if len(runs) == 0:
+        return "no paired runs."
+    r = (g.loc[runs, "rmse_tr"] / a.loc[runs, "rmse_tr"]).to_numpy()
+    spread = (
+        float(a.loc[runs, "rmse_tr"].std(ddof=1) / a.loc[runs, "rmse_tr"].mean())
+        if len(runs) > 1
+        else 0.0
+    )
+    return (
+        f"RMSE_tr ratio {fmt(float(r.mean()))} (per run {fmt(float(r.min()))}-{fmt(float(r.max()))}, greedy worse "
+        f"in {int(np.sum(r > 1))} of {len(r)} runs) with {fmt(float(g.loc[runs, 'readings_per_step'].mean()))} "
+        f"readings per step against {fmt(float(a.loc[runs, 'readings_per_step'].mean()))}. The difference is small "
+        f"but systematic: our run-to-run spread is only {spread:.0%} of the mean RMSE_tr (every run tracks the "
+        "object; the error is the measurement-noise floor, which falls with every added view), so 'within one "
+        "standard deviation' is a much tighter bar here than for a tracker whose runs differ more (the paper prints "
+        "no values for Fig. 12)."
+    )
+
+
 def run(ctx: RunContext) -> Outcome:
     size = sizes(ctx)
     if ctx.quick and not smoke():  # 15 configurations: shorter tracks keep --quick near a minute
@@ -176,6 +201,7 @@ def run(ctx: RunContext) -> Outcome:
             g6 - all_mean <= max(s6, all_std),
         )
     )
+    six_vs_all = _paired_with_all(df, kmax)
     ratio = float(df.loc[df["method"] == "greedy", "greedy_over_brute_mse"].mean())
     same = float(df.loc[df["method"] == "greedy", "greedy_equals_brute"].mean())
     claims.append(
@@ -325,5 +351,6 @@ the epochs differ far less than the searches; epoch times are wall clock in para
 {"" if full_size else run_length}* The paper prints no values for Fig. 12, only the ordering; the claims above check that ordering, with the
   paper's "within one standard deviation" read as: the mean difference is smaller than the larger of the two
   standard deviations over runs.
+* Greedy with k = {kmax} against all {n} cameras, run by run (same worlds): {six_vs_all}
 """
     return Outcome(df, claims, report, runs=runs)
