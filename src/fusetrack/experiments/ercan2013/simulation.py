@@ -11,7 +11,9 @@ made: :data:`~fusetrack.world.occluder_priors.PRIOR_FILTERS`), ``k``, ``method``
 fixed, random, closest, all), ``model`` (perspective, weak), ``period`` T, ``steps``,
 ``particles`` L, ``burn_in``, ``trace`` (keep per-step estimates), ``floor`` (least p(eta | u) of a
 particle the reporting cameras can see; 0 = the paper's hard zeros) and ``exclusion`` (the
-rectangles of Eq. 7 end this many occluder diameters before the particle; 0 = as printed): see
+rectangles of Eq. 7 end this many occluder diameters before the particle; 0 = as printed) and
+``tracker_sigma_v`` (the tracker's motion noise sigma_v of Eq. 5, "assumed to be known" by the
+paper; None = the walkers' true 0.33 units, spec §8 item 15): see
 :class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`.
 """
 
@@ -67,6 +69,7 @@ DEFAULTS: dict[str, Any] = {
     "trace": False,
     "floor": 1e-3,
     "exclusion": 1.0,
+    "tracker_sigma_v": None,
 }
 
 
@@ -177,7 +180,8 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         floor=float(cfg["floor"]),
         exclusion=float(cfg["exclusion"]) * scene.diameter,
     )
-    dynamics = WaypointRegimeDynamics(sigma_v=scene.motion_noise)
+    sigma_v = scene.motion_noise if cfg["tracker_sigma_v"] is None else float(cfg["tracker_sigma_v"])
+    dynamics = WaypointRegimeDynamics(sigma_v=sigma_v)
     asir = WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed)
     rng_f = np.random.default_rng([seed, 3])
     rng_s = np.random.default_rng([seed, 4])
