@@ -104,3 +104,34 @@ def test_numba_point_in_polygon_equals_the_numpy_one() -> None:
             expected &= ~points_in_polygon(p, o)
         assert np.array_equal(room.free(p), expected)
         assert room.free(p.reshape(50, 100, 2)).shape == (50, 100)
+
+
+def test_occlusion_power_scales_only_the_pattern_term() -> None:
+    """log f = log G + gamma log p(eta | u): the kernel and the reference agree at gamma = 0.3, and
+    log f(gamma = 1) - log f(gamma) = (1 - gamma) log p(eta | u) for every possible particle."""
+    scene = get_scene("square")
+    obj, occ, z = world_and_readings(scene, 40, 40, 3)
+    rng = np.random.default_rng(2)
+    sel = np.arange(5)
+    t = 20
+    x = obj[t] + rng.normal(0, 6, (400, 2))
+    pri = OccluderPriors(occ[t] + rng.normal(0, 3, (40, 2)), np.eye(2) * 9.0)
+    full = OcclusionAwareLikelihood(
+        scene.cameras, scene.room, scene.diameter, "gaussian", 1e-3, 3.33
+    )
+    tempered = OcclusionAwareLikelihood(
+        scene.cameras, scene.room, scene.diameter, "gaussian", 1e-3, 3.33, occlusion_power=0.3
+    )
+    a = full.log_likelihood(z[t, sel], sel, x, pri)
+    b = tempered.log_likelihood(z[t, sel], sel, x, pri)
+    ref = tempered.log_likelihood_reference(z[t, sel], sel, x, pri)
+    ok = np.isfinite(a)
+    assert ok.sum() > 50 and np.array_equal(ok, np.isfinite(b))
+    np.testing.assert_allclose(b[ok], ref[ok], rtol=0, atol=1e-4)
+    no_pattern = OcclusionAwareLikelihood(scene.cameras, scene.room, scene.diameter, "none")
+    log_g = no_pattern.log_likelihood(z[t, sel], sel, x)
+    log_p = a[ok] - log_g[ok]
+    assert np.ptp(log_p) > 1.0  # the pattern term varies over the cloud
+    np.testing.assert_allclose(a[ok] - b[ok], 0.7 * log_p, rtol=1e-9, atol=1e-9)
+    with pytest.raises(Exception, match="occlusion_power"):
+        OcclusionAwareLikelihood(scene.cameras, scene.room, 3.33, "gaussian", occlusion_power=0.0)

@@ -39,6 +39,12 @@ the paper as printed):
   cannot stand within ``D`` of the object (they would overlap), so ``exclusion = D`` removes exactly
   the impossible part of the rectangles where they overlap.
 
+``occlusion_power`` (default 1, the paper) tempers the occlusion evidence: ``p(eta | u)`` enters as
+``p^gamma``. Eq. 6 treats each step's seen/not-seen pattern as new evidence given the current
+priors, but a real occluder that hides the object usually does so for many steps in a row; with
+priors coarser than ``D`` the same event is then counted again every step. ``gamma < 1`` counts it
+as fewer independent looks (a diagnosis of ``ercan2013-prior-calibration``, not the paper's model).
+
 :meth:`OcclusionAwareLikelihood.log_likelihood` is one Numba pass over the particles
 (:func:`fusetrack.world.occlusion_kernels.camera_likelihood_kernel`);
 :meth:`OcclusionAwareLikelihood.log_likelihood_reference` is the NumPy composition of the
@@ -79,6 +85,7 @@ class OcclusionAwareLikelihood:
     prior_mode: PriorMode = "gaussian"
     floor: float = 0.0
     exclusion: float = 0.0
+    occlusion_power: float = 1.0
 
     def __post_init__(self) -> None:
         if self.prior_mode not in PRIOR_MODES:
@@ -89,6 +96,10 @@ class OcclusionAwareLikelihood:
             raise ConfigError(invalid("floor", self.floor, "a probability in [0, 1)"))
         if not 0 <= self.exclusion < np.inf:
             raise ConfigError(invalid("exclusion", self.exclusion, "a finite length >= 0"))
+        if not 0 < self.occlusion_power <= 1:
+            raise ConfigError(
+                invalid("occlusion_power", self.occlusion_power, "a number in (0, 1]")
+            )
         # A camera behind a wall would look through it: a convex room's walls are not tested
         # for sight (every inside point sees every other), so such a camera must be refused here.
         outside = ~self.room.free(self.cameras.positions)
@@ -197,6 +208,7 @@ class OcclusionAwareLikelihood:
                 float(self.diameter),
                 float(self.exclusion),
                 float(self.floor),
+                float(self.occlusion_power),
             )
         )
 
@@ -266,4 +278,4 @@ class OcclusionAwareLikelihood:
                 p[possible] = pattern_probability(q, eta, A[:, possible])
         p = np.where(possible, np.maximum(p, self.floor), 0.0)
         with np.errstate(divide="ignore"):
-            return np.asarray(np.log(p))
+            return np.asarray(np.where(possible, self.occlusion_power * np.log(p), -np.inf))

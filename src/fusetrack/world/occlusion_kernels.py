@@ -352,13 +352,14 @@ def camera_likelihood_kernel(
     diameter: float,
     exclusion: float,
     floor: float,
+    occlusion_power: float = 1.0,
 ) -> np.ndarray:  # pragma: no cover - jit
     """``log f(Z | x)`` of Ercan et al. 2013 (Eq. 6) for every particle in one pass.
 
     ``mode``: 0 no occluder information, 1 known occluder centres ``occ_mu`` (discs), 2 Gaussian
     priors ``(occ_mu, occ_cov)`` (Eqs. 7-9 on the assigned cameras). A particle that a reporting
     camera cannot see (field of view, walls, static occluders) is impossible (-inf); otherwise the
-    pattern probability is floored at ``floor``. Same formulas as
+    pattern probability is floored at ``floor`` and raised to ``occlusion_power``. Same formulas as
     :meth:`fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood.log_likelihood_reference`.
     """
     L, K, M, E = x.shape[0], cam_pos.shape[0], occ_mu.shape[0], edge_a.shape[0]
@@ -573,7 +574,7 @@ def camera_likelihood_kernel(
                     total += -prod if odd else prod
                 total *= common
             p = min(max(total, 0.0), 1.0)
-        out[l] = log_g + (math.log(p) if p > floor else log_floor)
+        out[l] = log_g + occlusion_power * (math.log(p) if p > floor else log_floor)
     return out
 
 

@@ -13,7 +13,8 @@ fixed, random, closest, all), ``model`` (perspective, weak), ``period`` T, ``ste
 particle the reporting cameras can see; 0 = the paper's hard zeros) and ``exclusion`` (the
 rectangles of Eq. 7 end this many occluder diameters before the particle; 0 = as printed) and
 ``tracker_sigma_v`` (the tracker's motion noise sigma_v of Eq. 5, "assumed to be known" by the
-paper; None = the walkers' true 0.33 units, spec §8 item 15): see
+paper; None = the walkers' true 0.33 units, spec §8 item 15), ``occlusion_power`` (p(eta | u)
+enters the likelihood to this power; 1 = the paper): see
 :class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`.
 """
 
@@ -70,6 +71,7 @@ DEFAULTS: dict[str, Any] = {
     "floor": 1e-3,
     "exclusion": 1.0,
     "tracker_sigma_v": None,
+    "occlusion_power": 1.0,
 }
 
 
@@ -179,8 +181,11 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         prior,
         floor=float(cfg["floor"]),
         exclusion=float(cfg["exclusion"]) * scene.diameter,
+        occlusion_power=float(cfg["occlusion_power"]),
     )
-    sigma_v = scene.motion_noise if cfg["tracker_sigma_v"] is None else float(cfg["tracker_sigma_v"])
+    sigma_v = (
+        scene.motion_noise if cfg["tracker_sigma_v"] is None else float(cfg["tracker_sigma_v"])
+    )
     dynamics = WaypointRegimeDynamics(sigma_v=sigma_v)
     asir = WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed)
     rng_f = np.random.default_rng([seed, 3])
