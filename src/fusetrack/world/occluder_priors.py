@@ -30,6 +30,17 @@ from .geometry import Array
 from .occlusion import OccluderPriors
 
 
+def _outputs(truth: Array, sigma_psi: float) -> tuple[Array, Array]:
+    """Arrays for a filter bank's means ``(T, M, 2)`` and variances ``(T,)``; filled with the
+    truth and zero variance when ``sigma_psi = 0`` (perfect priors)."""
+    means = np.empty_like(truth)
+    var = np.empty(truth.shape[0])
+    if sigma_psi == 0:
+        means[:] = truth
+        var[:] = 0.0
+    return means, var
+
+
 @dataclass(frozen=True)
 class RandomWalkPriorFilter:
     """A bank of isotropic random-walk Kalman filters, one per occluder (vectorised)."""
@@ -52,13 +63,10 @@ class RandomWalkPriorFilter:
         The covariance of every occluder at step t is ``var[t] * I`` (all filters start alike and
         see the same noise level, so they share it).
         """
-        steps, m = truth.shape[0], truth.shape[1]
-        means = np.empty_like(truth)
-        var = np.empty(steps)
+        means, var = _outputs(truth, self.sigma_psi)
         if self.sigma_psi == 0:
-            means[:] = truth
-            var[:] = 0.0
             return means, var
+        steps, m = truth.shape[0], truth.shape[1]
         mu = np.broadcast_to(np.asarray(center, float), (m, 2)).copy()
         p = self.initial_var
         r = self.sigma_psi**2
@@ -100,13 +108,10 @@ class ConstantVelocityPriorFilter:
 
     def run(self, truth: Array, center: Array, rng: np.random.Generator) -> tuple[Array, Array]:
         """Means ``(T, M, 2)`` and scalar position variances ``(T,)`` (one per step, shared)."""
-        steps, m = truth.shape[0], truth.shape[1]
-        means = np.empty_like(truth)
-        var = np.empty(steps)
+        means, var = _outputs(truth, self.sigma_psi)
         if self.sigma_psi == 0:
-            means[:] = truth
-            var[:] = 0.0
             return means, var
+        steps, m = truth.shape[0], truth.shape[1]
         axis = ConstantVelocity(ndim=1, q=self.q, noise="discrete")
         F, Q = axis.transition_matrix(1.0), axis.noise_cov(1.0)
         pos = np.broadcast_to(np.asarray(center, float), (m, 2)).copy()
