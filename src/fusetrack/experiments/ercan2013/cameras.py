@@ -285,8 +285,8 @@ RMSE_max here: {fmt(rmse_max)} (paper 24.4).
   ratio {fmt(cv_nees)}: calibrated) are the fourth curve: perfect <= them <= none at {int(cv_ordered.sum())} of
   {len(cv_ordered)} camera counts, them <= none at {int((cv_mean <= pivot["none"]).sum())} (random walk:
   {int((pivot["gaussian"] <= pivot["none"]).sum())}). {"So overconfidence is not the cause" if (cv_mean <= pivot["none"]).sum() <= (pivot["gaussian"] <= pivot["none"]).sum() else "Calibration helps here"}; the experiment
-  `ercan2013-prior-calibration` finds it: each step's occlusion pattern is counted as new evidence though one real
-  occlusion lasts about ten steps (tempering the evidence restores the ordering).
+  `ercan2013-prior-calibration` tests the other candidate: each step's occlusion pattern is counted as new evidence though one real
+  occlusion lasts many steps (it compares tempered evidence with calibrated priors).
 * The camera positions, static occluder and the intermediate prior's Kalman filter are reconstructions (the
   paper shows them only as pictures, or not at all); absolute RMSEs depend on them, the trends do not.
 * The paper reaches RMSE_occ = 6.67 with sigma_psi = 8; its Kalman filter's motion model is not given. A

@@ -309,9 +309,8 @@ sigma_psi = inf runs are shared.
   so the no-prior tracker rarely loses the object. The ratio 2.34 is {"reproduced" if abs(ratio / 2.34 - 1) <= tol else "not reproduced"}
   (ours {fmt(ratio)}, printed likelihood {fmt(hard_ratio)}).
 * Intermediate priors doing worse than none: the tracker treats each step's seen/not-seen pattern as new
-  evidence, but one real occlusion lasts about ten steps, so it is counted again and again; tempering that
-  evidence restores the paper's ordering, while calibrated, white-error or constant-velocity priors do not
-  (`ercan2013-prior-calibration`).
+  evidence, but one real occlusion lasts many steps, so it is counted again and again; the experiment
+  `ercan2013-prior-calibration` tests this against calibrated, white-error and constant-velocity priors.
 * The std ratio is a ratio of two standard deviations of {runs} runs each and varies a lot between seeds.
 * The tracker's motion noise sigma_v of Eq. 5 is "assumed to be known" and its value is not given; ours is the
   walkers' true 0.33, which is what "known" suggests. The gains measure how badly the no-prior tracker does while

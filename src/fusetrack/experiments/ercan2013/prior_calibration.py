@@ -15,7 +15,7 @@ priors are made, at the same virtual-reading noise ``sigma_psi``
   if only this fixes it, the cause is that a prior's error persists over many steps;
 * ``random-walk, gamma g``: the default priors with the occlusion evidence tempered,
   ``p(eta | u)^g`` (:class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`).
-  A real occluder that hides the object does so for about ten steps in a row, but Eq. 6 counts
+  A real occluder that hides the object does so for many steps in a row, but Eq. 6 counts
   each step's pattern as new evidence given the current priors; if tempering fixes the ordering,
   the cause is this repeated counting of one event, whatever the priors.
 
@@ -151,7 +151,7 @@ def run(ctx: RunContext) -> Outcome:
         conclusion = (
             "how the priors are made does not matter (calibrated, white or constant-velocity priors lose to none "
             "as often as the random walk); counting each step's occlusion pattern as new evidence does: a real "
-            "occlusion lasts about ten steps, and with the evidence tempered the Gaussian priors beat none at "
+            "occlusion lasts many steps, and with the evidence tempered the Gaussian priors beat none at "
             f"{wins(tempered[-1])} of sigma_psi ({tempered[-1]})."
         )
     else:
@@ -161,7 +161,7 @@ def run(ctx: RunContext) -> Outcome:
 
 Figs. 6-7 of the paper put the Gaussian-prior curves between perfect priors and none; ours (E1, E2) lose to
 none at intermediate accuracy. Is it because the random-walk priors are overconfident, because their error
-persists over many steps, or because one real occlusion (about ten steps long) is counted as new evidence
+persists over many steps, or because one real occlusion (lasting many steps) is counted as new evidence
 every step? Same worlds and seeds for every series; only the priors or the tempering differ.
 
 ## Setup
