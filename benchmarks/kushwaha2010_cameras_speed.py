@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from fusetrack.experiments.kushwaha2010_cameras import appearance_model
+from fusetrack.experiments.kushwaha2010.cameras import appearance_model
 from fusetrack.filters.smart_camera_trackers import (
     CameraNetwork,
     ImagePlaneTracker,

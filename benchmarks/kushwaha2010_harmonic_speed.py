@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from fusetrack.experiments.kushwaha2010_harmonic_sources import (
+from fusetrack.experiments.kushwaha2010.harmonic_sources import (
     SENSORS,
     network,
     simulate_features,

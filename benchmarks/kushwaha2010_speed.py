@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 
-from fusetrack.experiments.kushwaha2010_beamformer import realtime_factor
-from fusetrack.experiments.kushwaha2010_scene import default_layout, tick_likelihoods
+from fusetrack.experiments.kushwaha2010.beamformer import realtime_factor
+from fusetrack.experiments.kushwaha2010.scene import default_layout, tick_likelihoods
 from fusetrack.filters.grid import GridTracker
 from fusetrack.management.fusion_scheduler import Packet
 

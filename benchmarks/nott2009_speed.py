@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from fusetrack.experiments.nott2009_video import ekf_step_time
+from fusetrack.experiments.nott2009.video import ekf_step_time
 from fusetrack.perception.video import HorprasertModel, find_blobs
 from fusetrack.world.rendered_room import Person, RoomRenderer
 from fusetrack.world.walks import crossing_walks

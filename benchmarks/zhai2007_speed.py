@@ -29,7 +29,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from fusetrack.core import Gaussian
-from fusetrack.experiments.zhai2007_common import timed_gaussian
+from fusetrack.experiments.zhai2007.common import timed_gaussian
 from fusetrack.filters.cpf_sp import CPFSPProposal
 from fusetrack.filters.grid_proposals import DiscretisationProposal, GalerkinProposal
 from fusetrack.filters.imm import InteractingMultipleModel

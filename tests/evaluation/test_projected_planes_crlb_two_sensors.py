@@ -7,7 +7,7 @@ import pytest
 
 from fusetrack.core.errors import ConfigError
 from fusetrack.evaluation.projected_planes_crlb import direct3d_crlb
-from fusetrack.experiments.lee2009_projected_planes import (
+from fusetrack.experiments.lee2009.projected_planes import (
     AXES,
     SCN_ACCEL,
     SCN_DT,

@@ -3,7 +3,7 @@
 import numpy as np
 import pandas as pd
 
-from fusetrack.experiments.kushwaha2010_cameras import (
+from fusetrack.experiments.kushwaha2010.cameras import (
     ABLATIONS,
     GAP_START,
     SETUPS,

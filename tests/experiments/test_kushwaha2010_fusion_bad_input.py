@@ -3,7 +3,7 @@ whose clock jumps, a silent node — all counted, and the track goes on (Kushwah
 
 import numpy as np
 
-from fusetrack.experiments.kushwaha2010_scene import (
+from fusetrack.experiments.kushwaha2010.scene import (
     VIDEO_ANGLES,
     Recording,
     VehiclePass,

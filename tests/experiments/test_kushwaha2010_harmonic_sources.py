@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from fusetrack.experiments.kushwaha2010_harmonic_sources import SENSORS, run_once, separated_pair
+from fusetrack.experiments.kushwaha2010.harmonic_sources import SENSORS, run_once, separated_pair
 
 
 def test_separated_pair_geometry():

@@ -3,7 +3,7 @@
 
 import numpy as np
 
-from fusetrack.experiments.kushwaha2010_scene import (
+from fusetrack.experiments.kushwaha2010.scene import (
     ADC_FULL_SCALE,
     FusionInput,
     audio_on_the_wire,
@@ -56,7 +56,7 @@ def test_track_ends_after_four_quiet_ticks():
 def test_grid_track_ends_when_the_posterior_is_about_to_leave_the_field():
     from test_kushwaha2010_fusion_bad_input import synthetic_packets
 
-    from fusetrack.experiments.kushwaha2010_scene import (
+    from fusetrack.experiments.kushwaha2010.scene import (
         Recording,
         VehiclePass,
         all_likelihoods,

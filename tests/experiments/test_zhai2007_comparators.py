@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 
 from fusetrack.core import Gaussian
-from fusetrack.experiments.zhai2007_common import timed_gaussian
-from fusetrack.experiments.zhai2007_comparators import (
+from fusetrack.experiments.zhai2007.common import timed_gaussian
+from fusetrack.experiments.zhai2007.comparators import (
     Scenario,
     beyond_table,
     calibrate_particles,

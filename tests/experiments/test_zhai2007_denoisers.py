@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from fusetrack.experiments.zhai2007_denoising import practitioner_denoisers
+from fusetrack.experiments.zhai2007.denoising import practitioner_denoisers
 from fusetrack.perception.pf_dwt import isnr
 
 

@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fusetrack.experiments.zhai2007_visual import EXPERIMENTS, better, build_claims, run_once
-from fusetrack.experiments.zhai2007_visual_scenes import SCENES, build
+from fusetrack.experiments.zhai2007.visual import EXPERIMENTS, better, build_claims, run_once
+from fusetrack.experiments.zhai2007.visual_scenes import SCENES, build
 
 
 @pytest.mark.parametrize("name", sorted(SCENES))
@@ -77,7 +77,7 @@ def test_app_b_run_rows_and_claims():
 def test_comparators_build_and_track_each_family(exp):
     """UPF / IMM-EKF / equal-time bootstrap: the right filter on the family's measurements, and
     on a clean start they stay near the target for the first frames."""
-    from fusetrack.experiments.zhai2007_visual import BEYOND, NOT_RUN, make_tracker
+    from fusetrack.experiments.zhai2007.visual import BEYOND, NOT_RUN, make_tracker
     from fusetrack.filters.unscented_proposal import UnscentedProposal
     from fusetrack.perception.visual_tracking import GaussianFrameFilter, track_frames
 

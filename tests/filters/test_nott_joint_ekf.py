@@ -5,7 +5,7 @@ import pytest
 from scipy.linalg import solve_discrete_are
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.experiments.nott2009_scenario import SimConfig, run_trackers, simulate_truth
+from fusetrack.experiments.nott2009.scenario import SimConfig, run_trackers, simulate_truth
 from fusetrack.filters import ExtendedKalmanFilter, KalmanFilter, run_filter
 from fusetrack.motion import ConstantVelocity, WalkingPerson
 from fusetrack.sensors import HomographyCamera, PositionFix, StackedSensor

@@ -49,7 +49,7 @@ def test_condensation_follows_a_clean_head():
 
 
 def test_mmpf_sp_with_the_edge_sensor():
-    from fusetrack.experiments.zhai2007_visual import PI_B, _prior6, mm_models
+    from fusetrack.experiments.zhai2007.visual import PI_B, _prior6, mm_models
 
     seq, sensor, fe = _sequence()
     mm = MultipleModelParticleFilter(
@@ -66,7 +66,7 @@ def test_mmpf_sp_with_the_edge_sensor():
 def test_gaussian_and_unscented_proposal_trackers_follow_a_clean_head():
     """The beyond-the-paper comparators on the edge sensor: an IMM-EKF (MMPF models) through
     GaussianFrameFilter and the UPF (UKF proposal on the centre pseudo-measurement)."""
-    from fusetrack.experiments.zhai2007_visual import PI_B, _prior6, mm_models
+    from fusetrack.experiments.zhai2007.visual import PI_B, _prior6, mm_models
     from fusetrack.filters.imm import InteractingMultipleModel
     from fusetrack.filters.unscented_proposal import UnscentedProposal
     from fusetrack.perception.visual_tracking import GaussianFrameFilter

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from fusetrack.core.errors import ConfigError
-from fusetrack.experiments.nott2009_radio import TABLE_5_1_RFID, TABLE_5_1_TRUTH, table_summary
+from fusetrack.experiments.nott2009.radio import TABLE_5_1_RFID, TABLE_5_1_TRUTH, table_summary
 from fusetrack.sensors import NferTagSimulator, fit_position_fix
 
 

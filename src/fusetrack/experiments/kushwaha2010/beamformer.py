@@ -1,0 +1,212 @@
+"""Kushwaha 2010, Ch. III "Evaluation" (Figs 10–11): DOA error of one beamformer node against range.
+
+The paper put one node outdoors and played recorded speech at 3–150 ft and at −180° … +180° in
+5° steps (1800 experiments); Fig. 11 shows the mean DOA error per distance, smallest at 25 ft:
+closer, the planar-wavefront assumption fails; farther, the SNR drops. No error values are
+printed. Here a speech-like source (:func:`fusetrack.world.acoustics.speech_like`) at mouth
+height 1.6 m is propagated with exact spherical delays to the 4-microphone array on its 1 m
+tripod, with background noise at 40 dB SNR at 1 m (spec 003 §3.1) and a ground reflection
+(coefficient 0.5) — the outdoor multipath the paper names. The DOA estimate is the beam of
+largest energy (36 beams, 2^14 samples at 100 kHz).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...evaluation import plots
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...perception.audio_beamforming import Beamformer, MicrophoneArray, beam_angles
+from ...world.acoustics import pink_noise, propagate, speech_like
+
+FEET = 0.3048
+DISTANCES_FT = (3, 5, 10, 25, 50, 75, 100, 150)
+MIC_HEIGHT = 1.0
+MOUTH_HEIGHT = 1.6
+FS = 100e3
+
+
+def beam_energies(
+    distance: float,
+    angle: float,
+    rng: np.random.Generator,
+    snr_1m_db: float = 40.0,
+    reflection: float = 0.5,
+) -> np.ndarray:
+    """The 36 beam energies of one trial (the node's detection function; Fig. 10b)."""
+    array = MicrophoneArray.rectangle()
+    bf = Beamformer(array, alpha=0.0)
+    n = bf.window + bf.preroll
+    mics = np.column_stack([array.world_positions((0.0, 0.0), 0.0), np.full(4, MIC_HEIGHT)])
+    src = np.array([distance * np.cos(angle), distance * np.sin(angle), MOUTH_HEIGHT])
+    image = src * np.array([1.0, 1.0, -1.0])  # ground reflection (image source below the ground)
+    emission = speech_like(n / FS + 0.3, rng)
+    times = 0.25 + np.arange(n) / FS
+    x = propagate(emission, lambda t: np.broadcast_to(src, (t.size, 3)), mics, times, FS)
+    x += reflection * propagate(
+        emission, lambda t: np.broadcast_to(image, (t.size, 3)), mics, times, FS
+    )
+    x += 10 ** (-snr_1m_db / 20) * pink_noise(x.shape, rng)
+    return bf.energies(x)
+
+
+def doa_trial(
+    distance: float,
+    angle: float,
+    rng: np.random.Generator,
+    snr_1m_db: float = 40.0,
+    reflection: float = 0.5,
+) -> float:
+    """Absolute DOA error (rad) of one trial: a source at ``distance`` m and ``angle`` rad."""
+    est = beam_angles()[int(np.argmax(beam_energies(distance, angle, rng, snr_1m_db, reflection)))]
+    return float(abs((est - angle + np.pi) % (2 * np.pi) - np.pi))
+
+
+def realtime_factor(nodes: int = 6, repeats: int = 3) -> float:
+    """Seconds of processing per second of audio for ``nodes`` nodes (band-pass + 36 beams over
+    contiguous 2^14-sample windows; best of ``repeats``)."""
+    import time
+
+    rng = np.random.default_rng(0)
+    bfs = [Beamformer() for _ in range(nodes)]
+    x = rng.standard_normal((4, bfs[0].window + bfs[0].preroll))
+    best = np.inf
+    for _ in range(repeats):
+        tic = time.perf_counter()
+        for bf in bfs:
+            bf.process(x)
+        best = min(best, time.perf_counter() - tic)
+    return float(best * FS / bfs[0].window)
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    rng = np.random.default_rng(seed)
+    step = float(config["angle_step_deg"])
+    rows = []
+    for d_ft in DISTANCES_FT:
+        for a_deg in np.arange(-180.0, 180.0, step):
+            a = np.deg2rad(a_deg + rng.uniform(-0.5, 0.5) * step)
+            rows.append(
+                {
+                    "distance_ft": d_ft,
+                    "angle_deg": float(np.rad2deg(a)),
+                    "error_deg": np.rad2deg(doa_trial(d_ft * FEET, a, rng)),
+                }
+            )
+    return rows
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=3, quick=1)  # repeats of the whole distance × angle sweep
+    step = 30.0 if ctx.quick else 5.0
+    df = ctx.monte_carlo(run_once, [{"angle_step_deg": step}], runs, desc="sweeps")
+    mean = df.groupby("distance_ft")["error_deg"].mean()
+    best = int(mean.idxmin())
+    far = float(mean.loc[150])
+    mid = float(mean.loc[[10, 25, 50]].min())
+    claims = [
+        Claim(
+            "min_error_mid_range",
+            "the mean DOA error is smallest at mid range (paper: 25 ft)",
+            25,
+            best,
+            "10–50 ft",
+            best in (10, 25, 50),
+        ),
+        Claim(
+            "error_grows_far",
+            "the error grows at long range as the SNR falls (150 ft worse than the best mid range)",
+            "err(150 ft) > err(mid)",
+            {"150 ft": far, "best mid": mid},
+            "none",
+            far > mid,
+        ),
+        Claim(
+            "error_grows_near",
+            "the error grows close to the array (3 ft worse than the best mid range)",
+            "err(3 ft) > err(mid)",
+            {"3 ft": float(mean.loc[3]), "best mid": mid},
+            "none",
+            float(mean.loc[3]) > mid,
+        ),
+        Claim(
+            "within_one_beam",
+            "at mid range the mean error is within the 10° beam spacing",
+            "< 10°",
+            mid,
+            "10°",
+            mid < 10.0,
+        ),
+    ]
+    rt = realtime_factor()
+    pattern = beam_energies(50 * FEET, np.deg2rad(120.0), np.random.default_rng(ctx.seed))
+    fig_beam = _polar(ctx, pattern)
+    claims.append(
+        Claim(
+            "faster_than_realtime",
+            "six nodes' four channels at 100 kHz are beamformed faster than real time",
+            "FPGA: 2^14 samples in ≈ 160 ms",
+            rt,
+            "< 1 s of processing per s of audio",
+            rt < 1.0,
+        )
+    )
+    fig = plots.plot_series(
+        ctx.figure_path("doa_error_vs_range"),
+        np.array(mean.index),
+        {"mean |DOA error|": mean.to_numpy()},
+        xlabel="distance (ft)",
+        ylabel="mean DOA error (deg)",
+        title="DOA error against range (Fig. 11 analogue)",
+    )
+    trials = len(df)
+    body = f"""
+## Set-up
+
+{trials} trials: {len(DISTANCES_FT)} distances ({", ".join(map(str, DISTANCES_FT))} ft) × angles from −180° in {step:.0f}° steps
+(jittered within the step) × {runs} repeat(s); the paper: 1800 trials at 3–150 ft, 5° steps.
+Speech-like source at 1.6 m height, array at 1 m, ground reflection 0.5, 40 dB SNR at 1 m.
+
+## Mean DOA error per distance
+
+{pd.DataFrame({"mean error (deg)": mean, "trials": df.groupby("distance_ft").size()}).to_markdown(floatfmt=".2f")}
+
+The paper prints no values for Fig. 11, only that 25 ft was best and why.
+
+![DOA error against range]({fig.name})
+
+![Beam energies, source at 50 ft and 120°]({fig_beam.name})
+
+Speed: beamforming six nodes (4 channels at 100 kHz each) takes {rt:.3f} s per second of audio
+on this machine (the FPGA needs ≈ 160 ms per 2^14-sample window, i.e. it runs in real time).
+
+## Differences from the paper and their causes
+
+Beyond about 10 ft our mean error sits at the floor set by 10° beams (2.5° for angles spread
+uniformly between beams), so where along 10–150 ft the minimum falls is decided by noise of a
+few hundredths of a degree; the simulated SNR at 150 ft, integrated over 2^14 samples, is still
+high, so the far-range growth the paper saw outdoors is weak here. Our errors are what quantisation to 10° beams, the 10 cm aperture, the noise and the ground
+reflection leave. Close to the array the source is 0.6 m above it, so at 3 ft the wave arrives
+steeply from above and the horizontal delays shrink (the far-field, coplanar assumption fails
+as in the paper); at 150 ft the SNR is {40 - 20 * np.log10(150 * FEET):.0f} dB per microphone. Real speech, wind and
+reverberation of the paper's outdoor site are not modelled.
+"""
+    return Outcome(df, claims, body, runs)
+
+
+def _polar(ctx: RunContext, energies: np.ndarray) -> Any:
+    """Fig. 10b analogue: the beam energies of a source at 50 ft and 120°."""
+    import matplotlib.pyplot as plt
+
+    a = np.append(beam_angles(), 2 * np.pi)
+    e = np.append(energies, energies[0])
+    fig = plt.figure(figsize=(4.5, 4.5))
+    ax = fig.add_subplot(projection="polar")
+    ax.plot(a, e / e.max(), "o-", ms=3)
+    ax.plot([np.deg2rad(120.0)] * 2, [0, 1], "k--", lw=1)
+    ax.set_title("Beamform, source at 50 ft and 120° (Fig. 10b analogue)", fontsize=9)
+    return plots.save(fig, ctx.figure_path("beamform_50ft_120deg"))

@@ -1,0 +1,206 @@
+"""Kushwaha 2010, Ch. III (Fig. 26): three vehicles, two of them crossing, tracked by MCMCDA.
+
+The paper's multi-target case uses video-only observations from the three cameras, because
+"audio could not distinguish between targets when they cross each other" (beamforming assumes
+one source), and reports average errors of 1.29 m, 1.60 m and 2.20 m for the three tracks.
+Here: two vehicles drive east in one lane 9 m apart and a third drives west in the other lane,
+crossing both. Video-only product likelihood peaks go to online MCMCDA; tracks are matched to the
+vehicles by the Hungarian algorithm on their mean distance. The audio-only peaks of the same
+ticks show whether audio separates the crossing pair.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import linear_sum_assignment
+
+from ...evaluation import plots
+from ...evaluation.report import Claim, Outcome, RunContext
+from .mcmcda import observations, run_mcmcda
+from .scene import (
+    SceneConfig,
+    VehiclePass,
+    all_likelihoods,
+    default_layout,
+    fusion_input,
+    simulate_recording,
+)
+
+PAPER_ERRORS = (1.29, 1.60, 2.20)
+
+
+def vehicles(rng: np.random.Generator) -> list[VehiclePass]:
+    v_east = rng.uniform(9.5, 11.0)
+    v_west = rng.uniform(10.0, 12.0)
+    return [
+        VehiclePass(x0=-1.0, lane_y=8.5, speed=v_east, f0=float(rng.uniform(30, 80)), grey=35.0),
+        VehiclePass(x0=-10.0, lane_y=8.5, speed=v_east, f0=float(rng.uniform(30, 80)), grey=220.0),
+        VehiclePass(x0=36.0, lane_y=11.5, speed=-v_west, f0=float(rng.uniform(30, 80)), grey=60.0),
+    ]
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    rng = np.random.default_rng(seed)
+    layout = default_layout()
+    cars = vehicles(rng)
+    t0, t1 = 0.25, 3.5
+    rec = simulate_recording(layout, cars, t0, t1, SceneConfig(), rng)
+    truth = np.array(rec.truth())  # (T, 3, 2)
+    fin = fusion_input(rec, np.random.default_rng(seed + 7))
+    liks = all_likelihoods(layout, fin)
+    video_obs = observations(layout, liks, ("video",), "product")
+    tracks = run_mcmcda(video_obs, int(config["n_mc"]), np.random.default_rng(seed + 11))
+    ids = list(tracks)
+    inside = np.array([[layout.grid.contains(p) for p in row] for row in truth])  # (T, 3)
+    cost = np.full((len(cars), max(len(ids), 1)), 1e3)
+    for i in range(len(cars)):
+        for j, ident in enumerate(ids):
+            times, pos = tracks[ident]
+            ok = (times >= 0) & (times < len(truth))
+            ok[ok] &= inside[times[ok], i]
+            if ok.sum() >= 2:
+                cost[i, j] = np.linalg.norm(pos[ok] - truth[times[ok], i], axis=1).mean()
+    rows_i, cols_j = linear_sum_assignment(cost)
+    rows: list[dict[str, Any]] = []
+    audio_obs = observations(layout, liks, ("audio",), "product")
+    gap = np.abs(truth[:, 0, 0] - truth[:, 2, 0])
+    crossing = gap < 4.0
+
+    def peaks_at_crossing(obs: list[np.ndarray]) -> float:
+        """Mean number of peaks within 5 m of either crossing vehicle over the crossing ticks."""
+        if not crossing.any():
+            return np.nan
+        near = [
+            sum(
+                1
+                for o in obs[k]
+                if min(np.linalg.norm(o - truth[k, 0]), np.linalg.norm(o - truth[k, 2])) < 5.0
+            )
+            for k in np.flatnonzero(crossing)
+        ]
+        return float(np.mean(near))
+
+    scene = {  # the same in every vehicle's row
+        "n_tracks": len(ids),
+        "audio_peaks_at_crossing": peaks_at_crossing(audio_obs),
+        "video_peaks_at_crossing": peaks_at_crossing(video_obs),
+        "crossing_ticks": int(crossing.sum()),
+    }
+    for i, j in zip(rows_i, cols_j):
+        matched = cost[i, j] < 1e3
+        cover = 0.0
+        if matched:
+            times, _ = tracks[ids[j]]
+            cover = float(np.isin(np.flatnonzero(inside[:, i]), times).mean())
+        error = float(cost[i, j]) if matched else np.nan
+        rows.append({"vehicle": int(i), "error": error, "coverage": cover, **scene})
+    for i in range(len(cars)):
+        if i not in rows_i:
+            rows.append({"vehicle": i, "error": np.nan, "coverage": 0.0, **scene})
+    for r in rows[:1]:  # for the figure; dropped from results.parquet
+        r["tracks"] = {int(k): [v[0].tolist(), v[1].tolist()] for k, v in tracks.items()}
+        r["truth"] = truth.tolist()
+    return rows
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=5, quick=1)
+    n_mc = 200 if ctx.quick else 600
+    df = ctx.monte_carlo(run_once, [{"n_mc": n_mc}], runs, desc="scenes")
+    per_vehicle = df.groupby("vehicle")["error"].mean()
+    tracked = df.groupby("vehicle").apply(
+        lambda d: float(((d.error < 5) & (d.coverage >= 0.5)).mean())
+    )
+    ours = np.sort(per_vehicle.to_numpy())
+    tol = 2.5 if ctx.quick else 1.5
+    claims = [
+        Claim(
+            "three_tracks",
+            "video-only MCMCDA keeps a track on each of the three vehicles (Fig. 26)",
+            "3 tracks",
+            {int(k): float(v) for k, v in tracked.items()},
+            "each vehicle tracked in ≥ half the runs",
+            bool(np.all(tracked.to_numpy() >= 0.5)),
+        ),
+        Claim(
+            "per_track_errors",
+            "per-track mean errors of the three vehicles (sorted) are near 1.29, 1.60, 2.20 m",
+            list(PAPER_ERRORS),
+            ours.tolist(),
+            f"±{tol} m each",
+            bool(
+                np.all(np.isfinite(ours)) and np.all(np.abs(ours - np.array(PAPER_ERRORS)) <= tol)
+            ),
+        ),
+        Claim(
+            "audio_merges_at_crossing",
+            "audio cannot separate the crossing vehicles: fewer audio than video peaks near the pair while they cross",
+            "audio < video",
+            {
+                "audio": float(df.audio_peaks_at_crossing.mean()),
+                "video": float(df.video_peaks_at_crossing.mean()),
+            },
+            "mean peaks per crossing tick",
+            bool(df.audio_peaks_at_crossing.mean() < df.video_peaks_at_crossing.mean()),
+        ),
+    ]
+    first = df[(df.run == 0) & df.tracks.notna()].iloc[0]
+    fig = _figure(ctx, first.tracks, first.truth)
+    table = pd.DataFrame({"paper (m)": PAPER_ERRORS, "ours, sorted (m)": ours})
+    body = f"""
+## Set-up
+
+Three vehicles (two eastbound 9 m apart at the same speed, one westbound crossing both), {runs}
+simulated scene(s) of 3.25 s, the full sensing chain; video-only product-likelihood peaks feed
+online MCMCDA ({n_mc} iterations per step). Tracks are matched to vehicles by the Hungarian
+algorithm on their mean distance while the vehicle is in the field.
+
+## Per-track errors
+
+{table.to_markdown(floatfmt=".2f")}
+
+Per vehicle (0, 1 eastbound, 2 westbound): mean error {", ".join(f"{v:.2f} m" for v in per_vehicle)};
+fraction of runs tracked {", ".join(f"{v:.2f}" for v in tracked)}.
+Audio-only peaks near the crossing pair per crossing tick: {df.audio_peaks_at_crossing.mean():.2f};
+video-only: {df.video_peaks_at_crossing.mean():.2f}.
+
+![Tracks and truth]({fig.name})
+
+## Differences from the paper and their causes
+
+The paper's three errors come from one real recording; ours are means over simulated scenes
+whose geometry we chose (spec 003 §3.4), so only their size is comparable. Vehicles are
+matched to tracks, not to track fragments: a vehicle whose track breaks into pieces is scored
+on its best piece.
+"""
+    return Outcome(df.drop(columns=["tracks", "truth"]), claims, body, runs)
+
+
+def _figure(ctx: RunContext, tracks: dict[int, Any], truth_rows: Any) -> Any:
+    import matplotlib.pyplot as plt
+
+    truth = np.array(truth_rows)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    for i in range(truth.shape[1]):
+        axes[0].plot(truth[:, i, 0], truth[:, i, 1], "k-", lw=2)
+        axes[1].plot(0.25 * np.arange(len(truth)), truth[:, i, 0], "k-", lw=2)
+    for k, (times, pos) in tracks.items():
+        p = np.asarray(pos)
+        axes[0].plot(p[:, 0], p[:, 1], "o-", ms=3, label=f"track {k}")
+        axes[1].plot(0.25 * np.asarray(times), p[:, 0], "o-", ms=3)
+    axes[0].set_xlim(0, 35)
+    axes[0].set_ylim(0, 20)
+    axes[0].set_xlabel("x (m)")
+    axes[0].set_ylabel("y (m)")
+    axes[0].set_title("MCMCDA tracks (Fig. 26a analogue), truth in black")
+    axes[0].legend(fontsize=7)
+    axes[1].set_xlabel("time (s)")
+    axes[1].set_ylabel("x (m)")
+    axes[1].set_title("x against time (Fig. 26b analogue)")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    return plots.save(fig, ctx.figure_path("crossing_tracks"))

@@ -1,0 +1,307 @@
+"""Kushwaha 2010, Ch. III: MCMCDA on peaks of the fused likelihood, single vehicles (Tables 8–9).
+
+For every simulated pass and each of the six approaches {audio, video, audio-video} ×
+{weighted sum, product}, the fusion node forms the fused likelihood of each 4 Hz tick *without*
+a temporal prior, extracts its peaks (:mod:`fusetrack.association.peaks`) and feeds them to
+online MCMCDA (:mod:`fusetrack.association.mcmcda`). The track that matches the vehicle is
+scored: *success* when it covers at least half of the pass with a mean error below 5 m
+(spec 003 A-III-16), error = mean distance to the centre of mass over its ticks. Table 8 gives
+the marginal error and success rate per fusion rule and per modality; Table 9 the error
+reduction of AV over A and over V per rule; Fig. 25 compares MCMCDA with SBE.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...association.mcmcda import MCMCDA, MCMCDAConfig
+from ...association.peaks import likelihood_peaks
+from ...evaluation import plots
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...filters.grid import SensorLikelihoods, fuse
+from .scene import (
+    DT,
+    Layout,
+    all_likelihoods,
+    audio_prior,
+    default_layout,
+    fusion_input,
+    run_sbe,
+    simulate_single_pass,
+    track_start,
+)
+
+MODALITIES = {"A": ("audio",), "V": ("video",), "AV": ("audio", "video")}
+RULES = {"sum": "sum", "product": "product"}
+SBE_NAME = {
+    ("A", "sum"): "AS",
+    ("V", "sum"): "VS",
+    ("AV", "sum"): "AVCS",
+    ("A", "product"): "AP",
+    ("V", "product"): "VP",
+    ("AV", "product"): "AVCP",
+}
+PAPER_TABLE8 = {
+    "sum": (1.93, 0.74),
+    "product": (1.58, 0.59),
+    "A": (1.49, 0.89),
+    "V": (2.44, 0.50),
+    "AV": (1.34, 0.61),
+}
+PAPER_TABLE9 = {
+    ("A", "sum"): (0.26, 0.57),
+    ("A", "product"): (0.14, 1.00),
+    ("V", "sum"): (1.04, 0.75),
+    ("V", "product"): (0.90, 0.67),
+}
+
+
+def observations(
+    layout: Layout, liks: Sequence[SensorLikelihoods], modalities: tuple[str, ...], rule: str
+) -> list[np.ndarray]:
+    """Peaks of the fused likelihood at every tick (no temporal prior; spec 003 §2.6)."""
+    out = []
+    uniform = 1.0 / layout.grid.size
+    for lik in liks:
+        sub = lik.select(modalities)
+        if sub.values.shape[0] == 0:
+            out.append(np.empty((0, 2)))
+            continue
+        fused = fuse(sub.values, sub.quality, rule).reshape(layout.grid.shape)  # type: ignore[arg-type]
+        out.append(likelihood_peaks(fused, layout.grid.x, layout.grid.y, 0.3, 4.0 * uniform))
+    return out
+
+
+def run_mcmcda(
+    obs: Sequence[np.ndarray], n_mc: int, rng: np.random.Generator
+) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    tracker = MCMCDA(MCMCDAConfig(n_mc=n_mc, dt=DT), rng=rng)
+    for y in obs:
+        tracker.step(y)
+    tracker.finish()
+    return tracker.tracks()
+
+
+def match_tracks(
+    tracks: Mapping[int, tuple[np.ndarray, np.ndarray]], truth: np.ndarray, gate: float = 5.0
+) -> tuple[int | None, float, float]:
+    """The track that follows ``truth (T, 2)`` best: (id, mean error, coverage of the T ticks)."""
+    best: tuple[int | None, float, float] = (None, np.nan, 0.0)
+    best_hits = 0
+    for ident, (times, pos) in tracks.items():
+        ok = (times >= 0) & (times < len(truth))
+        if not np.any(ok):
+            continue
+        err = np.linalg.norm(pos[ok] - truth[times[ok]], axis=1)
+        hits = int(np.sum(err < gate))
+        if hits > best_hits:
+            best_hits = hits
+            best = (ident, float(err.mean()), float(ok.sum() / len(truth)))
+    return best
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    layout = default_layout()
+    sim = simulate_single_pass(layout, np.random.default_rng(seed))
+    rec, truth = sim.rec, sim.truth
+    fin = fusion_input(rec, np.random.default_rng(seed + 7))
+    liks = all_likelihoods(layout, fin)
+    start = track_start(fin, rec.audio_threshold)
+    prior = audio_prior(
+        liks[min(start, len(liks) - 1)],
+        fin.taken[min(start, len(liks) - 1)],
+        rec.audio_threshold,
+        layout,
+    )
+    rows = []
+    for mod, mods in MODALITIES.items():
+        for rule in RULES:
+            obs = observations(layout, liks, mods, rule)
+            tracks = run_mcmcda(obs, int(config["n_mc"]), np.random.default_rng(seed + 11))
+            ident, err, cover = match_tracks(tracks, truth)
+            success = ident is not None and cover >= 0.5 and err < 5.0
+            sbe_means, _ = run_sbe(layout, liks, SBE_NAME[(mod, rule)], start, prior=prior)
+            sbe_err = float(np.nanmean(np.linalg.norm(sbe_means[start:] - truth[start:], axis=1)))
+            rows.append(
+                {
+                    "modality": mod,
+                    "fusion": rule,
+                    "success": bool(success),
+                    "error": err if success else np.nan,
+                    "coverage": cover,
+                    "n_tracks": len(tracks),
+                    "n_observations": int(sum(len(o) for o in obs)),
+                    "ticks": len(truth),
+                    "duration": float(rec.ticks[-1] - rec.ticks[0]),
+                    "sbe_error": sbe_err,
+                }
+            )
+    return rows
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=9, quick=2)
+    n_mc = 150 if ctx.quick else 600
+    df = ctx.monte_carlo(run_once, [{"n_mc": n_mc}], runs, desc="passes")
+    t8 = {}
+    for key, sel in [
+        ("sum", df.fusion == "sum"),
+        ("product", df.fusion == "product"),
+        ("A", df.modality == "A"),
+        ("V", df.modality == "V"),
+        ("AV", df.modality == "AV"),
+    ]:
+        t8[key] = (float(df[sel & df.success]["error"].mean()), float(df[sel]["success"].mean()))
+    table8 = pd.DataFrame(
+        {
+            "paper error (m)": [PAPER_TABLE8[k][0] for k in t8],
+            "our error (m)": [t8[k][0] for k in t8],
+            "paper success": [PAPER_TABLE8[k][1] for k in t8],
+            "our success": [t8[k][1] for k in t8],
+        },
+        index=list(t8),
+    )
+    piv = df.pivot_table(index="run", columns=["modality", "fusion"], values="error")
+    t9 = {}
+    for base in ("A", "V"):
+        for rule in RULES:
+            if (base, rule) in piv and ("AV", rule) in piv:
+                d = (piv[(base, rule)] - piv[("AV", rule)]).dropna()
+                t9[(base, rule)] = (
+                    float(d.mean()) if len(d) else np.nan,
+                    float((d > 0).mean()) if len(d) else np.nan,
+                    len(d),
+                )
+            else:
+                t9[(base, rule)] = (np.nan, np.nan, 0)
+    table9 = pd.DataFrame(
+        {
+            "paper reduction (m)": [PAPER_TABLE9[k][0] for k in t9],
+            "our reduction (m)": [t9[k][0] for k in t9],
+            "paper improved": [PAPER_TABLE9[k][1] for k in t9],
+            "our improved": [t9[k][1] for k in t9],
+            "pairs": [t9[k][2] for k in t9],
+        },
+        index=[f"AV vs {b} ({r})" for b, r in t9],
+    )
+    slack_e = 0.5 if ctx.quick else 0.2
+    slack_s = 0.25 if ctx.quick else 0.1
+    claims = [
+        Claim(
+            "product_lower_error",
+            "MCMCDA: product fusion has lower error than summation (Table 8: 1.58 < 1.93 m)",
+            "1.58 < 1.93",
+            {"product": t8["product"][0], "sum": t8["sum"][0]},
+            f"{slack_e} m",
+            t8["product"][0] <= t8["sum"][0] + slack_e,
+        ),
+        Claim(
+            "sum_higher_success",
+            "MCMCDA: summation has the higher tracking success (Table 8: 74 % > 59 %)",
+            "0.74 > 0.59",
+            {"sum": t8["sum"][1], "product": t8["product"][1]},
+            f"{slack_s}",
+            t8["sum"][1] + slack_s >= t8["product"][1],
+        ),
+        Claim(
+            "av_lowest_error",
+            "MCMCDA: AV has the lowest error, then audio, then video (Table 8: 1.34 < 1.49 < 2.44 m)",
+            "AV < A < V",
+            {k: t8[k][0] for k in ("AV", "A", "V")},
+            f"{slack_e} m",
+            t8["AV"][0] <= t8["A"][0] + slack_e and t8["A"][0] <= t8["V"][0] + slack_e,
+        ),
+        Claim(
+            "audio_highest_success",
+            "MCMCDA: audio has the highest success, video the lowest (Table 8: 89 %, 61 % AV, 50 %)",
+            "A > AV > V",
+            {k: t8[k][1] for k in ("A", "AV", "V")},
+            f"{slack_s}",
+            t8["A"][1] + slack_s >= t8["AV"][1] and t8["AV"][1] + slack_s >= t8["V"][1],
+        ),
+        Claim(
+            "av_reduces_error",
+            "Table 9: AV reduces the error of A and of V on average, for both rules (0.26/1.04 m sum, 0.14/0.90 m product)",
+            "all reductions > 0",
+            {f"{b}-{r}": t9[(b, r)][0] for b, r in t9},
+            f"-{slack_e} m; a rule with no pair of successes fails",
+            all(np.isfinite(t9[k][0]) and t9[k][0] >= -slack_e for k in t9),
+        ),
+    ]
+    mc = df[df.success].groupby(["modality", "fusion"])["error"].mean()
+    sbe = df[df.success].groupby(["modality", "fusion"])["sbe_error"].mean()
+    claims.append(
+        Claim(
+            "mcmcda_beats_sbe",
+            "MCMCDA is consistently better than SBE (Fig. 25), on the tracks MCMCDA estimates",
+            "MCMCDA < SBE for every approach",
+            {f"{m}-{r}": [float(mc[(m, r)]), float(sbe[(m, r)])] for m, r in mc.index},
+            f"{slack_e} m, ≥ 2/3 of approaches",
+            float(np.mean(mc <= sbe + slack_e)) >= 2 / 3 if len(mc) else False,
+        )
+    )
+    fig = _figure(ctx, df)
+    body = f"""
+## Set-up
+
+{runs} simulated single-vehicle passes (the paper: 9 tracks of 2.75–4.5 s, mean 3.75 s; ours
+{df.duration.min():.2f}–{df.duration.max():.2f} s), the full sensing chain of `kushwaha2010-sbe`, 2 % packet loss.
+Observations: peaks of the fused likelihood (3×3 smoothing, 5×5 local maxima ≥ 0.3 × max and ≥ 4×
+uniform). Online MCMCDA: window 12 steps (3 s), {n_mc} MCMC iterations per step, p_d 0.8,
+p_z 0.05, λ_b 0.05 and λ_f 0.1 per step over the field, v̄ 20 m/s, gaps ≤ 3 steps, CV model
+(2 m/s²), observation σ 1 m. Success: a matched track covering ≥ 50 % of the pass with mean error < 5 m.
+
+## Table 8 — average error and success, marginals over passes
+
+{table8.to_markdown(floatfmt=".2f")}
+
+## Table 9 — error reduction of AV over A and over V (passes where both succeed)
+
+{table9.to_markdown(floatfmt=".2f")}
+
+## Fig. 25 — MCMCDA against SBE (same passes; MCMCDA's successful tracks)
+
+{pd.DataFrame({"MCMCDA (m)": mc, "SBE (m)": sbe}).to_markdown(floatfmt=".2f")}
+
+![Error and success per approach]({fig.name})
+
+## Differences from the paper and their causes
+
+* The paper's numbers come from 9 real recordings; ours from simulated passes, so only the
+  orderings are expected to carry over. Every ordering that fails is listed above as not holding.
+* MCMCDA is not described in the dissertation (it cites Oh et al.); ours is the spec's
+  reconstruction, with acceptance by posterior ratio only (a MAP search, see
+  `fusetrack.association.mcmcda`), and parameters the text does not give.
+* "Tracking success" is undefined in the paper; we use coverage ≥ 50 % and error < 5 m.
+* Weighted-sum fusion of audio (A and AV with summation) rarely yields a correct track here: the
+  sum of six broad audio likelihood wedges (a 10 cm array at engine frequencies) peaks where most
+  wedges overlap, towards the middle of the field, rather than at the vehicle, so its peaks are
+  biased; product fusion intersects the wedges and peaks at the vehicle. Hence our success rate
+  is higher for product than for summation, the opposite of Table 8, and Table 9's summation
+  rows have few or no pairs. The product rows are the comparable part of Tables 8–9.
+"""
+    return Outcome(df, claims, body, runs)
+
+
+def _figure(ctx: RunContext, df: pd.DataFrame) -> Any:
+    import matplotlib.pyplot as plt
+
+    g = df.groupby(["modality", "fusion"])
+    err = g.apply(lambda d: d[d.success]["error"].mean())
+    suc = g["success"].mean()
+    labels = [f"{m}-{r}" for m, r in err.index]
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4))
+    axes[0].bar(labels, err.to_numpy())
+    axes[0].set_ylabel("mean error (m)")
+    axes[0].set_title("MCMCDA error (Fig. 24/25 analogue)")
+    axes[1].bar(labels, suc.to_numpy(), color="C1")
+    axes[1].set_ylabel("success rate")
+    axes[1].set_title("Tracking success")
+    for ax in axes:
+        ax.tick_params(axis="x", rotation=45)
+        ax.grid(alpha=0.3, axis="y")
+    return plots.save(fig, ctx.figure_path("mcmcda_error_success"))

@@ -1,0 +1,162 @@
+"""Beyond Lee 2009 Ch. 2: PPS and the direct 3-D filter on angles estimated from simulated sound.
+
+The dissertation's acoustic angles are the true angles plus Gaussian noise (variance 3 deg^2).
+Here the angles of Scenario 1 also come from sound: a six-microphone octahedral array (radius
+8 cm) at the sensor position hears a white-noise source on the trajectory, in free field or in a
+reverberant hall (pyroomacoustics), and narrowband MUSIC estimates azimuth and polar angle per
+32 ms frame (:mod:`fusetrack.perception.audio_doa`). The trackers run unchanged; their angle noise
+std is the one measured for the array (sensor characterisation, as the text assumes). Run it as
+``fusetrack run lee2009-projected-planes --measurements audio`` (the issue's form); the name
+``lee2009-projected-planes-audio`` is kept as an alias.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...filters.projected_planes import Direct3DFilter, ProjectedPlanesTracker
+from ...motion.accel_turn import AccelTurn
+from ...perception.audio_doa import AudioDoaArray
+from ...sensors.doa_projection import DoaSensor3D
+from .projected_planes import PRIOR_STD, SCN_ACCEL, SCN_DT, SIGMA, scenario_truth
+
+HALL = (10.0, 11.0, 14.0)
+OFFSET = np.array([0.5, 0.5, 0.5])  # the array's place in the hall; the sensor frame has it at 0
+
+MEASUREMENTS = {
+    "gaussian (3 deg^2)": None,
+    "audio, free field, 0 dB": AudioDoaArray(snr_db=0.0),
+    "audio, hall, 10 dB": AudioDoaArray(
+        centre=tuple(OFFSET), snr_db=10.0, room=HALL, max_order=2, absorption=0.5
+    ),
+}
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    rng = np.random.default_rng(seed)
+    truth = scenario_truth("S1")
+    kind = str(config["measurements"])
+    array = MEASUREMENTS[kind]
+    if array is None:
+        sensor = DoaSensor3D("A0", sigma=SIGMA)
+        z = sensor.simulate(truth[:, :3], rng)
+    else:
+        shift = np.asarray(array.centre)
+        z = array.measure(truth[:, :3] + shift, rng)
+        sensor = DoaSensor3D("A0", sigma=float(config["audio_sigma_deg"]) * math.pi / 180)
+    th, ph = sensor.angles(truth[:, :3])
+    err = z - np.stack([th, ph], axis=1)
+    err[:, 0] = np.mod(err[:, 0] + math.pi, 2 * math.pi) - math.pi
+    model = AccelTurn(3, SCN_ACCEL, sigma_a=0.1)
+    n = int(config["n_particles"])
+    pps = ProjectedPlanesTracker([sensor], model, n, init_std=(PRIOR_STD, PRIOR_STD)).run(
+        z[:, None, :], SCN_DT, truth[0], rng
+    )
+    d3 = Direct3DFilter(sensor, model, n, init_std=(PRIOR_STD, PRIOR_STD)).run(
+        z, SCN_DT, truth[0], rng
+    )
+    rows = []
+    for method, est in (("PPS literal", pps.weighted), ("direct 3-D", d3.estimates)):
+        e = est[:, :3] - truth[:, :3]
+        rows.append(
+            {
+                "method": method,
+                "rmse_avg": float(np.mean(np.sqrt(np.mean(e**2, axis=0)))),
+                "angle_err_std_theta_deg": float(np.degrees(np.std(err[:, 0]))),
+                "angle_err_std_phi_deg": float(np.degrees(np.std(err[:, 1]))),
+                "angle_err_rms_deg": float(np.degrees(np.sqrt(np.mean(err**2)))),
+            }
+        )
+    return rows
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=10, quick=1)
+    n_part = 300 if ctx.quick else 1000
+    # characterise the array once (its angle noise std), as the text assumes for its sensor
+    cal_rng = np.random.default_rng([ctx.seed, 99])
+    truth = scenario_truth("S1")
+    sigmas = {}
+    for kind, array in MEASUREMENTS.items():
+        if array is None:
+            continue
+        pts = truth[:: (10 if ctx.quick else 2), :3]
+        z = array.measure(pts + np.asarray(array.centre), cal_rng)
+        th, ph = DoaSensor3D("c").angles(pts)
+        e = z - np.stack([th, ph], axis=1)
+        e[:, 0] = np.mod(e[:, 0] + math.pi, 2 * math.pi) - math.pi
+        sigmas[kind] = max(float(np.degrees(np.sqrt(np.mean(e**2)))), 0.1)
+    configs = [
+        {
+            "measurements": k,
+            "audio_sigma_deg": sigmas.get(k, math.degrees(SIGMA)),
+            "n_particles": n_part,
+        }
+        for k in MEASUREMENTS
+    ]
+    df = ctx.monte_carlo(run_once, configs, runs, desc="audio")
+    tab = (
+        df.groupby(["measurements", "method"])[["rmse_avg", "angle_err_rms_deg"]]
+        .mean()
+        .unstack("method")
+    )
+    ang = df.groupby("measurements")[
+        ["angle_err_std_theta_deg", "angle_err_std_phi_deg", "angle_err_rms_deg"]
+    ].mean()
+    g = tab.loc["gaussian (3 deg^2)", ("rmse_avg", "PPS literal")]
+    claims = []
+    for kind in MEASUREMENTS:
+        if MEASUREMENTS[kind] is None:
+            continue
+        rms = float(ang.loc[kind, "angle_err_rms_deg"])
+        claims.append(
+            Claim(
+                f"audio_angles_{kind.split(',')[1].strip()}",
+                f"{kind}: MUSIC angle error RMS (deg) is finite and below the 10 deg a usable DOA sensor needs",
+                "not in the paper",
+                round(rms, 3),
+                "< 10 deg",
+                rms < 10,
+            )
+        )
+        pps = float(tab.loc[kind, ("rmse_avg", "PPS literal")])
+        claims.append(
+            Claim(
+                f"audio_tracks_{kind.split(',')[1].strip()}",
+                f"{kind}: PPS runs unchanged on audio angles; average RMSE (m) vs the Gaussian model's {g:.3f} m",
+                "not in the paper",
+                round(pps, 4),
+                "finite, < 1 m",
+                bool(np.isfinite(pps) and pps < 1.0),
+            )
+        )
+    body = f"""
+`fusetrack run lee2009-projected-planes --measurements audio` (alias: `fusetrack run
+lee2009-projected-planes-audio`): the issue's comparison of the two noise models.
+
+Scenario 1 (sensor at the origin, 50 frames at 0.1 s), {runs} runs, {n_part} particles per filter.
+Array: six microphones on the axes at 8 cm, 16 kHz, 32 ms white-noise frames, STFT 128, MUSIC on
+300-3500 Hz (4-degree grid, refined to 0.5 degree). Hall: {HALL} m, image sources to order 2,
+absorption 0.5. The filters use the angle std measured for each array before the runs:
+{ {k: round(v, 3) for k, v in sigmas.items()} } deg (Gaussian model: {math.degrees(SIGMA):.3f} deg).
+
+Angle errors of the measurements (deg):
+
+{ang.to_markdown(floatfmt=".3f")}
+
+Average position RMSE (m) and angle error:
+
+{tab.to_markdown(floatfmt=".4f")}
+
+The Gaussian model of the dissertation (variance 3 deg^2) is much noisier than what a small
+MUSIC array achieves on a broadband source at these ranges in free field; in the hall, early
+reflections bias some frames. Errors from sound are not Gaussian (grid quantisation, occasional
+reflection-induced outliers) and are correlated with the geometry, which the Gaussian model does
+not capture.
+"""
+    return Outcome(df, claims, body, runs)

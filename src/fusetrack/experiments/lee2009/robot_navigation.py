@@ -1,0 +1,147 @@
+"""Lee 2009, Sec. 5.2.2: potential-field navigation, the aligned-obstacle collision (CAROG), its fix and escape (C15)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from ...evaluation.plots import save
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...world.potential_field import PotentialField, navigate
+
+PAPER_FORCES = {(12.0, 12.0): -8.46, (10.0, 10.0): -5.34, (9.0, 9.0): -1.21}
+
+
+def run(ctx: RunContext) -> Outcome:
+    fld = PotentialField()
+    u = np.array([1.0, 1.0]) / math.sqrt(2.0)
+    forces = {p: float(fld.total(np.array(p)) @ u) for p in PAPER_FORCES}
+    delta = fld.zero_force_distance()
+    variants: dict[str, dict[str, Any]] = {
+        "standard field": {},
+        "modified (Eq. 5.24)": {"modified": True},
+        "modified + escape": {"modified": True, "escape": True},
+        "modified + escape, r_r = r_o = 0.3": {
+            "modified": True,
+            "escape": True,
+            "r_robot": 0.3,
+            "r_obstacle": 0.3,
+        },
+        "standard, r_r = r_o = 0.3": {"r_robot": 0.3, "r_obstacle": 0.3},
+    }
+    results = {name: navigate(fld, **kw) for name, kw in variants.items()}
+    rows = []
+    for name, res in results.items():
+        for k, p in enumerate(res.path):
+            rows.append(
+                {
+                    "variant": name,
+                    "step": k,
+                    "x": float(p[0]),
+                    "y": float(p[1]),
+                    "collided_at": res.collided_at,
+                    "oscillation_at": res.oscillation_at,
+                    "reached_goal_at": res.reached_goal_at,
+                }
+            )
+    std, mod, esc, esc3 = (results[k] for k in list(variants)[:4])
+    claims = [
+        Claim(
+            "C15_forces",
+            "signed total force along the diagonal at (12,12), (10,10), (9,9)",
+            list(PAPER_FORCES.values()),
+            [round(v, 3) for v in forces.values()],
+            "+-0.01",
+            all(abs(forces[p] - v) <= 0.01 for p, v in PAPER_FORCES.items()),
+        ),
+        Claim(
+            "C15_delta",
+            "zero-force distance delta from the obstacle (text: 1.27, from the rounded 8.9)",
+            1.27,
+            round(delta, 4),
+            "< s_r T_s = 1.414",
+            delta < math.sqrt(2),
+        ),
+        Claim(
+            "C15_collision_step4",
+            "standard field: the robot passes (11,11), (10,10), (9,9) and collides at step 4",
+            4,
+            std.collided_at,
+            "== 4",
+            std.collided_at == 4,
+        ),
+        Claim(
+            "C15_modified_oscillates",
+            "modified field (Eq. 5.24): no collision, (9,9) <-> (10,10) oscillation detected by Eq. 5.26",
+            "oscillation, no collision",
+            {
+                "collided": mod.collided_at,
+                "oscillation_step": mod.oscillation_at,
+                "visits": sorted({tuple(p) for p in mod.path.round(6).tolist()})[:3],
+            },
+            "oscillation detected, no collision",
+            mod.collided_at is None and mod.oscillation_at is not None,
+        ),
+        Claim(
+            "C15_escape_reaches_goal",
+            "escape (heading turned by theta_osc) reaches the goal without collision (r = 0 and r = 0.3)",
+            "escape",
+            {"r=0": esc.reached_goal_at, "r=0.3": esc3.reached_goal_at},
+            "goal reached, no collision",
+            esc.reached_goal_at is not None
+            and esc.collided_at is None
+            and esc3.reached_goal_at is not None
+            and esc3.collided_at is None,
+        ),
+    ]
+    # Fig 5-26: force profile on the diagonal
+    t = np.linspace(2, 14, 481)
+    prof = np.array(
+        [[fld.attractive(np.array([a, a])) @ u, fld.repulsive(np.array([a, a])) @ u] for a in t]
+    )
+    fig, axs = plt.subplots(1, 3, figsize=(13, 3.6))
+    for ax, y, name in zip(
+        axs, (prof[:, 0], prof[:, 1], prof.sum(1)), ("(a) attractive", "(b) repulsive", "(c) total")
+    ):
+        ax.plot(t, np.clip(y, -20, 20))
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_xlabel("position on the diagonal (x = y)")
+        ax.set_title(f"Fig. 5-26 {name}")
+    fig526 = save(fig, ctx.figure_path("fig5_26_force_profile"))
+    fig, ax = plt.subplots(figsize=(5.5, 5.5))
+    for name, res in results.items():
+        ax.plot(res.path[:, 0], res.path[:, 1], "o-", ms=3, label=name)
+    ax.plot(*fld.obstacle, "ks", ms=10, label="obstacle")
+    ax.plot(*fld.goal, "g*", ms=14, label="goal")
+    ax.set_aspect("equal")
+    ax.legend(fontsize=7)
+    ax.set_title("Robot paths (Figs. 5-25, 5-28, 5-29)")
+    figpath = save(fig, ctx.figure_path("robot_paths"))
+    ev = "\n".join(f"* **{name}**: " + "; ".join(res.events) for name, res in results.items())
+    body = f"""
+## The example (p_r = (12, 12), p_o = (8, 8), p_g = (6, 6), s_r T_s = sqrt 2, rho_0 = 10, c_att = 0.5, c_rep = 5, m = n = 2)
+
+Signed total force along the diagonal (negative = towards the origin): paper {list(PAPER_FORCES.values())},
+ours {[round(v, 3) for v in forces.values()]}. Zero-force point at distance delta = {delta:.4f} from the
+obstacle (the text prints 1.27, i.e. sqrt 2 x 0.9 from the rounded 8.9; the exact value is {delta:.3f}), below
+the step sqrt 2, so the aligned robot steps onto the obstacle.
+
+{ev}
+
+![force profile]({fig526.name})
+
+![paths]({figpath.name})
+
+The escape step is not fully specified in the text (its step 3, Fig. 5-29): we turn the last heading
+anticlockwise by theta_osc = the top of the applicable range (pi/2 when the robot is within
+s_r T_s + r_r + r_o of the obstacle, Eq. 5.30 with arcsin for the printed csc) for one step and then
+follow the field again.
+"""
+    return Outcome(pd.DataFrame(rows), claims, body, 1)

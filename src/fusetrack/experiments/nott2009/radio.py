@@ -1,0 +1,232 @@
+"""Nott (2009), Sec. 5.2 / Table 5.1 / Fig. 5.5: the radio tag's accuracy at six test points
+(spec claim H7), and a simulated NFER tag whose errors match it.
+
+Table 5.1 is the only table of numbers in the thesis. We recompute its summary exactly, then
+draw the same experiment from :class:`~fusetrack.sensors.NferTagSimulator`'s realistic model
+(spatially correlated bias + white noise + 0.098 m quantisation): one building (bias field) per
+run, 32 calibration points along a 16 m hallway and the six test points, and compare the error
+distribution with the table's. The noise model for the filter is estimated the corrected way
+(sample covariance of calibration residuals; the thesis "averaged" them, which gives a bias).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from ...evaluation.plots import save
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...sensors import NferTagSimulator, fit_position_fix
+
+POINTS = ("A", "B", "C", "D", "E", "F")
+TABLE_5_1_TRUTH = np.array(
+    [
+        [6.456, 2.653],
+        [7.144, 5.150],
+        [6.587, 6.897],
+        [8.029, 9.550],
+        [2.982, 11.953],
+        [7.013, 11.797],
+    ]
+)
+TABLE_5_1_RFID = np.array(
+    [
+        [7.013, 2.840],
+        [7.013, 4.837],
+        [7.013, 6.710],
+        [7.111, 9.488],
+        [3.277, 11.891],
+        [7.111, 11.891],
+    ]
+)
+TABLE_5_1_ERROR = np.array([0.588, 0.339, 0.465, 0.920, 0.301, 0.136])
+
+
+def calibration_points() -> np.ndarray:
+    """32 calibration points: two rows of 16 along a 16 m hallway (Fig. 5.5's layout, approximated)."""
+    y = np.linspace(1.0, 16.0, 16)
+    return np.vstack(
+        [np.column_stack([np.full(16, 6.6), y]), np.column_stack([np.full(16, 7.6), y])]
+    )
+
+
+def table_summary() -> dict[str, Any]:
+    e = TABLE_5_1_RFID - TABLE_5_1_TRUTH
+    err = np.linalg.norm(e, axis=1)
+    fit = fit_position_fix(TABLE_5_1_TRUTH, TABLE_5_1_RFID)
+    return {
+        "errors": err,
+        "mean": float(err.mean()),
+        "std_sample": float(err.std(ddof=1)),
+        "std_population": float(err.std()),
+        "bias": fit.bias,
+        "cov": fit.cov,
+        "axis_std": np.sqrt(np.diag(fit.cov)),
+    }
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    """One building: the test points' errors and the calibration fit."""
+    rng = np.random.default_rng(seed)
+    sim = NferTagSimulator("field", sigma=(0.1, 0.1), quantum=0.098, field_seed=seed)
+    samples = int(config.get("samples_per_point", 5))
+    cal = calibration_points()
+    cal_truth = np.repeat(cal, samples, axis=0)
+    fit = fit_position_fix(cal_truth, sim.simulate(cal_truth, rng))
+    z = sim.simulate(TABLE_5_1_TRUTH, rng)
+    err = np.linalg.norm(z - TABLE_5_1_TRUTH, axis=1)
+    rows = []
+    for name, e, zz in zip(POINTS, err, z):
+        rows.append(
+            {
+                "point": name,
+                "err": float(e),
+                "z_x": float(zz[0]),
+                "z_y": float(zz[1]),
+                "cal_std_x": float(np.sqrt(fit.cov[0, 0])),
+                "cal_std_y": float(np.sqrt(fit.cov[1, 1])),
+                "cal_bias_norm": float(np.linalg.norm(fit.bias)),
+                "cal_mean_err": fit.mean_error,
+            }
+        )
+    return rows
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=200, quick=40)
+    tab = table_summary()
+    df = ctx.monte_carlo(run_once, [{"samples_per_point": 5}], runs)
+    per_run = df.groupby("run")["err"].agg(["mean", lambda s: s.std(ddof=1)])
+    per_run.columns = ["mean", "std"]
+    sim_mean = float(df["err"].mean())
+    sim_std = float(df["err"].std(ddof=1))
+    tol = 0.06 if ctx.quick else 0.04
+    cal = df.groupby("run")[["cal_std_x", "cal_std_y"]].first().mean()
+    repeats = float(
+        np.mean([len(g) - len(np.unique(np.round(g["z_x"], 6))) for _, g in df.groupby("run")])
+    )
+    claims = [
+        Claim(
+            "H7-table-mean",
+            "Table 5.1 recomputed: mean error at the six test points (m)",
+            0.458,
+            tab["mean"],
+            "0.0005",
+            abs(tab["mean"] - 0.458) < 5e-4,
+        ),
+        Claim(
+            "H7-table-std",
+            "Table 5.1 recomputed: standard deviation (sample, ddof = 1) (m)",
+            0.273,
+            tab["std_sample"],
+            "0.0005",
+            abs(tab["std_sample"] - 0.273) < 5e-4,
+        ),
+        Claim(
+            "H7-table-errors",
+            "Table 5.1 recomputed: largest per-point difference from the printed errors (m)",
+            "0.588, 0.339, 0.465, 0.920, 0.301, 0.136",
+            float(np.abs(tab["errors"] - TABLE_5_1_ERROR).max()),
+            "0.0005",
+            float(np.abs(tab["errors"] - TABLE_5_1_ERROR).max()) < 5e-4,
+        ),
+        Claim(
+            "H7-sim-mean",
+            "simulated NFER tag (correlated bias + white + quantisation): mean test-point error (m)",
+            0.458,
+            sim_mean,
+            tol,
+            abs(sim_mean - 0.458) < tol,
+        ),
+        Claim(
+            "H7-sim-std",
+            "simulated NFER tag: standard deviation of the test-point errors (m)",
+            0.273,
+            sim_std,
+            tol,
+            abs(sim_std - 0.273) < tol,
+        ),
+        Claim(
+            "H7-x-dominates",
+            "x error dominates y error (Table 5.1 per-axis sample std 0.535 / 0.182; simulated calibration fit)",
+            "x > y",
+            float(cal["cal_std_x"] / cal["cal_std_y"]),
+            "> 1",
+            cal["cal_std_x"] > cal["cal_std_y"],
+        ),
+    ]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    ax = axes[0]
+    ax.plot(*TABLE_5_1_TRUTH.T, "ko", label="ground truth")
+    ax.plot(*TABLE_5_1_RFID.T, "rx", label="RFID (Table 5.1)")
+    run0 = df[df["run"] == 0]
+    ax.plot(run0["z_x"], run0["z_y"], "b+", label="simulated tag, run 0")
+    cal_pts = calibration_points()
+    ax.plot(*cal_pts.T, ".", color="0.6", ms=4, label="calibration points (32)")
+    for n, p in zip(POINTS, TABLE_5_1_TRUTH):
+        ax.annotate(n, p, textcoords="offset points", xytext=(4, 4))
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title("Fig. 5.5 / Table 5.1: test points")
+    ax.legend(fontsize=7)
+    ax = axes[1]
+    ax.hist(df["err"], bins=40, density=True, alpha=0.6, label=f"simulated ({runs} buildings)")
+    for e in tab["errors"]:
+        ax.axvline(e, color="r", lw=1)
+    ax.set_xlabel("test-point error (m)")
+    ax.set_title("errors: simulated (histogram) vs Table 5.1 (red)")
+    ax.legend(fontsize=7)
+    fig_name = save(fig, ctx.figure_path("table_5_1")).name
+    table = pd.DataFrame(
+        {
+            "ground truth (m)": [f"({a:.3f}, {b:.3f})" for a, b in TABLE_5_1_TRUTH],
+            "RFID (m)": [f"({a:.3f}, {b:.3f})" for a, b in TABLE_5_1_RFID],
+            "error, thesis (m)": TABLE_5_1_ERROR,
+            "error, recomputed (m)": tab["errors"],
+            "simulated mean error (m)": df.groupby("point")["err"]
+            .mean()
+            .reindex(POINTS)
+            .to_numpy(),
+        },
+        index=list(POINTS),
+    )
+    body = f"""
+## Table 5.1 beside ours
+
+{table.to_markdown(floatfmt=".4f")}
+
+| statistic | thesis | recomputed from the table | simulated tag ({runs} buildings) |
+|---|---|---|---|
+| mean error (m) | 0.458 | {tab["mean"]:.4f} | {sim_mean:.4f} |
+| std of error (m) | 0.273 | {tab["std_sample"]:.4f} (sample), {tab["std_population"]:.4f} (population) | {sim_std:.4f} |
+| per-axis residual std x, y (m) | - | {tab["axis_std"][0]:.3f}, {tab["axis_std"][1]:.3f} | calibration fit {cal.mean() if False else ""}{df.groupby("run")["cal_std_x"].first().mean():.3f}, {df.groupby("run")["cal_std_y"].first().mean():.3f} |
+| residual mean (bias) x, y (m) | - | {tab["bias"][0]:+.3f}, {tab["bias"][1]:+.3f} | - |
+
+Sample covariance of the Table 5.1 residuals (the filter's R_z by the corrected Sec. 4.6 method):
+{np.array2string(tab["cov"], precision=4)} m^2. Repeated identical x outputs per building in the
+simulation (quantisation to 0.098 m): {repeats:.2f} of 6 on average (Table 5.1 repeats 7.013 three
+times and 7.111 twice).
+
+![Table 5.1]({fig_name})
+
+## Differences and their causes
+
+* The thesis's 0.273 m is the sample standard deviation (ddof = 1); the population value is
+  {tab["std_population"]:.3f} m.
+* Table 5.1 has six points, so its own mean and standard deviation are uncertain by about
+  0.27/sqrt(6) = 0.11 m; the simulated tag is tuned (bias std 0.50 / 0.17 m, correlation length
+  2 m, white 0.1 m, 0.098 m steps) so that its error distribution over many buildings has the
+  table's mean and spread, not to reproduce the six individual errors. Across buildings the
+  six-point mean varies with standard deviation {per_run["mean"].std():.3f} m.
+* The thesis "averaged" calibration residuals to get the measurement noise (Sec. 4.6); an average
+  measures a bias, so we use the residuals' sample covariance (and report the bias separately).
+"""
+    return Outcome(df, claims, body, runs)

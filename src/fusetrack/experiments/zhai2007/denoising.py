@@ -1,0 +1,268 @@
+"""Zhai 2007, E20 (Sec. 6.2.3, Figs 79-80): PF-DWT denoising of images with Gaussian (variance
+200) + Cauchy (scale 5) noise; ISNR of the PF stage alone and after translation-invariant hard or
+soft wavelet thresholding.
+
+Images: "Lena" is not shipped with any package we may use, so the spec's substitute
+``skimage.data.astronaut()`` (grey, 256 x 256) stands in for it; cameraman is
+``skimage.data.camera()`` resized to the classic 256 x 256. The noisy image is clipped to
+[0, 255] (spec choice: without clipping the Cauchy outliers make the ISNR unbounded).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...perception.pf_dwt import (
+    RasterParticleFilter,
+    add_mixed_noise,
+    isnr,
+    median3,
+    ti_threshold,
+)
+from .comparators import compare
+
+PAPER = {
+    ("lena", "PF"): 3.1991,
+    ("lena", "PF + TI hard"): 6.7126,
+    ("cameraman", "PF + TI hard"): 5.4722,
+    ("cameraman", "PF + TI soft"): 3.4959,
+}
+
+
+def load(name: str) -> np.ndarray:
+    from skimage import color, data, transform
+
+    img = data.camera() if name == "cameraman" else (color.rgb2gray(data.astronaut()) * 255.0)
+    return np.asarray(
+        transform.resize(img.astype(float), (256, 256), anti_aliasing=True, preserve_range=True)
+    )
+
+
+def practitioner_denoisers() -> dict[str, Callable[[np.ndarray], np.ndarray]]:
+    """Beyond the paper: what a practitioner would run today on a grey image in [0, 255], each
+    with its library's usual settings and the noise level estimated from the noisy image
+    (``estimate_sigma``, robust MAD of the finest wavelet band); nothing tuned on the clean image."""
+    from scipy.signal import wiener
+    from skimage.restoration import (
+        denoise_nl_means,
+        denoise_tv_chambolle,
+        denoise_wavelet,
+        estimate_sigma,
+    )
+
+    def unit(f: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
+        return lambda y: 255.0 * np.asarray(f(np.clip(y, 0, 255) / 255.0), float)
+
+    def nl_means(u: np.ndarray) -> np.ndarray:
+        sigma = float(estimate_sigma(u))
+        return np.asarray(
+            denoise_nl_means(u, h=0.8 * sigma, sigma=sigma, patch_size=5, patch_distance=6),
+            float,
+        )
+
+    def bayes_shrink(u: np.ndarray) -> np.ndarray:
+        return np.asarray(denoise_wavelet(u, method="BayesShrink", rescale_sigma=True), float)
+
+    return {
+        "wavelet BayesShrink": unit(bayes_shrink),
+        "median 3x3 + BayesShrink": unit(lambda u: bayes_shrink(median3(u))),
+        "NL-means": unit(nl_means),
+        "median 3x3 + NL-means": unit(lambda u: nl_means(median3(u))),
+        "TV Chambolle": unit(lambda u: denoise_tv_chambolle(u, weight=float(estimate_sigma(u)))),
+        "Wiener 5x5": lambda y: np.asarray(wiener(y, (5, 5)), float),
+    }
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    clean = load(str(config["image"]))
+    noisy = add_mixed_noise(clean, np.random.default_rng(seed))
+    q1 = float(config["q1"])
+    shifts = int(config["shifts"])
+    t0 = time.perf_counter()
+    pf = RasterParticleFilter(q1=q1, r=max(400.0, q1))(noisy, seed=seed % (2**31))
+    t_pf = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    med = median3(noisy)
+    t_med = time.perf_counter() - t0
+    out: dict[str, tuple[np.ndarray, float]] = {"PF": (pf, t_pf), "median 3x3": (med, t_med)}
+    for name, base in (("PF", pf), ("median 3x3", med)):
+        for mode in ("hard", "soft") if name == "PF" else ("hard",):
+            t0 = time.perf_counter()
+            img = ti_threshold(base, mode, shifts=shifts)
+            out[f"{name} + TI {mode}"] = (img, out[name][1] + time.perf_counter() - t0)
+    if config.get("comparators", False):
+        for name, f in practitioner_denoisers().items():
+            t0 = time.perf_counter()
+            img = f(noisy)
+            out[name] = (img, time.perf_counter() - t0)
+    resid = pf - clean
+    kurt = float(np.mean(resid**4) / np.mean(resid**2) ** 2 - 3.0)
+    noise = noisy - clean
+    kurt_noise = float(np.mean(noise**4) / np.mean(noise**2) ** 2 - 3.0)
+    return [
+        {
+            "method": m,
+            "isnr_db": isnr(clean, noisy, img),
+            "seconds": secs,
+            "pf_residual_excess_kurtosis": kurt,
+            "noise_excess_kurtosis": kurt_noise,
+        }
+        for m, (img, secs) in out.items()
+    ]
+
+
+def run(ctx: RunContext) -> Outcome:
+    import matplotlib.pyplot as plt
+
+    from ...evaluation import plots
+
+    runs = ctx.n_runs(full=10, quick=1)
+    shifts = 4 if ctx.quick else 8
+    cfgs = [
+        {"image": im, "q1": q, "shifts": shifts, "comparators": q == 1000.0}
+        for im in ("lena", "cameraman")
+        for q in (1000.0, 100.0)
+    ]
+    df = ctx.monte_carlo(run_once, cfgs, runs)
+    cmp = compare(
+        df[df["q1"] == 1000.0].rename(columns={"isnr_db": "error"}),
+        "PF + TI hard",
+        ctx.figure_path("isnr_vs_seconds"),
+        by=["image"],
+        better="higher",
+        ylabel="ISNR (dB, mean over seeds)",
+        calibration=(
+            "The denoisers have no particle count to tune: each ran once per noisy image with its "
+            "library's usual settings and the noise level estimated from the noisy image; the "
+            "winner at equal time is the best ISNR among those that took at most 1.5x PF-DWT's "
+            "time (PF stage + TI hard thresholding). Score: ISNR in dB, higher is better."
+        ),
+        notes=[
+            "UPF, IMM-EKF, equal-time bootstrap: do not apply as such. The PF stage is a raster-scan "
+            "filter per pixel on an AR image model whose Kalman proposal is already the exact "
+            "optimal proposal for the Gaussian part; for a denoiser the practitioner's comparators "
+            "are other denoisers, compared at equal time here.",
+            "NL-means: h = 0.8 sigma_est, 5x5 patches, 13x13 search window; TV: weight = "
+            "sigma_est (image in [0, 1]); BayesShrink: db1 default, 'rescale_sigma'; Wiener: "
+            "scipy.signal.wiener 5x5. 'median 3x3 + X' removes the Cauchy impulses first.",
+        ],
+        q1=1000.0,
+    )
+    own = df[~df["method"].isin(list(practitioner_denoisers()))]  # the paper's and PF variants
+    g = own.groupby(["image", "q1", "method"])["isnr_db"]
+    tab = pd.DataFrame({"mean ISNR (dB)": g.mean(), "std": g.std()})
+    main = tab.xs(1000.0, level="q1")["mean ISNR (dB)"]
+    claims = []
+    tol = 1.5
+    for (im, m), p in PAPER.items():
+        o = float(main.loc[(im, m)])
+        claims.append(
+            Claim(
+                f"C16_{im}_{m.replace(' ', '_')}",
+                f"{im if im != 'lena' else 'Lena (astronaut substitute)'}: ISNR of {m}",
+                p,
+                round(o, 3),
+                f"±{tol} dB",
+                abs(o - p) <= tol,
+            )
+        )
+    for im in ("lena", "cameraman"):
+        claims.append(
+            Claim(
+                f"C16_{im}_ti_helps",
+                f"{im}: PF + TI hard thresholding beats the PF alone",
+                "PF+TI > PF",
+                f"{main.loc[(im, 'PF + TI hard')]:.2f} vs {main.loc[(im, 'PF')]:.2f} dB",
+                "strict",
+                bool(main.loc[(im, "PF + TI hard")] > main.loc[(im, "PF")]),
+            )
+        )
+    claims.append(
+        Claim(
+            "C16_hard_beats_soft",
+            "cameraman: hard thresholding beats soft (5.47 vs 3.50 dB)",
+            "hard > soft",
+            f"{main.loc[('cameraman', 'PF + TI hard')]:.2f} vs {main.loc[('cameraman', 'PF + TI soft')]:.2f} dB",
+            "strict",
+            bool(main.loc[("cameraman", "PF + TI hard")] > main.loc[("cameraman", "PF + TI soft")]),
+        )
+    )
+    k = df[(df["q1"] == 1000.0) & (df["method"] == "PF")]
+    kr, kn = (
+        float(k["pf_residual_excess_kurtosis"].mean()),
+        float(k["noise_excess_kurtosis"].mean()),
+    )
+    claims.append(
+        Claim(
+            "C16_gaussian_like_residual",
+            "the PF removes the heavy-tailed part: its residual is 'Gaussian-like'",
+            "Gaussian-like",
+            f"excess kurtosis {kr:.2f} (noise {kn:.2f})",
+            "< noise's and < 10",
+            kr < kn and kr < 10,
+        )
+    )
+    # figure: cameraman, one seed
+    clean = load("cameraman")
+    noisy = add_mixed_noise(clean, np.random.default_rng(ctx.seed))
+    pf = RasterParticleFilter()(noisy, seed=1)
+    hard, soft = ti_threshold(pf, "hard", shifts=shifts), ti_threshold(pf, "soft", shifts=shifts)
+    fig, axes = plt.subplots(1, 5, figsize=(16, 3.6))
+    for ax, (t, panel) in zip(
+        axes,
+        [
+            ("clean", clean),
+            ("noisy", noisy),
+            ("PF", pf),
+            ("PF + TI hard", hard),
+            ("PF + TI soft", soft),
+        ],
+    ):
+        ax.imshow(panel, cmap="gray", vmin=0, vmax=255)
+        ax.set(
+            title=t if t in ("clean", "noisy") else f"{t} ({isnr(clean, noisy, panel):.2f} dB)",
+            xticks=[],
+            yticks=[],
+        )
+    fig80 = plots.save(fig, ctx.figure_path("fig80_cameraman")).name
+    paper_tab = pd.Series(PAPER, name="paper ISNR (dB)")
+    ours = pd.Series({key: float(main.loc[key]) for key in PAPER}, name="ours (q1 = 1000)")
+    body = f"""
+## Set-up
+
+PF-DWT as in the spec (Sec. 3): raster-scan particle filter with a Kalman proposal on the AR image
+model with the thesis's h = (0.815493, 0.489516, -0.308866), 100 particles per pixel, the exact
+Gaussian + Cauchy (Voigt) likelihood, proposal variance inflated x4; then translation-invariant
+db4 thresholding (4 levels, universal threshold, cycle spinning over {shifts} x {shifts} shifts).
+{runs} noise seed(s) per image. Two readings of the missing process-noise variance q1: the spec's
+100 and 1000 (with the Kalman R = max(400, q1)).
+
+## Paper beside ours
+
+{pd.concat([paper_tab, ours], axis=1).to_markdown(floatfmt=".3f")}
+
+All results (mean and std over seeds):
+
+{tab.to_markdown(floatfmt=".2f")}
+
+![Fig 80]({fig80})
+
+## Differences and their causes
+
+* With the spec's q1 = 100 the AR prior (std 10 grey levels) is far narrower than the jumps at
+  real edges, and the heavy-tailed likelihood treats a true edge exactly like a Cauchy outlier:
+  the filter keeps the old grey level and drags a streak along the row (ISNR near or below 0 dB
+  on cameraman). q1 = 1000 lets edges through; that reading is used for the claims.
+* "Lena" is replaced by the astronaut image (grey, 256 x 256), so its numbers are not directly
+  comparable; clipping the noisy image to [0, 255] also changes the ISNR's denominator.
+* Beyond the paper: a 3 x 3 median filter, with and without the same TI thresholding, is the
+  obvious practitioner's baseline for impulsive noise and is shown in the table.
+
+{cmp.section}"""
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)

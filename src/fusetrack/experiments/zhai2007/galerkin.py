@@ -1,0 +1,334 @@
+"""Zhai 2007, E13 (Sec. 4.2, Table 9, Figs 45-47): the Galerkin-projection particle filter on
+bearings-only tracking, against bootstrap filters of 200-2000 particles and the EKF.
+
+Example 1: ``X_1 = [0, 50, 1, -1]``, ``Q = 0.05 I``, ``sigma_n^2 = 0.01``, 100 steps, 200 runs;
+Galerkin PF with 200 particles and 100 basis functions per position axis (spec choice: a 100 x 100
+position grid, Algorithm 5 with the corrected prediction). Example 2 (Fig 47): the target reaches
+(72, 6) at t = 44, turns 90 degrees clockwise in 3 steps and flies on; all filters keep the CV model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import partial
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+
+from ...core import Gaussian
+from ...evaluation import plots
+from ...evaluation.montecarlo import run_seed
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...filters import ExtendedKalmanFilter, UnscentedKalmanFilter
+from ...filters.grid_proposals import GalerkinProposal
+from ...filters.sis import ProposalParticleFilter
+from ...motion import ConstantVelocity, CoordinatedTurn
+from ...sensors import Bearing
+from .common import timed_gaussian, timed_sis
+from .comparators import (
+    Scenario,
+    calibration_note,
+    compare,
+    equal_time_particles,
+    per_run_scores,
+    run_comparators,
+    sis_reference,
+)
+
+PAPER = pd.DataFrame(
+    {
+        "mean e_x": [4.8312, 4.0599, 3.6181, 3.6199, 1.1391],
+        "mean e_y": [4.0215, 3.8300, 3.6961, 3.6489, 1.1554],
+        "var e_x": [6.7798, 4.0483, 3.3728, 3.3991, 0.0535],
+        "var e_y": [5.7492, 6.0063, 5.8839, 6.0310, 0.0576],
+    },
+    index=["bootstrap 200", "bootstrap 500", "bootstrap 1000", "bootstrap 2000", "Galerkin PF 200"],
+)
+P0 = np.diag([1.0, 1.0, 0.1, 0.1])
+
+
+def simulate(example: int, rng: np.random.Generator) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    """Truth and bearings (sigma 0.1 rad) from a sensor at the origin."""
+    cv = ConstantVelocity(q=0.05, noise="discrete")
+    sensor = Bearing("s", position=[0.0, 0.0], sigma=0.1)
+    if example == 1:
+        x, steps, turn = np.array([0.0, 50.0, 1.0, -1.0]), 100, range(0)
+    else:
+        x, steps, turn = np.array([0.0, 50.0, 72.0 / 44.0, -1.0]), 77, range(45, 48)
+    xs, zs = [], []
+    for k in range(1, steps + 1):
+        if k in turn:
+            x = CoordinatedTurn(omega=-np.pi / 6).mean(x, 1.0)  # 90 degrees clockwise in 3 steps
+        else:
+            x = cv.sample(x, 1.0, rng) if example == 1 else cv.mean(x, 1.0)
+        xs.append(x.copy())
+        zs.append([sensor.simulate(x, rng)])
+    return np.array(xs), zs
+
+
+def x0(example: int) -> np.ndarray:
+    return (
+        np.array([0.0, 50.0, 1.0, -1.0])
+        if example == 1
+        else np.array([0.0, 50.0, 72.0 / 44.0, -1.0])
+    )
+
+
+# beyond the paper: the IMM-EKF's models (CV and left/right turns at example 2's rate) and regimes
+IMM_OMEGA = np.pi / 6
+IMM_TRANSITION = np.array([[0.9, 0.05, 0.05], [0.1, 0.9, 0.0], [0.1, 0.0, 0.9]])
+
+
+def comparator_scenario(example: int, seed: int) -> Scenario:
+    """Run ``seed``'s truth, bearings and prior as a :class:`Scenario` (the filters' CV model)."""
+    rng = np.random.default_rng(seed)
+    truth, zs = simulate(example, rng)
+    prior = Gaussian(x0(example) + rng.multivariate_normal(np.zeros(4), P0), P0)
+    motion = ConstantVelocity(q=0.05, noise="continuous")
+    sensor = Bearing("s", position=[0.0, 0.0], sigma=0.1)
+    imm = [motion, *(CoordinatedTurn(omega=w, q=0.05) for w in (IMM_OMEGA, -IMM_OMEGA))]
+    return Scenario(motion, [sensor], prior, zs, 1.0, truth, imm, IMM_TRANSITION)
+
+
+def galerkin_pf(
+    cs: Scenario, weight: Literal["exact", "projected"] = "exact"
+) -> ProposalParticleFilter:
+    """Algorithm 5 with 200 particles on a 100 x 100 grid (Table 9's Galerkin PF)."""
+    return ProposalParticleFilter(cs.motion, cs.sensors, GalerkinProposal(100, weight=weight), 200)
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    example = int(config["example"])
+    cs = comparator_scenario(example, seed)
+    motion, sensor, prior, zs, truth = cs.motion, cs.sensors[0], cs.prior, cs.zs, cs.truth
+    est: dict[str, tuple[np.ndarray, float]] = {
+        "EKF": timed_gaussian(ExtendedKalmanFilter(motion, [sensor]), prior, zs, ["s"], 1.0),
+        "UKF": timed_gaussian(UnscentedKalmanFilter(motion, [sensor]), prior, zs, ["s"], 1.0),
+    }
+    pfs: dict[str, ProposalParticleFilter] = {
+        f"bootstrap {n}": ProposalParticleFilter(motion, [sensor], n_particles=n)
+        for n in (200, 500, 1000, 2000)
+    }
+    pfs["Galerkin PF 200"] = galerkin_pf(cs)
+    if config.get("extras", False):
+        pfs["Galerkin PF 200 (projected weight)"] = galerkin_pf(cs, "projected")
+    grid_small = 0
+    for k, (name, f) in enumerate(pfs.items()):
+        e, secs, _ = timed_sis(f, prior, zs, 1.0, np.random.default_rng([seed, k]))
+        est[name] = (e, secs)
+        if name == "Galerkin PF 200":
+            grid_small = f.stats.grid_too_small
+    est.update(run_comparators(cs, seed, config["n_equal"]))
+    rows = []
+    for name, (e, secs) in est.items():
+        dx, dy = e[:, 0] - truth[:, 0], e[:, 1] - truth[:, 1]
+        dx, dy = (np.where(np.isfinite(v), v, 1e9) for v in (dx, dy))
+        for t in range(len(dx)):
+            rows.append(
+                {
+                    "method": name,
+                    "step": t + 1,
+                    "sq_ex": float(dx[t] ** 2),
+                    "sq_ey": float(dy[t] ** 2),
+                    "e_x": float(np.sqrt(np.mean(dx**2))),
+                    "e_y": float(np.sqrt(np.mean(dy**2))),
+                    "seconds": secs,
+                    "grid_too_small": grid_small,
+                    "x": e[t, 0],
+                    "y": e[t, 1],
+                    "true_x": truth[t, 0],
+                    "true_y": truth[t, 1],
+                }
+            )
+    return rows
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=200, quick=4)
+    runs2 = max(2, runs // 10)
+    n_equal, target = {}, {}
+    for ex in (1, 2):  # UPF and bootstrap particles at the Galerkin PF's time, on run 0
+        cs = comparator_scenario(ex, run_seed(ctx.seed, 0))
+        n_equal[f"example {ex}"], target[f"example {ex}"] = equal_time_particles(
+            cs,
+            sis_reference(cs, partial(galerkin_pf, cs)),
+            ("UPF", "bootstrap equal time"),
+            repeats=2 if ctx.quick else 3,
+        )
+    df1 = ctx.monte_carlo(
+        run_once,
+        [{"example": 1, "extras": True, "n_equal": n_equal["example 1"]}],
+        runs,
+        desc="example 1",
+    )
+    df2 = ctx.monte_carlo(
+        run_once, [{"example": 2, "n_equal": n_equal["example 2"]}], runs2, desc="example 2"
+    )
+    df = pd.concat([df1, df2], ignore_index=True)
+    per_run = df1[df1["step"] == 1]
+    g = per_run.groupby("method")
+    ours = pd.DataFrame(
+        {
+            "mean e_x": g["e_x"].mean(),
+            "mean e_y": g["e_y"].mean(),
+            "var e_x": g["e_x"].var(),
+            "var e_y": g["e_y"].var(),
+            "seconds": g["seconds"].mean(),
+        }
+    )
+    gal, b2000 = ours.loc["Galerkin PF 200"], ours.loc["bootstrap 2000"]
+    claims = [
+        Claim(
+            "C12_beats_bs2000",
+            "Galerkin PF(200) mean RMSE < bootstrap(2000) in x and in y (Table 9)",
+            "1.14/1.16 < 3.62/3.65",
+            f"{gal['mean e_x']:.3g}/{gal['mean e_y']:.3g} vs {b2000['mean e_x']:.3g}/{b2000['mean e_y']:.3g}",
+            "both axes",
+            bool(gal["mean e_x"] < b2000["mean e_x"] and gal["mean e_y"] < b2000["mean e_y"]),
+        ),
+        Claim(
+            "C12_variance",
+            "Galerkin PF's RMSE variance is far below bootstrap(2000)'s (Table 9)",
+            "0.05/0.06 vs 3.40/6.03",
+            f"{gal['var e_x']:.3g}/{gal['var e_y']:.3g} vs {b2000['var e_x']:.3g}/{b2000['var e_y']:.3g}",
+            "< 0.5x in both axes",
+            bool(
+                gal["var e_x"] < 0.5 * b2000["var e_x"] and gal["var e_y"] < 0.5 * b2000["var e_y"]
+            ),
+        ),
+    ]
+    rel = 0.5 if ctx.quick else 0.25
+    for m in PAPER.index:
+        for ax in ("x", "y"):
+            p, o = PAPER.loc[m, f"mean e_{ax}"], float(ours.loc[m, f"mean e_{ax}"])
+            claims.append(
+                Claim(
+                    f"C12_level_{m.replace(' ', '_')}_{ax}",
+                    f"{m}: mean e_{ax} equals Table 9's",
+                    p,
+                    o,
+                    f"relative ±{rel:.0%}",
+                    abs(o - p) <= rel * p,
+                )
+            )
+    sat = [
+        abs(ours.loc["bootstrap 1000", f"mean e_{a}"] - b2000[f"mean e_{a}"])
+        / ours.loc["bootstrap 1000", f"mean e_{a}"]
+        for a in "xy"
+    ]
+    claims.append(
+        Claim(
+            "C13_saturation",
+            "bootstrap RMSE saturates between 1000 and 2000 particles (3.62 vs 3.62)",
+            "0.05% / 1.3% change",
+            f"{sat[0]:.1%} / {sat[1]:.1%} change",
+            "< 5% in both axes",
+            bool(max(sat) < 0.05),
+        )
+    )
+    d2 = df2.copy()
+    d2["sq"] = d2["sq_ex"] + d2["sq_ey"]
+    after = d2[d2["step"] > 47].groupby("method")["sq"].mean().pow(0.5)
+    claims.append(
+        Claim(
+            "E13_turn",
+            "example 2: after the turn the Galerkin PF stays closer than the EKF and the bootstrap(500) (Fig 47)",
+            "Galerkin < EKF, bootstrap",
+            f"Galerkin {after['Galerkin PF 200']:.3g}, EKF {after['EKF']:.3g}, bootstrap 500 {after['bootstrap 500']:.3g}",
+            "strict",
+            bool(after["Galerkin PF 200"] < min(after["EKF"], after["bootstrap 500"])),
+        )
+    )
+    rm = (
+        df1.assign(sq=df1["sq_ex"] + df1["sq_ey"])
+        .groupby(["method", "step"])["sq"]
+        .mean()
+        .pow(0.5)
+        .unstack("method")
+    )
+    fig46 = plots.plot_series(
+        ctx.figure_path("rmse_example1"),
+        rm.index.to_numpy(),
+        {
+            m: rm[m].to_numpy()
+            for m in ["EKF", "bootstrap 200", "bootstrap 2000", "Galerkin PF 200"]
+        },
+        xlabel="t",
+        ylabel="position RMSE",
+        title=f"Example 1: {runs} runs (Figs 45-46)",
+        logy=True,
+    )
+    r0 = df2[df2["run"] == 0]
+    fig47 = plots.plot_trajectories(
+        ctx.figure_path("example2_turn"),
+        r0[r0["method"] == "EKF"][["true_x", "true_y"]].to_numpy(),
+        {
+            m: r0[r0["method"] == m][["x", "y"]].to_numpy()
+            for m in ["EKF", "bootstrap 500", "Galerkin PF 200"]
+        },
+        sensors=[("sensor", np.zeros(2))],
+        title="Example 2, run 0 (Fig 47)",
+    )
+    table = pd.concat({"paper": PAPER, "ours": ours.loc[PAPER.index, PAPER.columns]}, axis=1)
+    extra = ours.drop(index=PAPER.index)
+    gs = int(df1[df1["method"] == "EKF"].groupby("run")["grid_too_small"].first().sum())
+    body = f"""
+## Set-up
+
+Example 1 as printed (X_1 = [0, 50, 1, -1], Q_v = 0.05 I, sigma_n^2 = 0.01 rad^2, sensor at the
+origin); spec choices: T = 1, 100 steps, filters start at N(X_1 + e, P_0), e ~ N(0, P_0),
+P_0 = diag(1, 1, 0.1, 0.1). {runs} runs (example 2: {runs2}). The Galerkin PF projects the predictive
+position density onto 100 Fourier basis functions per axis (a 100 x 100 grid over mean ± 6 std of
+the predicted particles), multiplies by the bearing likelihood, draws 200 positions, completes each
+velocity from the motion model given its position and an ancestor, and weights with the exact
+marginal weight (the grid is a proposal; its error is corrected). Grid-too-small events over all
+runs: {gs}.
+
+## Table 9: paper beside ours (mean and variance over runs of the per-run RMSE in x and y)
+
+{table.to_markdown(floatfmt=".3f")}
+
+Other filters on the same runs (the comparators at equal time are in the last section):
+
+{extra.to_markdown(floatfmt=".3f")}
+
+![Example 1]({fig46.name})
+
+![Example 2]({fig47.name})
+
+## Differences and their causes
+
+* The levels differ by an order of magnitude from Table 9 for every filter, the bootstrap
+  included: this target passes the static sensor on a straight line, so its range is not
+  observable from bearings and the error is set by the prior's velocity error (0.32 per axis,
+  i.e. ~30 m after 100 steps) and by the random-walk velocity of the truth (Q = 0.05 per step). The
+  thesis's bootstrap errors of ~3.6 cannot come from this model as printed under any
+  initialisation we can think of; the thesis does not give its own.
+* The Galerkin PF does not beat the bootstrap here. The position kernel of the CV model over one
+  step is narrow (std {np.sqrt(0.05 / 3):.2f}) while the predicted cloud spans tens of metres, so a
+  100 x 100 grid (cells of a metre or more) resolves the cloud but not the per-particle kernels:
+  as a proposal it is about as informative as the prior, and the exact weight that corrects its
+  discretisation is high-variance. Using the projected density itself in the weight (the
+  projection filter as the thesis describes it, row "projected weight") keeps the grid's error and
+  adds position noise of a cell per step, which is worse.
+"""
+    d = df.assign(sq_err=df["sq_ex"] + df["sq_ey"])
+    d["example"] = d["example"].map(lambda e: f"example {int(e)}")
+    cmp = compare(
+        per_run_scores(d, ["example"], "sq_err"),
+        "Galerkin PF 200",
+        ctx.figure_path("error_vs_seconds"),
+        by=["example"],
+        ylabel="position RMSE per run (mean over runs)",
+        calibration=calibration_note(n_equal, target),
+        notes=[
+            "IMM-EKF: CV and left/right coordinated turns at pi/6 rad/step (example 2's turn), "
+            f"q = 0.05, regime matrix {IMM_TRANSITION.tolist()}.",
+            "UPF: the shared-covariance unscented proposal (filters/unscented_proposal.py).",
+            f"Example 2 has {runs2} runs.",
+        ],
+        families={"bootstrap": [f"bootstrap {n}" for n in (200, 500, 1000, 2000)]},
+        n_particles=n_equal,
+    )
+    return Outcome(df, claims, body + "\n" + cmp.section, runs, beyond_the_paper=cmp.summary)

@@ -1,0 +1,276 @@
+"""Zhai 2007, E19 (Sec. 6.1.2, Table 15): particle filters with MCMC moves after resampling.
+
+Model (Eqs. 93-94): ``x_t = 1.7 exp(-2 x_{t-1}^2) + 5 cos(x_{t-1}) + w``, ``y_t = x_t^2 + v``,
+``x_0 ~ N(0, 0.5)``, ``w ~ N(0, 8)``, ``v ~ N(0, 0.5)``, 25 steps. Four filters, all with the
+bootstrap proposal: PF; PF-MH (transition prior as instrumental density); PF-RWM (N(0, 0.2) steps);
+PF-MIS (N(0, 0.15) independence proposal). Average MSE over runs and time, N in {100, 200, 500, 1000}.
+The thesis used 50 runs; ``y = x^2`` hides the sign, so the spec asks for >= 500 runs and CIs.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping
+from functools import partial
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...core import Gaussian
+from ...evaluation import plots
+from ...evaluation.montecarlo import run_seed
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...filters.mcmc_moves import IndependenceMove, MHPriorMove, RandomWalkMove
+from ...filters.sis import ProposalParticleFilter
+from ...motion.benchmark import ScalarBenchmark
+from ...sensors.power import Power
+from .common import timed_sis
+from .comparators import (
+    UPF_NOTE,
+    Scenario,
+    calibration_note,
+    compare,
+    equal_time_particles,
+    run_comparators,
+    sis_reference,
+)
+
+STEPS = 25
+NS = (100, 200, 500, 1000)
+METHODS = ("PF", "PF-MH", "PF-RWM", "PF-MIS")
+PAPER = pd.DataFrame(
+    {
+        "PF": [5.3494, 5.0470, 4.3868, 3.4414],
+        "PF-MH": [4.8779, 4.0194, 3.3737, 3.3238],
+        "PF-RWM": [3.5558, 3.3813, 3.2536, 3.1814],
+        "PF-MIS": [3.7227, 3.5506, 3.3580, 3.2574],
+    },
+    index=list(NS),
+)
+PAPER_ORDER = ["PF-RWM", "PF-MIS", "PF-MH", "PF"]  # ascending MSE in every row of Table 15
+
+
+def model() -> tuple[ScalarBenchmark, Power, Gaussian]:
+    return (
+        ScalarBenchmark(a=1.7, b=5.0, trig="cos", q=8.0),
+        Power("y", exponent=2, sigma=float(np.sqrt(0.5))),
+        Gaussian(np.zeros(1), 0.5 * np.eye(1)),
+    )
+
+
+def simulate(rng: np.random.Generator) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    motion, sensor, prior = model()
+    x = prior.sample(rng)
+    xs, zs = [], []
+    for _ in range(STEPS):
+        x = motion.sample(x, 1.0, rng)
+        xs.append(x.copy())
+        zs.append([sensor.simulate(x, rng)])
+    return np.array(xs), zs
+
+
+def make_filter(method: str, n: int) -> ProposalParticleFilter:
+    motion, sensor, _ = model()
+    move = {
+        "PF": None,
+        "PF-MH": MHPriorMove(),
+        "PF-RWM": RandomWalkMove(variance=0.2),
+        "PF-MIS": IndependenceMove(variance=0.15),
+    }[method]
+    return ProposalParticleFilter(motion, [sensor], n_particles=n, move=move)
+
+
+def comparator_scenario(seed: int) -> Scenario:
+    """Run ``seed``'s truth and measurements as a :class:`Scenario` (one model: IMM = EKF)."""
+    truth, zs = simulate(np.random.default_rng(seed))
+    motion, sensor, prior = model()
+    return Scenario(motion, [sensor], prior, zs, 1.0, truth)
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    truth, zs = simulate(np.random.default_rng(seed))
+    _, _, prior = model()
+    n = int(config["n_particles"])
+    rows = []
+    if "n_equal" in config:  # beyond the paper
+        for method, timed in run_comparators(
+            comparator_scenario(seed), seed, config["n_equal"]
+        ).items():
+            err2 = (timed.estimates[:, 0] - truth[:, 0]) ** 2
+            err2 = np.where(np.isfinite(err2), err2, 1e12)
+            rows.append({"method": method, "mse": float(err2.mean()), "seconds": timed.seconds})
+    for k, method in enumerate(METHODS):
+        filt = make_filter(method, n)
+        est, secs, _ = timed_sis(filt, prior, zs, 1.0, np.random.default_rng([seed, k]))
+        err2 = (est[:, 0] - truth[:, 0]) ** 2
+        rows.append(
+            {
+                "method": method,
+                "mse": float(err2.mean()),
+                "seconds": secs,
+                "acceptance": filt.stats.acceptance_rate,
+                "zero_acceptance_steps": filt.stats.zero_acceptance_steps,
+            }
+        )
+    return rows
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=1000, quick=40)
+    cs = comparator_scenario(run_seed(ctx.seed, 0))
+    n_equal, target = {}, {}
+    for n in NS:  # UPF and bootstrap at PF-RWM(N)'s time
+        n_equal[n], target[n] = equal_time_particles(
+            cs,
+            sis_reference(cs, partial(make_filter, "PF-RWM", n)),
+            ("UPF", "bootstrap equal time"),
+            repeats=2 if ctx.quick else 3,
+        )
+    df_all = ctx.monte_carlo(
+        run_once, [{"n_particles": n, "n_equal": n_equal[n]} for n in NS], runs
+    )
+    df = df_all[df_all["method"].isin(METHODS)]
+    cmp = compare(
+        df_all.assign(error=df_all["mse"]),
+        "PF-RWM",
+        ctx.figure_path("error_vs_seconds_comparators"),
+        by=["n_particles"],
+        ylabel="average MSE",
+        calibration=calibration_note(n_equal, target),
+        notes=[
+            "IMM-EKF: the model has one motion model and a one-model IMM is exactly the EKF; "
+            "with y = x^2 and a prior centred on 0 the EKF's Jacobian 2x starts at 0, so it "
+            "cannot learn the sign.",
+            UPF_NOTE,
+            "n_particles is the particle count of the paper's four filters; the comparators' "
+            "counts are the calibrated ones above.",
+        ],
+        n_particles=n_equal,
+    )
+    g = df.groupby(["n_particles", "method"])
+    mse = g["mse"].mean().unstack("method")[list(METHODS)]
+    se = (g["mse"].std() / np.sqrt(g["mse"].count())).unstack("method")[list(METHODS)]
+    acc = g["acceptance"].mean().unstack("method")[list(METHODS)]
+    secs = g["seconds"].mean().unstack("method")[list(METHODS)]
+    # paired differences (common random numbers: same truth per run across methods)
+    wide = df.pivot_table(index=["n_particles", "run"], columns="method", values="mse")
+    claims: list[Claim] = []
+    rows_order = 0
+    for n in NS:
+        ok = all(mse.loc[n, a] < mse.loc[n, b] for a, b in itertools.pairwise(PAPER_ORDER))
+        rows_order += ok
+        claims.append(
+            Claim(
+                f"C15_order_N{n}",
+                f"N={n}: MSE PF > PF-MH > PF-MIS > PF-RWM (Table 15)",
+                " > ".join(f"{m} {PAPER.loc[n, m]:.3f}" for m in reversed(PAPER_ORDER)),
+                " > ".join(f"{m} {mse.loc[n, m]:.3f}" for m in reversed(PAPER_ORDER)),
+                "strict ordering of means",
+                ok,
+            )
+        )
+    for m in ("PF-MH", "PF-RWM"):
+        diff = wide["PF"] - wide[m]
+        d = diff.groupby(level=0)
+        mean_d, se_d = d.mean(), d.std() / np.sqrt(d.count())
+        z = (mean_d / se_d).min()
+        claims.append(
+            Claim(
+                f"C15_{m}_beats_PF",
+                f"{m} reduces the PF's MSE at every N, beyond Monte Carlo noise (paired z > 2)",
+                "reduction at every N: "
+                + ", ".join(f"{(PAPER.loc[n, 'PF'] - PAPER.loc[n, m]):.3f}" for n in NS),
+                "reduction at every N: " + ", ".join(f"{mean_d[n]:.3f}±{se_d[n]:.3f}" for n in NS),
+                "paired z > 2 at every N",
+                bool(z > 2),
+            )
+        )
+    falls = all(mse.loc[a, "PF"] > mse.loc[b, "PF"] for a, b in itertools.pairwise(NS))
+    claims.append(
+        Claim(
+            "C15_pf_falls_with_n",
+            "the PF's MSE falls as N grows (Table 15, column PF)",
+            ", ".join(f"{v:.3f}" for v in PAPER["PF"]),
+            ", ".join(f"{v:.3f}" for v in mse["PF"]),
+            "strictly decreasing",
+            falls,
+        )
+    )
+    mis_acc = float(acc["PF-MIS"].mean())
+    claims.append(
+        Claim(
+            "mis_acceptance_reported",
+            "the MIS with N(0, 0.15) proposals has a low acceptance rate (spec Sec. 3, Alg. 10)",
+            "not reported",
+            mis_acc,
+            "< 0.2",
+            mis_acc < 0.2,
+        )
+    )
+
+    fig = plots.plot_series(
+        ctx.figure_path("mse_vs_particles"),
+        np.array(NS),
+        {
+            **{m: mse[m].to_numpy() for m in METHODS},
+            **{f"paper {m}": PAPER[m].to_numpy() for m in METHODS},
+        },
+        xlabel="particles N",
+        ylabel="average MSE",
+        title=f"Table 15: ours ({runs} runs) and the paper's (dotted)",
+        styles={f"paper {m}": ":" for m in METHODS},
+    )
+    fig_t = plots.plot_series(
+        ctx.figure_path("mse_vs_seconds"),
+        secs["PF"].to_numpy(),
+        {m: mse[m].to_numpy() for m in METHODS},
+        xlabel="seconds per run (PF's time at each N on the x-axis)",
+        ylabel="average MSE",
+        title="MSE against computing time",
+    )
+    table = pd.concat({"paper": PAPER, "ours": mse, "± s.e.": se}, axis=1)
+    cost = pd.concat({"seconds/run": secs, "acceptance": acc}, axis=1)
+    best_time = {}
+    for m in METHODS:
+        best_time[m] = float(
+            np.interp(float(secs["PF-RWM"].max()), secs[m].to_numpy(), mse[m].to_numpy())
+        )
+    winner = min(best_time, key=best_time.get)  # type: ignore[arg-type]
+    body = f"""
+## Set-up
+
+Zhai 2007, Eqs. 93-94 as printed; 25 steps; {runs} runs per N (the thesis: 50) with the same truths
+for every filter and N (common random numbers). One MH iteration per particle per step, target
+`p(y_t|x) p(x|x_(t-1)^(a_i))` (spec choice 28); systematic resampling at every step; estimate =
+mean of the (moved) particles; MSE averaged over the 25 steps and the runs.
+
+## Table 15: paper beside ours (± standard error of our mean)
+
+{table.to_markdown(floatfmt=".3f")}
+
+Cost and acceptance (beyond the paper):
+
+{cost.to_markdown(floatfmt=".3f")}
+
+![MSE vs N]({fig.name})
+
+![MSE vs time]({fig_t.name})
+
+## Differences and their causes
+
+The paper's ordering PF > PF-MH > PF-MIS > PF-RWM holds in {rows_order} of the 4 rows here. Our
+MSE levels ({mse.to_numpy().min():.2f}-{mse.to_numpy().max():.2f}) are of the paper's order
+(3.2-5.3) and fall with N, but the four filters differ by amounts comparable to the standard error:
+with `y = x^2` the posterior is bimodal in the sign of `x`, and the mean's squared error is
+dominated by runs where the filter cannot know the sign, which no MCMC move can fix (the moves
+leave the same posterior invariant; they only add diversity). The thesis's 50 runs give a standard
+error of roughly {float(se.to_numpy().mean() * np.sqrt(runs / 50)):.2f} on each entry, larger than
+most of its differences between columns, so Table 15's ordering is not evidence of an effect. The
+MIS proposal N(0, 0.15) hardly ever lands in the posterior (acceptance {mis_acc:.3f}), so PF-MIS
+is nearly the plain PF, as the spec predicted. At equal computing time (interpolated at the RWM's
+largest cost) the lowest MSE is **{winner}**: a move costs about as much as a second likelihood
+evaluation per particle, which buys about as much as doubling N.
+
+{cmp.section}"""
+    return Outcome(df_all, claims, body, runs, beyond_the_paper=cmp.summary)

@@ -1,0 +1,465 @@
+"""Zhai 2007, E1 (Sec. 3.1.3, Tables 2-3, Figs 5-9): EKF vs bootstrap vs PF-SP-PEKF on the
+scalar benchmark ``x' = 1.7 exp(-2x^2) + 5 sin x + w``, ``z = x^3 + v``, ``w, v ~ N(0, 1)``.
+
+The model is implemented as printed; the spec's pre-check found that Table 2 does not follow
+from it, so the plausible readings the spec lists (``z = x^2``, ``z = x^2 / 20``, ``sigma_v^2 =
+100``) are run too, each labelled, and the report says which (if any) reproduces the table.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ...core import Gaussian
+from ...evaluation import plots
+from ...evaluation.montecarlo import run_seed
+from ...evaluation.report import Claim, Outcome, RunContext
+from ...filters import ExtendedKalmanFilter, UnscentedKalmanFilter
+from ...filters.sis import ProposalParticleFilter
+from ...filters.sp_pekf import SPPEKFProposal
+from ...motion.benchmark import ScalarBenchmark
+from ...sensors.power import Power
+from .common import fmt_order, ordering_holds, timed_gaussian, timed_sis
+from .comparators import (
+    COMPARATORS,
+    UPF_NOTE,
+    Scenario,
+    calibration_note,
+    compare,
+    equal_time_particles,
+    run_comparators,
+    sis_reference,
+)
+
+T_STEPS = 50
+PAPER_TABLE = pd.DataFrame(
+    {
+        "mean RMSE": [2.9232, 1.5581, 1.3339, 1.1803, 0.6442],
+        "var RMSE": [0.3175, 0.0558, 0.0485, 0.0344, 0.0247],
+        "time (s)": [0.0067, 0.7967, 4.1495, 7.3011, 1.5217],
+    },
+    index=["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"],
+)
+ORDER = ["PF-SP-PEKF", "BS2000", "BS1000", "BS200", "EKF"]
+VARIANTS: dict[str, dict[str, Any]] = {
+    "printed": {"exponent": 3, "scale": 1.0, "sigma_v": 1.0},
+    "z=x^2": {"exponent": 2, "scale": 1.0, "sigma_v": 1.0},
+    "z=x^2/20": {"exponent": 2, "scale": 1.0 / 20.0, "sigma_v": 1.0},
+    "sigma_v^2=100": {"exponent": 3, "scale": 1.0, "sigma_v": 10.0},
+}
+
+
+def simulate(
+    motion: ScalarBenchmark, sensor: Power, rng: np.random.Generator, steps: int = T_STEPS
+) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    """``x(0) ~ N(0, 1)`` (spec choice), then ``steps`` transitions and measurements."""
+    x = rng.standard_normal(1)
+    xs, zs = [], []
+    for _ in range(steps):
+        x = motion.sample(x, 1.0, rng)
+        xs.append(x.copy())
+        zs.append([sensor.simulate(x, rng)])
+    return np.array(xs), zs
+
+
+def filters_for(
+    config: Mapping[str, Any], motion: ScalarBenchmark, sensor: Power
+) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "EKF": ExtendedKalmanFilter(motion, [sensor]),
+        "UKF": UnscentedKalmanFilter(motion, [sensor]),
+    }
+    for n in (200, 1000, 2000):
+        out[f"BS{n}"] = ProposalParticleFilter(motion, [sensor], n_particles=n)
+    out["PF-SP-PEKF"] = ProposalParticleFilter(
+        motion, [sensor], SPPEKFProposal(n_channels=20), n_particles=200
+    )
+    if config.get("extras", False):
+        out["PF-SP-PEKF marginal"] = ProposalParticleFilter(
+            motion, [sensor], SPPEKFProposal(n_channels=20), 200, transition="marginal"
+        )
+        out["PF-SP-PEKF no feedback"] = ProposalParticleFilter(
+            motion, [sensor], SPPEKFProposal(n_channels=20, feedback_on=False), 200
+        )
+    return out
+
+
+def comparator_scenario(config: Mapping[str, Any], seed: int) -> Scenario:
+    """Run ``seed``'s truth and measurements under ``config``'s reading, as a :class:`Scenario`."""
+    motion = ScalarBenchmark()
+    sensor = Power("z", int(config["exponent"]), float(config["sigma_v"]), float(config["scale"]))
+    truth, zs = simulate(motion, sensor, np.random.default_rng(seed))
+    return Scenario(motion, [sensor], Gaussian(np.zeros(1), np.eye(1)), zs, 1.0, truth)
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    """One Monte Carlo run: one truth, every filter on it (common random numbers); with
+    ``extras`` also the comparators of :mod:`.zhai2007_comparators` (``n_equal_time``: their N)."""
+    cs = comparator_scenario(config, seed)
+    motion, sensor, prior, zs, truth = cs.motion, cs.sensors[0], cs.prior, cs.zs, cs.truth
+    results: dict[str, tuple[np.ndarray, float, int, int]] = {}
+    for k, (method, filt) in enumerate(filters_for(config, motion, sensor).items()):  # type: ignore[arg-type]
+        if isinstance(filt, ProposalParticleFilter):
+            est, secs, _ = timed_sis(filt, prior, zs, 1.0, np.random.default_rng([seed, k]))
+            stats = filt.stats
+            results[method] = (est, secs, stats.dropped_channels, stats.repaired_channels)
+        else:
+            results[method] = (*timed_gaussian(filt, prior, zs, ["z"], 1.0), 0, 0)
+    if config.get("extras", False):
+        for method, timed in run_comparators(cs, seed, config["n_equal_time"]).items():
+            results[method] = (timed.estimates, timed.seconds, 0, 0)
+    rows = []
+    for method, (est, secs, dropped, repaired) in results.items():
+        err = est[:, 0] - truth[:, 0]
+        err = np.where(np.isfinite(err), err, 1e6)
+        run_rmse = float(np.sqrt(np.mean(err**2)))
+        for t in range(len(err)):
+            rows.append(
+                {
+                    "method": method,
+                    "step": t + 1,
+                    "truth": float(truth[t, 0]),
+                    "estimate": float(est[t, 0]),
+                    "sq_err": float(err[t] ** 2),
+                    "run_rmse": run_rmse,
+                    "seconds": secs,
+                    "dropped_channels": dropped,
+                    "repaired_channels": repaired,
+                }
+            )
+    return rows
+
+
+def _equal_time_particles(seed: int, repeats: int) -> tuple[dict[str, int], float]:
+    """UPF and bootstrap particles that cost what PF-SP-PEKF(200) costs (a pilot on run 0's
+    truth under the printed model; rule in :mod:`.zhai2007_comparators`)."""
+    cs = comparator_scenario(VARIANTS["printed"], run_seed(seed, 0))
+    ref = filters_for(VARIANTS["printed"], cs.motion, cs.sensors[0])["PF-SP-PEKF"]  # type: ignore[arg-type]
+    return equal_time_particles(
+        cs,
+        sis_reference(cs, lambda: ref),
+        ("UPF", "bootstrap equal time"),
+        repeats=repeats,
+    )
+
+
+def state_pdfs(
+    rng: np.random.Generator, gains: tuple[float, ...], n: int, steps: int
+) -> dict[float, np.ndarray]:
+    """Monte Carlo samples of ``x_t`` for each sinusoid gain (Zhai 2007, Figs 5-7), ``(steps, n)``."""
+    out = {}
+    for b in gains:
+        m = ScalarBenchmark(b=b)
+        x = rng.standard_normal((n, 1))
+        xs = []
+        for _ in range(steps):
+            x = m.sample(x, 1.0, rng)
+            xs.append(x[:, 0].copy())
+        out[b] = np.array(xs)
+    return out
+
+
+def _pdf_figure(ctx: RunContext, quick: bool) -> str:
+    import matplotlib.pyplot as plt
+
+    samples = state_pdfs(
+        np.random.default_rng(ctx.seed),
+        (1.0, 5.0, 10.0, 50.0, 100.0),
+        20_000 if quick else 100_000,
+        20,
+    )
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
+    for b, xs in samples.items():
+        axes[0].hist(xs[-1], bins=200, density=True, histtype="step", label=f"gain {b:g}")
+        axes[1].hist(
+            np.clip(xs[-1] ** 3, -2e3, 2e3),
+            bins=200,
+            density=True,
+            histtype="step",
+            label=f"gain {b:g}",
+        )
+    axes[0].set(title="p(x_20) by sinusoid gain (Fig 5)", xlabel="x")
+    axes[1].set(title="p(z_20 = x^3 + v) (Fig 5)", xlabel="z (clipped to ±2000)")
+    axes[0].legend(fontsize=7)
+    x5 = samples[5.0]
+    for t in (0, 1, 4, 9, 19):
+        axes[2].hist(x5[t], bins=150, density=True, histtype="step", label=f"t={t + 1}")
+    axes[2].set(title="p(x_t), gain 5 (Figs 6-7)", xlabel="x")
+    axes[2].legend(fontsize=7)
+    return plots.save(fig, ctx.figure_path("state_pdfs")).name
+
+
+def run(ctx: RunContext) -> Outcome:
+    runs = ctx.n_runs(full=1000, quick=40)
+    var_runs = max(5, runs // 5) if ctx.runs is None else runs
+    n_eq, target = _equal_time_particles(ctx.seed, 2 if ctx.quick else 3)
+    printed = ctx.monte_carlo(
+        run_once,
+        [{"variant": "printed", **VARIANTS["printed"], "extras": True, "n_equal_time": n_eq}],
+        runs,
+        desc="as printed",
+    )
+    others = ctx.monte_carlo(
+        run_once,
+        [{"variant": k, **v, "extras": False} for k, v in VARIANTS.items() if k != "printed"],
+        var_runs,
+        desc="variants",
+    )
+    df = pd.concat([printed, others], ignore_index=True)
+    return analyse(ctx, df, runs, var_runs, n_eq, target)
+
+
+def analyse(
+    ctx: RunContext,
+    df: pd.DataFrame,
+    runs: int,
+    var_runs: int,
+    n_eq: Mapping[str, int],
+    target: float = float("nan"),
+) -> Outcome:
+    """Claims, tables and figures from the rows of :func:`run_once` (also usable on a saved
+    ``results.parquet``)."""
+    per_run = df[df["step"] == 1][["variant", "method", "run", "run_rmse", "seconds"]]
+    summary = per_run.groupby(["variant", "method"]).agg(
+        mean_rmse=("run_rmse", "mean"),
+        var_rmse=("run_rmse", "var"),
+        median_rmse=("run_rmse", "median"),
+        diverged_runs=("run_rmse", lambda r: int((r > 100).sum())),
+        seconds=("seconds", "mean"),
+    )
+    ours = summary.loc["printed"]
+
+    claims: list[Claim] = []
+    claims.append(
+        Claim(
+            "C1_order",
+            "mean RMSE: PF-SP-PEKF < BS2000 < BS1000 < BS200 < EKF (Tables 2-3)",
+            fmt_order(PAPER_TABLE["mean RMSE"], ORDER),
+            fmt_order(ours["mean_rmse"], ORDER),
+            "strict ordering",
+            ordering_holds(ours["mean_rmse"], ORDER),
+        )
+    )
+    improvement = 1.0 - ours.loc["PF-SP-PEKF", "mean_rmse"] / ours.loc["EKF", "mean_rmse"]
+    claims.append(
+        Claim(
+            "C1_improvement",
+            "PF-SP-PEKF improves the EKF's mean RMSE by about 78%",
+            0.7796,
+            float(improvement),
+            "±0.10",
+            abs(improvement - 0.7796) <= 0.10,
+        )
+    )
+    rel = 0.35 if ctx.quick else 0.25
+    for m in ["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"]:
+        paper, got = PAPER_TABLE.loc[m, "mean RMSE"], float(ours.loc[m, "mean_rmse"])
+        claims.append(
+            Claim(
+                f"C1_level_{m}",
+                f"{m} mean RMSE equals Table 3's",
+                paper,
+                got,
+                f"relative ±{rel:.0%}",
+                abs(got - paper) <= rel * paper,
+            )
+        )
+    t_ratio = ours.loc["PF-SP-PEKF", "seconds"] / ours.loc["BS200", "seconds"]
+    lo, hi = (1.0, 4.0) if ctx.quick else (1.5, 3.0)
+    claims.append(
+        Claim(
+            "C2_time_ratio",
+            "PF-SP-PEKF(200) costs about 2x bootstrap(200) (1.52 vs 0.80 s)",
+            round(1.5217 / 0.7967, 3),
+            float(t_ratio),
+            f"in [{lo}, {hi}]",
+            lo <= t_ratio <= hi,
+        )
+    )
+    claims.append(
+        Claim(
+            "C2_cheaper_than_bs2000",
+            "PF-SP-PEKF(200) is cheaper than bootstrap(2000)",
+            "1.52 < 7.30 s",
+            f"{ours.loc['PF-SP-PEKF', 'seconds']:.4f} < {ours.loc['BS2000', 'seconds']:.4f} s",
+            "strict",
+            ours.loc["PF-SP-PEKF", "seconds"] < ours.loc["BS2000", "seconds"],
+        )
+    )
+    smallest = (
+        ours.loc[["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"], "var_rmse"]
+        .fillna(np.inf)
+        .idxmin()
+    )
+    claims.append(
+        Claim(
+            "C3_smallest_variance",
+            "PF-SP-PEKF has the smallest RMSE variance (Table 2)",
+            "PF-SP-PEKF 0.0247",
+            f"{smallest} {ours.loc[smallest, 'var_rmse']:.4g}",
+            "argmin",
+            smallest == "PF-SP-PEKF",
+        )
+    )
+    reproduces = []
+    for v in VARIANTS:
+        s = summary.loc[v]
+        ok = ordering_holds(s["mean_rmse"], ORDER)
+        if ok:
+            reproduces.append(v)
+        claims.append(
+            Claim(
+                f"C1_order_variant_{v}",
+                f"Table 3 ordering under the reading '{v}'",
+                fmt_order(PAPER_TABLE["mean RMSE"], ORDER),
+                fmt_order(s["mean_rmse"], ORDER),
+                "strict ordering",
+                ok,
+            )
+        )
+
+    # Figures
+    rmse_t = (
+        df[df["variant"] == "printed"]
+        .groupby(["method", "step"])["sq_err"]
+        .mean()
+        .pow(0.5)
+        .unstack("method")
+    )
+    steps = rmse_t.index.to_numpy()
+    fig8 = plots.plot_series(
+        ctx.figure_path("rmse_vs_time"),
+        steps,
+        {m: rmse_t[m].to_numpy() for m in ["EKF", "BS200", "BS2000", "PF-SP-PEKF"]},
+        xlabel="t",
+        ylabel="RMSE(t)",
+        title=f"Fig 8: RMSE over {runs} runs (model as printed)",
+        logy=True,
+    )
+    run0 = df[(df["variant"] == "printed") & (df["run"] == 0)]
+    truth0 = run0[run0["method"] == "EKF"]["truth"].to_numpy()
+    fig9 = plots.plot_series(
+        ctx.figure_path("realisation"),
+        steps,
+        {
+            "truth": truth0,
+            **{
+                m: run0[run0["method"] == m]["estimate"].to_numpy()
+                for m in ["EKF", "BS200", "PF-SP-PEKF"]
+            },
+        },
+        xlabel="t",
+        ylabel="x",
+        title="Fig 9: one realisation",
+        styles={"truth": "k-"},
+    )
+    fig5 = _pdf_figure(ctx, ctx.quick)
+
+    table = pd.DataFrame(
+        {
+            "paper mean RMSE": PAPER_TABLE["mean RMSE"],
+            "ours mean RMSE": ours["mean_rmse"],
+            "paper var RMSE": PAPER_TABLE["var RMSE"],
+            "ours var RMSE": ours["var_rmse"],
+            "paper time (s)": PAPER_TABLE["time (s)"],
+            "ours time (s)": ours["seconds"],
+            "ours median RMSE": ours["median_rmse"],
+            "ours runs with RMSE > 100": ours["diverged_runs"],
+        }
+    ).loc[PAPER_TABLE.index]
+    extra = ours.drop(index=PAPER_TABLE.index)
+    var_table = (
+        summary["mean_rmse"]
+        .unstack("variant")[list(VARIANTS)]
+        .loc[["EKF", "UKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"]]
+    )
+    med_table = (
+        summary["median_rmse"]
+        .unstack("variant")[list(VARIANTS)]
+        .loc[["EKF", "UKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"]]
+    )
+    sp, b200, b2000 = (float(ours.loc[m, "mean_rmse"]) for m in ["PF-SP-PEKF", "BS200", "BS2000"])
+    pr = per_run[per_run["variant"] == "printed"].rename(columns={"run_rmse": "error"})
+    cmp = compare(
+        pr,
+        "PF-SP-PEKF",
+        ctx.figure_path("error_vs_seconds"),
+        ylabel="mean over runs of the per-run RMSE",
+        calibration=calibration_note({"printed": n_eq}, {"printed": target}),
+        notes=[
+            "IMM-EKF: the scalar model has one motion model, and a one-model IMM is exactly the "
+            "EKF (its mixing step is the identity), so the IMM-EKF row equals the EKF row.",
+            UPF_NOTE,
+            "Dotted line: the bootstrap at 200, 1000, 2000 particles and at equal time.",
+        ],
+        families={"bootstrap": ["BS200", "BS1000", "BS2000", "bootstrap equal time"]},
+        methods=[*PAPER_TABLE.index, "UKF", *COMPARATORS],
+        n_particles=dict(n_eq),
+    )
+    body = f"""
+## Set-up
+
+Model exactly as printed (Zhai 2007, Eqs. 31-32): `x(t+1) = 1.7 exp(-2 x(t)^2) + 5 sin x(t) + w`,
+`z = x^3 + v`, `w, v ~ N(0, 1)`, 50 steps; `x(0) ~ N(0, 1)` and every filter starts from N(0, 1)
+(the thesis gives neither: spec choice). {runs} Monte Carlo runs with common truths for all
+filters; the variants ran {var_runs} runs each. Bootstrap = transition-prior proposal; PF-SP-PEKF =
+Algorithm 1 with N = 20 EKF channels, memoryless channel weights, paired transition weight
+(Eq. 13), feedback re-partition; systematic resampling at every step and the mean of the resampled
+particles as the estimate, for every particle filter. Times are seconds per run of 50 steps
+(Python/NumPy on this machine, one process per run).
+
+## Tables 2-3: paper beside ours (model as printed)
+
+{table.to_markdown(floatfmt=".4f")}
+
+Ablations and the comparators of the last section (same runs):
+
+{extra[["mean_rmse", "median_rmse", "diverged_runs", "var_rmse", "seconds"]].to_markdown(floatfmt=".4g")}
+
+## Readings of the model (mean RMSE; median in the second table)
+
+{var_table.to_markdown(floatfmt=".4g")}
+
+{med_table.to_markdown(floatfmt=".3f")}
+
+Readings under which the paper's ordering PF-SP-PEKF < BS2000 < BS1000 < BS200 < EKF holds:
+{", ".join(reproduces) if reproduces else "none"}.
+
+![Fig 8]({fig8.name})
+
+![Fig 9]({fig9.name})
+
+![Figs 5-7]({fig5})
+
+## Differences and their causes
+
+* **Levels.** As printed, `z = x^3` with unit noise is almost an exact observation of `x` (the cube
+  is invertible and steep away from 0), so a plain bootstrap filter with 200 particles already
+  reaches a mean RMSE of {b200:.3f} (paper 1.558) and 2000 particles {b2000:.3f} (paper 1.180).
+  PF-SP-PEKF reaches {sp:.3f} (paper 0.644): it is *worse* than the bootstrap here because its
+  proposal is one Gaussian for all particles, moment-matched from EKF channels linearised at
+  random nominals; when the posterior is sharp the Gaussian is usually too wide or off-centre and
+  many particles are wasted, while the prior proposal of the bootstrap is already adequate.
+  The EKF diverges in many runs (mean RMSE {float(ours.loc["EKF", "mean_rmse"]):.2f}, paper 2.92)
+  because `H = 3x^2` vanishes near 0 and the 5 sin x map folds the state.
+* **Readings.** The spec's alternative readings change the levels but, as the table above shows,
+  {"also reproduce the ordering under " + ", ".join(reproduces) if reproduces else "none reproduces the paper's ordering and levels"}.
+  We did not tune anything further: the thesis's numbers cannot be derived from the model it prints
+  under any reading we tried.
+* **Time.** The thesis's times are MATLAB on a 2005 PC; only ratios are compared. PF-SP-PEKF costs
+  {t_ratio:.2f}x the bootstrap(200) here (paper 1.91x): the 20 EKF channels are vectorised, so
+  their cost is small next to the per-step overhead.
+* **Ablations.** Without the feedback re-partition the bank drifts away
+  (mean RMSE {float(ours.loc["PF-SP-PEKF no feedback", "mean_rmse"]):.3g}); the marginal transition
+  weight gives a median RMSE of {float(ours.loc["PF-SP-PEKF marginal", "median_rmse"]):.3f} against the paired
+  weight's {float(ours.loc["PF-SP-PEKF", "median_rmse"]):.3f}. Runs whose RMSE exceeds 100 are runs where the
+  EKF channels of the bank blew up (the cubic's Jacobian 3x^2 makes a channel that overshoots
+  overshoot more); they are counted in the tables and dominate any mean they enter, so the
+  medians are given beside the means.
+
+{cmp.section}"""
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
