@@ -15,12 +15,22 @@ from .errors import (
     invalid,
 )
 from .measurement import Measurement, as_measurements, group_by_time, order_by_time, stack_values
-from .models import Filter, MotionModel, SensorMap, SensorModel
+from .models import (
+    Belief,
+    Filter,
+    LikelihoodFilter,
+    MotionModel,
+    SensorMap,
+    SensorModel,
+    SteppingFilter,
+    filter_step,
+)
 from .resampling import RESAMPLERS, get_resampler, multinomial, residual, stratified, systematic
 from .track import Estimate, Track
 
 __all__ = [
     "RESAMPLERS",
+    "Belief",
     "ConfigError",
     "DegenerateWeightsWarning",
     "Estimate",
@@ -29,6 +39,7 @@ __all__ = [
     "Gaussian",
     "GaussianMixture",
     "GridBelief",
+    "LikelihoodFilter",
     "Measurement",
     "MeasurementError",
     "MotionModel",
@@ -36,6 +47,7 @@ __all__ = [
     "SensorMap",
     "SensorModel",
     "ShapeError",
+    "SteppingFilter",
     "Track",
     "UnknownExperimentError",
     "UnknownSensorError",
@@ -44,6 +56,7 @@ __all__ = [
     "check_positive",
     "check_probability",
     "circular_mean",
+    "filter_step",
     "get_resampler",
     "group_by_time",
     "invalid",

@@ -100,14 +100,75 @@ class SensorModel(Protocol):
 B = TypeVar("B")
 
 
+@runtime_checkable
+class Belief(Protocol):
+    """What every belief offers a reader: the point estimate ``mean`` ``(..., d)`` and its
+    covariance ``cov`` ``(..., d, d)`` (Gaussian, particles, grid, mixture, model-conditioned)."""
+
+    @property
+    def mean(self) -> Array: ...
+
+    @property
+    def cov(self) -> Array: ...
+
+
+@runtime_checkable
 class Filter(Protocol[B]):
-    """A recursive Bayesian filter: pure ``predict`` and ``update`` on immutable beliefs."""
+    """A recursive Bayesian filter: pure ``predict`` and ``update`` on immutable beliefs.
+
+    Everything the filter carries from one step to the next lives in the belief it returns; the
+    filter object holds only its configuration. Two optional capabilities (duck-typed, see
+    :class:`SteppingFilter` and :class:`LikelihoodFilter`) let a filter draw its prediction with
+    the new measurements in view and report ``log p(z_k | z_1:k-1)``.
+    """
 
     def predict(self, belief: B, dt: float, rng: np.random.Generator | None = None) -> B: ...
 
     def update(
         self, belief: B, measurements: Sequence[Measurement], rng: np.random.Generator | None = None
     ) -> B: ...
+
+
+@runtime_checkable
+class SteppingFilter(Filter[B], Protocol[B]):
+    """A filter whose prediction looks at the measurements it is about to be updated with (a
+    particle filter with a proposal ``q(x_k | x_{k-1}, z_k)``): ``step`` replaces
+    ``update(predict(belief, dt), measurements)`` and must equal it in distribution."""
+
+    def step(
+        self,
+        belief: B,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> B: ...
+
+
+@runtime_checkable
+class LikelihoodFilter(Filter[B], Protocol[B]):
+    """A filter that also reports the log-likelihood increment ``log p(z_k | z_1:k-1)`` of an
+    update, ``(...)`` per batch entry: the sum over a run is the log-likelihood of the model,
+    for parameter estimation and model comparison."""
+
+    def update_with_likelihood(
+        self, belief: B, measurements: Sequence[Measurement], rng: np.random.Generator | None = None
+    ) -> tuple[B, Array]: ...
+
+
+def filter_step(
+    filt: Filter[B],
+    belief: B,
+    dt: float,
+    measurements: Sequence[Measurement],
+    rng: np.random.Generator | None = None,
+) -> B:
+    """One step of any filter: its own ``step`` when it has one, else predict (when ``dt > 0``)
+    then update (when there are measurements)."""
+    if isinstance(filt, SteppingFilter):
+        return filt.step(belief, dt, measurements, rng)
+    if dt > 0:
+        belief = filt.predict(belief, dt, rng)
+    return filt.update(belief, measurements, rng) if measurements else belief
 
 
 SensorMap = Mapping[str, SensorModel]

@@ -35,6 +35,7 @@ class Track:
     covariances: NDArray[np.float64] | None = None
     label: str = ""
     info: Mapping[str, Any] = field(default_factory=dict)
+    id: int | None = None  # a multi-target tracker's persistent track identity
 
     def __post_init__(self) -> None:
         t = np.asarray(self.times, dtype=float)

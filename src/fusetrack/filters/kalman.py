@@ -267,7 +267,10 @@ class GaussianFilter:
         return self._update(belief, measurements, want_loglik=False)[0]
 
     def update_with_likelihood(
-        self, belief: Gaussian, measurements: Sequence[Measurement] | Measurement
+        self,
+        belief: Gaussian,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: np.random.Generator | None = None,
     ) -> tuple[Gaussian, Array]:
         """Like :meth:`update`, and also ``log p(z_1..z_k | past)`` ``(...)`` per batch entry.
 

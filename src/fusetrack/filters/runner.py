@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, MeasurementError, invalid
 from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
+from ..core.models import Filter, LikelihoodFilter, filter_step
 from ..core.track import Track
 from .stats import validate_measurement
 
@@ -79,7 +80,7 @@ def _batch_shape(measurements: list[Measurement]) -> tuple[int, ...]:
 
 
 def run_filter(
-    filt: Any,
+    filt: Filter[Any],
     prior: Any,
     measurements: Iterable[Measurement | tuple[Any, ...]],
     *,
@@ -87,13 +88,16 @@ def run_filter(
     order: Literal["reject", "reorder"] = "reject",
     times: ArrayLike | None = None,
     t0: float | None = None,
+    log_likelihood: bool = False,
 ) -> Track:
     """Run ``filt`` from ``prior`` over ``measurements`` and return the filtered track.
 
     Parameters
     ----------
     filt:
-        any filter with ``predict(belief, dt, rng)`` and ``update(belief, measurements, rng)``.
+        any :class:`~fusetrack.core.Filter`: ``predict(belief, dt, rng)`` and
+        ``update(belief, measurements, rng)``, or its own ``step`` when it has one
+        (:func:`~fusetrack.core.filter_step`).
         If it also has ``initialize(prior, rng[, batch_shape])`` (particle filters) and
         ``prior`` is a :class:`~fusetrack.core.Gaussian`, the prior is turned into particles
         with it.
@@ -115,6 +119,11 @@ def run_filter(
         the time of ``prior``; default the first step's time (no prediction before the first
         update). Steps before ``t0`` raise :class:`~fusetrack.core.MeasurementError`.
 
+    log_likelihood:
+        also sum the filter's log-likelihood increments ``log p(z_k | z_1:k-1)`` into
+        ``track.info["log_likelihood"]`` (per batch entry); the filter must be a
+        :class:`~fusetrack.core.LikelihoodFilter`.
+
     Returns
     -------
     Track
@@ -124,6 +133,15 @@ def run_filter(
     """
     if order not in ("reject", "reorder"):
         raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
+    if log_likelihood and not isinstance(filt, LikelihoodFilter):
+        raise ConfigError(
+            invalid(
+                "log_likelihood",
+                True,
+                f"False for {type(filt).__name__}, which does not report log p(z_k | z_1:k-1) "
+                "(no update_with_likelihood)",
+            )
+        )
     ms = order_by_time(as_measurements(measurements), order)
     sensors = getattr(filt, "sensors", None)
     if isinstance(sensors, Mapping):  # unknown sensors and wrong sizes fail before any work
@@ -132,7 +150,8 @@ def run_filter(
     steps = _steps(ms, times)
     batch = _batch_shape(ms)
 
-    is_sampler = callable(getattr(filt, "initialize", None))
+    initialize = getattr(filt, "initialize", None)  # particle filters: a Gaussian prior -> samples
+    is_sampler = callable(initialize)
     if is_sampler and rng is None:
         raise ConfigError(
             invalid(
@@ -146,9 +165,9 @@ def run_filter(
     if isinstance(prior, Gaussian):
         if is_sampler:
             if batch and prior.mean.ndim == 1:
-                belief = filt.initialize(prior, rng, batch_shape=batch)
+                belief = initialize(prior, rng, batch_shape=batch)  # type: ignore[misc]
             else:
-                belief = filt.initialize(prior, rng)
+                belief = initialize(prior, rng)  # type: ignore[misc]
         else:
             full = np.broadcast_shapes(prior.mean.shape[:-1], prior.cov.shape[:-2], batch)
             d = prior.dim
@@ -175,19 +194,29 @@ def run_filter(
     out_t: list[float] = []
     out_mean: list[np.ndarray] = []
     out_cov: list[np.ndarray] = []
+    loglik: Any = 0.0
     for t, group in steps:
         dt = t - t_prev
         if dt > _TIME_TOLERANCE:
-            belief = filt.predict(belief, dt, rng)
             t_prev = t
-        if group:
-            belief = filt.update(belief, group, rng)
+        else:
+            dt = 0.0
+        if log_likelihood and group:
+            if dt > 0.0:
+                belief = filt.predict(belief, dt, rng)
+            assert isinstance(filt, LikelihoodFilter)
+            belief, increment = filt.update_with_likelihood(belief, group, rng)
+            loglik = loglik + increment
+        else:
+            belief = filter_step(filt, belief, dt, group, rng)
         out_t.append(t)
         summary = estimate(belief) if estimate is not None else belief
         out_mean.append(np.asarray(summary.mean))
         out_cov.append(np.asarray(summary.cov))
 
     info: dict[str, Any] = {"filter": type(filt).__name__}
+    if log_likelihood:
+        info["log_likelihood"] = loglik
     if stats is not None:
         after = stats.as_dict()
         info["stats"] = {k: after[k] - before.get(k, 0) for k in after}

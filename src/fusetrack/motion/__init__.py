@@ -12,6 +12,7 @@ from .linear import (
     kinematic_noise,
     kinematic_transition,
 )
+from .linear_gaussian import LinearGaussianMotion
 from .switching import MarkovSwitching
 from .turn import CoordinatedTurn, CoordinatedTurnRate
 
@@ -20,6 +21,7 @@ __all__ = [
     "ConstantVelocity",
     "CoordinatedTurn",
     "CoordinatedTurnRate",
+    "LinearGaussianMotion",
     "MarkovSwitching",
     "RandomWalk",
     "kinematic_noise",

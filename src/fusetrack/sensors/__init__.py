@@ -13,6 +13,7 @@ only ``predict``, ``jacobian`` and ``noise_cov``:
 
 from .angles import AzimuthPolar, Bearing
 from .base import MIN_RANGE_SQ, SensorBase, wrap
+from .linear_gaussian import LinearGaussianSensor
 from .position_fix import PositionFix
 from .range import Range, RangeBearing
 
@@ -20,6 +21,7 @@ __all__ = [
     "MIN_RANGE_SQ",
     "AzimuthPolar",
     "Bearing",
+    "LinearGaussianSensor",
     "PositionFix",
     "Range",
     "RangeBearing",
