@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..core import Gaussian, Measurement
+from ..core import Filter, Gaussian, Measurement
 from ..evaluation import plots, position_rmse_bound, posterior_crlb
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
@@ -111,7 +111,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     truth, reports = simulate(scn, rng)
     truth = truth[1:]
     motion, sensors, prior = scn.motion(), scn.sensors(), scn.prior()
-    filters = {
+    filters: dict[str, Filter[Any]] = {
         "EKF": ExtendedKalmanFilter(motion, sensors),
         "UKF": UnscentedKalmanFilter(motion, sensors),
         "PF": BootstrapFilter(
