@@ -26,6 +26,7 @@ from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
 from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
+from .multiple_model import MMBelief as MMBelief
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
 from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
@@ -35,7 +36,7 @@ from .particle import RegularizedParticleFilter as RegularizedParticleFilter
 from .runner import run_filter as run_filter
 from .sis import PriorProposal as PriorProposal
 from .sis import ProposalParticleFilter as ProposalParticleFilter
-from .sis import run_sis as run_sis
+from .sis import SISBelief as SISBelief
 from .slice_sampling import slice_sample as slice_sample
 from .sp_pekf import SPPEKFBank as SPPEKFBank
 from .sp_pekf import SPPEKFProposal as SPPEKFProposal

@@ -21,8 +21,7 @@ the set; spec choice 22).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
-from types import SimpleNamespace
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -30,10 +29,20 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, invalid
+from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
-from .sis import Array, LogLikelihood, SISStats, Zs, resample_log_weights
+from .sis import (
+    Array,
+    LogLikelihood,
+    ProposalContext,
+    SISStats,
+    Zs,
+    aligned_values,
+    check_generator,
+    resample_log_weights,
+)
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
 
 IntArray = NDArray[np.intp]
@@ -125,17 +134,38 @@ class PaddedModel:
         )
 
 
-@dataclass(frozen=True)
-class MMState:
-    particles: Array  # (..., N, d)
-    modes: IntArray  # (..., N)
-    estimate: Array  # (..., d)
-    model_probs: Array  # (..., M) regime shares after resampling
+@dataclass(frozen=True, eq=False)
+class MMBelief:
+    """Particles with a regime each: ``states`` ``(..., N, d)``, ``modes`` ``(..., N)``, equally
+    weighted after a step; ``estimate`` ``(..., d)`` their mean, ``model_probs`` ``(..., M)`` the
+    regime shares, ``banks`` the SP-PEKF bank state of each regime (MMPF-SP). Between
+    ``predict`` and ``update``, ``parents`` holds the states each particle was drawn from."""
+
+    states: Array
+    modes: IntArray
+    estimate: Array
+    model_probs: Array
     banks: tuple[BankState | None, ...] = ()
+    parents: Array | None = None
+
+    @property
+    def mean(self) -> Array:
+        return self.estimate
+
+    @property
+    def cov(self) -> Array:
+        """Sample covariance of the (equally weighted) particles, ``(..., d, d)``."""
+        dev = self.states - self.estimate[..., None, :]
+        n = self.states.shape[-2]
+        return np.asarray(np.einsum("...ni,...nj->...ij", dev, dev) / max(n - 1, 1))
 
 
 class MultipleModelParticleFilter:
-    """Jump-Markov particle filter: MM-bootstrap (``proposal="prior"``) or MMPF-SP (``"sp-pekf"``).
+    """Jump-Markov particle filter: MM-bootstrap (``proposal="prior"``), MMPF-SP
+    (``"sp-pekf"``) or the discretisation MMPF (``"cells"``); a
+    :class:`~fusetrack.core.SteppingFilter` over :class:`MMBelief`. ``predict`` (regimes by
+    Eq. 47, states by each regime's motion model) followed by ``update`` (weight, resample) is
+    the MM-bootstrap step.
 
     >>> from fusetrack.motion import ConstantVelocity
     >>> from fusetrack.motion.maneuver import ManeuverTurn
@@ -145,7 +175,7 @@ class MultipleModelParticleFilter:
     >>> mm = MultipleModelParticleFilter(models, pi, [Bearing("b", [0, 0], 0.05)], 500)
     >>> rng = np.random.default_rng(0)
     >>> s = mm.initialize(Gaussian(np.array([10.0, 30, 1, 0]), np.diag([1, 1, 0.1, 0.1])), rng)
-    >>> s = mm.step(s, [np.array([1.25])], 1.0, rng)
+    >>> s = mm.step(s, 1.0, [Measurement(1.0, "b", [1.25])], rng)
     >>> s.model_probs.shape
     (3,)
     """
@@ -190,7 +220,7 @@ class MultipleModelParticleFilter:
 
     def initialize(
         self, prior: Gaussian, rng: np.random.Generator, batch_shape: tuple[int, ...] = ()
-    ) -> MMState:
+    ) -> MMBelief:
         mean, cov = np.asarray(prior.mean, float), np.asarray(prior.cov, float)
         d, n = len(mean), self.n_particles
         x = mean + rng.standard_normal((*batch_shape, n, d)) @ np.linalg.cholesky(cov).T
@@ -198,7 +228,7 @@ class MultipleModelParticleFilter:
             np.zeros((*batch_shape, n), dtype=np.intp), np.tile(self.initial_probs, (1, 1)), rng
         )
         banks = tuple(b.initialize(prior, rng, batch_shape) for b in self.banks)
-        return MMState(
+        return MMBelief(
             x, modes, np.broadcast_to(mean, (*batch_shape, d)).copy(), self._shares(modes), banks
         )
 
@@ -221,7 +251,7 @@ class MultipleModelParticleFilter:
         if prev.ndim != 2:
             raise ConfigError(invalid("batch_shape", prev.shape[:-2], "() for proposal='cells'"))
         model = self.models[r]
-        view = SimpleNamespace(motion=model, sensors=self.sensors, stats=self.stats)
+        view = ProposalContext(model, self.sensors, self.stats)
         centre, w, delta = self.cell_proposal.cells(prev, zs, dt, view)
         pos = list(model.position_index)  # type: ignore[attr-defined]
         p, log_q = sample_cells(centre[:, pos], w, delta, n_r, rng)
@@ -230,70 +260,95 @@ class MultipleModelParticleFilter:
         n = prev.shape[0]
         return x, log_pred - (log_q + np.log(n_r / n))
 
-    def step(self, state: MMState, zs: Zs, dt: float, rng: np.random.Generator) -> MMState:
-        prev = state.particles
-        modes = sample_regimes(state.modes, self.transition, rng)  # Eq. 47
+    def step(
+        self,
+        belief: MMBelief,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> MMBelief:
+        """Regimes (Eq. 47), states from each regime's proposal, weights (Eqs. 48, 53),
+        resampling of states and regimes together, bank feedback."""
+        gen = check_generator(rng)
+        zs, _ = aligned_values(self.sensors, measurements)
+        prev = belief.states
+        modes = sample_regimes(belief.modes, self.transition, gen)  # Eq. 47
         loglik = LogLikelihood(self.sensors, zs, self.stats)
         x = np.empty_like(prev)
         log_w = loglik(prev) * 0.0
-        banks = list(state.banks)
+        banks = list(belief.banks)
         for r, model in enumerate(self.models):
             sel = modes == r
             if self.proposal == "cells":
                 if np.any(sel):
                     x[sel], log_w[sel] = self._from_cells(
-                        r, prev, state.modes, int(sel.sum()), zs, dt, rng
+                        r, prev, belief.modes, int(sel.sum()), zs, dt, gen
                     )
                 continue
             if self.proposal == "prior":
                 if np.any(sel):
-                    x[sel] = model.sample(prev[sel], dt, rng)
+                    x[sel] = model.sample(prev[sel], dt, gen)
                 continue
             bank = self.banks[r]
-            bs = bank.step(banks[r], zs, dt, rng)  # type: ignore[arg-type]  # Eq. 54
+            bs = bank.step(banks[r], zs, dt, gen)  # type: ignore[arg-type]  # Eq. 54
             banks[r] = bs
-            draw, log_q = gaussian_draw(bs.mean, bs.total_cov, self.n_particles, rng)
+            draw, log_q = gaussian_draw(bs.mean, bs.total_cov, self.n_particles, gen)
             x = np.where(sel[..., None], draw, x)
             lt = np.asarray(model.log_density(draw, prev, dt))
             log_w = np.where(sel, lt - log_q, log_w)  # Eq. 53 (likelihood added below)
         if loglik:
             log_w = log_w + loglik(x)
+        return self._select(x, modes, log_w, tuple(banks), gen)
+
+    def predict(
+        self, belief: MMBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> MMBelief:
+        """``r_t`` by Eq. 47 and ``x_t ~ p(x_t | x_{t-1}, r_t)``; the parents wait for update."""
+        gen = check_generator(rng)
+        prev = belief.states
+        modes = sample_regimes(belief.modes, self.transition, gen)
+        x = np.empty_like(prev)
+        for r, model in enumerate(self.models):
+            sel = modes == r
+            if np.any(sel):
+                x[sel] = model.sample(prev[sel], dt, gen)
+        return MMBelief(x, modes, x.mean(axis=-2), self._shares(modes), belief.banks, parents=prev)
+
+    def update(
+        self,
+        belief: MMBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> MMBelief:
+        """Weight by ``p(z_t | x_t)``, resample states and regimes together."""
+        zs, _ = aligned_values(self.sensors, measurements)
+        loglik = LogLikelihood(self.sensors, zs, self.stats)
+        if not loglik:
+            return belief
+        x = belief.states
+        return self._select(x, belief.modes, loglik(x), belief.banks, check_generator(rng))
+
+    def _select(
+        self,
+        x: Array,
+        modes: IntArray,
+        log_w: Array,
+        banks: tuple[BankState | None, ...],
+        rng: np.random.Generator,
+    ) -> MMBelief:
+        """Resample states and regimes by ``log_w``; estimate; feed every bank its regime's mean
+        (the overall mean for a regime with no particle)."""
         idx = resample_log_weights(log_w, self.resample, rng, self.stats)
         x = np.take_along_axis(x, idx[..., None], axis=-2)
         modes = np.take_along_axis(modes, idx, axis=-1)
         est = x.mean(axis=-2)
-        if self.banks:
-            for r, bank in enumerate(self.banks):
-                sel = (modes == r)[..., None]
-                cnt = sel.sum(axis=-2)
-                sub = np.where(cnt > 0, (x * sel).sum(axis=-2) / np.maximum(cnt, 1), est)
-                banks[r] = bank.feedback(banks[r], sub)  # type: ignore[arg-type]
-        return replace(
-            state,
-            particles=x,
-            modes=modes,
-            estimate=est,
-            model_probs=self._shares(modes),
-            banks=tuple(banks),
-        )
-
-
-def run_mm(
-    filt: MultipleModelParticleFilter,
-    prior: Gaussian,
-    measurements: Sequence[Zs],
-    dt: float,
-    rng: np.random.Generator,
-    batch_shape: tuple[int, ...] = (),
-) -> tuple[Array, Array]:
-    """Estimates ``(T, *batch, d)`` and model probabilities ``(T, *batch, M)``."""
-    s = filt.initialize(prior, rng, batch_shape)
-    est, probs = [], []
-    for zs in measurements:
-        s = filt.step(s, zs, dt, rng)
-        est.append(s.estimate)
-        probs.append(s.model_probs)
-    return np.array(est), np.array(probs)
+        fed = list(banks)
+        for r, bank in enumerate(self.banks):
+            sel = (modes == r)[..., None]
+            cnt = sel.sum(axis=-2)
+            sub = np.where(cnt > 0, (x * sel).sum(axis=-2) / np.maximum(cnt, 1), est)
+            fed[r] = bank.feedback(fed[r], sub)  # type: ignore[arg-type]
+        return MMBelief(x, modes, est, self._shares(modes), tuple(fed))
 
 
 def hmm_filter(transition: ArrayLike, loglik: Array, initial: ArrayLike) -> Array:
