@@ -26,6 +26,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.special import logsumexp
 
 from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, invalid
@@ -321,12 +322,24 @@ class MultipleModelParticleFilter:
         rng: np.random.Generator | None = None,
     ) -> MMBelief:
         """Weight by ``p(z_t | x_t)``, resample states and regimes together."""
+        return self.update_with_likelihood(belief, measurements, rng)[0]
+
+    def update_with_likelihood(
+        self,
+        belief: MMBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> tuple[MMBelief, Array]:
+        """:meth:`update` and ``log p(z_t | z_1:t-1)`` ``(...)``, estimated by
+        ``log (1/N) sum_i p(z_t | x_t^i)`` over the predicted particles (0 with no report)."""
         zs, _ = aligned_values(self.sensors, measurements)
         loglik = LogLikelihood(self.sensors, zs, self.stats)
         if not loglik:
-            return belief
+            return belief, np.zeros(belief.states.shape[:-2])
         x = belief.states
-        return self._select(x, belief.modes, loglik(x), belief.banks, check_generator(rng))
+        ll = loglik(x)
+        increment = np.asarray(logsumexp(ll, axis=-1) - np.log(x.shape[-2]), dtype=float)
+        return self._select(x, belief.modes, ll, belief.banks, check_generator(rng)), increment
 
     def _select(
         self,

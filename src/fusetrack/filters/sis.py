@@ -393,22 +393,35 @@ class ProposalParticleFilter:
         rng: np.random.Generator | None = None,
     ) -> SISBelief:
         """Weight the predicted particles by ``p(z_t | x_t)``, resample, move, feed back."""
+        return self.update_with_likelihood(belief, measurements, rng)[0]
+
+    def update_with_likelihood(
+        self,
+        belief: SISBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> tuple[SISBelief, Array]:
+        """:meth:`update` and ``log p(z_t | z_1:t-1)`` ``(...)`` per run, estimated by
+        ``log (1/N) sum_i p(z_t | x_t^i)`` over the equally weighted predicted particles
+        (0 when no sensor reported)."""
         zs, side = aligned_values(self.sensors, measurements, self._side_ids)
         loglik = LogLikelihood(self.sensors, zs, self.stats)
         if not loglik:
-            return belief
+            return belief, np.zeros(belief.batch_shape)
         parents = belief.parents if belief.parents is not None else belief.states
         x = belief.states
+        ll = loglik(x)
+        increment = logsumexp(ll, axis=-1) - np.log(x.shape[-2])
         return self._select(
             x,
             parents,
-            loglik(x),
+            ll,
             loglik,
             belief.proposal,
             belief.dt,
             check_generator(rng),
             self.context(side),
-        )
+        ), np.asarray(increment, dtype=float)
 
     def _select(
         self,
