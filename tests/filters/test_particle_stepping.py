@@ -63,8 +63,8 @@ def test_multiple_model_step_is_predict_then_update():
         a = mm.step(a, 1.0, ms, r1)
         b = mm.update(mm.predict(b, 1.0, r2), ms, r2)
     np.testing.assert_array_equal(a.states, b.states)
-    np.testing.assert_array_equal(a.modes, b.modes)
-    np.testing.assert_array_equal(a.model_probs, b.model_probs)
+    np.testing.assert_array_equal(a.proposal.modes, b.proposal.modes)
+    np.testing.assert_array_equal(a.proposal.model_probs, b.proposal.model_probs)
 
 
 def test_interleaved_runs_equal_separate_runs():

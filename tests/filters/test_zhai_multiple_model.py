@@ -64,7 +64,7 @@ def _model_probs(mm, zs, rng, batch_shape=()):
     out = []
     for k, z in enumerate(zs):
         b = mm.step(b, 1.0, [Measurement(k + 1.0, "p", [z])], rng)
-        out.append(b.model_probs)
+        out.append(b.proposal.model_probs)
     return np.array(out)
 
 

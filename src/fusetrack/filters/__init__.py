@@ -26,8 +26,9 @@ from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
 from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
-from .multiple_model import MMBelief as MMBelief
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
+from .multiple_model import RegimeState as RegimeState
+from .multiple_model import RegimeSwitchingProposal as RegimeSwitchingProposal
 from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter

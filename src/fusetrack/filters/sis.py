@@ -437,6 +437,9 @@ class ProposalParticleFilter:
         """Resample by ``log_w``, move (with the likelihood in view), estimate, feed back."""
         idx = resample_log_weights(log_w, self.resample, rng, self.stats)
         x_res = np.take_along_axis(x, idx[..., None], axis=-2)
+        reindex = getattr(self.proposal, "reindex", None)
+        if reindex is not None:  # per-particle parts of the proposal state (regimes)
+            pstate = reindex(pstate, idx)
         if self.move is not None and loglik:
             parents = np.take_along_axis(prev, idx[..., None], axis=-2)
             x_res = self.move(x_res, parents, loglik, dt, rng, ctx)

@@ -138,6 +138,6 @@ def timed_mm(
     """A multiple-model particle filter run (:func:`run_steps`): estimates ``(T, d)``, model
     probabilities ``(T, M)`` and seconds."""
     t0 = time.perf_counter()
-    kept = run_steps(filt, prior, zs, dt, rng, keep=lambda b: (b.estimate, b.model_probs))
+    kept = run_steps(filt, prior, zs, dt, rng, keep=lambda b: (b.estimate, b.proposal.model_probs))
     secs = time.perf_counter() - t0
     return np.array([e for e, _ in kept]), np.array([p for _, p in kept]), secs
