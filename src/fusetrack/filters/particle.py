@@ -90,7 +90,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from itertools import repeat
@@ -104,7 +103,6 @@ from ..core import resampling
 from ..core.beliefs import Gaussian, Particles
 from ..core.errors import (
     ConfigError,
-    DegenerateWeightsWarning,
     MeasurementError,
     ShapeError,
     check_positive,
@@ -272,7 +270,6 @@ class ParticleFilter:
         self.temper_factor = tf
         self.min_log_evidence = mle
         self.stats = FilterStats()
-        self._warned = False
         self._fused_dt: tuple[float, tuple[Array, Array] | None] | None = None
         self._fused_ll: dict[int, tuple[SensorModel, tuple[int, Array] | None]] = {}
         self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...], Any]] = {}
@@ -949,18 +946,12 @@ class ParticleFilter:
         return recovered
 
     def _note_degenerate(self, degenerate: bool) -> None:
-        if not degenerate:
-            return
-        self.stats.degenerate_steps += 1
-        if not self._warned:
-            self._warned = True
-            warnings.warn(
-                f"{type(self).__name__}: every particle's likelihood vanished for a measurement "
-                f"(log evidence not finite or below min_log_evidence={self.min_log_evidence:.1f}); "
-                f"recovered with degenerate={self.degenerate!r}. Counted in "
-                "stats.degenerate_steps; this warning is shown once per filter.",
-                DegenerateWeightsWarning,
-                stacklevel=3,
+        if degenerate:
+            self.stats.note_degenerate(
+                type(self).__name__,
+                "for a measurement: log evidence not finite or below min_log_evidence="
+                f"{self.min_log_evidence:.1f}; recovered with degenerate={self.degenerate!r}",
+                stacklevel=4,
             )
 
 

@@ -163,18 +163,22 @@ def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
 
 
 def resample_log_weights(
-    log_w: Array, resample: Callable[..., Any], rng: np.random.Generator, stats: FilterStats
+    log_w: Array,
+    resample: Callable[..., Any],
+    rng: np.random.Generator,
+    stats: FilterStats,
+    owner: str = "particle filter",
 ) -> NDArray[np.intp]:
     """Normalise log-weights ``(..., N)`` per run and resample: ancestor indices ``(..., N)``.
 
     NaN counts as ``-inf``; a run whose weights all vanished keeps them equal and the step is
-    counted in ``stats.degenerate_steps`` (never NaN).
+    counted and warned (:meth:`~fusetrack.filters.stats.FilterStats.note_degenerate`; never NaN).
     """
     log_w = np.where(np.isnan(log_w), -np.inf, log_w)
     top = np.max(log_w, axis=-1, keepdims=True)
     bad = ~np.isfinite(top)
     if np.any(bad):
-        stats.degenerate_steps += 1
+        stats.note_degenerate(owner, "every weight of a run was zero; it kept them equal", 5)
         log_w = np.where(bad, 0.0, log_w)
         top = np.where(bad, 0.0, top)
     w = np.exp(log_w - top)
@@ -435,7 +439,7 @@ class ProposalParticleFilter:
         ctx: ProposalContext,
     ) -> SISBelief:
         """Resample by ``log_w``, move (with the likelihood in view), estimate, feed back."""
-        idx = resample_log_weights(log_w, self.resample, rng, self.stats)
+        idx = resample_log_weights(log_w, self.resample, rng, self.stats, type(self).__name__)
         x_res = np.take_along_axis(x, idx[..., None], axis=-2)
         reindex = getattr(self.proposal, "reindex", None)
         if reindex is not None:  # per-particle parts of the proposal state (regimes)
