@@ -19,6 +19,10 @@ measurements of an update are summed and normalised once (the degeneracy rules b
 per measurement: a cheap bound vouches for each, and the exact one-at-a-time update runs when it
 cannot).
 
+:meth:`ParticleFilter.update_with_likelihood` also returns the log-likelihood increment
+``log p(z_k | z_1:k-1)`` per run, the log normaliser of the same pass (so the filters are
+:class:`~fusetrack.core.LikelihoodFilter` s: parameter estimation, model comparison).
+
 Resampling sits at the start of ``predict`` rather than the end of ``update`` so that the
 estimate after an update (:meth:`ParticleFilter.estimate`) is taken from the weighted particles,
 which has lower variance than taking it after resampling; the sequence of particle sets is the

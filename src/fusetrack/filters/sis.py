@@ -11,6 +11,12 @@ dissertation (bootstrap, PF-SP-PEKF, Galerkin and grid proposals, MCMC moves):
    with an MCMC kernel that leaves ``p(z_t | x) p(x | x_{t-1}^{a_i})`` invariant (Algorithms 8-10);
 4. output the mean of the resampled particles and hand it back to the proposal ("feedback").
 
+Proposals: the transition prior (:class:`PriorProposal`), the EKF bank of PF-SP-PEKF
+(:mod:`.sp_pekf`), CPF-SP (:mod:`.cpf_sp`), unscented (:mod:`.unscented_proposal`), Galerkin and
+discretisation (:mod:`.grid_proposals`), and regime switching (:mod:`.multiple_model`: the
+multiple-model filters are this engine with a regime per particle); MCMC moves in
+:mod:`.mcmc_moves`.
+
 Pairing (spec Sec. 2.1): when the proposal ignores the particle's own past, Eq. 13 pairs new
 particle i with resampled ancestor i ("paired", the thesis's literal weight). ``transition=
 "marginal"`` uses ``(1/N) sum_j p(x_t^i | x_{t-1}^j)`` instead (O(N^2), the marginal-proposal weight).
@@ -107,6 +113,9 @@ class Proposal(Protocol):
 
     ``filt`` is the step's :class:`ProposalContext`; everything a proposal carries from step to
     step is its ``state`` (returned by ``initialize``/``draw``/``feedback``, kept in the belief).
+    Optional members: ``returns_log_ratio`` (see :meth:`draw`), ``side_inputs`` (measurement ids
+    the proposal reads, see :class:`ProposalContext`) and ``reindex(state, ancestors)``, which
+    makes per-particle parts of the state (regimes, :mod:`.multiple_model`) follow resampling.
     """
 
     def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> Any: ...
