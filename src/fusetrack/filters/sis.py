@@ -49,6 +49,7 @@ from ..core.errors import (
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
+from . import kernels
 from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .stats import FilterStats
 
@@ -180,18 +181,16 @@ def resample_log_weights(
 ) -> NDArray[np.intp]:
     """Normalise log-weights ``(..., N)`` per run and resample: ancestor indices ``(..., N)``.
 
-    NaN counts as ``-inf``; a run whose weights all vanished keeps them equal and the step is
-    counted and warned (:meth:`~fusetrack.filters.stats.FilterStats.note_degenerate`; never NaN).
+    The normalisation is the particle filters' shared kernel
+    (:func:`~fusetrack.filters.kernels.normalize_log_weights`). NaN counts as ``-inf``; a run
+    whose weights all vanished keeps them equal and the step is counted and warned
+    (:meth:`~fusetrack.filters.stats.FilterStats.note_degenerate`; never NaN).
     """
-    log_w = np.where(np.isnan(log_w), -np.inf, log_w)
-    top = np.max(log_w, axis=-1, keepdims=True)
-    bad = ~np.isfinite(top)
+    _, w, lse, _ = kernels.normalize_log_weights(log_w)
+    bad = ~np.isfinite(lse)
     if np.any(bad):
         stats.note_degenerate(owner, "every weight of a run was zero; it kept them equal", 5)
-        log_w = np.where(bad, 0.0, log_w)
-        top = np.where(bad, 0.0, top)
-    w = np.exp(log_w - top)
-    w /= w.sum(axis=-1, keepdims=True)
+        w[bad] = 1.0 / w.shape[-1]
     stats.resample_count += 1
     return np.asarray(resample(w, rng), dtype=np.intp)
 
