@@ -21,7 +21,6 @@ from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
-from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
