@@ -12,6 +12,7 @@ so the bound is a real bound here, not an approximation.
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -26,6 +27,8 @@ from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
 from ..filters.particle import BootstrapFilter
 from ..motion import CoordinatedTurnRate
 from ..sensors import Bearing, PositionFix
+
+logger = logging.getLogger(__name__)
 
 AREA = (0.0, 100.0, 0.0, 60.0)
 POSITION = (0, 1)
@@ -248,8 +251,12 @@ def run(ctx: RunContext) -> Outcome:
             "RMSE / PCRB": avg / bound_avg,
         }
     ).loc[["EKF", "UKF", "PF"]]
-    print(f"\nTime-averaged over {runs} runs (PCRB position bound {bound_avg:.3f} m):")
-    print(table.to_string(float_format=lambda v: f"{v:.3f}"))
+    logger.info(
+        "\nTime-averaged over %d runs (PCRB position bound %.3f m):\n%s",
+        runs,
+        bound_avg,
+        table.to_string(float_format=lambda v: f"{v:.3f}"),
+    )
     hidden = np.array([any(a <= t < b for a, b in scn.occluded) for t in times])
     ratio_seen = rmse.loc[~hidden].mean() / pcrb[~hidden].mean()
     ratio_hidden = rmse.loc[hidden].mean() / pcrb[hidden].mean()
