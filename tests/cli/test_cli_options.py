@@ -157,3 +157,24 @@ def test_verbosity_sets_the_logging_level(toy, flags, info, debug, tmp_path, cap
 
 def test_describe_options_of_a_model_without_options():
     assert describe_options(ExperimentOptions) == "  (none)"
+
+
+def test_every_example_yaml_is_described_by_a_pydantic_model(tmp_path):
+    """Each file in examples/ validates against its model; an unknown key is refused by name."""
+    from fusetrack.evaluation.options import load_yaml
+    from fusetrack.experiments.ercan2013.scenes import RoomConfig
+    from fusetrack.service.config import load_config
+
+    examples = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.yaml"))
+    assert examples
+    for path in examples:
+        if path.name.startswith("ercan2013_room"):
+            assert len(load_yaml(RoomConfig, path).cameras) == 6
+        else:
+            assert load_config(path) is not None
+    bad = tmp_path / "room.yaml"
+    bad.write_text((examples[0].parent / "ercan2013_room.yaml").read_text() + "colour: red\n")
+    with pytest.raises(
+        ConfigError, match=r"config.colour is not a known key: expected one of .*cameras"
+    ):
+        load_yaml(RoomConfig, bad)
