@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -59,6 +61,31 @@ def size_options(ctx: RunContext, size: dict[str, int]) -> dict[str, int]:
     if out["burn_in"] >= out["steps"]:
         raise ConfigError(invalid("--set burn_in", out["burn_in"], f"< steps = {out['steps']}"))
     return out
+
+
+@dataclass(frozen=True)
+class Timed:
+    """A Monte Carlo table with the wall time and load averages around it."""
+
+    results: pd.DataFrame
+    wall: float
+    load_start: tuple[float, float, float]
+    load_end: tuple[float, float, float]
+
+
+def timed_monte_carlo(
+    ctx: RunContext,
+    fn: Callable[..., Any],
+    configs: Sequence[Mapping[str, Any]],
+    runs: int,
+    desc: str,
+) -> Timed:
+    """``ctx.monte_carlo(fn, configs, runs)`` timed: wall seconds, load average before and after."""
+    load_start = os.getloadavg()
+    t0 = time.perf_counter()
+    results = ctx.monte_carlo(fn, configs, runs, desc=desc)
+    wall = time.perf_counter() - t0
+    return Timed(results, wall, load_start, os.getloadavg())
 
 
 def mean_std(df: pd.DataFrame, by: Sequence[str], value: str = "rmse_tr") -> pd.DataFrame:

@@ -33,18 +33,18 @@ from scipy.stats import spearmanr
 from ...evaluation import plots
 from ...evaluation.options import ExperimentOptions
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.energy_localisation import energy_localise
-from ...filters.harmonic_localisation import (
+from ...perception.harmonic_features import NodeFeatures, compress_psd, psd
+from ...perception.harmonic_features import beamform as beamform_energies
+from ...perception.source_localisation import (
     AcousticNetwork,
     BeamformModel,
     FrequencyModel,
+    energy_localise,
     estimate_frequencies,
     harmonic_powers,
     localise,
     match_error,
 )
-from ...perception.harmonic_features import NodeFeatures, compress_psd, psd
-from ...perception.harmonic_features import beamform as beamform_energies
 from ...world.harmonic_sources import HarmonicSource, noise_sigma, random_sources, received_signals
 
 
