@@ -123,8 +123,12 @@ class _ToyOptions(ExperimentOptions):
     size: int = Field(3, ge=1, description="rows to write")
 
 
+_SEEN: list[RunContext] = []
+
+
 def _toy_run(ctx: RunContext) -> Outcome:
     opts = _ToyOptions.of(ctx)
+    _SEEN.append(ctx)
     logging.getLogger("fusetrack.experiments.toy").info("toy: progress line")
     logging.getLogger("fusetrack.experiments.toy").debug("toy: debug line")
     df = pd.DataFrame({"run": range(opts.size)})
@@ -149,6 +153,7 @@ def test_verbosity_sets_the_logging_level(toy, flags, info, debug, tmp_path, cap
     captured = capsys.readouterr()
     assert ("toy: progress line" in captured.err) is info
     assert ("toy: debug line" in captured.err) is debug
+    assert (_SEEN[-1].progress is False) is (flags == ["-q"])  # -q: no progress bar either
     assert "1/1 claims hold (2 runs" in captured.out  # the summary is the product: always printed
     assert "--set size=2`" in (tmp_path / "report.md").read_text().splitlines()[2]
     assert main(["run", toy, *flags, "--out", str(tmp_path)]) == 0  # after the command, too

@@ -405,7 +405,7 @@ def main(args: Any) -> int:
         args.calibration,
         args.out,
         clock_offset=args.clock_offset,
-        progress=False if args.no_progress else None,
+        progress=False if args.no_progress or getattr(args, "quiet", 0) else None,
         drop_frames=drop,
     )
     print(
