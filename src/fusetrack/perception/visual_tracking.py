@@ -31,7 +31,7 @@ class FrameFilter(Protocol):
     def initialize(self, prior: Gaussian, rng: np.random.Generator) -> Any: ...
 
     def step(
-        self, state: Any, zs: Sequence[Array | None], dt: float, rng: np.random.Generator
+        self, state: Any, dt: float, measurements: Sequence[Measurement], rng: np.random.Generator
     ) -> Any: ...
 
 
@@ -74,7 +74,11 @@ def track_frames(
     front_end.adapt(frames[0], est[0])
     for k in range(1, len(frames)):
         zs = front_end.measure(frames[k], predicted_centre(est[-1]))
-        state = filt.step(state, zs, 1.0, rng)
+        ids = getattr(filt, "sensor_ids", None) or [s.sensor_id for s in filt.sensors]  # type: ignore[attr-defined]
+        ms = [
+            Measurement(float(k), i, np.asarray(z, float)) for i, z in zip(ids, zs) if z is not None
+        ]
+        state = filt.step(state, 1.0, ms, rng)
         if after_step is not None:
             state = after_step(state, k)
         e = np.asarray(state.estimate, float)
@@ -110,16 +114,12 @@ class GaussianFrameFilter:
     def step(
         self,
         state: GaussianFrameState,
-        zs: Sequence[Array | None],
         dt: float,
+        measurements: Sequence[Measurement],
         rng: np.random.Generator,
     ) -> GaussianFrameState:
         belief = self.filt.predict(state.belief, dt)
-        ms = [
-            Measurement(0.0, sid, np.atleast_1d(np.asarray(z, float)))
-            for sid, z in zip(self.sensor_ids, zs)
-            if z is not None and np.all(np.isfinite(z))
-        ]
+        ms = [m for m in measurements if m.is_finite]
         if ms:
             belief = self.filt.update(belief, ms)
         return GaussianFrameState(belief, np.asarray(belief.mean, float))
