@@ -11,7 +11,7 @@ T0-T4 and the baseline P on the same frames (``fusetrack.filters.smart_camera_tr
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ...core import Measurement, filter_step
 from ...evaluation import plots
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.smart_camera_trackers import (
@@ -29,12 +30,17 @@ from ...filters.smart_camera_trackers import (
     ImagePlaneTracker,
     Particle3DTracker,
     RayIntersectionTracker,
+    SmartCameraBelief,
+    SmartCameraTracker,
     TrackerSettings,
 )
-from ...perception.appearance import AppearanceModel, FeatureImage
+from ...perception.appearance import appearance_model_from_views, features_from_rgb
+from ...sensors.appearance import AppearanceModel
 from ...sensors.ellipsoid_camera import EllipsoidCamera
 from ...world.ellipsoid_scene import (
     EllipsoidTarget,
+    Frames,
+    Trajectory,
     corner_cameras,
     cube_viewpoints,
     perimeter_cameras,
@@ -77,7 +83,7 @@ def appearance_model() -> tuple[EllipsoidTarget, AppearanceModel]:
     target = EllipsoidTarget()
     views = cube_viewpoints()
     images, centres, shapes = reference_views(target, views)
-    return target, AppearanceModel.from_views(images, centres, shapes, views)
+    return target, appearance_model_from_views(images, centres, shapes, views)
 
 
 def gap_mask(
@@ -102,10 +108,21 @@ def gap_mask(
     return hidden
 
 
-def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    """Render one trajectory and run every tracker on it; one row per tracker and step."""
+@dataclass(frozen=True)
+class Scene:
+    """One rendered run: the truth, every camera's measurements per step, the network."""
+
+    truth: Trajectory
+    cameras: list[EllipsoidCamera]
+    frames: Frames
+    measurements: list[list[Measurement]]  # per step: one frame per camera
+    net: CameraNetwork
+    scale_change: float  # linear image-size change in the camera where it changes most
+
+
+def render_scene(config: Mapping[str, Any], rng: np.random.Generator) -> Scene:
+    """A smooth trajectory rendered by every camera of the set-up (with the gap, if any)."""
     setup = SETUPS[str(config["setup"])]
-    rng = np.random.default_rng(seed)
     target, model = appearance_model()
     cams = setup.cameras()
     steps = int(config["steps"])
@@ -122,69 +139,101 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         cams, target, truth.positions, truth.quaternions, range(GAP_START, GAP_START + gap)
     )
     frames = render_frames(cams, target, truth, rng, hidden=hidden)
-    feats = [[FeatureImage.from_rgb(img) for img in row] for row in frames.images]
     net = CameraNetwork.build(cams, model, target.semi_axes, setup.base)
+    measurements = [
+        net.measurements(float(t), [features_from_rgb(img) for img in row])
+        for t, row in enumerate(frames.images)
+    ]
+    seen_px = np.where(frames.participating, frames.target_pixels, np.nan).astype(float)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # cameras that never see the target
+        ratio = np.nanmax(seen_px, axis=0) / np.nanmin(seen_px, axis=0)
+    scale_change = float(np.sqrt(np.nanmax(ratio))) if np.any(np.isfinite(ratio)) else np.nan
+    return Scene(truth, cams, frames, measurements, net, scale_change)
+
+
+def trackers(net: CameraNetwork, settings: TrackerSettings) -> dict[str, SmartCameraTracker]:
+    """The paper's trackers and the ablations, by name."""
+    return {
+        "P": RayIntersectionTracker(net, settings),
+        "T0": Particle3DTracker("T0", net, settings),
+        "T1": Particle3DTracker("T1", net, settings),
+        "T2": Particle3DTracker("T2", net, settings),
+        "T3": ImagePlaneTracker("T3", net, settings),
+        "T4": ImagePlaneTracker("T4", net, settings),
+        "T0-rho1": Particle3DTracker("T0", net, replace(settings, sharpness=1.0)),
+        "T0-paper-orientation": Particle3DTracker(
+            "T0", net, replace(settings, orientation_fusion="paper")
+        ),
+    }
+
+
+def track(
+    tracker: SmartCameraTracker, scene: Scene, rng: np.random.Generator
+) -> list[SmartCameraBelief]:
+    """The tracker's beliefs at steps 1..T-1, from the manual initialisation at step 0."""
+    truth = scene.truth
+    belief = tracker.initial_belief(
+        truth.positions[0], truth.velocities[0], truth.quaternions[0], scene.measurements[0]
+    )
+    out = []
+    for t in range(1, len(scene.measurements)):
+        belief = filter_step(tracker, belief, 1.0, scene.measurements[t], rng)
+        out.append(belief)
+    return out
+
+
+def error_rows(
+    name: str, beliefs: Sequence[SmartCameraBelief], scene: Scene
+) -> list[dict[str, Any]]:
+    """One row per step (and per estimate: T4 adds its Eq. 103 closed form) with the errors."""
+    frames, truth, cams = scene.frames, scene.truth, scene.cameras
+    rows: list[dict[str, Any]] = []
+    for t, belief in enumerate(beliefs, start=1):
+        estimates = {
+            name: belief.position,
+            **({"T4-eq103": belief.extra["eq103"]} if "eq103" in belief.extra else {}),
+        }
+        seen = np.flatnonzero(frames.participating[t])
+        for label, est in estimates.items():
+            err2d = [
+                float(np.linalg.norm(cams[n].project(est) - cams[n].project(truth.positions[t])))
+                for n in seen
+            ]
+            own = label == name
+            rows.append(
+                {
+                    "tracker": label,
+                    "t": t,
+                    "err3d": float(np.linalg.norm(est - truth.positions[t])),
+                    "err2d": float(np.mean(err2d)) if err2d else np.nan,
+                    "participating": len(seen),
+                    "pixel_fraction": float(
+                        frames.target_pixels[t, seen].mean() / IMAGE_PIXELS if len(seen) else 0.0
+                    ),
+                    "bytes": int(belief.sent.bytes_sent) if own else np.nan,
+                    "link_bytes": int(belief.sent.link_bytes) if own else np.nan,
+                    "cameras_used": int(belief.sent.cameras_used),
+                    "scale_change": scene.scale_change,
+                }
+            )
+    return rows
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    """Render one trajectory and run every tracker on it; one row per tracker and step."""
+    setup = SETUPS[str(config["setup"])]
+    scene = render_scene(config, np.random.default_rng(seed))
     settings = TrackerSettings(
         n_particles=int(config["n_particles"]),
         n_particles_2d=int(config["n_particles_2d"]),
         sigma=setup.sigma,
         sharpness=float(config.get("sharpness", 20.0)),
     )
-    init = (truth.positions[0], truth.velocities[0], truth.quaternions[0])  # manual initialisation
-    trackers: dict[str, Any] = {
-        "P": RayIntersectionTracker(net, *init, feats[0], settings),
-        "T0": Particle3DTracker("T0", net, *init, settings),
-        "T1": Particle3DTracker("T1", net, *init, settings),
-        "T2": Particle3DTracker("T2", net, *init, settings),
-        "T3": ImagePlaneTracker("T3", net, *init, settings),
-        "T4": ImagePlaneTracker("T4", net, *init, settings),
-        "T0-rho1": Particle3DTracker("T0", net, *init, replace(settings, sharpness=1.0)),
-        "T0-paper-orientation": Particle3DTracker(
-            "T0", net, *init, replace(settings, orientation_fusion="paper")
-        ),
-    }
-    participating = frames.participating
-    seen_px = np.where(participating, frames.target_pixels, np.nan).astype(float)
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore", RuntimeWarning)  # cameras that never see the target
-        ratio = np.nanmax(seen_px, axis=0) / np.nanmin(seen_px, axis=0)
-    # linear scale change of the target image in the camera where it changes most
-    scale_change = float(np.sqrt(np.nanmax(ratio))) if np.any(np.isfinite(ratio)) else np.nan
     rows: list[dict[str, Any]] = []
-    for name, tracker in trackers.items():
+    for name, tracker in trackers(scene.net, settings).items():
         trng = np.random.default_rng([seed, [*TRACKERS, *ABLATIONS].index(name)])
-        for t in range(1, steps):
-            rep = tracker.step(feats[t], trng)
-            estimates = {
-                name: rep.position,
-                **({"T4-eq103": rep.extra["eq103"]} if "eq103" in rep.extra else {}),
-            }
-            seen = np.flatnonzero(participating[t])
-            for label, est in estimates.items():
-                err2d = [
-                    float(
-                        np.linalg.norm(cams[n].project(est) - cams[n].project(truth.positions[t]))
-                    )
-                    for n in seen
-                ]
-                rows.append(
-                    {
-                        "tracker": label,
-                        "t": t,
-                        "err3d": float(np.linalg.norm(est - truth.positions[t])),
-                        "err2d": float(np.mean(err2d)) if err2d else np.nan,
-                        "participating": len(seen),
-                        "pixel_fraction": float(
-                            frames.target_pixels[t, seen].mean() / IMAGE_PIXELS
-                            if len(seen)
-                            else 0.0
-                        ),
-                        "bytes": int(rep.bytes_sent) if label == name else np.nan,
-                        "link_bytes": int(rep.link_bytes) if label == name else np.nan,
-                        "cameras_used": int(rep.cameras_used),
-                        "scale_change": scale_change,
-                    }
-                )
+        rows += error_rows(name, track(tracker, scene, trng), scene)
     return rows
 
 
