@@ -199,3 +199,17 @@ def test_a_camera_without_its_frame_does_not_take_part():
         tracker.update(
             b0, [Measurement(1.0, net.sensors[0].sensor_id, [1.0])], np.random.default_rng(0)
         )
+
+
+def test_run_filter_runs_a_camera_tracker_over_the_frame_stream():
+    """The library's runner takes the tracker like any Filter: the same track as the loop."""
+    from fusetrack.filters import run_filter
+
+    truth, feats, _, net = _scene()
+    tracker = Particle3DTracker("T1", net, TrackerSettings(n_particles=100))
+    _, beliefs = _run(tracker, feats, truth, seed=5)
+    stream = [m for t in range(1, STEPS) for m in feats[t]]
+    prior = tracker.initial_belief(*_init(truth), feats[0])
+    track = run_filter(tracker, prior, stream, rng=np.random.default_rng(5), t0=0.0)
+    np.testing.assert_array_equal(track.times, np.arange(1.0, STEPS))
+    np.testing.assert_array_equal(track.means, np.array([b.position for b in beliefs]))
