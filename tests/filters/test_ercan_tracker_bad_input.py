@@ -9,8 +9,8 @@ import pytest
 
 from fusetrack.core.errors import ConfigError
 from fusetrack.experiments.ercan2013.scenes import scene_from_mapping, square_scene
-from fusetrack.filters.occlusion_likelihood import OcclusionAwareLikelihood
 from fusetrack.filters.waypoint_asir import WaypointASIR
+from fusetrack.sensors.occlusion_aware_camera import OcclusionAwareLikelihood
 from fusetrack.sensors.perspective_camera import ring_of_cameras
 from fusetrack.world.occlusion import OccluderPriors
 from fusetrack.world.room import Room

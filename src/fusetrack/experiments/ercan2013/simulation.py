@@ -29,7 +29,6 @@ from typing import Any
 import numpy as np
 
 from ...core.errors import ConfigError, invalid
-from ...filters.occlusion_likelihood import OcclusionAwareLikelihood
 from ...filters.waypoint_asir import WaypointASIR
 from ...management.camera_selection import (
     SELECTION_METHODS,
@@ -42,6 +41,7 @@ from ...management.camera_selection import (
     subset_mse,
 )
 from ...motion.waypoint_regime import WaypointRegimeDynamics
+from ...sensors.occlusion_aware_camera import OcclusionAwareLikelihood
 from ...world.geometry import Array
 from ...world.occluder_priors import (
     PRIOR_FILTERS,

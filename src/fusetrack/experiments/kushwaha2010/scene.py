@@ -38,6 +38,7 @@ from ...perception.audio_beamforming import (
     unpack_audio_message,
 )
 from ...perception.video_detection import VideoDetector, fit_angle_mixture
+from ...sensors.camera_geometry import PinholeCamera
 from ...sensors.detection_function import (
     AngularSampling,
     arc_mean_matrix,
@@ -47,7 +48,7 @@ from ...sensors.detection_function import (
 )
 from ...world.acoustics import harmonic_engine, pink_noise, propagate
 from ...world.clocks import HopTranslation, NodeClock, RbsDomain, fit_clock_map
-from ...world.road_video import PinholeCamera, RoadRenderer, Vehicle
+from ...world.road_video import RoadRenderer, Vehicle
 
 FS = 100e3
 DT = 0.25
@@ -415,7 +416,7 @@ def simulate_recording(
     # Video nodes: frames at 4 fps.
     for c_idx, (sid, x, y, yaw) in enumerate(layout.video):
         true_yaw = yaw + config.camera_yaw_error[c_idx]
-        cam = PinholeCamera((x, y, CAMERA_HEIGHT), true_yaw, hfov=CAMERA_FOV)
+        cam = PinholeCamera.from_pose((x, y, CAMERA_HEIGHT), true_yaw, hfov=CAMERA_FOV)
         renderer = RoadRenderer(cam, rng, clutter=config.clutter)
         det = VideoDetector(cam.column_angles(), cam.hfov)
         for _ in range(25):
