@@ -80,8 +80,9 @@ class MultiTargetEngine:
                 area=(x1 - x0) * (y1 - y0),
                 **a.model_dump(exclude={"method"}),  # the section's fields are MCMCDAConfig's
             ),
-            rng=np.random.default_rng(cfg.tracker.seed),
         )
+        self.rng = np.random.default_rng(cfg.tracker.seed)
+        self.association = self.mcmcda.initial_state()
         self.cells = CellLikelihoods(cfg, grid_of(cfg)) if cfg.tracker.filter == "grid" else None
         self.time = float(start)
         self.resets = 0
@@ -90,13 +91,13 @@ class MultiTargetEngine:
     def step_all(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]:
         """Associate the tick's detections; publish every current track."""
         y = detections(self.cfg, readings, self.cells)
-        self.mcmcda.step(y)
-        self.mcmcda.forget_past()  # a node runs for days: memory stays flat
+        state = self.mcmcda.step(self.association, y, self.rng)
+        self.association = self.mcmcda.forget_past(state)  # a node runs for days: memory stays flat
         self.last_detections = y
         self.time = t
         sensors = sorted({r.sensor for r in readings})
         out = []
-        for ident, (x, p) in self.mcmcda.current_tracks().items():
+        for ident, (x, p) in self.mcmcda.current_tracks(self.association).items():
             out.append(
                 TrackState(
                     track=ident + 1,  # ids from 1, as the single-target trackers'

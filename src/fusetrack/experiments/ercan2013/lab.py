@@ -15,9 +15,14 @@ import numpy as np
 import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
+from .common import SizeOptions, curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
 from .scenes import lab_scene
 from .simulation import run_tracking, simulate_world
+
+
+class Options(SizeOptions):
+    """``fusetrack run ercan2013-lab`` options: ``steps``, ``particles``, ``burn_in``."""
+
 
 SIGMA_PSI = (
     26.0  # inches: random-walk Kalman priors with RMSE_occ ~ 12.1 in (measured in the report)

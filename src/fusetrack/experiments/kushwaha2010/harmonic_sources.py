@@ -21,15 +21,17 @@ import json
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import spearmanr
 
-from ...core.errors import ConfigError, invalid
 from ...evaluation import plots
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...perception.harmonic_features import NodeFeatures, compress_psd, psd
 from ...perception.harmonic_features import beamform as beamform_energies
@@ -44,6 +46,18 @@ from ...perception.source_localisation import (
     match_error,
 )
 from ...world.harmonic_sources import HarmonicSource, noise_sigma, random_sources, received_signals
+
+
+class Options(ExperimentOptions):
+    """``fusetrack run kushwaha2010-harmonic-sources`` options."""
+
+    results: Path | None = Field(
+        None, description="a saved results.parquet to analyse instead of simulating"
+    )
+    seconds: float | None = Field(
+        None, ge=0, description="the time of the run that made --set results (report text)"
+    )
+
 
 FIELD = (0.0, 10.0, 0.0, 5.0)
 SENSORS = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0], [0.0, 5.0]])
@@ -251,11 +265,8 @@ def _mean(df: pd.DataFrame, sweep: str, key: str, method: str = "beamform") -> p
 def run(ctx: RunContext) -> Outcome:
     """Simulate every sweep point ``runs`` times and analyse; with ``--set results=PATH`` analyse a
     saved ``results.parquet`` instead (``--set seconds=S``: the time of the run that made it)."""
-    unknown = sorted(set(ctx.extra) - {"results", "seconds", "config"})
-    if unknown:
-        raise ConfigError(invalid("--set", unknown, "results=PATH and seconds=S"))
-    if "results" in ctx.extra:
-        df = pd.read_parquet(ctx.extra["results"])
+    if Options.of(ctx).results is not None:
+        df = pd.read_parquet(Options.of(ctx).results)
         for col in ("f0_errors", "resolved"):  # JSON-encoded by write_outputs
             df[col] = [json.loads(v) if isinstance(v, str) else v for v in df[col]]
         runs = int(df["run"].max()) + 1 if "run" in df else 1
@@ -529,8 +540,8 @@ def _setup_text(
     """The report's set-up (Table 10 beside ours) and results sections."""
     origin = (
         f"Re-analysed from the saved results of the full run, which took "
-        f"{float(ctx.extra['seconds']):.0f} s (`--workers 1`, 2 shared cores). "
-        if "seconds" in ctx.extra
+        f"{Options.of(ctx).seconds:.0f} s (`--workers 1`, 2 shared cores). "
+        if Options.of(ctx).seconds is not None
         else ""
     )
     medians = " · ".join(f"M={int(m)}: {s.medians.loc[('sources', m)]:.3f} m" for m in SOURCES)

@@ -79,11 +79,11 @@ def observations(
 def run_mcmcda(
     obs: Sequence[np.ndarray], n_mc: int, rng: np.random.Generator
 ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    tracker = MCMCDA(MCMCDAConfig(n_mc=n_mc, dt=DT), rng=rng)
+    tracker = MCMCDA(MCMCDAConfig(n_mc=n_mc, dt=DT))
+    state = tracker.initial_state()
     for y in obs:
-        tracker.step(y)
-    tracker.finish()
-    return tracker.tracks()
+        state = tracker.step(state, y, rng)
+    return tracker.tracks(tracker.finish(state))
 
 
 def match_tracks(

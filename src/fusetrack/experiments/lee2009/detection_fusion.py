@@ -26,6 +26,7 @@ from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.detection_fusion import (
     DetectionFusion,
     chair_varshney,
+    frame_measurements,
     fused_position,
     presence_prior,
     quality,
@@ -164,10 +165,15 @@ def run_sequence(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     )
     for method, kw in variants:
         fusion = DetectionFusion(hs, PM, PF, SIGMA2, **kw)
+        belief = fusion.initial_belief()
         covered = accepted_false = raw_covered = 0
         err = []
-        for present, truth, dets in frames:
-            dec = fusion.step(dets)
+        for n, (present, truth, dets) in enumerate(frames):
+            zs = frame_measurements(float(n), dets, fusion.camera_ids)
+            # every frame is an update: a frame without detections is evidence too (all E0)
+            belief = fusion.update(fusion.predict(belief, 1.0), zs)
+            dec = belief.decision
+            assert dec is not None
             if present:
                 raw_covered += sum(d is not None for d in dets)
                 if dec.real:
