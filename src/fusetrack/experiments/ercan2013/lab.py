@@ -160,7 +160,7 @@ Synthetic replica of the lab (the recordings are not public; spec §7.3, §10): 
 M = 20 virtual occluders (D = 12 in, 3.6 in/step), the object on an ellipse (semi-axes 120 and 98 in) in 200 steps,
 L = {size["particles"]}, T = 5, {runs} runs x {size["steps"]} steps (paper: 50 x 200), RMSE from t = 5. Tracker and selection share
 the occlusion model (Eq. 7 rectangles ending one D before the particle, p(eta | u) floored at 1e-3; see
-`fusetrack.filters.occlusion_likelihood`).
+`fusetrack.sensors.occlusion_aware_camera`).
 
 ![Fig. 13(b)](fig13b_lab.png)
 
