@@ -43,7 +43,7 @@ from .comparators import (
     run_comparators,
     sis_reference,
 )
-from .reporting import order_claim, plot_rmse, rmse_by_step
+from .reporting import order_claim, plot_rmse, rmse_by_method, rmse_by_step
 
 PI_B = np.array(
     [[0.7, 0.1, 0.1, 0.1], [0.4, 0.2, 0.2, 0.2], [0.4, 0.2, 0.2, 0.2], [0.4, 0.2, 0.2, 0.2]]
@@ -278,6 +278,19 @@ def comparators(
     d17 = df17[df17["run"] < k17]
     d17 = d17.assign(label="E17 " + d17["scenario"] + d17["case"])
     rows = pd.concat([d16, d17, *parts], ignore_index=True)
+    return comparison(ctx, rows, ref, n_equal, target, (k16, k17))
+
+
+def comparison(
+    ctx: RunContext,
+    rows: pd.DataFrame,
+    ref: dict[str, str],
+    n_equal: dict[str, Any],
+    target: dict[str, float],
+    runs: tuple[int, int],
+) -> Comparison:
+    """The comparators' table and figure on the first ``runs`` (E16, E17) runs of each label."""
+    k16, k17 = runs
     return compare(
         per_run_scores(rows, ["label"], "sq_pos_err"),
         ref,
@@ -320,7 +333,7 @@ def run(ctx: RunContext) -> Outcome:
     fig52 = figure_e15(ctx, demo)
 
     df16 = ctx.monte_carlo(run_e16, [{"experiment": "E16"}], runs16, desc="E16")
-    avg16 = df16.groupby("method")["sq_pos_err"].mean().pow(0.5)
+    avg16 = rmse_by_method(df16, "sq_pos_err")
     claims.append(
         order_claim(
             "E16_order",
@@ -415,7 +428,7 @@ def claims_e17(df17: pd.DataFrame, tab: Mapping[tuple[str, str], pd.DataFrame]) 
             )
         )
         if s == "S2":
-            win = d[d["step"].between(20, 25)].groupby("method")["sq_pos_err"].mean().pow(0.5)
+            win = rmse_by_method(d[d["step"].between(20, 25)], "sq_pos_err")
             claims.append(
                 Claim(
                     f"C14_{s}{c}_turn",

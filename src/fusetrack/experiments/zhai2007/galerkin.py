@@ -35,7 +35,14 @@ from .comparators import (
     run_comparators,
     sis_reference,
 )
-from .reporting import origin_sensor, plot_rmse, plot_run_tracks, relative_claim, rmse_by_step
+from .reporting import (
+    origin_sensor,
+    plot_rmse,
+    plot_run_tracks,
+    relative_claim,
+    rmse_by_method,
+    rmse_by_step,
+)
 
 PAPER = pd.DataFrame(
     {
@@ -248,7 +255,7 @@ def claim_turn(df2: pd.DataFrame) -> Claim:
     """E13: after example 2's turn the Galerkin PF stays closer than the EKF and bootstrap(500)."""
     d2 = df2.copy()
     d2["sq"] = d2["sq_ex"] + d2["sq_ey"]
-    after = d2[d2["step"] > 47].groupby("method")["sq"].mean().pow(0.5)
+    after = rmse_by_method(d2[d2["step"] > 47], "sq")
     return Claim(
         "E13_turn",
         "example 2: after the turn the Galerkin PF stays closer than the EKF and the bootstrap(500) (Fig 47)",

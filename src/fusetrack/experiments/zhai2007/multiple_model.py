@@ -45,7 +45,7 @@ from .comparators import (
     per_run_scores,
     run_comparators,
 )
-from .reporting import plot_rmse, plot_run_tracks, rmse_by_step
+from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
 
 PI_A = np.array(
     [[0.7, 0.1, 0.1, 0.1], [0.4, 0.5, 0.05, 0.05], [0.4, 0.3, 0.2, 0.1], [0.4, 0.3, 0.2, 0.1]]
@@ -489,7 +489,7 @@ def figure_e7(
 
 def claim_e8(df8: pd.DataFrame) -> Claim:
     """C11: fused multi-sensor MMPF < single-sensor MMPF < single-model bootstrap (Fig 30)."""
-    avg8 = df8.groupby("method")["sq_pos_err"].mean().pow(0.5)
+    avg8 = rmse_by_method(df8, "sq_pos_err")
     return Claim(
         "C11_order",
         "multi-sensor MMPF < single-sensor MMPF < single-model bootstrap (Fig 30)",
@@ -588,7 +588,7 @@ Lowest position RMSE over all steps: {"; ".join(f"sigma {k:g}: **{v}**" for k, v
 
 def report_e8(df8: pd.DataFrame, figs: Mapping[str, str], n_part: int, runs: int) -> str:
     """The report's E8 section: position RMSE of every filter over all steps."""
-    avg8 = df8.groupby("method")["sq_pos_err"].mean().pow(0.5)
+    avg8 = rmse_by_method(df8, "sq_pos_err")
     return f"""
 ## E8: multi-sensor MM-bootstrap (Figs 29-30)
 

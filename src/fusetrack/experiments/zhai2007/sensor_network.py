@@ -40,7 +40,7 @@ from .comparators import (
     per_run_scores,
     run_comparators,
 )
-from .reporting import plot_rmse, plot_run_tracks, rmse_by_step
+from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
 
 CMP_RUNS = 30  # runs with the comparators (beyond the paper) at full size
 SOURCE_DB = 70.0
@@ -346,9 +346,7 @@ def claims_scenarios(df: pd.DataFrame) -> list[Claim]:
         .groupby("method")["err"]
         .apply(lambda e: float((e > 3 * SPACING).mean()))
     )
-    s3 = (
-        df[(df["scenario"] == "S3") & (df["step"] > 30)].groupby("method")["sq_vel"].mean().pow(0.5)
-    )
+    s3 = rmse_by_method(df[(df["scenario"] == "S3") & (df["step"] > 30)], "sq_vel")
     return [
         Claim(
             "C7_loss",
