@@ -36,6 +36,7 @@ PAPER = {
 
 
 def load(name: str) -> np.ndarray:
+    """The 256 x 256 grey test image: cameraman, or the astronaut for Lena."""
     from skimage import color, data, transform
 
     img = data.camera() if name == "cameraman" else (color.rgb2gray(data.astronaut()) * 255.0)
@@ -118,6 +119,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E20: every image and q1 reading, comparators at q1 = 1000, claims, Fig 80, report."""
     runs = ctx.n_runs(full=10, quick=1)
     shifts = 4 if ctx.quick else 8
     cfgs = [

@@ -130,6 +130,7 @@ def e17_truth(scenario: str, rng: np.random.Generator) -> np.ndarray:
 
 
 def e17_models(q: float, a_m: float = 3.0) -> list[Any]:
+    """E17's models on the 6-D state: CV, CCW, CW (padded) and CA."""
     return [
         PaddedModel(ConstantVelocity(q=q)),
         PaddedModel(ManeuverTurn(a_m, 1, q)),
@@ -203,6 +204,7 @@ def run_e17(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def e15_demo(rng: np.random.Generator, n: int = 2000) -> dict[str, Any]:
+    """E15: one bearing update of a discretised prior (particles, cells, weights)."""
     motion = ConstantVelocity(q=0.05)
     sensor = Bearing("s", position=[-20.0, -40.0], sigma=0.01)
     prior = Gaussian(np.array([0.0, 0.0, 10.0, 5.0]), np.diag([4.0, 4.0, 1e-4, 1e-4]))
@@ -324,6 +326,7 @@ def comparison(
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E15-E17: the one-bearing demo, the E16 and E17 runs, comparators, claims, report."""
     runs16 = ctx.n_runs(full=100, quick=3)
     runs17 = ctx.n_runs(full=100, quick=1)
     n17 = 200 if ctx.quick else 1000

@@ -76,6 +76,7 @@ def simulate(example: int, rng: np.random.Generator) -> tuple[np.ndarray, list[l
 
 
 def x0(example: int) -> np.ndarray:
+    """Example ``example``'s initial state X_1."""
     return (
         np.array([0.0, 50.0, 1.0, -1.0])
         if example == 1
@@ -153,6 +154,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E13: comparators calibrated to the Galerkin PF, examples 1 and 2, claims, report."""
     runs = ctx.n_runs(full=200, quick=4)
     runs2 = max(2, runs // 10)
     n_equal, target = {}, {}

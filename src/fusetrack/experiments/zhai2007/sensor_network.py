@@ -263,6 +263,7 @@ def comparators(
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E4: every configuration's runs, the comparators, claims, figures and report."""
     runs = ctx.n_runs(full=100, quick=2)
     cfgs = [{"scenario": "S1", "threshold": t} for t in (0.75, 0.78)]
     cfgs += [{"scenario": s, "threshold": 0.75} for s in ("S2", "S3")]
