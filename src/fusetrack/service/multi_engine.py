@@ -1,4 +1,5 @@
-"""Several targets inside the node: position detections associated by online MCMCDA.
+"""Several targets inside the node: position detections associated by online MCMCDA, behind the
+same :class:`~.engine.Engine` interface as the single-target :class:`~.engine.FusionEngine`.
 
 ``tracker.association.method: mcmcda``. Every tick, the tick's readings become position
 detections (:func:`detections`):
@@ -29,7 +30,7 @@ from ..association.mcmcda import MCMCDA, MCMCDAConfig
 from ..association.peaks import likelihood_peaks
 from .alignment import Reading
 from .config import NetworkConfig
-from .grid_engine import CellLikelihoods, grid_of
+from .grid_cells import CellLikelihoods, grid_of
 from .schema import TrackState
 
 _POSITION_KINDS = ("position_fix", "range_bearing")
@@ -67,6 +68,15 @@ def detections(
     return np.array(out, dtype=float).reshape(-1, 2)
 
 
+def associate(mcmcda: MCMCDA, y: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """One MCMCDA step on the tick's detections ``y (k, 2)``; the current tracks by id (the
+    Kalman state and covariance of each, predicted to the tick). The engine's only call into
+    :mod:`fusetrack.association.mcmcda`."""
+    mcmcda.step(y)
+    mcmcda.forget_past()  # a node runs for days: memory stays flat
+    return dict(mcmcda.current_tracks())
+
+
 class MultiTargetEngine:
     """The node's multi-target tracker (module docstring)."""
 
@@ -90,13 +100,12 @@ class MultiTargetEngine:
     def step_all(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]:
         """Associate the tick's detections; publish every current track."""
         y = detections(self.cfg, readings, self.cells)
-        self.mcmcda.step(y)
-        self.mcmcda.forget_past()  # a node runs for days: memory stays flat
+        tracks = associate(self.mcmcda, y)
         self.last_detections = y
         self.time = t
         sensors = sorted({r.sensor for r in readings})
         out = []
-        for ident, (x, p) in self.mcmcda.current_tracks().items():
+        for ident, (x, p) in tracks.items():
             out.append(
                 TrackState(
                     track=ident + 1,  # ids from 1, as the single-target trackers'
