@@ -43,16 +43,9 @@ NOT_YET: set[str] = {
     "fusetrack.filters.detection_pf.DetectionParticleFilter",
     "fusetrack.filters.grid.GridTracker",
     "fusetrack.filters.multi_model_pf.MultiModelBearingPF",
-    "fusetrack.filters.multiple_model.MultipleModelParticleFilter",
-    "fusetrack.filters.sis.ProposalParticleFilter",
-    "fusetrack.filters.smart_camera_trackers.ImagePlaneTracker",
-    "fusetrack.filters.smart_camera_trackers.Particle3DTracker",
-    "fusetrack.filters.smart_camera_trackers.RayIntersectionTracker",
     "fusetrack.filters.sp_pekf.SPPEKFBank",
     "fusetrack.filters.waypoint_asir.WaypointASIR",
     "fusetrack.management.camera_triggering.AcousticTracker",
-    "fusetrack.perception.visual_tracking.FrameFilter",
-    "fusetrack.perception.visual_tracking.GaussianFrameFilter",
 }
 
 

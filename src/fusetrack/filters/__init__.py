@@ -21,6 +21,8 @@ from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
+from .multiple_model import RegimeState as RegimeState
+from .multiple_model import RegimeSwitchingProposal as RegimeSwitchingProposal
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
@@ -28,7 +30,7 @@ from .particle import RegularizedParticleFilter as RegularizedParticleFilter
 from .runner import run_filter as run_filter
 from .sis import PriorProposal as PriorProposal
 from .sis import ProposalParticleFilter as ProposalParticleFilter
-from .sis import run_sis as run_sis
+from .sis import SISBelief as SISBelief
 from .sp_pekf import SPPEKFBank as SPPEKFBank
 from .sp_pekf import SPPEKFProposal as SPPEKFProposal
 from .stats import FilterStats as FilterStats

@@ -211,9 +211,14 @@ class InteractingMultipleModel:
         return IMMBelief(np.stack(means, axis=-2), np.stack(covs, axis=-3), probs)
 
     def step(
-        self, belief: IMMBelief, measurements: Sequence[Measurement] | Measurement, dt: float
+        self,
+        belief: IMMBelief,
+        dt: float,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: np.random.Generator | None = None,
     ) -> IMMBelief:
-        """:meth:`predict` then :meth:`update`."""
+        """:meth:`predict` then :meth:`update` (the :class:`~fusetrack.core.SteppingFilter`
+        argument order, so that ``filter_step`` and ``run_filter`` can call it)."""
         return self.update(self.predict(belief, dt), measurements)
 
     def filter_stats(self) -> dict[str, Any]:

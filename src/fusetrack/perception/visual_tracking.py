@@ -1,14 +1,13 @@
 """Running a fusetrack filter over video frames, and scoring the track.
 
-The filters are the ordinary ones: any :class:`~fusetrack.core.Filter` (the Kalman family, the
-IMM), or a particle filter with ``initialize``/``step`` over its own state
+The filters are the ordinary ones -- any :class:`~fusetrack.core.Filter`: a particle filter
 (:class:`~fusetrack.filters.sis.ProposalParticleFilter` with any proposal,
-:class:`~fusetrack.filters.multiple_model.MultipleModelParticleFilter`) until the particle engine
-is one ``Filter``. A frame becomes their measurements through a front end, so the same loop
-serves the edge-contour trackers (Zhai 2007, Secs. 3.6 and 4.3: the measurement is the frame's
-edge map) and the multi-cue tracker (Sec. 5.4: the measurements are cue locations found in an
-aid window around the predicted centre, with templates that adapt to the estimate). The result
-is a :class:`~fusetrack.core.Track` (frame index as time; ``info["seconds"]`` the time it took).
+:class:`~fusetrack.filters.multiple_model.MultipleModelParticleFilter`), the Kalman family, the
+IMM. A frame becomes their measurements through a front end, so the same loop serves the
+edge-contour trackers (Zhai 2007, Secs. 3.6 and 4.3: the measurement is the frame's edge map) and
+the multi-cue tracker (Sec. 5.4: the measurements are cue locations found in an aid window around
+the predicted centre, with templates that adapt to the estimate). The result is a
+:class:`~fusetrack.core.Track` (frame index as time; ``info["seconds"]`` the time it took).
 
 Track loss (spec 001, claim C17): the centre error exceeds the target's half-size for at least
 ``frames`` consecutive frames.
@@ -17,27 +16,17 @@ Track loss (spec 001, claim C17): the centre error exceeds the target's half-siz
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import Filter, Gaussian, Measurement, Track
+from ..core import Filter, Gaussian, Measurement, Track, filter_step
 from ..core.errors import ConfigError, invalid
 
 Array = NDArray[np.float64]
-
-
-class StateStepper(Protocol):
-    """A particle filter that steps its own state (``initialize``/``step``; see the module)."""
-
-    def initialize(self, prior: Gaussian, rng: np.random.Generator) -> Any: ...
-
-    def step(
-        self, state: Any, zs: Sequence[Array | None], dt: float, rng: np.random.Generator
-    ) -> Any: ...
 
 
 class FrontEnd(Protocol):
@@ -65,8 +54,20 @@ def frame_measurements(
     ]
 
 
+def filter_sensor_ids(filt: Any) -> list[str]:
+    """The ids of a filter's sensors in their order (``filt.sensors``: models or id -> model)."""
+    sensors = getattr(filt, "sensors", None)
+    if isinstance(sensors, Mapping):
+        return [str(k) for k in sensors]
+    if sensors is not None:
+        return [s.sensor_id for s in sensors]
+    raise ConfigError(
+        invalid("sensor_ids", None, f"the front end's sensor ids ({type(filt).__name__} has none)")
+    )
+
+
 def track_frames(
-    filt: Filter[Any] | StateStepper,
+    filt: Filter[Any],
     prior: Any,
     frames: Sequence[NDArray[np.uint8]] | NDArray[np.uint8],
     front_end: FrontEnd,
@@ -77,29 +78,24 @@ def track_frames(
 ) -> Track:
     """Filter frames 1..T-1 (frame 0 is where the prior was set) with ``dt = 1`` per frame.
 
-    A :class:`~fusetrack.core.Filter` starts from the belief ``prior``; each frame it predicts,
-    then updates with the front end's values as measurements of ``sensor_ids`` (in the front
-    end's order; a frame without any is a prediction only); a
-    :class:`StateStepper` starts from ``initialize(prior)``. ``after_step(state, k)`` may return
-    a modified state (e.g. App. B's shared velocity)."""
+    ``prior`` is the filter's belief, or a Gaussian that a particle filter's ``initialize``
+    turns into particles. Each frame, the front end's values become measurements of
+    ``sensor_ids`` (default: the filter's sensors, in order) and the filter takes one
+    :func:`~fusetrack.core.filter_step`. ``after_step(belief, k)`` may return a modified
+    belief (e.g. App. B's shared velocity)."""
     t0 = time.perf_counter()
-    is_filter = isinstance(filt, Filter)
-    if is_filter and not sensor_ids:
-        raise ConfigError(invalid("sensor_ids", sensor_ids, "the front end's sensor ids"))
-    state = prior if is_filter else filt.initialize(prior, rng)  # type: ignore[union-attr]
+    ids = list(sensor_ids) or filter_sensor_ids(filt)
+    initialize = getattr(filt, "initialize", None)
+    sampler = callable(initialize) and isinstance(prior, Gaussian)
+    belief = initialize(prior, rng) if sampler else prior  # type: ignore[misc]
     est = [np.asarray(prior.mean, float)]
     front_end.adapt(frames[0], est[0])
     for k in range(1, len(frames)):
         zs = front_end.measure(frames[k], predicted_centre(est[-1]))
-        if is_filter:
-            ms = frame_measurements(float(k), sensor_ids, zs)
-            state = filt.predict(state, 1.0, rng)  # type: ignore[union-attr]
-            state = filt.update(state, ms, rng) if ms else state  # type: ignore[union-attr]
-        else:
-            state = filt.step(state, zs, 1.0, rng)  # type: ignore[union-attr]
+        belief = filter_step(filt, belief, 1.0, frame_measurements(float(k), ids, zs), rng)
         if after_step is not None:
-            state = after_step(state, k)
-        e = np.asarray(state.mean if is_filter else state.estimate, float)
+            belief = after_step(belief, k)
+        e = np.asarray(belief.mean, float)
         est.append(e)
         front_end.adapt(frames[k], e)
     stats = getattr(filt, "stats", None)

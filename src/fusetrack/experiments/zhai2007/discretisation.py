@@ -25,7 +25,7 @@ from ...filters import ExtendedKalmanFilter
 from ...filters.grid_proposals import DiscretisationProposal
 from ...filters.imm import InteractingMultipleModel
 from ...filters.multiple_model import MultipleModelParticleFilter, PaddedModel
-from ...filters.sis import ProposalParticleFilter
+from ...filters.sis import ProposalParticleFilter, sensor_measurements
 from ...motion import ConstantAcceleration, ConstantVelocity, CoordinatedTurn
 from ...motion.maneuver import ManeuverTurn
 from ...sensors import Bearing, RangeBearing
@@ -210,14 +210,14 @@ def e15_demo(rng: np.random.Generator, n: int = 2000) -> dict[str, Any]:
     prop = DiscretisationProposal(cell_scale=0.25)
     pf = ProposalParticleFilter(motion, [sensor], prop, n)
     s0 = pf.initialize(prior, rng)
-    centre, w, delta = prop.cells(s0.particles, [z], 1.0, pf)
-    s1 = pf.step(s0, [z], 1.0, rng)
+    centre, w, delta = prop.cells(s0.states, [z], 1.0, pf.context())
+    s1 = pf.step(s0, 1.0, sensor_measurements([sensor], [z], 1.0), rng)
     return {
-        "prior": s0.particles,
+        "prior": s0.states,
         "centre": centre,
         "w": w,
         "delta": delta,
-        "post": s1.particles,
+        "post": s1.states,
         "z": z,
         "truth": truth,
         "sensor": sensor,

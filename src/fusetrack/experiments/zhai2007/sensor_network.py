@@ -25,11 +25,12 @@ from ...evaluation import plots
 from ...evaluation.montecarlo import run_seed
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.cpf_sp import CPFSPProposal
-from ...filters.sis import ProposalParticleFilter, run_sis
+from ...filters.sis import ProposalParticleFilter
 from ...management.intensity_activation import activation_radius, active_sensors, intensity_weights
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
 from ...sensors.acoustic_intensity import AcousticIntensity
+from .common import run_steps
 from .comparators import (
     COMPARATORS,
     UPF_NOTE,
@@ -41,6 +42,8 @@ from .comparators import (
     per_run_scores,
     run_comparators,
 )
+
+WEIGHTS = CPFSPProposal.weights_id  # the measurement id of CPF-SP's per-step sensor weights
 
 CMP_RUNS = 30  # runs with the comparators (beyond the paper) at full size
 SOURCE_DB = 70.0
@@ -143,7 +146,7 @@ def cpf_sp(cs: Scenario, ws: list[np.ndarray]) -> Callable[[], object]:
 
     def run() -> object:
         f = ProposalParticleFilter(cs.motion, cs.sensors, CPFSPProposal(10), 200)
-        return run_sis(f, cs.prior, cs.zs, 1.0, np.random.default_rng(0), aux=ws)
+        return run_steps(f, cs.prior, cs.zs, 1.0, np.random.default_rng(0), side={WEIGHTS: ws})
 
     return run
 
@@ -177,7 +180,8 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     rows = []
     for k, (name, (f, aux)) in enumerate(filters.items()):
         t0 = time.perf_counter()
-        est, _ = run_sis(f, prior, zs, 1.0, np.random.default_rng([seed, k]), aux=aux)
+        side = None if aux is None else {WEIGHTS: aux}
+        est = np.array(run_steps(f, prior, zs, 1.0, np.random.default_rng([seed, k]), side=side))
         rows += _rows(name, est, time.perf_counter() - t0, truth, counts)
     return rows
 

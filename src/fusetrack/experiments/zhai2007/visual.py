@@ -314,12 +314,12 @@ def shared_velocity(history: list[np.ndarray]) -> Any:
         est = np.asarray(state.estimate, float)
         prev = history[-1]
         v = est[:2] - prev[:2]
-        x = state.particles.copy()
+        x = state.states.copy()
         x[..., 2:4] = v
         est = est.copy()
         est[2:4] = v
         history.append(est)
-        return replace(state, particles=x, estimate=est)
+        return replace(state, states=x, estimate=est)
 
     return hook
 
