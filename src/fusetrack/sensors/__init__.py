@@ -32,7 +32,7 @@ __all__ = [
 # Nott 2009 (issue 7): the camera that sees a person on the floor, a simulated NFER radio tag
 from . import camera_geometry as camera_geometry
 
-# Kushwaha 2010, Ch. V (issue 16): a smart camera's view of a target's appearance (and the rest)
+# Cameras and tags: Kushwaha 2010's appearance camera (issue 16), Nott 2009's (issue 7)
 from .appearance import AppearanceModel as AppearanceModel
 from .appearance import FeatureImage as FeatureImage
 from .appearance_camera import AppearanceCamera as AppearanceCamera
