@@ -86,9 +86,7 @@ def test_gaussian_and_unscented_proposal_trackers_follow_a_clean_head():
     assert np.sqrt(np.mean(err**2)) < 2.0
 
 
-def test_any_filter_runs_over_frames_and_the_track_is_the_library_track():
-    """An EKF over the edge sensor: measurements named by the filter's own sensors (or given
-    ids); a filter without sensors must be told them."""
+def test_sensor_ids_default_to_the_filters_and_the_track_is_the_library_track():
     from fusetrack.core import Track
     from fusetrack.core.errors import ConfigError
     from fusetrack.filters.kalman import ExtendedKalmanFilter
@@ -96,20 +94,13 @@ def test_any_filter_runs_over_frames_and_the_track_is_the_library_track():
     seq, sensor, fe = _sequence()
     ekf = ExtendedKalmanFilter(Langevin(), [sensor])
     prior = Gaussian(seq.truth[0], np.diag([4, 4, 1, 1.0]))
-    tk = track_frames(ekf, prior, seq.frames, fe, np.random.default_rng(0))
+    with pytest.raises(ConfigError, match="sensor_ids"):
+        track_frames(object(), prior, seq.frames, fe, np.random.default_rng(0))  # type: ignore[arg-type]
+    default = track_frames(ekf, prior, seq.frames, fe, np.random.default_rng(0))
+    tk = track_frames(
+        ekf, prior, seq.frames, _sequence()[2], np.random.default_rng(0), sensor_ids=["head"]
+    )
+    np.testing.assert_array_equal(default.means, tk.means)
     assert isinstance(tk, Track) and len(tk) == 20 and tk.info["seconds"] > 0
     np.testing.assert_array_equal(tk.times, np.arange(20.0))
     np.testing.assert_array_equal(tk.means[0], seq.truth[0])
-    _, _, fe2 = _sequence()
-    again = track_frames(ekf, prior, seq.frames, fe2, np.random.default_rng(0), sensor_ids=["head"])
-    np.testing.assert_array_equal(again.means, tk.means)
-
-    class NoSensors:
-        def predict(self, belief, dt, rng=None):
-            return belief
-
-        def update(self, belief, measurements, rng=None):
-            return belief
-
-    with pytest.raises(ConfigError, match="sensor_ids"):
-        track_frames(NoSensors(), prior, seq.frames, fe, np.random.default_rng(0))

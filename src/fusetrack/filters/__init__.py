@@ -5,8 +5,9 @@ One import per line, re-exported with ``as``: add new filters by adding lines.
 
 from .cpf_sp import CPFSPProposal as CPFSPProposal
 from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
+from .grid import DirectionalGridBelief as DirectionalGridBelief
+from .grid import GridFilter as GridFilter
 from .grid import GridSpec as GridSpec
-from .grid import GridTracker as GridTracker
 from .grid import SensorLikelihoods as SensorLikelihoods
 from .grid_proposals import DiscretisationProposal as DiscretisationProposal
 from .grid_proposals import GalerkinProposal as GalerkinProposal

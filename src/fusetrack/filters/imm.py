@@ -210,17 +210,6 @@ class InteractingMultipleModel:
         probs = np.where(bad, belief.probs, np.exp(log_mu - np.where(bad, 0.0, norm)))
         return IMMBelief(np.stack(means, axis=-2), np.stack(covs, axis=-3), probs)
 
-    def step(
-        self,
-        belief: IMMBelief,
-        dt: float,
-        measurements: Sequence[Measurement] | Measurement,
-        rng: np.random.Generator | None = None,
-    ) -> IMMBelief:
-        """:meth:`predict` then :meth:`update` (the :class:`~fusetrack.core.SteppingFilter`
-        argument order, so that ``filter_step`` and ``run_filter`` can call it)."""
-        return self.update(self.predict(belief, dt), measurements)
-
     def filter_stats(self) -> dict[str, Any]:
         """The IMM's own counters plus the sums of its model filters'."""
         out = self.stats.as_dict()

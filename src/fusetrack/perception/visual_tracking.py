@@ -1,13 +1,13 @@
 """Running a fusetrack filter over video frames, and scoring the track.
 
-The filters are the ordinary ones -- any :class:`~fusetrack.core.Filter`: a particle filter
-(:class:`~fusetrack.filters.sis.ProposalParticleFilter` with any proposal,
-:class:`~fusetrack.filters.multiple_model.MultipleModelParticleFilter`), the Kalman family, the
-IMM. A frame becomes their measurements through a front end, so the same loop serves the
-edge-contour trackers (Zhai 2007, Secs. 3.6 and 4.3: the measurement is the frame's edge map) and
-the multi-cue tracker (Sec. 5.4: the measurements are cue locations found in an aid window around
-the predicted centre, with templates that adapt to the estimate). The result is a
-:class:`~fusetrack.core.Track` (frame index as time; ``info["seconds"]`` the time it took).
+The filters are the ordinary ones: any :class:`~fusetrack.core.Filter` (the Kalman family, the
+IMM, :class:`~fusetrack.filters.sis.ProposalParticleFilter` with any proposal,
+:class:`~fusetrack.filters.multiple_model.MultipleModelParticleFilter`), stepped by
+:func:`~fusetrack.core.filter_step`. A frame becomes their measurements through a front end, so the same loop
+serves the edge-contour trackers (Zhai 2007, Secs. 3.6 and 4.3: the measurement is the frame's
+edge map) and the multi-cue tracker (Sec. 5.4: the measurements are cue locations found in an
+aid window around the predicted centre, with templates that adapt to the estimate). The result
+is a :class:`~fusetrack.core.Track` (frame index as time; ``info["seconds"]`` the time it took).
 
 Track loss (spec 001, claim C17): the centre error exceeds the target's half-size for at least
 ``frames`` consecutive frames.
@@ -54,16 +54,12 @@ def frame_measurements(
     ]
 
 
-def filter_sensor_ids(filt: Any) -> list[str]:
-    """The ids of a filter's sensors in their order (``filt.sensors``: models or id -> model)."""
-    sensors = getattr(filt, "sensors", None)
+def _sensor_ids(filt: Any) -> list[str]:
+    """The filter's sensor ids in its order (a mapping's keys, or a list's ``sensor_id``)."""
+    sensors = getattr(filt, "sensors", ())
     if isinstance(sensors, Mapping):
         return [str(k) for k in sensors]
-    if sensors is not None:
-        return [s.sensor_id for s in sensors]
-    raise ConfigError(
-        invalid("sensor_ids", None, f"the front end's sensor ids ({type(filt).__name__} has none)")
-    )
+    return [s.sensor_id for s in sensors]
 
 
 def track_frames(
@@ -78,24 +74,28 @@ def track_frames(
 ) -> Track:
     """Filter frames 1..T-1 (frame 0 is where the prior was set) with ``dt = 1`` per frame.
 
-    ``prior`` is the filter's belief, or a Gaussian that a particle filter's ``initialize``
-    turns into particles. Each frame, the front end's values become measurements of
-    ``sensor_ids`` (default: the filter's sensors, in order) and the filter takes one
-    :func:`~fusetrack.core.filter_step`. ``after_step(belief, k)`` may return a modified
-    belief (e.g. App. B's shared velocity)."""
+    The filter starts from the belief ``prior`` (a particle filter given a Gaussian ``prior``
+    from ``initialize(prior, rng)``); each frame is one
+    :func:`~fusetrack.core.filter_step` with the front end's values as measurements of
+    ``sensor_ids`` (default: the filter's sensors; in the front end's order; a frame without any
+    is a prediction only). ``after_step(state, k)`` may return a modified state (e.g. App. B's
+    shared velocity)."""
     t0 = time.perf_counter()
-    ids = list(sensor_ids) or filter_sensor_ids(filt)
-    initialize = getattr(filt, "initialize", None)
-    sampler = callable(initialize) and isinstance(prior, Gaussian)
-    belief = initialize(prior, rng) if sampler else prior  # type: ignore[misc]
+    sensor_ids = sensor_ids or _sensor_ids(filt)
+    if not sensor_ids:
+        raise ConfigError(invalid("sensor_ids", sensor_ids, "the front end's sensor ids"))
+    initialize = getattr(filt, "initialize", None)  # particle filters: a Gaussian prior -> samples
+    state = (
+        initialize(prior, rng) if callable(initialize) and isinstance(prior, Gaussian) else prior
+    )
     est = [np.asarray(prior.mean, float)]
     front_end.adapt(frames[0], est[0])
     for k in range(1, len(frames)):
         zs = front_end.measure(frames[k], predicted_centre(est[-1]))
-        belief = filter_step(filt, belief, 1.0, frame_measurements(float(k), ids, zs), rng)
+        state = filter_step(filt, state, 1.0, frame_measurements(float(k), sensor_ids, zs), rng)
         if after_step is not None:
-            belief = after_step(belief, k)
-        e = np.asarray(belief.mean, float)
+            state = after_step(state, k)
+        e = np.asarray(state.mean, float)
         est.append(e)
         front_end.adapt(frames[k], e)
     stats = getattr(filt, "stats", None)
