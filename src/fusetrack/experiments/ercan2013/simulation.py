@@ -15,7 +15,7 @@ rectangles of Eq. 7 end this many occluder diameters before the particle; 0 = as
 ``tracker_sigma_v`` (the tracker's motion noise sigma_v of Eq. 5, "assumed to be known" by the
 paper; None = the walkers' true 0.33 units, spec §8 item 15), ``occlusion_power`` (p(eta | u)
 enters the likelihood to this power; 1 = the paper): see
-:class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`.
+:class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`.
 """
 
 from __future__ import annotations

@@ -24,8 +24,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from pydantic import Field, field_validator
 
-from ...core.errors import ConfigError, invalid
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.plots import save
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.multi_model_pf import turn_models
@@ -46,6 +47,28 @@ PAPER_T31 = {"none": (7.54, 3.70, 5.54, 5.59), "trig": (1.38, 0.24, 0.32, 0.64)}
 PAPER_TV_EQUIV = (4.16, 4.28, 4.19, 4.21)
 PAPER_TV_TRIG = 4.55
 SWEEP_PERIODS = [1, 3, 10, 30, 100]  # E3.2 camera periods (T_s) run at 1,000 trials
+
+
+class SweepOptions(ExperimentOptions):
+    """``fusetrack run lee2009-periodic-sweep`` options."""
+
+    periods: tuple[int, ...] | None = Field(
+        None,
+        description="camera periods T_v to sweep, e.g. 1,10,100 "
+        f"(default: 1,10,100 with --quick, else {','.join(map(str, SWEEP_PERIODS))})",
+    )
+
+    @field_validator("periods", mode="before")
+    @classmethod
+    def _split(cls, v: Any) -> Any:
+        return [p.strip() for p in v.split(",")] if isinstance(v, str) else v
+
+    @field_validator("periods")
+    @classmethod
+    def _two_or_more(cls, v: tuple[int, ...] | None) -> tuple[int, ...] | None:
+        if v is not None and (len(set(v)) < 2 or min(v) < 1):
+            raise ValueError("two or more integers >= 1, e.g. 1,10,100")
+        return None if v is None else tuple(sorted(set(v)))
 
 
 def piecewise_truth(
@@ -338,15 +361,7 @@ def run_sweep(ctx: RunContext) -> Outcome:
     """``lee2009-periodic-sweep``: E3.2 alone at the paper's 1,000 trials (Fig. 3-6)."""
     trials = ctx.n_runs(full=1000, quick=6)
     tv_sweep = [1, 10, 100] if ctx.quick else SWEEP_PERIODS
-    if "periods" in ctx.extra:  # --set periods=1,10,100
-        try:
-            tv_sweep = sorted({int(v) for v in str(ctx.extra["periods"]).split(",")})
-        except ValueError:
-            tv_sweep = []
-        if len(tv_sweep) < 2 or tv_sweep[0] < 1:
-            raise ConfigError(
-                invalid("periods", ctx.extra["periods"], "two or more integers >= 1, e.g. 1,10,100")
-            )
+    tv_sweep = list(SweepOptions.of(ctx).periods or tv_sweep)  # --set periods=1,10,100
     n_part = 100 if ctx.quick else 500
     batches = _batch_configs("E3.2", 5.0, tv_sweep, trials, 10, n_part)
     df = ctx.monte_carlo(run_batch, batches, 1, desc="E3.2 batches")

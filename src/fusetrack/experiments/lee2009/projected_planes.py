@@ -17,7 +17,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import matplotlib
 
@@ -25,8 +25,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
-from ...core.errors import ConfigError, invalid
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.plots import save
 from ...evaluation.projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from ...evaluation.report import Claim, Outcome, RunContext
@@ -38,6 +39,17 @@ from ...sensors.doa_projection import (
     monte_carlo_projected_variance,
     projected_variance,
 )
+
+
+class Options(ExperimentOptions):
+    """``fusetrack run lee2009-projected-planes`` options."""
+
+    measurements: Literal["gaussian", "audio"] = Field(
+        "gaussian",
+        description="where the angles come from: gaussian (the dissertation's Ch. 2 noise) or "
+        "audio (estimated from simulated sound by MUSIC)",
+    )
+
 
 DEG = math.pi / 180.0
 SIGMA = math.sqrt(3.0) * DEG  # variance 3 deg^2 on both angles
@@ -396,18 +408,9 @@ kept as "literal" and the minimum-variance rule is run beside it.
     return claims, body, df
 
 
-MEASUREMENT_SOURCES = ("gaussian", "audio")
-
-
 def run(ctx: RunContext) -> Outcome:
     """``--measurements gaussian`` (default): the dissertation's Ch. 2; ``audio``: angles from sound."""
-    unknown = sorted(set(ctx.extra) - {"measurements", "config"})
-    if unknown:
-        raise ConfigError(invalid("option", unknown[0], "measurements=gaussian|audio"))
-    source = str(ctx.extra.get("measurements", "gaussian"))
-    if source not in MEASUREMENT_SOURCES:
-        raise ConfigError(invalid("measurements", source, f"one of {MEASUREMENT_SOURCES}"))
-    if source == "audio":
+    if Options.of(ctx).measurements == "audio":
         from .projected_planes_audio import run as run_audio
 
         return run_audio(ctx)
