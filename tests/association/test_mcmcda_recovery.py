@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from fusetrack.association.mcmcda import MCMCDA, MCMCDAConfig
+from fusetrack.association.mcmcda import MCMCDA, HypothesisSampler, MCMCDAConfig
 from fusetrack.association.peaks import likelihood_peaks
 from fusetrack.core.errors import ConfigError
 
@@ -12,7 +12,8 @@ def test_two_crossing_targets_with_clutter_are_recovered():
     rng = np.random.default_rng(0)
     starts = [np.array([2.0, 8.0]), np.array([33.0, 12.0])]
     vels = [np.array([10.0, 0.5]), np.array([-10.0, -0.5])]
-    tracker = MCMCDA(MCMCDAConfig(n_mc=300), rng=np.random.default_rng(1))
+    tracker = MCMCDA(MCMCDAConfig(n_mc=300))
+    state, draws = tracker.initial_state(), np.random.default_rng(1)
     steps = 14
     for t in range(steps):
         obs = [
@@ -22,22 +23,20 @@ def test_two_crossing_targets_with_clutter_are_recovered():
         ]
         if t % 4 == 1:
             obs.append(rng.uniform([0, 0], [35, 20]))
-        tracker.step(np.array(obs).reshape(-1, 2))
-    tracker.finish()
-    tracks = tracker.tracks()
+        state = tracker.step(state, np.array(obs).reshape(-1, 2), draws)
+    tracks = tracker.tracks(tracker.finish(state))
     long_tracks = {k: v for k, v in tracks.items() if len(v[0]) >= steps - 2}
     assert len(long_tracks) == 2
     for times, pos in long_tracks.values():
         truths = [s + v * 0.25 * times[:, None] for s, v in zip(starts, vels)]
         err = min(np.linalg.norm(pos - tr, axis=1).mean() for tr in truths)
         assert err < 0.6
-    assert tracker.accepted > 0
+    assert tracker.stats.accepted > 0
 
 
 def test_scores_prefer_the_true_association():
-    tracker = MCMCDA(MCMCDAConfig())
-    for t in range(4):
-        tracker.observations.append(np.array([[1.0 + 2.5 * t, 5.0], [30.0 - 2.5 * t, 15.0]]))
+    obs = [np.array([[1.0 + 2.5 * t, 5.0], [30.0 - 2.5 * t, 15.0]]) for t in range(4)]
+    tracker = HypothesisSampler(MCMCDAConfig(), obs, np.random.default_rng(0))
     good = tuple((t, 0) for t in range(4))
     bad = ((0, 0), (1, 1), (2, 0), (3, 1))
     assert tracker.track_score(good, 3) > 0 > tracker.track_score(bad, 3)

@@ -13,6 +13,7 @@ reports) is :mod:`fusetrack.world.demo_scene`, which the live node's ``demo`` re
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping
 from typing import Any
 
@@ -25,6 +26,8 @@ from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
 from ..filters.particle import BootstrapFilter
 from ..world.demo_scene import AREA, DemoScene, simulate_demo
+
+logger = logging.getLogger(__name__)
 
 POSITION = (0, 1)
 VELOCITY = (2, 3)
@@ -125,8 +128,12 @@ def run(ctx: RunContext) -> Outcome:
             "RMSE / PCRB": avg / bound_avg,
         }
     ).loc[METHODS]
-    print(f"\nTime-averaged over {runs} runs (PCRB position bound {bound_avg:.3f} m):")
-    print(table.to_string(float_format=lambda v: f"{v:.3f}"))
+    logger.info(
+        "\nTime-averaged over %d runs (PCRB position bound %.3f m):\n%s",
+        runs,
+        bound_avg,
+        table.to_string(float_format=lambda v: f"{v:.3f}"),
+    )
     body = _report_text(scn, runs, n_particles, table, figs, rmse, pcrb, per_run_bound)
     return Outcome(df, claims, body, runs)
 

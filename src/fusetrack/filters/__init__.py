@@ -5,18 +5,12 @@ One import per line, re-exported with ``as``: add new filters by adding lines.
 
 from .cpf_sp import CPFSPProposal as CPFSPProposal
 from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
-from .energy_localisation import energy_localise as energy_localise
 from .grid import DirectionalGridBelief as DirectionalGridBelief
 from .grid import GridFilter as GridFilter
 from .grid import GridSpec as GridSpec
 from .grid import SensorLikelihoods as SensorLikelihoods
 from .grid_proposals import DiscretisationProposal as DiscretisationProposal
 from .grid_proposals import GalerkinProposal as GalerkinProposal
-from .harmonic_localisation import AcousticNetwork as AcousticNetwork
-from .harmonic_localisation import BeamformModel as BeamformModel
-from .harmonic_localisation import FrequencyModel as FrequencyModel
-from .harmonic_localisation import estimate_frequencies as estimate_frequencies
-from .harmonic_localisation import localise as localise
 from .imm import IMMBelief as IMMBelief
 from .imm import InteractingMultipleModel as InteractingMultipleModel
 from .kalman import ExtendedKalmanFilter as ExtendedKalmanFilter
@@ -28,7 +22,8 @@ from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
-from .occlusion_likelihood import OcclusionAwareLikelihood as OcclusionAwareLikelihood
+from .multiple_model import RegimeState as RegimeState
+from .multiple_model import RegimeSwitchingProposal as RegimeSwitchingProposal
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
@@ -36,8 +31,7 @@ from .particle import RegularizedParticleFilter as RegularizedParticleFilter
 from .runner import run_filter as run_filter
 from .sis import PriorProposal as PriorProposal
 from .sis import ProposalParticleFilter as ProposalParticleFilter
-from .sis import run_sis as run_sis
-from .slice_sampling import slice_sample as slice_sample
+from .sis import SISBelief as SISBelief
 from .sp_pekf import SPPEKFBank as SPPEKFBank
 from .sp_pekf import SPPEKFProposal as SPPEKFProposal
 from .stats import FilterStats as FilterStats

@@ -37,6 +37,7 @@ from .detection_function import cell_arcs as cell_arcs
 from .homography_camera import HomographyCamera as HomographyCamera
 from .nfer_tag import NferTagSimulator as NferTagSimulator
 from .nfer_tag import fit_position_fix as fit_position_fix
+from .occlusion_aware_camera import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .perspective_camera import CameraArray as CameraArray
 from .perspective_camera import PerspectiveCamera as PerspectiveCamera
 from .stacked import StackedSensor as StackedSensor

@@ -26,7 +26,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..association.mcmcda import MCMCDA, MCMCDAConfig
+from ..association.mcmcda import MCMCDA, AssociationState, MCMCDAConfig
 from ..association.peaks import likelihood_peaks
 from .alignment import Reading
 from .config import NetworkConfig
@@ -68,13 +68,16 @@ def detections(
     return np.array(out, dtype=float).reshape(-1, 2)
 
 
-def associate(mcmcda: MCMCDA, y: np.ndarray) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """One MCMCDA step on the tick's detections ``y (k, 2)``; the current tracks by id (the
-    Kalman state and covariance of each, predicted to the tick). The engine's only call into
-    :mod:`fusetrack.association.mcmcda`."""
-    mcmcda.step(y)
-    mcmcda.forget_past()  # a node runs for days: memory stays flat
-    return dict(mcmcda.current_tracks())
+def associate(
+    mcmcda: MCMCDA, state: AssociationState, y: np.ndarray, rng: np.random.Generator
+) -> tuple[AssociationState, dict[int, tuple[np.ndarray, np.ndarray]]]:
+    """One MCMCDA step on the tick's detections ``y (k, 2)``: the new association state and the
+    current tracks by id (the Kalman state and covariance of each, predicted to the tick). The
+    engine's only call into :mod:`fusetrack.association.mcmcda`."""
+    state = mcmcda.forget_past(
+        mcmcda.step(state, y, rng)
+    )  # a node runs for days: memory stays flat
+    return state, dict(mcmcda.current_tracks(state))
 
 
 class MultiTargetEngine:
@@ -90,8 +93,9 @@ class MultiTargetEngine:
                 area=(x1 - x0) * (y1 - y0),
                 **a.model_dump(exclude={"method"}),  # the section's fields are MCMCDAConfig's
             ),
-            rng=np.random.default_rng(cfg.tracker.seed),
         )
+        self.rng = np.random.default_rng(cfg.tracker.seed)
+        self.association = self.mcmcda.initial_state()
         self.cells = CellLikelihoods(cfg, grid_of(cfg)) if cfg.tracker.filter == "grid" else None
         self.time = float(start)
         self.resets = 0
@@ -100,7 +104,7 @@ class MultiTargetEngine:
     def step_all(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]:
         """Associate the tick's detections; publish every current track."""
         y = detections(self.cfg, readings, self.cells)
-        tracks = associate(self.mcmcda, y)
+        self.association, tracks = associate(self.mcmcda, self.association, y, self.rng)
         self.last_detections = y
         self.time = t
         sensors = sorted({r.sensor for r in readings})

@@ -360,7 +360,7 @@ def camera_likelihood_kernel(
     priors ``(occ_mu, occ_cov)`` (Eqs. 7-9 on the assigned cameras). A particle that a reporting
     camera cannot see (field of view, walls, static occluders) is impossible (-inf); otherwise the
     pattern probability is floored at ``floor`` and raised to ``occlusion_power``. Same formulas as
-    :meth:`fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood.log_likelihood_reference`.
+    :meth:`fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood.log_likelihood_reference`.
     """
     L, K, M, E = x.shape[0], cam_pos.shape[0], occ_mu.shape[0], edge_a.shape[0]
     out = np.empty(L)

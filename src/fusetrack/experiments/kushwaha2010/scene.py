@@ -44,6 +44,7 @@ from ...perception.audio_beamforming import (
     unpack_audio_message,
 )
 from ...perception.video_detection import VideoDetector, fit_angle_mixture
+from ...sensors.camera_geometry import PinholeCamera
 from ...sensors.detection_function import (
     AngularSampling,
     arc_mean_matrix,
@@ -53,7 +54,7 @@ from ...sensors.detection_function import (
 )
 from ...world.acoustics import harmonic_engine, pink_noise, propagate
 from ...world.clocks import HopTranslation, NodeClock, RbsDomain, fit_clock_map
-from ...world.road_video import PinholeCamera, RoadRenderer, Vehicle
+from ...world.road_video import RoadRenderer, Vehicle
 
 FS = 100e3
 DT = 0.25
@@ -477,7 +478,7 @@ def _video_packets(
     """Video nodes: column scores of rendered frames at 4 fps, with the optional false peak."""
     for c_idx, (sid, x, y, yaw) in enumerate(layout.video):
         true_yaw = yaw + config.camera_yaw_error[c_idx]
-        cam = PinholeCamera((x, y, CAMERA_HEIGHT), true_yaw, hfov=CAMERA_FOV)
+        cam = PinholeCamera.from_pose((x, y, CAMERA_HEIGHT), true_yaw, hfov=CAMERA_FOV)
         renderer = RoadRenderer(cam, rng, clutter=config.clutter)
         det = VideoDetector(cam.column_angles(), cam.hfov)
         for _ in range(25):
@@ -651,28 +652,40 @@ def _split(sensors: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
     )
 
 
+def detection_sensors(layout: Layout) -> dict[str, Any]:
+    """Every node as a detection-function sensor model, for the grid-free particle back end."""
+    from ...sensors.bearing_detection import DetectionFunctionSensor
+
+    beams = AngularSampling.beams(36)
+    out: dict[str, Any] = {}
+    for sid, x, y, h in layout.audio:
+        out[sid] = DetectionFunctionSensor(sid, (x, y), h, sampling=beams)
+    for sid, x, y, h in layout.video:
+        out[sid] = DetectionFunctionSensor(sid, (x, y), h, fov=CAMERA_FOV)
+    return out
+
+
 def bearing_detections(
-    layout: Layout, taken: dict[str, Packet], modalities: tuple[str, ...]
+    layout: Layout, taken: dict[str, Packet], modalities: tuple[str, ...], time: float = 0.0
 ) -> list[Any]:
-    """The same reports as :func:`tick_likelihoods`, for the grid-free particle back end."""
-    from ...filters.detection_pf import BearingDetection
+    """The same reports as :func:`tick_likelihoods` as measurements for :func:`detection_sensors`."""
+    from ...core.measurement import Measurement
+    from ...sensors.bearing_detection import DetectionFunctionSensor
 
     out = []
-    beams = AngularSampling.beams(36)
     if "audio" in modalities:
-        for sid, x, y, h in layout.audio:
+        for sid, _, _, _ in layout.audio:
             if sid in taken:
-                out.append(BearingDetection((x, y), h, sampling=beams, values=taken[sid].values))
+                out.append(Measurement(time, sid, taken[sid].values))
     if "video" in modalities:
-        for sid, x, y, h in layout.video:
+        for sid, _, _, _ in layout.video:
             if sid in taken:
                 mix = fit_angle_mixture(taken[sid].values, VIDEO_ANGLES, min_mass=20.0)
                 if not mix.empty:
-                    out.append(
-                        BearingDetection(
-                            (x, y), h, mixture=(mix.weights, mix.means, mix.sigmas), fov=CAMERA_FOV
-                        )
+                    value = DetectionFunctionSensor.mixture_value(
+                        mix.weights, mix.means, mix.sigmas
                     )
+                    out.append(Measurement(time, sid, value))
     return out
 
 
@@ -686,18 +699,22 @@ def run_particle_backend(
     n_particles: int = 2000,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Posterior means ``(T, 2)`` and det Σ of the particle back end (product fusion)."""
-    from ...filters.detection_pf import DetectionParticleFilter
+    from ...filters.detection_pf import DetectionParticleFilter, position_estimate
     from ...motion import ConstantVelocity
 
     modalities = VARIANTS[variant][0]
-    pf = DetectionParticleFilter(ConstantVelocity(ndim=2, q=4.0), n_particles)
+    pf = DetectionParticleFilter(
+        ConstantVelocity(ndim=2, q=4.0), detection_sensors(layout), n_particles
+    )
     cells = rng.choice(layout.grid.size, n_particles, p=prior / prior.sum())
     jitter = rng.uniform(-0.5, 0.5, (n_particles, 2)) * layout.grid.cell
-    pf.initialize(layout.grid.centres[cells] + jitter, 8.0, rng)
+    belief = pf.initial_belief(layout.grid.centres[cells] + jitter, 8.0, rng)
     means = np.full((len(fin.taken), 2), np.nan)
     dets = np.full(len(fin.taken), np.nan)
     for k in range(start, len(fin.taken)):
-        m, c = pf.step(DT, bearing_detections(layout, fin.taken[k], modalities), rng)
+        zs = bearing_detections(layout, fin.taken[k], modalities, k * DT)
+        belief = pf.update(pf.predict(belief, DT, rng), zs, rng)
+        m, c = position_estimate(belief)
         means[k] = m
         dets[k] = np.linalg.det(c)
     return means, dets
