@@ -56,10 +56,10 @@ def _valid_keys(model: type[BaseModel]) -> str:
     return f"one of {', '.join(keys)}" if keys else "no option (this one takes none)"
 
 
-def _submodel(model: type[BaseModel], loc: Sequence[str | int]) -> type[BaseModel]:
+def _submodel(model: type[BaseModel], loc: Sequence[str]) -> type[BaseModel]:
     """The (nested) model that holds the key at ``loc``, e.g. ``cameras.0.yaw`` -> the camera's."""
     for part in loc[:-1]:
-        field = model.model_fields.get(str(part))
+        field = model.model_fields.get(part)
         if field is None:
             continue  # a list index
         inner = [field.annotation, *get_args(field.annotation)]
@@ -70,13 +70,18 @@ def _submodel(model: type[BaseModel], loc: Sequence[str | int]) -> type[BaseMode
     return model
 
 
-def validation_error(err: ValidationError, model: type[BaseModel], where: str) -> ConfigError:
-    """One :class:`ConfigError` for the first problem pydantic found: field, value, what is valid."""
+def validation_error(
+    err: ValidationError, model: type[BaseModel], where: str, raw: Mapping[str, Any]
+) -> ConfigError:
+    """One :class:`ConfigError` for the first problem pydantic found: field, value, what is valid.
+    A ``--set`` value is shown whole (``periods='1,x'``), a YAML one where the problem is."""
     first = err.errors()[0]
-    loc = [str(p) for p in first["loc"]]
-    key = loc[-1] if loc else "?"
+    loc = [str(p) for p in first["loc"]] or ["?"]
+    if where == "--set":  # flat KEY=VALUE strings: the key and the value as typed
+        loc, first["input"] = loc[:1], raw.get(loc[0], first.get("input"))
+    key = loc[-1]
     flag = _flag(".".join(loc) if where != "--set" else key, where)
-    owner = _submodel(model, first["loc"])
+    owner = _submodel(model, loc)
     if first["type"] == "extra_forbidden":
         return ConfigError(f"{flag} is not a known key: expected {_valid_keys(owner)}")
     field = owner.model_fields.get(key)
@@ -96,7 +101,7 @@ def parse_options(model: type[M], raw: Mapping[str, Any], where: str = "--set") 
     try:
         return model.model_validate(dict(raw))
     except ValidationError as err:
-        raise validation_error(err, model, where) from None
+        raise validation_error(err, model, where, raw) from None
 
 
 def load_yaml(model: type[M], path: str | Path, where: str = "config") -> M:

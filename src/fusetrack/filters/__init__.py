@@ -5,8 +5,9 @@ One import per line, re-exported with ``as``: add new filters by adding lines.
 
 from .cpf_sp import CPFSPProposal as CPFSPProposal
 from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
+from .grid import DirectionalGridBelief as DirectionalGridBelief
+from .grid import GridFilter as GridFilter
 from .grid import GridSpec as GridSpec
-from .grid import GridTracker as GridTracker
 from .grid import SensorLikelihoods as SensorLikelihoods
 from .grid_proposals import DiscretisationProposal as DiscretisationProposal
 from .grid_proposals import GalerkinProposal as GalerkinProposal
@@ -21,6 +22,8 @@ from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
+from .multiple_model import RegimeState as RegimeState
+from .multiple_model import RegimeSwitchingProposal as RegimeSwitchingProposal
 from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
@@ -28,7 +31,7 @@ from .particle import RegularizedParticleFilter as RegularizedParticleFilter
 from .runner import run_filter as run_filter
 from .sis import PriorProposal as PriorProposal
 from .sis import ProposalParticleFilter as ProposalParticleFilter
-from .sis import run_sis as run_sis
+from .sis import SISBelief as SISBelief
 from .sp_pekf import SPPEKFBank as SPPEKFBank
 from .sp_pekf import SPPEKFProposal as SPPEKFProposal
 from .stats import FilterStats as FilterStats

@@ -21,6 +21,7 @@ estimate. The triggers are pure functions so that each can be tested on its own.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -183,7 +184,6 @@ def run_cooperation(
     births = (not can_discover) if oracle_births is None else oracle_births
     answer = np.ones(T, bool) if camera_available is None else np.asarray(camera_available, bool)
     filt = tracker.build(sensor, sigma)
-    parts: dict[int, Array] = {}
     res = CooperationResult(
         np.full((T, O, 4), np.nan),
         np.zeros((T, O), bool),
@@ -192,17 +192,10 @@ def run_cooperation(
         np.zeros(T, bool),
         np.zeros(T, int),
     )
-
-    def start(o: int, k: int, known: bool = False) -> tuple[Array, Array]:
-        fix = truth[k, o, :2] + tracker.sigma_r * rng.standard_normal(2)
-        v0 = truth[k, o, 2:] if known else np.zeros(2)
-        mean = np.array([fix[0], fix[1], v0[0], v0[1]])
-        std = tracker.start_std
-        return filt.initialize(mean, std, rng), fix
-
+    parts: dict[int, Array] = {}
     for o in range(O):  # step 0: the cameras find every present object
         if present[0, o]:
-            parts[o], _ = start(o, 0, tracker.known_initial_velocity)
+            parts[o], _ = _start(filt, tracker, truth[0, o], rng, tracker.known_initial_velocity)
     n_tracked_prev = len(parts)
     for k in range(T):
         z = simulate_bearings(truth[k, :, :2], audible[k], sensor, sigma, rng, tracker.dz_critical)
@@ -213,58 +206,115 @@ def run_cooperation(
             for o, p in list(parts.items()):
                 parts[o], st = _filter_step(filt, p, z, tracker.dt, rng, tracker.engine)
                 est[o], steps[o] = st.estimate, st
+                res.degenerate_steps += st.degenerate
         else:
             for o, p in parts.items():
                 est[o] = p.mean(axis=0)
-        # --- triggers
         fire_count = policy.count and count_trigger(len(z), n_tracked_prev)
-        fire_obj: set[int] = set()
-        gate_any = ell_any = False
-        if k > 0:
-            for o in est:
-                g = policy.gate and bearing_gate_trigger(est[o], sensor, z, sigma, policy.gate_k)
-                e = policy.ellipse and ellipse_trigger(est[o], steps[o].predictions, policy.chi2)
-                gate_any |= g
-                ell_any |= e
-                if g or e:
-                    fire_obj.add(o)
+        fire_obj, gate_any, ell_any = _object_triggers(policy, est, steps, z, sensor, sigma, k)
         periodic = policy.period is not None and k > 0 and k % policy.period == 0
         res.fired[k] = (fire_count, gate_any, ell_any)
         res.fired_any[k] = fire_count or bool(fire_obj) or periodic
-        # --- camera cooperation
         if policy.apply_fixes and answer[k] and (fire_count or periodic or fire_obj):
-            everyone = fire_count or periodic
-            targets = range(O) if everyone else sorted(fire_obj)
-            for o in targets:
-                if present[k, o]:
-                    if o in parts:
-                        fix = truth[k, o, :2] + tracker.sigma_r * rng.standard_normal(2)
-                        parts[o] = filt.reset_to_fix(parts[o], fix, tracker.sigma_r, rng)
-                        vel = est[o][2:] if o in est else parts[o][:, 2:].mean(0)
-                    else:
-                        parts[o], fix = start(o, k)
-                        vel = np.zeros(2)
-                    est[o] = np.array([fix[0], fix[1], vel[0], vel[1]])
-                    res.camera_updates[k, o] = True
-                elif o in parts:  # the cameras no longer see it
-                    del parts[o]
-                    est.pop(o, None)
+            targets = range(O) if fire_count or periodic else sorted(fire_obj)
+            _camera_fixes(filt, tracker, truth[k], present[k], targets, parts, est, rng)
+            res.camera_updates[k, list(targets)] = [present[k, o] for o in targets]
         if births:
-            for o in range(O):
-                if present[k, o] and o not in parts:
-                    parts[o], fix = start(o, k, tracker.known_initial_velocity)
-                    est[o] = parts[o].mean(axis=0)
-                    est[o][:2] = fix
-                elif not present[k, o] and o in parts:
-                    del parts[o]
-                    est.pop(o, None)
+            _oracle_births(filt, tracker, truth[k], present[k], parts, est, rng)
         for o, e_o in est.items():
             if o in parts:
                 res.estimates[k, o] = e_o
                 res.tracked[k, o] = True
         n_tracked_prev = len(parts)
-    res.degenerate_steps = filt.degenerate_steps
     return res
+
+
+def _start(
+    filt: MultiModelBearingPF,
+    tracker: AcousticTracker,
+    truth: Array,
+    rng: np.random.Generator,
+    known: bool = False,
+) -> tuple[Array, Array]:
+    """A new object's particles around a camera fix of its true state ``truth (4,)``; the
+    velocity is the true one when ``known``, else zero. Returns (particles, fix)."""
+    fix = truth[:2] + tracker.sigma_r * rng.standard_normal(2)
+    v0 = truth[2:] if known else np.zeros(2)
+    mean = np.array([fix[0], fix[1], v0[0], v0[1]])
+    return filt.initialize(mean, tracker.start_std, rng), fix
+
+
+def _object_triggers(
+    policy: CooperationPolicy,
+    est: Mapping[int, Array],
+    steps: Mapping[int, MultiModelStep],
+    z: Array,
+    sensor: tuple[float, float],
+    sigma: float,
+    k: int,
+) -> tuple[set[int], bool, bool]:
+    """Objects whose bearing-gate (Eq. 3.15) or ellipse (Eq. 3.16) trigger fires at step ``k``,
+    and whether each trigger fired for any object."""
+    fire_obj: set[int] = set()
+    gate_any = ell_any = False
+    if k > 0:
+        for o in est:
+            g = policy.gate and bearing_gate_trigger(est[o], sensor, z, sigma, policy.gate_k)
+            e = policy.ellipse and ellipse_trigger(est[o], steps[o].predictions, policy.chi2)
+            gate_any |= g
+            ell_any |= e
+            if g or e:
+                fire_obj.add(o)
+    return fire_obj, gate_any, ell_any
+
+
+def _camera_fixes(
+    filt: MultiModelBearingPF,
+    tracker: AcousticTracker,
+    truth: Array,
+    present: Array,
+    targets: Iterable[int],
+    parts: dict[int, Array],
+    est: dict[int, Array],
+    rng: np.random.Generator,
+) -> None:
+    """The cameras localise ``targets`` (``truth (O, 4)`` at this step): a tracked object's
+    particles are reset around its fix, a new one is started, one the cameras no longer see is
+    dropped. Updates ``parts`` and ``est`` in place."""
+    for o in targets:
+        if present[o]:
+            if o in parts:
+                fix = truth[o, :2] + tracker.sigma_r * rng.standard_normal(2)
+                parts[o] = filt.reset_to_fix(parts[o], fix, tracker.sigma_r, rng)
+                vel = est[o][2:] if o in est else parts[o][:, 2:].mean(0)
+            else:
+                parts[o], fix = _start(filt, tracker, truth[o], rng)
+                vel = np.zeros(2)
+            est[o] = np.array([fix[0], fix[1], vel[0], vel[1]])
+        elif o in parts:  # the cameras no longer see it
+            del parts[o]
+            est.pop(o, None)
+
+
+def _oracle_births(
+    filt: MultiModelBearingPF,
+    tracker: AcousticTracker,
+    truth: Array,
+    present: Array,
+    parts: dict[int, Array],
+    est: dict[int, Array],
+    rng: np.random.Generator,
+) -> None:
+    """Start a filter for every object that appeared, drop those that left (policies that
+    cannot discover objects). Updates ``parts`` and ``est`` in place."""
+    for o in range(len(present)):
+        if present[o] and o not in parts:
+            parts[o], fix = _start(filt, tracker, truth[o], rng, tracker.known_initial_velocity)
+            est[o] = parts[o].mean(axis=0)
+            est[o][:2] = fix
+        elif not present[o] and o in parts:
+            del parts[o]
+            est.pop(o, None)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -397,7 +447,6 @@ def _filter_step(
         parts[None, None], eta, alphas, dt, np.asarray(filt.sensor_position, float), zz,
         1.0 / filt.sigma**2, pred, w_ml, est,
     )  # fmt: skip
-    filt.degenerate_steps += deg
     w = w_ml[0, 0]
     p_m = w.sum(axis=1)
     means = np.einsum("jl,jld->jd", w, pred[0, 0]) / np.where(p_m > 0, p_m, 1.0)[:, None]

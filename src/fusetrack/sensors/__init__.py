@@ -31,6 +31,11 @@ __all__ = [
 
 # Nott 2009 (issue 7): the camera that sees a person on the floor, a simulated NFER radio tag
 from . import camera_geometry as camera_geometry
+
+# Cameras and tags: Kushwaha 2010's appearance camera (issue 16), Nott 2009's (issue 7)
+from .appearance import AppearanceModel as AppearanceModel
+from .appearance import FeatureImage as FeatureImage
+from .appearance_camera import AppearanceCamera as AppearanceCamera
 from .detection_function import AngularSampling as AngularSampling
 from .detection_function import arc_mean_matrix as arc_mean_matrix
 from .detection_function import cell_arcs as cell_arcs

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -51,6 +52,52 @@ class SizeOptions(ExperimentOptions):
     )
     burn_in: int | None = Field(
         None, ge=0, description="steps left out of RMSE_tr, < steps (default: the run's)"
+    )
+
+
+PRINTED_PREFIX = "printed "
+"""Label prefix of a series run with the likelihood exactly as printed (hard zeros, full rectangles)."""
+
+
+def prior_level(sigma_psi: float) -> str:
+    """The occluder-prior level of a sweep point: 0 is perfect, infinity none, else Gaussian."""
+    return "perfect" if sigma_psi == 0 else ("none" if math.isinf(sigma_psi) else "gaussian")
+
+
+def sweep_config(sigma_psi: float, k: int, size: dict[str, int]) -> dict[str, Any]:
+    """One point of a sigma_psi sweep in the open square room (M = 40, first ``k`` fixed cameras),
+    labelled by its sigma_psi ("inf": no priors)."""
+    return {
+        "scene": "square-open",
+        "n_occluders": 40,
+        "prior": prior_level(sigma_psi),
+        "sigma_psi": sigma_psi if math.isfinite(sigma_psi) else 0.0,
+        "k": k,
+        "method": "fixed",
+        "label": "inf" if math.isinf(sigma_psi) else f"{sigma_psi:g}",
+        **size,
+    }
+
+
+def printed_config(config: dict[str, Any]) -> dict[str, Any]:
+    """``config`` with the likelihood exactly as printed (floor 0, full Eq. 7 rectangles)."""
+    return {
+        **config,
+        "floor": 0.0,
+        "exclusion": 0.0,
+        "label": f"{PRINTED_PREFIX}{config['label']}",
+    }
+
+
+def printed_runs(results: pd.DataFrame, no_prior: pd.DataFrame) -> pd.DataFrame:
+    """The printed-likelihood runs of ``results`` under their sweep labels, with the shared
+    no-prior runs ``no_prior`` (neither correction enters the no-prior likelihood)."""
+    is_printed = results["label"].str.startswith(PRINTED_PREFIX)
+    return pd.concat(
+        [
+            results[is_printed].assign(label=lambda d: d["label"].str[len(PRINTED_PREFIX) :]),
+            no_prior,
+        ]
     )
 
 

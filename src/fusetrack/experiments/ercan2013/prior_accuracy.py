@@ -16,23 +16,28 @@ import numpy as np
 import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, interpolate_crossing, md, mean_std, sizes
+from .common import (
+    PRINTED_PREFIX,
+    curve_plot,
+    fmt,
+    interpolate_crossing,
+    md,
+    mean_std,
+    printed_config,
+    printed_runs,
+    sizes,
+    sweep_config,
+)
 from .simulation import DEFAULTS, run_tracking
 
 SIGMA_PSI_FULL = (0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, math.inf)
 SIGMA_PSI_QUICK = (0.0, 2.0, 8.0, math.inf)
-PRINTED_PREFIX = "printed "
-"""Label prefix of the series run with the likelihood exactly as printed (hard zeros, full rectangles)."""
 SIGMA_V_PREFIX = "sigma_v "
 """Label prefix of the extremes rerun with another tracker motion noise (the paper does not give it)."""
 SIGMA_V_SWEPT = 2.0
 """Tracker sigma_v at which the whole sigma_psi sweep is rerun (the paper's 2.34x, 3.72 and 1.94x)."""
 SIGMA_V_EXTREMES_FULL = (1.0,)
 """Further sigma_v at which only perfect and no priors are rerun."""
-
-
-def _prior(sigma_psi: float) -> str:
-    return "perfect" if sigma_psi == 0 else ("none" if math.isinf(sigma_psi) else "gaussian")
 
 
 class _Curve(NamedTuple):
@@ -100,21 +105,9 @@ class _Sweep:
 def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
     """Scenario: the sigma_psi sweep, the printed-likelihood series and the sigma_v reruns."""
     sweep = SIGMA_PSI_QUICK if ctx.quick else SIGMA_PSI_FULL
-    configs = [
-        {
-            "scene": "square-open",
-            "n_occluders": 40,
-            "prior": _prior(s),
-            "sigma_psi": s if math.isfinite(s) else 0.0,
-            "k": 4,
-            "method": "fixed",
-            "label": "inf" if math.isinf(s) else f"{s:g}",
-            **size,
-        }
-        for s in sweep
-    ]
+    configs = [sweep_config(s, 4, size) for s in sweep]
     printed = [
-        {**c, "floor": 0.0, "exclusion": 0.0, "label": f"{PRINTED_PREFIX}{c['label']}"}
+        printed_config(c)
         for c in configs
         if c["prior"] != "none"  # neither correction enters the no-prior likelihood
     ]
@@ -138,12 +131,7 @@ def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Sweep:
     df_all = results[~is_noisier]
     is_printed = df_all["label"].str.startswith(PRINTED_PREFIX)
     df = df_all[~is_printed]
-    hard = pd.concat(  # the printed curve: its own runs, the shared no-prior runs at the end
-        [
-            df_all[is_printed].assign(label=lambda d: d["label"].str[len(PRINTED_PREFIX) :]),
-            df[df["label"] == "inf"],
-        ]
-    )
+    hard = printed_runs(df_all, df[df["label"] == "inf"])  # shared no-prior runs at the end
     return _Sweep(results, df, hard, _curve(df), _curve(hard), sv, sv_table)
 
 

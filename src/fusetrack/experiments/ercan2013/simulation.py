@@ -190,7 +190,8 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     asir = WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed)
     rng_f = np.random.default_rng([seed, 3])
     rng_s = np.random.default_rng([seed, 4])
-    u, w = asir.initialize(rng_f)
+    belief = asir.initialize(rng_f)
+    u, w = belief.particles, belief.weights
     n_cams = len(scene.cameras)
     method, k, period = cfg["method"], int(cfg["k"]), int(cfg["period"])
     selected = (
@@ -250,7 +251,8 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
             lik_time += time.perf_counter() - t1
             return out
 
-        u, w = asir.step(u, w, loglik, rng_f)
+        belief = asir.step(belief, loglik, rng_f)
+        u, w = belief.particles, belief.weights
         est[t - 1] = asir.estimate(u, w)
     b = int(cfg["burn_in"])
     err = est[b:] - obj[1 + b :]

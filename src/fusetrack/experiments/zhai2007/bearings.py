@@ -55,6 +55,7 @@ IMM_TRANSITION = np.array([[0.9, 0.05, 0.05], [0.1, 0.9, 0.0], [0.1, 0.0, 0.9]])
 
 
 def scenario(name: str) -> dict[str, Any]:
+    """The E2 (thesis) or E3 (simulated aircraft) settings."""
     if name == "E2":
         return {
             "x0": np.array([1.0, 1.0, 1.0, 1.0]),
@@ -82,6 +83,7 @@ def scenario(name: str) -> dict[str, Any]:
 def simulate(
     scn: Mapping[str, Any], rng: np.random.Generator
 ) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    """Truth and bearings from the radar at the origin (E3's turn is noise-free)."""
     cv = ConstantVelocity(q=scn["q"], noise="discrete")
     sensor = Bearing("radar", position=[0.0, 0.0], sigma=scn["sigma"])
     x, xs, zs = scn["x0"].copy(), [], []
@@ -163,6 +165,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E2-E3: comparators calibrated to PF-SP-PEKF(200), the runs, claims, figures, report."""
     runs = ctx.n_runs(full=100, quick=8)
     n_equal, target = {}, {}
     for s in ("E2", "E3"):  # particles at PF-SP-PEKF(200)'s time, on run 0's scenario

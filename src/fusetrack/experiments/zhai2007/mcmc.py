@@ -53,6 +53,7 @@ PAPER_ORDER = ["PF-RWM", "PF-MIS", "PF-MH", "PF"]  # ascending MSE in every row 
 
 
 def model() -> tuple[ScalarBenchmark, Power, Gaussian]:
+    """Motion (Eq. 93), sensor (Eq. 94) and prior of E19."""
     return (
         ScalarBenchmark(a=1.7, b=5.0, trig="cos", q=8.0),
         Power("y", exponent=2, sigma=float(np.sqrt(0.5))),
@@ -61,6 +62,7 @@ def model() -> tuple[ScalarBenchmark, Power, Gaussian]:
 
 
 def simulate(rng: np.random.Generator) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    """``x_0`` from the prior, then ``STEPS`` transitions and measurements."""
     motion, sensor, prior = model()
     x = prior.sample(rng)
     xs, zs = [], []
@@ -118,6 +120,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E19: comparators calibrated to PF-RWM(N), the runs per N, claims, figures, report."""
     runs = ctx.n_runs(full=1000, quick=40)
     cs = comparator_scenario(run_seed(ctx.seed, 0))
     n_equal, target = {}, {}

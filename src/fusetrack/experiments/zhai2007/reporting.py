@@ -20,6 +20,11 @@ def rmse_by_step(df: pd.DataFrame, column: str) -> pd.DataFrame:
     return df.groupby(["method", "step"])[column].mean().pow(0.5).unstack("method")
 
 
+def rmse_by_method(df: pd.DataFrame, column: str) -> pd.Series:
+    """``sqrt(mean(df[column]))`` per method, over every step and run of ``df``."""
+    return df.groupby("method")[column].mean().pow(0.5)
+
+
 def order_claim(
     claim_id: str,
     statement: str,

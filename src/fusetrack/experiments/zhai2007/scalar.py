@@ -166,6 +166,7 @@ def state_pdfs(
 
 
 def _pdf_figure(ctx: RunContext, quick: bool) -> str:
+    """Figs 5-7: densities of x_20 and z_20 per sinusoid gain, and of x_t at gain 5."""
     import matplotlib.pyplot as plt
 
     samples = state_pdfs(
@@ -196,6 +197,7 @@ def _pdf_figure(ctx: RunContext, quick: bool) -> str:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E1: the printed model's runs (comparators calibrated first) and each reading's runs."""
     runs = ctx.n_runs(full=1000, quick=40)
     var_runs = max(5, runs // 5) if ctx.runs is None else runs
     n_eq, target = _equal_time_particles(ctx.seed, 2 if ctx.quick else 3)

@@ -1,9 +1,10 @@
-"""The grid tracker inside the node: Kushwaha 2010's sequential Bayesian estimation on a grid.
+"""The node's grid (``tracker.filter: grid``; Kushwaha 2010, Ch. III): cells over the network's
+``area``, the readings as per-cell likelihood maps, the prior on the cells and the grid filter.
 
-``tracker.filter: grid`` keeps the target's position as a probability per cell of the network's
-``area`` (:class:`~fusetrack.filters.grid.GridTracker`: directional motion, Eq. 29, then the
-product, Eq. 30, or quality-weighted sum, Eq. 31, of the sensors' per-cell likelihoods). Each
-reading of a tick gives one per-cell likelihood (:class:`CellLikelihoods`):
+The node's engine (:mod:`.engine`) runs :class:`~fusetrack.filters.grid.GridFilter` like any
+other filter: directional motion (Eq. 29), then the product (Eq. 30) or quality-weighted sum
+(Eq. 31) of the sensors' per-cell likelihoods. Each reading of a tick gives one likelihood map
+(:class:`CellLikelihoods`):
 
 * a ``detection_function`` (beam energies of a microphone array, per-column scores of a camera):
   the mean of the piecewise-linear detection function over the arc each cell subtends at the
@@ -13,10 +14,12 @@ reading of a tick gives one per-cell likelihood (:class:`CellLikelihoods`):
   homography): the sensor model's own likelihood ``p(z | x)`` at each cell centre;
 
 both floored and normalised (:func:`~fusetrack.sensors.detection_function.normalize_likelihood`)
-so that no cell is ever ruled out. One grid step per tick fuses every reading of the tick at the
-tick time (Kushwaha 2010 fuses at 4 Hz the same way); a tick without readings predicts only.
-The published state is the posterior mean ``[x, y]`` and covariance over the cells.
-Everything is deterministic, so live and offline runs over the same readings agree exactly.
+so that no cell is ever ruled out. The maps travel to the filter as measurements (value: the
+map, ``metadata["quality"]``), interpreted by one
+:class:`~fusetrack.sensors.likelihood_map.LikelihoodMapSensor` per sensor. The grid filter fuses
+every reading of a tick at the tick time (Kushwaha 2010 fuses at 4 Hz the same way); a tick
+without readings predicts only. Everything is deterministic, so live and offline runs over the
+same readings agree exactly.
 """
 
 from __future__ import annotations
@@ -26,11 +29,17 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..filters.grid import DirectionalMotion, GridSpec, GridTracker, SensorLikelihoods, fuse
+from ..filters.grid import (
+    DirectionalMotion,
+    GridFilter,
+    GridSpec,
+    SensorLikelihoods,
+    fuse,
+    map_sensors,
+)
 from ..sensors.detection_function import arc_mean_matrix, cell_arcs, normalize_likelihood
 from .alignment import Reading
 from .config import DetectionFunctionSensor, NetworkConfig
-from .schema import TrackState
 
 Array = NDArray[np.float64]
 
@@ -81,11 +90,14 @@ class CellLikelihoods:
 
     def of(self, readings: Sequence[Reading]) -> SensorLikelihoods:
         """The tick's readings as the grid filter's input (one row per informative reading)."""
-        rows = [lq for lq in (self(r) for r in readings) if lq is not None]
+        rows = [(r.sensor, lq) for r, lq in ((r, self(r)) for r in readings) if lq is not None]
         if not rows:
             return SensorLikelihoods(np.empty((0, self.grid.size)), np.empty(0), ())
         return SensorLikelihoods(
-            np.array([lk for lk, _ in rows]), np.array([q for _, q in rows]), ("all",) * len(rows)
+            np.array([lk for _, (lk, _) in rows]),
+            np.array([q for _, (_, q) in rows]),
+            ("all",) * len(rows),
+            tuple(sid for sid, _ in rows),
         )
 
     def fused(self, readings: Sequence[Reading], rule: str) -> Array | None:
@@ -96,53 +108,23 @@ class CellLikelihoods:
         return fuse(lik.values, lik.quality, rule).reshape(self.grid.shape)  # type: ignore[arg-type]
 
 
-class GridEngine:
-    """The node's grid tracker: one :class:`GridTracker` step per tick (module docstring)."""
+def grid_filter(cfg: NetworkConfig, grid: GridSpec) -> GridFilter:
+    """The configured grid filter over every sensor's likelihood maps (one modality)."""
+    g = cfg.tracker.grid
+    return GridFilter(
+        grid,
+        map_sensors(grid, [s.id for s in cfg.sensors]),
+        g.fusion,
+        motion=DirectionalMotion(g.delta),
+        first_delta=2 * g.delta,
+        max_speed=g.max_speed,
+    )
 
-    def __init__(self, cfg: NetworkConfig, start: float) -> None:
-        g = cfg.tracker.grid
-        self.cfg = cfg
-        self.grid = grid_of(cfg)
-        self.cells = CellLikelihoods(cfg, self.grid)
-        self.rate = cfg.fusion.rate_hz
-        self.tracker = GridTracker(
-            self.grid,
-            g.fusion,
-            motion=DirectionalMotion(g.delta),
-            first_delta=2 * g.delta,
-            max_step=g.max_speed / self.rate,
-        )
-        self.tracker.initialize(self._prior())
-        self.time = float(start)
-        self.resets = 0
 
-    def _prior(self) -> Array:
-        """The configured Gaussian prior on the position, evaluated on the cells."""
-        m = np.asarray(self.cfg.tracker.prior_mean[:2], float)
-        sd = np.maximum(np.asarray(self.cfg.tracker.prior_std[:2], float), self.grid.cell)
-        u = (self.grid.centres - m) / sd
-        p = np.exp(-0.5 * np.sum(u * u, axis=1))
-        return p if p.sum() > 0 else self.grid.uniform()
-
-    def step(self, tick: int, t: float, readings: Sequence[Reading]) -> TrackState:
-        mean, cov = self.tracker.step(self.cells.of(readings))
-        del self.tracker.estimates[:-2], self.tracker.covariances[:-2]  # all it uses: memory flat
-        if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))):  # never publish NaN
-            self.resets += 1
-            self.tracker.initialize(self._prior())
-            mean, cov = self.grid.mean_cov(self.tracker.prob)  # type: ignore[arg-type]
-        self.time = t
-        return TrackState(
-            track=1,
-            tick=tick,
-            time=t,
-            state=mean.tolist(),
-            covariance=cov.tolist(),
-            position=mean.tolist(),
-            position_covariance=cov.tolist(),
-            sensors=sorted({r.sensor for r in readings}),
-            readings=len(readings),
-        )
-
-    def step_all(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]:
-        return [self.step(tick, t, readings)]
+def grid_prior(cfg: NetworkConfig, grid: GridSpec) -> Array:
+    """The configured Gaussian prior on the position, evaluated on the cells."""
+    m = np.asarray(cfg.tracker.prior_mean[:2], float)
+    sd = np.maximum(np.asarray(cfg.tracker.prior_std[:2], float), grid.cell)
+    u = (grid.centres - m) / sd
+    p = np.exp(-0.5 * np.sum(u * u, axis=1))
+    return p if p.sum() > 0 else grid.uniform()
