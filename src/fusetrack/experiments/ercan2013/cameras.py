@@ -9,12 +9,13 @@ Gaussian priors from Kalman filters with RMSE_occ about 6.67, and none (RMSE_occ
 from __future__ import annotations
 
 import os
-import time
+from dataclasses import dataclass
+from typing import Any
 
 import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, md, mean_std, room_plot, sizes
+from .common import Timed, curve_plot, fmt, md, mean_std, room_plot, sizes, timed_monte_carlo
 from .scenes import square_scene
 from .simulation import DEFAULTS, run_tracking, simulate_world
 
@@ -39,9 +40,30 @@ PRIORS = {
 }
 
 
-def run(ctx: RunContext) -> Outcome:
-    size = sizes(ctx)
-    runs = ctx.n_runs(full=5, quick=2)
+@dataclass(frozen=True)
+class _Series:
+    """The three series of one E1 run (paper, printed likelihood, constant-velocity priors) and the
+    tables the claims, figures and report read."""
+
+    timed: Timed
+    n_configs: int
+    printed_ks: tuple[int, ...]
+    df: pd.DataFrame
+    hard: pd.DataFrame
+    cv: pd.DataFrame
+    table: pd.DataFrame
+    pivot: pd.DataFrame
+    rmse_max: float
+    rmse_occ: float
+
+    @property
+    def df_all(self) -> pd.DataFrame:
+        return self.timed.results
+
+
+def _configs(ctx: RunContext, size: dict[str, int]) -> tuple[list[dict[str, Any]], ...]:
+    """Scenario: the paper's prior x camera-count grid, the printed-likelihood series and the
+    constant-velocity-prior series."""
     ks = [2, 4, 8] if ctx.quick else list(range(1, 9))
     configs = [
         {
@@ -64,24 +86,71 @@ def run(ctx: RunContext) -> Outcome:
         if c["k"] in printed_ks and c["prior"] != "none"
     ]
     calibrated = [{**c, **CV} for c in configs if c["prior"] == "gaussian"]
-    load_start = os.getloadavg()
-    t0 = time.perf_counter()
-    df_all = ctx.monte_carlo(
-        run_tracking, [*configs, *printed, *calibrated], runs, desc="E1 cameras"
+    return configs, printed, calibrated
+
+
+def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Series:
+    """Estimation: run every series (timed) and tabulate the paper's one."""
+    configs, printed, calibrated = _configs(ctx, size)
+    timed = timed_monte_carlo(
+        ctx, run_tracking, [*configs, *printed, *calibrated], runs, desc="E1 cameras"
     )
-    wall = time.perf_counter() - t0
-    load_end = os.getloadavg()
+    df_all = timed.results
     df = df_all[df_all["label"] == "corrected"]
-    hard = df_all[df_all["label"] == "printed"]
-    cv = df_all[df_all["label"] == "constant-velocity"]
-    cpu_main = float(df["cpu_seconds"].sum())
-    cpu_printed = float(hard["cpu_seconds"].sum())
-    cpu_cv = float(cv["cpu_seconds"].sum())
-    wall_main = wall * cpu_main / max(cpu_main + cpu_printed + cpu_cv, 1e-12)
     table = mean_std(df, ["prior", "k"])
-    rmse_max = float(df["rmse_max"].mean())
-    rmse_occ = float(df.loc[df["prior"] == "gaussian", "rmse_occ"].mean())
-    pivot = table.pivot(index="k", columns="prior", values="mean")
+    return _Series(
+        timed=timed,
+        n_configs=len(configs),
+        printed_ks=PRINTED_KS_QUICK if ctx.quick else PRINTED_KS_FULL,
+        df=df,
+        hard=df_all[df_all["label"] == "printed"],
+        cv=df_all[df_all["label"] == "constant-velocity"],
+        table=table,
+        pivot=table.pivot(index="k", columns="prior", values="mean"),
+        rmse_max=float(df["rmse_max"].mean()),
+        rmse_occ=float(df.loc[df["prior"] == "gaussian", "rmse_occ"].mean()),
+    )
+
+
+def _cost(ctx: RunContext, s: _Series) -> dict[str, Any]:
+    """CPU seconds per series and the wall time prorated to the paper's configurations."""
+    cpu_main = float(s.df["cpu_seconds"].sum())
+    cpu_printed = float(s.hard["cpu_seconds"].sum())
+    cpu_cv = float(s.cv["cpu_seconds"].sum())
+    wall = s.timed.wall
+    return {
+        "tracking_wall_seconds": wall,
+        "workers": ctx.workers or os.cpu_count(),
+        "load_average_start": list(s.timed.load_start),
+        "load_average_end": list(s.timed.load_end),
+        "cpu_seconds_paper_configurations": cpu_main,
+        "cpu_seconds_printed_series": cpu_printed,
+        "cpu_seconds_constant_velocity_series": cpu_cv,
+        "wall_seconds_paper_configurations_prorated": wall
+        * cpu_main
+        / max(cpu_main + cpu_printed + cpu_cv, 1e-12),
+    }
+
+
+def _hard_table(s: _Series) -> pd.DataFrame:
+    """Mean and std of the printed-likelihood series per prior and camera count."""
+    return mean_std(s.hard, ["prior", "k"])
+
+
+def _cv_mean(s: _Series) -> pd.Series:
+    """Mean RMSE_tr of the constant-velocity-prior series per camera count."""
+    return s.cv.groupby("k")["rmse_tr"].mean()
+
+
+def _cv_ordered(s: _Series) -> pd.Series:
+    """Per camera count: perfect <= constant-velocity priors <= none."""
+    cv_mean = _cv_mean(s)
+    return (s.pivot["perfect"] <= cv_mean) & (cv_mean <= s.pivot["none"])
+
+
+def _trend_claims(ctx: RunContext, s: _Series) -> list[Claim]:
+    """C3: RMSE_tr falls with cameras, the priors order the curves, all below RMSE_max, spread."""
+    pivot, rmse_max = s.pivot, s.rmse_max
     claims = []
     for p in PRIORS:
         rho = float(
@@ -100,8 +169,6 @@ def run(ctx: RunContext) -> Outcome:
                 rho <= need,
             )
         )
-    med = df.groupby(["k", "prior"])["rmse_tr"].median().unstack("prior")
-    nees = float(df.loc[df["prior"] == "gaussian", "prior_nees"].mean())
     ordered = (pivot["perfect"] <= pivot["gaussian"]) & (pivot["gaussian"] <= pivot["none"])
     share = float(ordered.mean())
     need_share = 0.6 if ctx.quick else 0.75
@@ -127,7 +194,7 @@ def run(ctx: RunContext) -> Outcome:
             worst / rmse_max < 1,
         )
     )
-    std = table.groupby("prior")["std"].mean()
+    std = s.table.groupby("prior")["std"].mean()
     claims.append(
         Claim(
             "C3_spread_grows",
@@ -138,7 +205,13 @@ def run(ctx: RunContext) -> Outcome:
             std["none"] > std["perfect"],
         )
     )
-    claims.append(
+    return claims
+
+
+def _setup_claims(s: _Series) -> list[Claim]:
+    """RMSE_max of the room and RMSE_occ of the intermediate priors against the paper's."""
+    rmse_max, rmse_occ = s.rmse_max, s.rmse_occ
+    return [
         Claim(
             "rmse_max",
             "RMSE_max of the setup (object assumed at the room centre, per-coordinate RMS)",
@@ -146,9 +219,7 @@ def run(ctx: RunContext) -> Outcome:
             rmse_max,
             "+-15%",
             abs(rmse_max / 24.4 - 1) <= 0.15,
-        )
-    )
-    claims.append(
+        ),
         Claim(
             "rmse_occ_intermediate",
             f"RMSE_occ of the intermediate priors (sigma_psi = {SIGMA_PSI:g}, random-walk Kalman filters)",
@@ -156,16 +227,24 @@ def run(ctx: RunContext) -> Outcome:
             rmse_occ,
             "+-15%",
             abs(rmse_occ / 6.67 - 1) <= 0.15,
-        )
-    )
-    hard_table = mean_std(hard, ["prior", "k"])
-    hard_pivot = hard_table.pivot(index="k", columns="prior", values="mean")
+        ),
+    ]
+
+
+def _variant_claims(ctx: RunContext, s: _Series) -> list[Claim]:
+    """C3_ordering again with the printed likelihood and with constant-velocity priors."""
+    pivot, printed_ks = s.pivot, s.printed_ks
+    need_share = 0.6 if ctx.quick else 0.75
+    hard_pivot = _hard_table(s).pivot(index="k", columns="prior", values="mean")
     # the floor and the rectangles do not enter the no-prior likelihood: its printed series is the same
     hard_pivot["none"] = pivot.loc[hard_pivot.index, "none"]
     hard_ordered = (hard_pivot["perfect"] <= hard_pivot["gaussian"]) & (
         hard_pivot["gaussian"] <= hard_pivot["none"]
     )
-    claims.append(
+    cv_ordered = _cv_ordered(s)
+    cv_occ = float(s.cv["rmse_occ"].mean())
+    cv_nees = float(s.cv["prior_nees"].mean())
+    return [
         Claim(
             "C3_ordering_printed",
             "as C3_ordering, with the likelihood exactly as printed (floor 0, full rectangles), "
@@ -174,14 +253,7 @@ def run(ctx: RunContext) -> Outcome:
             float(hard_ordered.mean()),
             f">= {need_share}",
             float(hard_ordered.mean()) >= need_share,
-        )
-    )
-    cv_mean = cv.groupby("k")["rmse_tr"].mean()
-    cv_std = cv.groupby("k")["rmse_tr"].std(ddof=1)
-    cv_ordered = (pivot["perfect"] <= cv_mean) & (cv_mean <= pivot["none"])
-    cv_occ = float(cv["rmse_occ"].mean())
-    cv_nees = float(cv["prior_nees"].mean())
-    claims.append(
+        ),
         Claim(
             "C3_ordering_constant_velocity",
             "as C3_ordering, with the intermediate priors from constant-velocity Kalman filters "
@@ -191,24 +263,14 @@ def run(ctx: RunContext) -> Outcome:
             float(cv_ordered.mean()),
             f">= {need_share}",
             float(cv_ordered.mean()) >= need_share,
-        )
-    )
-    side = table.merge(hard_table, on=["prior", "k"], suffixes=(" corrected", " printed"))
-    side = side[["prior", "k", "mean corrected", "std corrected", "mean printed", "std printed"]]
-    side["ignored steps/run printed"] = [
-        float(hard.loc[(hard["prior"] == p) & (hard["k"] == k), "ignored_steps"].mean())
-        for p, k in zip(side["prior"], side["k"])
+        ),
     ]
-    cost = {
-        "tracking_wall_seconds": wall,
-        "workers": ctx.workers or os.cpu_count(),
-        "load_average_start": list(load_start),
-        "load_average_end": list(load_end),
-        "cpu_seconds_paper_configurations": cpu_main,
-        "cpu_seconds_printed_series": cpu_printed,
-        "cpu_seconds_constant_velocity_series": cpu_cv,
-        "wall_seconds_paper_configurations_prorated": wall_main,
-    }
+
+
+def _claims(ctx: RunContext, s: _Series, cost: dict[str, Any]) -> list[Claim]:
+    """Every claim of E1; the full-size run adds the issue 4 wall-time bar."""
+    claims = [*_trend_claims(ctx, s), *_setup_claims(s), *_variant_claims(ctx, s)]
+    wall_main = cost["wall_seconds_paper_configurations_prorated"]
     if not ctx.quick:
         claims.append(
             Claim(
@@ -222,11 +284,16 @@ def run(ctx: RunContext) -> Outcome:
                 wall_main / 60 < 15,
             )
         )
+    return claims
 
-    cv_table = mean_std(cv, ["k"]).assign(prior="constant-velocity")
+
+def _figures(ctx: RunContext, s: _Series, size: dict[str, int], runs: int) -> None:
+    """Fig. 6 (RMSE_tr against cameras, four prior series) and Fig. 5 (the room, a snapshot)."""
+    cv_table = mean_std(s.cv, ["k"]).assign(prior="constant-velocity")
+    rmse_max = s.rmse_max
     curve_plot(
         ctx.figure_path("fig6_rmse_vs_cameras"),
-        pd.concat([table, cv_table]),
+        pd.concat([s.table, cv_table]),
         "k",
         "prior",
         xlabel="number of cameras (fixed list)",
@@ -244,15 +311,43 @@ def run(ctx: RunContext) -> Outcome:
         occluders=occ[-1],
         obj=obj[-1],
     )
-    lost = df.groupby("prior")["ignored_steps"].mean()
-    reinit = df.groupby("prior")["reinitialisations"].mean()
-    wide = pivot.reset_index().rename(columns={p: f"{p} (mean)" for p in PRIORS})
-    sd = table.pivot(index="k", columns="prior", values="std").reset_index(drop=True)
+
+
+def _wide_table(s: _Series) -> pd.DataFrame:
+    """Fig. 6 as a table: mean and std per prior (and constant-velocity priors) per camera count."""
+    wide = s.pivot.reset_index().rename(columns={p: f"{p} (mean)" for p in PRIORS})
+    sd = s.table.pivot(index="k", columns="prior", values="std").reset_index(drop=True)
     for p in PRIORS:
         wide[f"{p} (std)"] = sd[p].to_numpy()
-    wide["constant-velocity (mean)"] = wide["k"].map(cv_mean)
-    wide["constant-velocity (std)"] = wide["k"].map(cv_std)
-    report = f"""
+    wide["constant-velocity (mean)"] = wide["k"].map(_cv_mean(s))
+    wide["constant-velocity (std)"] = wide["k"].map(s.cv.groupby("k")["rmse_tr"].std(ddof=1))
+    return wide
+
+
+def _side_table(s: _Series) -> pd.DataFrame:
+    """Corrected beside printed likelihood per prior and camera count, with ignored steps."""
+    hard = s.hard
+    side = s.table.merge(_hard_table(s), on=["prior", "k"], suffixes=(" corrected", " printed"))
+    side = side[["prior", "k", "mean corrected", "std corrected", "mean printed", "std printed"]]
+    side["ignored steps/run printed"] = [
+        float(hard.loc[(hard["prior"] == p) & (hard["k"] == k), "ignored_steps"].mean())
+        for p, k in zip(side["prior"], side["k"])
+    ]
+    return side
+
+
+def _report_main(s: _Series, size: dict[str, int], runs: int) -> str:
+    """Report text: setup, Fig. 6 beside the paper, differences and their causes."""
+    df, pivot, rmse_max, rmse_occ = s.df, s.pivot, s.rmse_max, s.rmse_occ
+    wide = _wide_table(s)
+    med = df.groupby(["k", "prior"])["rmse_tr"].median().unstack("prior")
+    nees = float(df.loc[df["prior"] == "gaussian", "prior_nees"].mean())
+    cv_mean, cv_ordered = _cv_mean(s), _cv_ordered(s)
+    cv_occ = float(s.cv["rmse_occ"].mean())
+    cv_nees = float(s.cv["prior_nees"].mean())
+    lost = df.groupby("prior")["ignored_steps"].mean()
+    reinit = df.groupby("prior")["reinitialisations"].mean()
+    return f"""
 ## Setup
 
 Square room [0, 100]^2 with the static rectangle [35, 65] x [40, 60] and 8 cameras (spec §7.1; the paper
@@ -306,7 +401,16 @@ RMSE_max here: {fmt(rmse_max)} (paper 24.4).
   ignored because no particle was consistent, per run: {", ".join(f"{p} {lost[p]:.1f}" for p in PRIORS)};
   re-initialisations per run: {", ".join(f"{p} {reinit[p]:.1f}" for p in PRIORS)}.
 """
-    report += f"""
+
+
+def _report_printed_and_cost(ctx: RunContext, s: _Series, cost: dict[str, Any], runs: int) -> str:
+    """Report text: the printed likelihood beside the corrected one, and this run's cost."""
+    side = _side_table(s)
+    wall, load_start, load_end = s.timed.wall, s.timed.load_start, s.timed.load_end
+    cpu_main = cost["cpu_seconds_paper_configurations"]
+    cpu_printed = cost["cpu_seconds_printed_series"]
+    wall_main = cost["wall_seconds_paper_configurations_prorated"]
+    return f"""
 ## The likelihood as printed beside the corrected one
 
 Series run both ways (same seeds, same worlds): "corrected" = p(eta | u) floored at {DEFAULT_FLOOR:g} and Eq. 7
@@ -321,7 +425,18 @@ rectangles), so its printed series is the corrected one and was not run twice.
 Tracking wall time {wall:.0f} s ({wall / 60:.1f} min) with {ctx.workers or os.cpu_count()} worker processes, load average
 {load_start[0]:.2f} / {load_start[1]:.2f} / {load_start[2]:.2f} at the start and {load_end[0]:.2f} / {load_end[1]:.2f} /
 {load_end[2]:.2f} at the end (1 / 5 / 15 min; the machine has {os.cpu_count()} cores and is shared). CPU time:
-{cpu_main:.0f} s for the paper's {len(configs)} configurations x {runs} runs, {cpu_printed:.0f} s for the printed-likelihood
+{cpu_main:.0f} s for the paper's {s.n_configs} configurations x {runs} runs, {cpu_printed:.0f} s for the printed-likelihood
 series; prorated, the paper's E1 alone took {wall_main:.0f} s = {wall_main / 60:.1f} min of wall time (issue 4 bar: 15 min).
 """
-    return Outcome(df_all, claims, report, runs=runs, beyond_the_paper={"cost": cost})
+
+
+def run(ctx: RunContext) -> Outcome:
+    """E1: scenario, estimation, claims, figures and report text."""
+    size = sizes(ctx)
+    runs = ctx.n_runs(full=5, quick=2)
+    s = _estimate(ctx, size, runs)
+    cost = _cost(ctx, s)
+    claims = _claims(ctx, s, cost)
+    _figures(ctx, s, size, runs)
+    report = _report_main(s, size, runs) + _report_printed_and_cost(ctx, s, cost, runs)
+    return Outcome(s.df_all, claims, report, runs=runs, beyond_the_paper={"cost": cost})

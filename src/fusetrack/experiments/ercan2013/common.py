@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import math
 import os
-from collections.abc import Mapping, Sequence
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -14,8 +17,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.patches import Circle, Polygon, Wedge
+from pydantic import Field
 
 from ...core.errors import ConfigError, invalid
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.report import RunContext
 from .scenes import Scene
 
@@ -37,33 +42,97 @@ def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[
     return {"steps": steps, "particles": particles, "burn_in": 0}
 
 
-SIZE_OPTIONS = ("steps", "particles", "burn_in")
+class SizeOptions(ExperimentOptions):
+    """``--set steps=N`` / ``particles=L`` / ``burn_in=B``: a full-size run that must fit a time
+    budget (fewer steps per run, the paper's number of runs); unset: the run's own sizes."""
+
+    steps: int | None = Field(None, ge=1, description="time steps per run (default: the run's)")
+    particles: int | None = Field(
+        None, ge=1, description="particles of the tracker (default: the run's)"
+    )
+    burn_in: int | None = Field(
+        None, ge=0, description="steps left out of RMSE_tr, < steps (default: the run's)"
+    )
 
 
-def number_option(
-    ctx: RunContext, key: str, default: float, kind: type = int, least: float = 1
-) -> Any:
-    """``--set key=value`` as ``kind`` (int or float), at least ``least``; ``default`` if unset."""
-    if key not in ctx.extra:
-        return default
-    raw = ctx.extra[key]
-    try:
-        value = kind(raw)
-    except (TypeError, ValueError):
-        value = None
-    if value is None or not np.isfinite(value) or value < least:
-        what = "an integer" if kind is int else "a number"
-        raise ConfigError(invalid(f"--set {key}", raw, f"{what} >= {least:g}"))
-    return value
+PRINTED_PREFIX = "printed "
+"""Label prefix of a series run with the likelihood exactly as printed (hard zeros, full rectangles)."""
+
+
+def prior_level(sigma_psi: float) -> str:
+    """The occluder-prior level of a sweep point: 0 is perfect, infinity none, else Gaussian."""
+    return "perfect" if sigma_psi == 0 else ("none" if math.isinf(sigma_psi) else "gaussian")
+
+
+def sweep_config(sigma_psi: float, k: int, size: dict[str, int]) -> dict[str, Any]:
+    """One point of a sigma_psi sweep in the open square room (M = 40, first ``k`` fixed cameras),
+    labelled by its sigma_psi ("inf": no priors)."""
+    return {
+        "scene": "square-open",
+        "n_occluders": 40,
+        "prior": prior_level(sigma_psi),
+        "sigma_psi": sigma_psi if math.isfinite(sigma_psi) else 0.0,
+        "k": k,
+        "method": "fixed",
+        "label": "inf" if math.isinf(sigma_psi) else f"{sigma_psi:g}",
+        **size,
+    }
+
+
+def printed_config(config: dict[str, Any]) -> dict[str, Any]:
+    """``config`` with the likelihood exactly as printed (floor 0, full Eq. 7 rectangles)."""
+    return {
+        **config,
+        "floor": 0.0,
+        "exclusion": 0.0,
+        "label": f"{PRINTED_PREFIX}{config['label']}",
+    }
+
+
+def printed_runs(results: pd.DataFrame, no_prior: pd.DataFrame) -> pd.DataFrame:
+    """The printed-likelihood runs of ``results`` under their sweep labels, with the shared
+    no-prior runs ``no_prior`` (neither correction enters the no-prior likelihood)."""
+    is_printed = results["label"].str.startswith(PRINTED_PREFIX)
+    return pd.concat(
+        [
+            results[is_printed].assign(label=lambda d: d["label"].str[len(PRINTED_PREFIX) :]),
+            no_prior,
+        ]
+    )
 
 
 def size_options(ctx: RunContext, size: dict[str, int]) -> dict[str, int]:
-    """``size`` with ``--set steps=N`` / ``particles=L`` / ``burn_in=B`` applied (a full-size run
-    that must fit a time budget: fewer steps per run, the paper's number of runs)."""
-    out = {k: number_option(ctx, k, v, int, 0 if k == "burn_in" else 1) for k, v in size.items()}
+    """``size`` with the :class:`SizeOptions` the user set applied."""
+    opts = SizeOptions.of(ctx).model_dump()
+    out = {k: v if opts[k] is None else opts[k] for k, v in size.items()}
     if out["burn_in"] >= out["steps"]:
         raise ConfigError(invalid("--set burn_in", out["burn_in"], f"< steps = {out['steps']}"))
     return out
+
+
+@dataclass(frozen=True)
+class Timed:
+    """A Monte Carlo table with the wall time and load averages around it."""
+
+    results: pd.DataFrame
+    wall: float
+    load_start: tuple[float, float, float]
+    load_end: tuple[float, float, float]
+
+
+def timed_monte_carlo(
+    ctx: RunContext,
+    fn: Callable[..., Any],
+    configs: Sequence[Mapping[str, Any]],
+    runs: int,
+    desc: str,
+) -> Timed:
+    """``ctx.monte_carlo(fn, configs, runs)`` timed: wall seconds, load average before and after."""
+    load_start = os.getloadavg()
+    t0 = time.perf_counter()
+    results = ctx.monte_carlo(fn, configs, runs, desc=desc)
+    wall = time.perf_counter() - t0
+    return Timed(results, wall, load_start, os.getloadavg())
 
 
 def mean_std(df: pd.DataFrame, by: Sequence[str], value: str = "rmse_tr") -> pd.DataFrame:

@@ -11,13 +11,21 @@ under three prior accuracies; E8: selection methods with the weak-perspective me
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
+from .common import SizeOptions, curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
 from .scenes import lab_scene
 from .simulation import run_tracking, simulate_world
+
+
+class Options(SizeOptions):
+    """``fusetrack run ercan2013-lab`` options: ``steps``, ``particles``, ``burn_in``."""
+
 
 SIGMA_PSI = (
     26.0  # inches: random-walk Kalman priors with RMSE_occ ~ 12.1 in (measured in the report)
@@ -36,16 +44,22 @@ METHODS = {
 }
 
 
-def run(ctx: RunContext) -> Outcome:
-    runs = ctx.n_runs(full=50, quick=2)
-    size = (
-        {"steps": 100, "particles": 800, "burn_in": 4}
-        if ctx.quick
-        else {"steps": 200, "particles": 1000, "burn_in": 4}
-    )
-    if smoke():
-        size = {"steps": 10, "particles": 50, "burn_in": 4}
-    size = size_options(ctx, size)
+@dataclass(frozen=True)
+class _Lab:
+    """E7-E8 results: every run, and mean / std of RMSE per series and k for each experiment."""
+
+    df: pd.DataFrame
+    e7: pd.DataFrame
+    e8: pd.DataFrame
+    all_row: pd.Series
+
+    @property
+    def all_mean(self) -> float:
+        return float(self.all_row.mean())
+
+
+def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
+    """Scenario: E7's fixed subsets per prior level, E8's selection methods, and all 16 cameras."""
     ks7 = [2, 9] if ctx.quick else list(range(1, 10))
     ks8 = [2, 6] if ctx.quick else [2, 3, 4, 5, 6]
     base = {
@@ -71,17 +85,23 @@ def run(ctx: RunContext) -> Outcome:
     )
     for c in configs:
         c["label"] = f"{c.pop('experiment')}:{c['label']}"
-    df = ctx.monte_carlo(run_tracking, configs, runs, desc="E7-E8 lab")
+    return configs
+
+
+def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Lab:
+    """Estimation: run E7 and E8 together and tabulate each."""
+    df = ctx.monte_carlo(run_tracking, _configs(ctx, size), runs, desc="E7-E8 lab")
     df["experiment"] = df["label"].str.split(":").str[0]
     df["series"] = df["label"].str.split(":").str[1]
     e7 = mean_std(df[df["experiment"] == "E7"], ["series", "k"])
     e8 = mean_std(df[(df["experiment"] == "E8") & (df["series"] != "all")], ["series", "k"])
-    all_row = df[df["series"] == "all"]["rmse_tr"]
-    all_mean = float(all_row.mean())
-    p7 = e7.pivot(index="k", columns="series", values="mean")
-    s7 = e7.pivot(index="k", columns="series", values="std")
-    p8 = e8.pivot(index="k", columns="series", values="mean")
-    s8 = e8.pivot(index="k", columns="series", values="std")
+    return _Lab(df, e7, e8, df[df["series"] == "all"]["rmse_tr"])
+
+
+def _fig14_claims(lab: _Lab) -> list[Claim]:
+    """C11 on Fig. 14: fewer errors with more cameras and better priors, but not by much."""
+    p7 = lab.e7.pivot(index="k", columns="series", values="mean")
+    s7 = lab.e7.pivot(index="k", columns="series", values="std")
     rho = [
         float(
             pd.Series(p7[p].to_numpy()).corr(
@@ -97,12 +117,7 @@ def run(ctx: RunContext) -> Outcome:
             (p7["none"] - p7["perfect"]) / np.maximum(s7[["perfect", "none"]].max(axis=1), 1e-12)
         ).median()
     )
-    avg8 = p8.mean()
-    gap_gb = float(
-        (p8["greedy"] - p8["brute"]).abs().max()
-        / max(float(np.maximum(s8["greedy"], s8["brute"]).mean()), 1e-12)
-    )
-    claims = [
+    return [
         Claim("C11_fig14_decreasing", "Fig. 14: mean RMSE falls as cameras are added (worst Spearman rho over the three prior levels)",
               "decreasing", min(rho), "<= -0.5", min(rho) <= -0.5),
         Claim("C11_fig14_priors_help", "Fig. 14: better priors give lower mean RMSE (mean over k: none / perfect)",
@@ -111,6 +126,21 @@ def run(ctx: RunContext) -> Outcome:
               ">= 0.5", order >= 0.5),
         Claim("C11_fig14_not_substantial", "Fig. 14: the difference between prior levels is not substantial against the spread "
               "(median over k of (none - perfect) / larger std)", "not substantial", small, "<= 2", small <= 2),
+    ]  # fmt: skip
+
+
+def _fig15_claims(lab: _Lab) -> list[Claim]:
+    """C11 on Fig. 15 (greedy near brute force, better than heuristics, large spread) and the
+    replica's RMSE_occ and RMSE_max."""
+    df = lab.df
+    p8 = lab.e8.pivot(index="k", columns="series", values="mean")
+    s8 = lab.e8.pivot(index="k", columns="series", values="std")
+    avg8 = p8.mean()
+    gap_gb = float(
+        (p8["greedy"] - p8["brute"]).abs().max()
+        / max(float(np.maximum(s8["greedy"], s8["brute"]).mean()), 1e-12)
+    )
+    return [
         Claim("C11_fig15_greedy_brute", "Fig. 15: greedy close to brute force (largest |mean difference| / mean std)", "< 1",
               gap_gb, "< 1", gap_gb < 1),
         Claim("C11_fig15_greedy_beats", "Fig. 15: greedy better than fixed, random and closest (mean over k, best heuristic / greedy)",
@@ -124,6 +154,11 @@ def run(ctx: RunContext) -> Outcome:
         Claim("rmse_max_lab", "RMSE_max of the object's path (inches)", 77.5, float(df["rmse_max"].mean()), "+-5%",
               abs(float(df["rmse_max"].mean()) / 77.5 - 1) <= 0.05),
     ]  # fmt: skip
+
+
+def _figures(ctx: RunContext, lab: _Lab, runs: int) -> None:
+    """Figs. 14 and 15 (RMSE against k) and Fig. 13(b) (the replica room)."""
+    e7, e8, all_mean = lab.e7, lab.e8, lab.all_mean
     curve_plot(ctx.figure_path("fig14_lab_fixed"), e7, "k", "series", xlabel="number of cameras (fixed list)",
                ylabel="RMSE (in)", title=f"Fig. 14: lab replica, M = 20 + 1 static, {runs} runs", labels=PRIORS)  # fmt: skip
     curve_plot(ctx.figure_path("fig15_lab_selection"), e8, "k", "series", xlabel="number of selected cameras k",
@@ -133,11 +168,17 @@ def run(ctx: RunContext) -> Outcome:
     _, occ = simulate_world(scene, 20, 60, ctx.seed)
     room_plot(ctx.figure_path("fig13b_lab"), scene, title="Fig. 13(b): lab replica, 16 cameras, path, virtual occluders",
               occluders=occ[-1], truth=scene.object_path, fov_length=60)  # fmt: skip
+
+
+def _report(lab: _Lab, size: dict[str, int], runs: int) -> str:
+    """Report text: setup, Figs. 14-15 as tables, readings per step, differences."""
+    df, all_row, all_mean = lab.df, lab.all_row, lab.all_mean
+    scene = lab_scene()
     w7, w8 = (
         t.assign(cell=[f"{a:.3g} ± {b:.2g}" for a, b in zip(t["mean"], t["std"])])
         .pivot(index="k", columns="series", values="cell")
         .reset_index()
-        for t in (e7, e8)
+        for t in (lab.e7, lab.e8)
     )
     all_std = float(all_row.std(ddof=1)) if len(all_row) > 1 else 0.0
     seen = (
@@ -147,7 +188,7 @@ def run(ctx: RunContext) -> Outcome:
         .unstack("series")
         .reset_index()
     )
-    report = f"""
+    return f"""
 ## Setup
 
 Synthetic replica of the lab (the recordings are not public; spec §7.3, §10): 264 x 228 in, 16 cameras (4 a wall at
@@ -155,7 +196,7 @@ Synthetic replica of the lab (the recordings are not public; spec §7.3, §10): 
 M = 20 virtual occluders (D = 12 in, 3.6 in/step), the object on an ellipse (semi-axes 120 and 98 in) in 200 steps,
 L = {size["particles"]}, T = 5, {runs} runs x {size["steps"]} steps (paper: 50 x 200), RMSE from t = 5. Tracker and selection share
 the occlusion model (Eq. 7 rectangles ending one D before the particle, p(eta | u) floored at 1e-3; see
-`fusetrack.filters.occlusion_likelihood`).
+`fusetrack.sensors.occlusion_aware_camera`).
 
 ![Fig. 13(b)](fig13b_lab.png)
 
@@ -186,4 +227,20 @@ no position information at all):
   so our RMSEs are lower than a real lab's and the differences between methods are cleaner.
 * The object path is an ellipse chosen to give RMSE_max = 77.5 in; the paper's path is hand-drawn in Fig. 13(b).
 """
-    return Outcome(df, claims, report, runs=runs)
+
+
+def run(ctx: RunContext) -> Outcome:
+    """E7-E8: scenario, estimation, claims, Figs. 13-15 and report text."""
+    runs = ctx.n_runs(full=50, quick=2)
+    size = (
+        {"steps": 100, "particles": 800, "burn_in": 4}
+        if ctx.quick
+        else {"steps": 200, "particles": 1000, "burn_in": 4}
+    )
+    if smoke():
+        size = {"steps": 10, "particles": 50, "burn_in": 4}
+    size = size_options(ctx, size)
+    lab = _estimate(ctx, size, runs)
+    claims = [*_fig14_claims(lab), *_fig15_claims(lab)]
+    _figures(ctx, lab, runs)
+    return Outcome(lab.df, claims, _report(lab, size, runs), runs=runs)

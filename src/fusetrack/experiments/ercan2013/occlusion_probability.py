@@ -11,6 +11,7 @@ p(eta | u) over all 2^K visibility patterns (claim C2).
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 from typing import Any
 
 import matplotlib
@@ -117,10 +118,47 @@ def pmf_sums(
     return float(np.max(gaps)), float(np.max(gaps_clamped)), lowest
 
 
-def run(ctx: RunContext) -> Outcome:
-    n_points = 100 if smoke() else (2000 if ctx.quick else 16000)
-    n_mc = 1_000 if smoke() else (10_000 if ctx.quick else 40_000)
-    rng = np.random.default_rng([ctx.seed, 17])
+@dataclass(frozen=True)
+class _Case:
+    """Eq. 7 against Monte Carlo at one anisotropy alpha: q, the MC estimates and the 3-sigma test."""
+
+    q7: np.ndarray
+    rect: np.ndarray
+    disk: np.ndarray
+    sd: np.ndarray
+    inside: np.ndarray
+
+    @property
+    def within(self) -> float:
+        return float(self.inside.mean())
+
+    @property
+    def mae(self) -> float:
+        return float(np.mean(np.abs(self.q7 - self.rect)))
+
+    @property
+    def worst(self) -> float:
+        return float(np.max(np.abs(self.q7 - self.rect)))
+
+
+@dataclass(frozen=True)
+class _Checks:
+    """Everything E0 measured."""
+
+    n_points: int
+    n_mc: int
+    n_check: int
+    cases: dict[float, _Case]
+    rows: list[dict[str, Any]]
+    form_gap: float
+    pmf: tuple[float, float, float]
+    hard: tuple[float, float, float]
+
+
+def _compare_cases(
+    n_points: int, n_mc: int, rng: np.random.Generator
+) -> tuple[dict[float, _Case], list[dict[str, Any]]]:
+    """Eq. 7 against Monte Carlo at alpha = 4 (Fig. 17) and alpha = 1, with per-point rows."""
     rows: list[dict[str, Any]] = []
     results = {}
     for alpha in (4.0, 1.0):
@@ -129,7 +167,7 @@ def run(ctx: RunContext) -> Outcome:
         rect, disk = monte_carlo(cfg, n_mc, rng)
         sd = np.sqrt(np.maximum(rect * (1 - rect), 1.0 / n_mc) / n_mc)
         inside = np.abs(q7 - rect) <= 3 * sd
-        results[alpha] = (q7, rect, disk, sd, inside)
+        results[alpha] = _Case(q7, rect, disk, sd, inside)
         rows += [
             {
                 "alpha": alpha,
@@ -141,7 +179,11 @@ def run(ctx: RunContext) -> Outcome:
             }
             for i in range(n_points)
         ]
-    n_check = 30 if smoke() else 300
+    return results, rows
+
+
+def _form_gap(n_check: int, rng: np.random.Generator) -> float:
+    """Largest difference between the tracker's frame-free Eq. 7 and Eq. 7 as printed."""
     cfg = random_configs(n_check, 4.0, rng)
     q_kernel = eq7_batch(cfg)
     q_printed = np.array(
@@ -152,17 +194,28 @@ def run(ctx: RunContext) -> Outcome:
             for i in range(n_check)
         ]
     )
-    form_gap = float(np.max(np.abs(q_kernel - q_printed)))
-    trials = 4 if smoke() else (40 if ctx.quick else 200)
-    pmf_gap, pmf_gap_clamped, pmf_lowest = pmf_sums(rng, trials, DIAMETER, 60.0)
-    hard_gap, hard_gap_clamped, hard_lowest = pmf_sums(rng, trials, 8.0, 400.0)
+    return float(np.max(np.abs(q_kernel - q_printed)))
 
-    frac4 = float(results[4.0][4].mean())
-    frac1 = float(results[1.0][4].mean())
-    mae4 = float(np.mean(np.abs(results[4.0][0] - results[4.0][1])))
-    worst4 = float(np.max(np.abs(results[4.0][0] - results[4.0][1])))
-    disk_mae = float(np.mean(np.abs(results[4.0][0] - results[4.0][2])))
-    claims = [
+
+def _estimate(ctx: RunContext) -> _Checks:
+    """Estimation: Monte Carlo comparisons, the frame-free form, the pmf sums (in draw order)."""
+    n_points = 100 if smoke() else (2000 if ctx.quick else 16000)
+    n_mc = 1_000 if smoke() else (10_000 if ctx.quick else 40_000)
+    rng = np.random.default_rng([ctx.seed, 17])
+    cases, rows = _compare_cases(n_points, n_mc, rng)
+    n_check = 30 if smoke() else 300
+    form_gap = _form_gap(n_check, rng)
+    trials = 4 if smoke() else (40 if ctx.quick else 200)
+    pmf = pmf_sums(rng, trials, DIAMETER, 60.0)
+    hard = pmf_sums(rng, trials, 8.0, 400.0)
+    return _Checks(n_points, n_mc, n_check, cases, rows, form_gap, pmf, hard)
+
+
+def _claims(c: _Checks) -> list[Claim]:
+    """C1 (Eq. 7 against Monte Carlo, frame-free form) and C2 (p(eta | u) sums to one)."""
+    frac4, frac1, form_gap = c.cases[4.0].within, c.cases[1.0].within, c.form_gap
+    pmf_gap, hard_gap = c.pmf[0], c.hard[0]
+    return [
         Claim(
             "C1_most_within_3sigma",
             "alpha = 4, D = 3.33 > sigma = 2: most points' Eq. 7 lies within +-3 MC std of the Monte Carlo q",
@@ -197,9 +250,11 @@ def run(ctx: RunContext) -> Outcome:
             max(pmf_gap, hard_gap) <= 1e-9,
         ),
     ]
-    df = pd.DataFrame(rows)
 
-    q7, rect, _, sd, inside = results[4.0]
+
+def _figure(ctx: RunContext, case: _Case) -> None:
+    """Fig. 17: Eq. 7 against the Monte Carlo q with +-3 std bars (at most 2000 points shown)."""
+    q7, rect, sd = case.q7, case.rect, case.sd
     show = np.random.default_rng(0).choice(len(q7), size=min(2000, len(q7)), replace=False)
     fig, ax = plt.subplots(figsize=(5.6, 5.2))
     ax.errorbar(
@@ -224,16 +279,24 @@ def run(ctx: RunContext) -> Outcome:
     fig.savefig(ctx.figure_path("fig17_eq7_vs_mc"), dpi=110)
     plt.close(fig)
 
+
+def _report(c: _Checks) -> str:
+    """Report text: what was run, the paper beside ours, differences and their causes."""
+    n_points, n_mc, n_check, form_gap = c.n_points, c.n_mc, c.n_check, c.form_gap
+    frac4, mae4, worst4 = c.cases[4.0].within, c.cases[4.0].mae, c.cases[4.0].worst
+    frac1 = c.cases[1.0].within
+    disk_mae = float(np.mean(np.abs(c.cases[4.0].q7 - c.cases[4.0].disk)))
+    pmf_gap, pmf_gap_clamped, pmf_lowest = c.pmf
+    hard_gap, hard_gap_clamped, hard_lowest = c.hard
     table = pd.DataFrame(
         [
             {"case": "alpha = 4 (Fig. 17)", "points": n_points, "MC draws": n_mc, "within +-3 std": frac4,
              "mean abs error": mae4, "max abs error": worst4},
             {"case": "alpha = 1", "points": n_points, "MC draws": n_mc, "within +-3 std": frac1,
-             "mean abs error": float(np.mean(np.abs(results[1.0][0] - results[1.0][1]))),
-             "max abs error": float(np.max(np.abs(results[1.0][0] - results[1.0][1])))},
+             "mean abs error": c.cases[1.0].mae, "max abs error": c.cases[1.0].worst},
         ]
     )  # fmt: skip
-    report = f"""
+    return f"""
 ## What was run
 
 {n_points} random configurations per case (camera at the origin, object 5-60 units away in a random
@@ -270,4 +333,11 @@ sampling of configurations or its number of draws.
 * The tracker evaluates Eq. 7 in a frame-free form (module `fusetrack.world.occlusion`) with a tabulated normal
   CDF; it matches Eq. 7 as printed to {form_gap:.1e} on {n_check} configurations.
 """
-    return Outcome(df, claims, report, runs=1)
+
+
+def run(ctx: RunContext) -> Outcome:
+    """E0: estimation, claims, Fig. 17 and report text."""
+    c = _estimate(ctx)
+    claims = _claims(c)
+    _figure(ctx, c.cases[4.0])
+    return Outcome(pd.DataFrame(c.rows), claims, _report(c), runs=1)

@@ -14,7 +14,7 @@ priors are made, at the same virtual-reading noise ``sigma_psi``
 * ``white`` (oracle): the random walk's accuracy and calibration, but fresh errors every step --
   if only this fixes it, the cause is that a prior's error persists over many steps;
 * ``random-walk, gamma g``: the default priors with the occlusion evidence tempered,
-  ``p(eta | u)^g`` (:class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`).
+  ``p(eta | u)^g`` (:class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`).
   A real occluder that hides the object does so for many steps in a row, but Eq. 6 counts
   each step's pattern as new evidence given the current priors; if tempering fixes the ordering,
   the cause is this repeated counting of one event, whatever the priors.
@@ -78,16 +78,21 @@ def _ordering(table: pd.DataFrame, setting: str, kind: str) -> tuple[float, floa
     return float(np.mean((perfect <= g) & (g <= none))), float(np.mean(g <= none))
 
 
-def run(ctx: RunContext) -> Outcome:
-    size = sizes(ctx)
-    runs = ctx.n_runs(full=5, quick=2)
-    sweep = SIGMA_PSI_QUICK if ctx.quick else SIGMA_PSI_FULL
+def _estimate(
+    ctx: RunContext, sweep: tuple[float, ...], size: dict[str, int], runs: int
+) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Estimation: every series in both settings; RMSE_tr, RMSE_occ and calibration per point."""
     df = ctx.monte_carlo(run_tracking, _configs(sweep, size), runs, desc="prior calibration")
     parts = df["label"].str.split("|", expand=True)
     df = df.assign(setting=parts[0], series=parts[1], sigma=parts[2])
     table = mean_std(df, ["setting", "series", "sigma"])
     extra = df.groupby(["setting", "series", "sigma"])[["rmse_occ", "prior_nees"]].mean()
     table = table.join(extra, on=["setting", "series", "sigma"])
+    return df, table
+
+
+def _claims(table: pd.DataFrame) -> tuple[list[Claim], dict[str, dict[str, float]]]:
+    """The paper's ordering per setting and series, and the share of sigma_psi beating none."""
     claims: list[Claim] = []
     verdict: dict[str, dict[str, float]] = {}
     for setting, (scene, k) in SETTINGS.items():
@@ -107,6 +112,11 @@ def run(ctx: RunContext) -> Outcome:
                     share >= 0.75,
                 )
             )
+    return claims, verdict
+
+
+def _figures(ctx: RunContext, table: pd.DataFrame, size: dict[str, int], runs: int) -> list[str]:
+    """RMSE_tr against RMSE_occ per setting, perfect and no priors as lines; markdown links."""
     figures = []
     for setting, (scene, k) in SETTINGS.items():
         t = table[table["setting"] == setting]
@@ -127,6 +137,11 @@ def run(ctx: RunContext) -> Outcome:
             hlines={f"{name} priors {fmt(v)}": v for name, v in refs.items()},
         )
         figures.append(f"![{setting}]({stem}.png)")
+    return figures
+
+
+def _show_table(table: pd.DataFrame) -> pd.DataFrame:
+    """The whole table for the report, sorted by setting, series and RMSE_occ."""
     show = table.assign(sigma_psi=table["sigma"])[
         ["setting", "series", "sigma_psi", "rmse_occ", "prior_nees", "mean", "std"]
     ].rename(
@@ -139,24 +154,56 @@ def run(ctx: RunContext) -> Outcome:
     )
     show = show.sort_values(["setting", "priors", "rmse_occ"])
 
-    def wins(kind: str) -> str:
-        return ", ".join(f"{s}: {verdict[s][kind]:.0%}" for s in SETTINGS)
+    return show
 
-    rw, cv, cal, white = PRIOR_FILTERS
+
+def _wins(verdict: dict[str, dict[str, float]], kind: str) -> str:
+    """Share of sigma_psi at which ``kind`` priors beat none, per setting."""
+    return ", ".join(f"{s}: {verdict[s][kind]:.0%}" for s in SETTINGS)
+
+
+def _recounting(verdict: dict[str, dict[str, float]]) -> dict[str, bool]:
+    """Per tempered series: does it beat none more often than the untempered random walk?"""
+    rw = PRIOR_FILTERS[0]
     tempered = [k for k in SERIES if "gamma" in k]
-    overconfidence = all(verdict[s][cal] > verdict[s][rw] for s in SETTINGS)
-    persistence = all(verdict[s][white] > verdict[s][cal] for s in SETTINGS)
-    recounting = {k: all(verdict[s][k] > verdict[s][rw] for s in SETTINGS) for k in tempered}
+    return {k: all(verdict[s][k] > verdict[s][rw] for s in SETTINGS) for k in tempered}
+
+
+def _conclusion(
+    verdict: dict[str, dict[str, float]], overconfidence: bool, persistence: bool
+) -> str:
+    """Which cause the series single out, if one does in both settings."""
+    recounting = _recounting(verdict)
+    tempered = list(recounting)
     if any(recounting.values()) and not (overconfidence or persistence):
-        conclusion = (
+        return (
             "how the priors are made does not matter (calibrated, white or constant-velocity priors lose to none "
             "as often as the random walk); counting each step's occlusion pattern as new evidence does: a real "
             "occlusion lasts many steps, and with the evidence tempered the Gaussian priors beat none at "
-            f"{wins(tempered[-1])} of sigma_psi ({tempered[-1]})."
+            f"{_wins(verdict, tempered[-1])} of sigma_psi ({tempered[-1]})."
         )
-    else:
-        conclusion = "no single series separates the causes in both settings; see the table."
-    report = f"""
+    return "no single series separates the causes in both settings; see the table."
+
+
+def _report(
+    verdict: dict[str, dict[str, float]],
+    show: pd.DataFrame,
+    figures: list[str],
+    sweep: tuple[float, ...],
+    size: dict[str, int],
+    runs: int,
+) -> str:
+    """Report text: the question, setup, results and what they say about the causes."""
+    rw, cv, cal, white = PRIOR_FILTERS
+
+    def wins(kind: str) -> str:
+        return _wins(verdict, kind)
+
+    overconfidence = all(verdict[s][cal] > verdict[s][rw] for s in SETTINGS)
+    persistence = all(verdict[s][white] > verdict[s][cal] for s in SETTINGS)
+    recounting = _recounting(verdict)
+    conclusion = _conclusion(verdict, overconfidence, persistence)
+    return f"""
 ## Question
 
 Figs. 6-7 of the paper put the Gaussian-prior curves between perfect priors and none; ours (E1, E2) lose to
@@ -197,4 +244,15 @@ Share of sigma_psi at which the Gaussian priors beat no priors (mean RMSE_tr <= 
   about occlusions that last many steps; its Figs. 6-7 ordering is what this experiment gets only where the
   evidence is {"tempered" if any(recounting.values()) else "(not reproduced by any series here)"}.
 """
+
+
+def run(ctx: RunContext) -> Outcome:
+    """Scenario, estimation, claims, figures and report text."""
+    size = sizes(ctx)
+    runs = ctx.n_runs(full=5, quick=2)
+    sweep = SIGMA_PSI_QUICK if ctx.quick else SIGMA_PSI_FULL
+    df, table = _estimate(ctx, sweep, size, runs)
+    claims, verdict = _claims(table)
+    figures = _figures(ctx, table, size, runs)
+    report = _report(verdict, _show_table(table), figures, sweep, size, runs)
     return Outcome(df.drop(columns=["setting", "series", "sigma"]), claims, report, runs=runs)

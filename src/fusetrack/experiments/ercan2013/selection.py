@@ -11,18 +11,21 @@ in the user's room, and the report shows the room, its cameras and one tracked r
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 from ...evaluation.report import Claim, Outcome, RunContext
 from .common import (
+    SizeOptions,
     curve_plot,
     fmt,
     md,
     mean_std,
-    number_option,
     room_plot,
     size_options,
     sizes,
@@ -34,6 +37,24 @@ from .simulation import run_tracking, simulate_world
 SIGMA_PSI = (
     31.0  # random-walk Kalman priors with RMSE_occ ~ 11.5 in the L room (measured in the report)
 )
+
+
+class Options(SizeOptions):
+    """``fusetrack run ercan2013-selection`` options (and ``steps``/``particles``/``burn_in``)."""
+
+    config: Path | None = Field(
+        None, description="YAML room and cameras to run in (e.g. examples/ercan2013_room.yaml)"
+    )
+    occluders: int | None = Field(
+        None,
+        ge=0,
+        description="moving occluders M (default: 40 in the L room, 20 in a --config room)",
+    )
+    sigma_psi: float = Field(
+        SIGMA_PSI, ge=0.01, description="random-walk std of the occluder-prior Kalman filters"
+    )
+
+
 METHODS = {
     "greedy-perspective": ("greedy", "perspective"),
     "greedy-weak": ("greedy", "weak"),
@@ -106,21 +127,49 @@ def _paired_with_all(df: pd.DataFrame, k: int) -> str:
     )
 
 
-def run(ctx: RunContext) -> Outcome:
-    size = sizes(ctx)
-    if ctx.quick and not smoke():  # 15 configurations: shorter tracks keep --quick near a minute
-        size = {"steps": 100, "particles": 400, "burn_in": 10}
-    size = size_options(ctx, size)
-    runs = ctx.n_runs(full=10, quick=2)
-    cfg_path = ctx.extra.get("config")
-    scene = load_scene(cfg_path) if cfg_path else None
-    shown = scene or l_scene()
-    n = len(shown.cameras)
-    ks = selection_sizes(n, ctx.quick)
-    m = number_option(ctx, "occluders", 40 if scene is None else 20, int, 0)
-    sigma_psi = number_option(ctx, "sigma_psi", SIGMA_PSI, float, 0.01)
+@dataclass(frozen=True)
+class _Setup:
+    """The scenario of one E6 run: room, camera counts compared, occluders, priors, sizes."""
+
+    scene: Scene | None
+    shown: Scene
+    cfg_path: Any
+    ks: list[int]
+    m: int
+    sigma_psi: float
+    size: dict[str, int]
+    runs: int
+
+    @property
+    def n(self) -> int:
+        return len(self.shown.cameras)
+
+
+@dataclass(frozen=True)
+class _Tables:
+    """E6's results: every run, and the mean / std of RMSE_tr per method and k."""
+
+    df: pd.DataFrame
+    table: pd.DataFrame
+    all_mean: float
+    all_std: float
+
+    @property
+    def piv(self) -> pd.DataFrame:
+        return self.table.pivot(index="k", columns="label", values="mean")
+
+    @property
+    def sd(self) -> pd.DataFrame:
+        return self.table.pivot(index="k", columns="label", values="std")
+
+
+def _estimate(ctx: RunContext, st: _Setup) -> _Tables:
+    """Estimation: every method at every k, and all cameras, on the same worlds."""
     df = ctx.monte_carlo(
-        run_tracking, _configs(scene, ks, size, m, sigma_psi), runs, desc="E6 selection"
+        run_tracking,
+        _configs(st.scene, st.ks, st.size, st.m, st.sigma_psi),
+        st.runs,
+        desc="E6 selection",
     )
     df = df.drop(columns=[c for c in ("scene_obj",) if c in df.columns])
     table = mean_std(df[df["label"] != "all"], ["label", "k"])
@@ -129,8 +178,28 @@ def run(ctx: RunContext) -> Outcome:
         float(all_row.mean()),
         float(all_row.std(ddof=1)) if len(all_row) > 1 else 0.0,
     )
-    piv = table.pivot(index="k", columns="label", values="mean")
-    sd = table.pivot(index="k", columns="label", values="std")
+    return _Tables(df, table, all_mean, all_std)
+
+
+def _greedy_ratio_and_share(df: pd.DataFrame) -> tuple[float, float]:
+    """Greedy's subset MSE over brute force's, and the share of epochs where they agree."""
+    ratio = float(df.loc[df["method"] == "greedy", "greedy_over_brute_mse"].mean())
+    same = float(df.loc[df["method"] == "greedy", "greedy_equals_brute"].mean())
+    return ratio, same
+
+
+def _times(df: pd.DataFrame) -> tuple[pd.Series, pd.Series]:
+    """Selection time per epoch (all of it) and search time per epoch, per method and k."""
+    t = df.groupby(["method", "k"])["selection_ms_per_epoch"].mean()
+    searched = df[df["method"].isin(["greedy", "brute"])]
+    t_search = searched.groupby(["method", "k"])["search_ms_per_epoch"].mean()
+    return t, t_search
+
+
+def _method_claims(st: _Setup, tb: _Tables) -> list[Claim]:
+    """C8: greedy near brute force, better than the heuristics, weak metric as good, k_max like all."""
+    piv, sd, ks, n = tb.piv, tb.sd, st.ks, st.n
+    all_mean, all_std = tb.all_mean, tb.all_std
     avg = piv.mean()
     claims = []
     for model in ("perspective", "weak"):
@@ -201,9 +270,14 @@ def run(ctx: RunContext) -> Outcome:
             g6 - all_mean <= max(s6, all_std),
         )
     )
-    six_vs_all = _paired_with_all(df, kmax)
-    ratio = float(df.loc[df["method"] == "greedy", "greedy_over_brute_mse"].mean())
-    same = float(df.loc[df["method"] == "greedy", "greedy_equals_brute"].mean())
+    return claims
+
+
+def _search_claims(st: _Setup, res: _Tables) -> list[Claim]:
+    """C9: greedy's subset nearly optimal and cheaper to find; RMSE_occ / RMSE_max of the L room."""
+    df, n, kmax, scene = res.df, st.n, max(st.ks), st.scene
+    ratio, _ = _greedy_ratio_and_share(df)
+    claims = []
     claims.append(
         Claim(
             "C9_greedy_metric",
@@ -214,9 +288,7 @@ def run(ctx: RunContext) -> Outcome:
             ratio <= 1.05,
         )
     )
-    t = df.groupby(["method", "k"])["selection_ms_per_epoch"].mean()
-    searched = df[df["method"].isin(["greedy", "brute"])]
-    t_search = searched.groupby(["method", "k"])["search_ms_per_epoch"].mean()
+    _, t_search = _times(df)
     tg, tb = float(t_search[("greedy", kmax)]), float(t_search[("brute", kmax)])
     claims.append(
         Claim(
@@ -238,9 +310,16 @@ def run(ctx: RunContext) -> Outcome:
             Claim("rmse_max_L", "RMSE_max: the object assumed at the room's centre (units)", 47.9,
                   rmse_max, "+-15%", abs(rmse_max / 47.9 - 1) <= 0.15),
         ]  # fmt: skip
+    return claims
+
+
+def _figures(ctx: RunContext, st: _Setup, tb: _Tables) -> None:
+    """Fig. 12 (RMSE_tr per method against k) and Fig. 11 (the room with one tracked run)."""
+    shown, n, m, runs, size = st.shown, st.n, st.m, st.runs, st.size
+    kmax, all_mean = max(st.ks), tb.all_mean
     curve_plot(
         ctx.figure_path("fig12_selection"),
-        table,
+        tb.table,
         "k",
         "label",
         xlabel="number of selected cameras k",
@@ -249,7 +328,9 @@ def run(ctx: RunContext) -> Outcome:
         hlines={f"all {n} cameras = {all_mean:.2f}": all_mean},
     )
     rep_cfg = {
-        **_configs(scene, [kmax], {**size, "steps": min(size["steps"], 400)}, m, sigma_psi)[0],
+        **_configs(st.scene, [kmax], {**size, "steps": min(size["steps"], 400)}, m, st.sigma_psi)[
+            0
+        ],
         "trace": True,
         "metric_gap": False,
     }
@@ -264,12 +345,12 @@ def run(ctx: RunContext) -> Outcome:
         truth=np.array(trace["trace_true"]),
         estimate=np.array(trace["trace_est"]),
     )
-    wide = (
-        table.assign(cell=[f"{a:.3g} ± {b:.2g}" for a, b in zip(table["mean"], table["std"])])
-        .pivot(index="k", columns="label", values="cell")
-        .reset_index()
-    )
-    layout = pd.DataFrame(
+
+
+def _layout_table(shown: Scene) -> pd.DataFrame:
+    """The cameras' positions, yaws and fields of view."""
+    n = len(shown.cameras)
+    return pd.DataFrame(
         {
             "camera": [i + 1 for i in range(n)],
             "x": shown.cameras.positions[:, 0],
@@ -278,7 +359,11 @@ def run(ctx: RunContext) -> Outcome:
             "fov (deg)": np.round(np.degrees(shown.cameras.fovs), 1),
         }
     )
-    fixed_list = ", ".join(str(i + 1) for i in shown.fixed_order)
+
+
+def _timing_table(df: pd.DataFrame) -> pd.DataFrame:
+    """Epoch and search milliseconds per method and k, one column per (method, measure)."""
+    t, t_search = _times(df)
     timing = (
         pd.concat(
             {"epoch ms": t, "search ms": t_search}, axis=1
@@ -291,20 +376,30 @@ def run(ctx: RunContext) -> Outcome:
         c if isinstance(c, str) else (c[0] if not c[1] else f"{c[1]} {c[0]}")
         for c in timing.columns
     ]
+    return timing
+
+
+def _full_size(ctx: RunContext, st: _Setup) -> bool:
+    """Whether this run has the paper's size (10 runs x 4000 steps)."""
+    return not ctx.quick and st.size["steps"] == 4000 and st.runs == 10
+
+
+def _report_setup(ctx: RunContext, st: _Setup, tb: _Tables) -> str:
+    """Report text: setup, occlusion model, camera layout and Fig. 11."""
+    cfg_path, shown, n, m, sigma_psi = st.cfg_path, st.shown, st.n, st.m, st.sigma_psi
+    runs, size = st.runs, st.size
+    rmse_occ = float(tb.df["rmse_occ"].mean())
+    rmse_max = float(tb.df["rmse_max"].mean())
+    layout = _layout_table(shown)
+    fixed_list = ", ".join(str(i + 1) for i in shown.fixed_order)
     where = (
         f"User scene from `{cfg_path}`"
         if cfg_path
         else "L-shaped room of spec §7.2 (the paper gives only a picture, Fig. 11)"
     )
     paper_occ, paper_max = ("", "") if cfg_path else (" (paper 11.5)", "; paper 47.9")
-    full_size = not ctx.quick and size["steps"] == 4000 and runs == 10
-    run_length = (
-        f"* Run length: {runs} runs x {size['steps']} steps (paper 10 x 4000 without burn-in), the first "
-        f"{size['burn_in']} steps (the start from a uniform cloud) left out of RMSE_tr: a shorter run weighs\n"
-        "  the start-up more and averages fewer occlusion episodes, so per-run RMSEs and their spread are larger\n"
-        "  than over 4000 steps; the comparisons between methods use the same worlds (common random numbers).\n"
-    )
-    report = f"""
+    full_size = _full_size(ctx, st)
+    return f"""
 ## Setup
 
 {where}: {n} cameras, M = {m} moving occluders (D = {shown.diameter:g}), Gaussian occluder priors from random-walk
@@ -317,7 +412,7 @@ differences between methods within a run are the method's alone.
 Tracker and selection use the same occlusion model: Eq. 7 with the rectangles ending one diameter D before the
 particle (`exclusion` = 1 D, an occluder cannot overlap the object) and p(eta | u) floored at 1e-3 for particles the
 reporting cameras can see (`floor`); both are corrections to the printed model, explained in
-`fusetrack.filters.occlusion_likelihood`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
+`fusetrack.sensors.occlusion_aware_camera`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
 likelihood's p(eta | u) for the same option (tested).
 
 Camera layout (reconstructed; the paper draws it only). Fixed list: {fixed_list}.
@@ -326,7 +421,30 @@ Camera layout (reconstructed; the paper draws it only). Fixed list: {fixed_list}
 
 ![Fig. 11](fig11_room.png)
 
-## Fig. 12: RMSE_tr (mean ± std over runs) per method and k (paper: curves only, no printed values)
+"""
+
+
+def _report_results(ctx: RunContext, st: _Setup, tb: _Tables) -> str:
+    """Report text: Fig. 12 as a table, greedy against brute force, timing, differences."""
+    table, n, kmax, runs, size = tb.table, st.n, max(st.ks), st.runs, st.size
+    all_mean, all_std = tb.all_mean, tb.all_std
+    rmse_max = float(tb.df["rmse_max"].mean())
+    wide = (
+        table.assign(cell=[f"{a:.3g} ± {b:.2g}" for a, b in zip(table["mean"], table["std"])])
+        .pivot(index="k", columns="label", values="cell")
+        .reset_index()
+    )
+    ratio, same = _greedy_ratio_and_share(tb.df)
+    timing = _timing_table(tb.df)
+    six_vs_all = _paired_with_all(tb.df, kmax)
+    full_size = _full_size(ctx, st)
+    run_length = (
+        f"* Run length: {runs} runs x {size['steps']} steps (paper 10 x 4000 without burn-in), the first "
+        f"{size['burn_in']} steps (the start from a uniform cloud) left out of RMSE_tr: a shorter run weighs\n"
+        "  the start-up more and averages fewer occlusion episodes, so per-run RMSEs and their spread are larger\n"
+        "  than over 4000 steps; the comparisons between methods use the same worlds (common random numbers).\n"
+    )
+    return f"""## Fig. 12: RMSE_tr (mean ± std over runs) per method and k (paper: curves only, no printed values)
 
 {md(wide)}
 
@@ -353,4 +471,26 @@ the epochs differ far less than the searches; epoch times are wall clock in para
   standard deviations over runs.
 * Greedy with k = {kmax} against all {n} cameras, run by run (same worlds): {six_vs_all}
 """
-    return Outcome(df, claims, report, runs=runs)
+
+
+def run(ctx: RunContext) -> Outcome:
+    """E6: scenario (options), estimation, claims, Figs. 11-12 and report text."""
+    size = sizes(ctx)
+    if ctx.quick and not smoke():  # 15 configurations: shorter tracks keep --quick near a minute
+        size = {"steps": 100, "particles": 400, "burn_in": 10}
+    size = size_options(ctx, size)
+    runs = ctx.n_runs(full=10, quick=2)
+    cfg_path = Options.of(ctx).config
+    scene = load_scene(cfg_path) if cfg_path else None
+    shown = scene or l_scene()
+    n = len(shown.cameras)
+    ks = selection_sizes(n, ctx.quick)
+    m = Options.of(ctx).occluders
+    m = (40 if scene is None else 20) if m is None else m
+    sigma_psi = Options.of(ctx).sigma_psi
+    st = _Setup(scene, shown, cfg_path, ks, m, sigma_psi, size, runs)
+    tb = _estimate(ctx, st)
+    claims = [*_method_claims(st, tb), *_search_claims(st, tb)]
+    _figures(ctx, st, tb)
+    report = _report_setup(ctx, st, tb) + _report_results(ctx, st, tb)
+    return Outcome(tb.df, claims, report, runs=runs)

@@ -10,13 +10,24 @@ target is out of reach with k cameras.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import fmt, interpolate_crossing, md, mean_std, sizes
-from .prior_accuracy import _prior
+from .common import (
+    PRINTED_PREFIX,
+    fmt,
+    interpolate_crossing,
+    md,
+    mean_std,
+    printed_config,
+    printed_runs,
+    sizes,
+    sweep_config,
+)
 from .simulation import DEFAULTS, run_tracking
 
 TARGET = 3.0
@@ -30,7 +41,6 @@ KS_QUICK = (3, 8)
 SWEEP_QUICK = (0.0, 8.0, math.inf)
 PAPER_PERFECT_K4 = 3.1
 """The paper's RMSE_tr with perfect priors at N = 4, M = 40 (implied by Sec. 6.1: 7.2 / 2.34)."""
-PRINTED_PREFIX = "printed "
 PRINTED_KS_FULL = (8,)
 PRINTED_KS_QUICK = (8,)
 """Camera counts also run with the likelihood as printed (floor 0, full Eq. 7 rectangles)."""
@@ -107,44 +117,43 @@ def _grid_figure(ctx: RunContext, table: pd.DataFrame, targets: list[float], run
     return "rmse_grid.png"
 
 
-def run(ctx: RunContext) -> Outcome:
-    size = sizes(ctx)
-    runs = ctx.n_runs(full=5, quick=2)
+@dataclass(frozen=True)
+class _Tradeoff:
+    """E3's results: the RMSE_tr grids (corrected and printed likelihood) and the tolerated
+    RMSE_occ per camera count read off them."""
+
+    df_all: pd.DataFrame
+    df: pd.DataFrame
+    table: pd.DataFrame
+    hard_table: pd.DataFrame
+    curve: pd.DataFrame
+    hard_curve: dict[Any, float]
+    rmse_max: float
+    perfect_k4: pd.Series
+    scaled: float
+
+
+def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
+    """Scenario: the (k, sigma_psi) grid and, at a few k, the printed-likelihood series."""
     ks = list(KS_QUICK if ctx.quick else KS_FULL)
     sweep = SWEEP_QUICK if ctx.quick else SWEEP_FULL
-    configs = [
-        {
-            "scene": "square-open",
-            "n_occluders": 40,
-            "prior": _prior(s),
-            "sigma_psi": s if math.isfinite(s) else 0.0,
-            "k": k,
-            "method": "fixed",
-            "label": "inf" if math.isinf(s) else f"{s:g}",
-            **size,
-        }
-        for k in ks
-        for s in sweep
-    ]
+    configs = [sweep_config(s, k, size) for k in ks for s in sweep]
     printed_ks = PRINTED_KS_QUICK if ctx.quick else PRINTED_KS_FULL
     printed = [  # neither correction enters the no-prior likelihood: those runs are shared
-        {**c, "floor": 0.0, "exclusion": 0.0, "label": f"{PRINTED_PREFIX}{c['label']}"}
-        for c in configs
-        if c["k"] in printed_ks and c["prior"] != "none"
+        printed_config(c) for c in configs if c["k"] in printed_ks and c["prior"] != "none"
     ]
-    df_all = ctx.monte_carlo(run_tracking, [*configs, *printed], runs, desc="E3 trade-off")
+    return [*configs, *printed]
+
+
+def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Tradeoff:
+    """Estimation: run the grid, tabulate it and read the tolerated RMSE_occ per k."""
+    printed_ks = PRINTED_KS_QUICK if ctx.quick else PRINTED_KS_FULL
+    df_all = ctx.monte_carlo(run_tracking, _configs(ctx, size), runs, desc="E3 trade-off")
     is_printed = df_all["label"].str.startswith(PRINTED_PREFIX)
     df = df_all[~is_printed]
     rmse_max = float(df["rmse_max"].mean())
     table = _grid(df)
-    hard_table = _grid(
-        pd.concat(
-            [
-                df_all[is_printed].assign(label=lambda d: d["label"].str[len(PRINTED_PREFIX) :]),
-                df[(df["label"] == "inf") & df["k"].isin(printed_ks)],
-            ]
-        )
-    )
+    hard_table = _grid(printed_runs(df_all, df[(df["label"] == "inf") & df["k"].isin(printed_ks)]))
     curve = pd.DataFrame(
         [{"k": k, "tolerated_rmse_occ": tolerated(g, rmse_max)} for k, g in table.groupby("k")]
     )
@@ -157,6 +166,12 @@ def run(ctx: RunContext) -> Outcome:
         tolerated(g, rmse_max, scaled) for _, g in table.groupby("k")
     ]
     curve["tolerated (printed likelihood)"] = curve["k"].map(hard_curve)
+    return _Tradeoff(df_all, df, table, hard_table, curve, hard_curve, rmse_max, perfect_k4, scaled)
+
+
+def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
+    """C5: the tolerated RMSE_occ does not fall with cameras; enough cameras need no priors."""
+    curve, rmse_max, scaled, hard_curve = t.curve, t.rmse_max, t.scaled, t.hard_curve
     vals = curve["tolerated_rmse_occ"].fillna(-1.0).to_numpy()
     steps_ok = np.diff(vals) >= -0.1 * rmse_max
     share = float(steps_ok.mean()) if len(steps_ok) else float("nan")
@@ -202,8 +217,14 @@ def run(ctx: RunContext) -> Outcome:
             bool(np.isfinite(hard_top) and hard_top / rmse_max >= 0.99),
         )
     )
+    return claims
+
+
+def _tradeoff_figure(ctx: RunContext, t: _Tradeoff, ks: list[int], runs: int) -> None:
+    """Fig. 8: cameras against the tolerated RMSE_occ (corrected, printed, scaled target)."""
     import matplotlib.pyplot as plt
 
+    curve, rmse_max, scaled = t.curve, t.rmse_max, t.scaled
     fig, ax = plt.subplots(figsize=(6.0, 4.2))
     ok = curve.dropna()
     ax.plot(ok["tolerated_rmse_occ"], ok["k"], "o-", label="corrected likelihood")
@@ -232,12 +253,17 @@ def run(ctx: RunContext) -> Outcome:
     fig.tight_layout()
     fig.savefig(ctx.figure_path("fig8_tradeoff"), dpi=110)
     plt.close(fig)
-    grid_png = _grid_figure(ctx, table, [TARGET, scaled], runs)
-    beats = _gaussian_vs_none(table)
-    order = sorted(set(table["label"]), key=float)
-    grid = table.pivot(index="k", columns="label", values="mean")[order].reset_index()
-    hard_grid = hard_table.pivot(index="k", columns="label", values="mean")[order].reset_index()
-    report = f"""
+
+
+def _report_tables(ctx: RunContext, t: _Tradeoff, size: dict[str, int], runs: int) -> str:
+    """Report text: setup, the tolerated accuracy, the scaled target, the RMSE_tr grids."""
+    curve, rmse_max, perfect_k4, scaled, df = t.curve, t.rmse_max, t.perfect_k4, t.scaled, t.df
+    sweep = SWEEP_QUICK if ctx.quick else SWEEP_FULL
+    printed_ks = PRINTED_KS_QUICK if ctx.quick else PRINTED_KS_FULL
+    order = sorted(set(t.table["label"]), key=float)
+    grid = t.table.pivot(index="k", columns="label", values="mean")[order].reset_index()
+    hard_grid = t.hard_table.pivot(index="k", columns="label", values="mean")[order].reset_index()
+    return f"""
 ## Setup
 
 Square room without the static occluder, M = 40, first k of the fixed camera list, sigma_psi swept
@@ -270,7 +296,12 @@ The same with the likelihood as printed:
 
 {md(hard_grid)}
 
-![Fig. 8](fig8_tradeoff.png)
+"""
+
+
+def _report_figures(grid_png: str, beats: pd.DataFrame) -> str:
+    """Report text: Fig. 8, the whole grid, Gaussian priors against none, differences."""
+    return f"""![Fig. 8](fig8_tradeoff.png)
 
 The whole grid (mean RMSE_tr, log colour scale) with the iso-RMSE lines the curves above are read from:
 
@@ -287,4 +318,17 @@ priors (the paper's Figs. 6-7 have every Gaussian curve between the perfect and 
   its resolution is that of the sweep. With 5 runs the mean curves are noisy and the read-off can dip.
 * Where the tracker already beats the target with no priors the tolerated accuracy is RMSE_max by definition.
 """
-    return Outcome(df_all, claims, report, runs=runs)
+
+
+def run(ctx: RunContext) -> Outcome:
+    """E3: scenario, estimation, claims, Fig. 8 and the grid, report text."""
+    size = sizes(ctx)
+    runs = ctx.n_runs(full=5, quick=2)
+    ks = list(KS_QUICK if ctx.quick else KS_FULL)
+    t = _estimate(ctx, size, runs)
+    claims = _claims(t, ks)
+    _tradeoff_figure(ctx, t, ks, runs)
+    grid_png = _grid_figure(ctx, t.table, [TARGET, t.scaled], runs)
+    beats = _gaussian_vs_none(t.table)
+    report = _report_tables(ctx, t, size, runs) + _report_figures(grid_png, beats)
+    return Outcome(t.df_all, claims, report, runs=runs)

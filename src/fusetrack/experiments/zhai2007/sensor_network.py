@@ -21,7 +21,6 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import plots
 from ...evaluation.montecarlo import run_seed
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.cpf_sp import CPFSPProposal
@@ -42,6 +41,7 @@ from .comparators import (
     per_run_scores,
     run_comparators,
 )
+from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
 
 WEIGHTS = CPFSPProposal.weights_id  # the measurement id of CPF-SP's per-step sensor weights
 
@@ -267,17 +267,29 @@ def comparators(
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E4: every configuration's runs, the comparators, claims, figures and report."""
     runs = ctx.n_runs(full=100, quick=2)
     cfgs = [{"scenario": "S1", "threshold": t} for t in (0.75, 0.78)]
     cfgs += [{"scenario": s, "threshold": 0.75} for s in ("S2", "S3")]
     df = ctx.monte_carlo(run_once, cfgs, runs)
     cmp = comparators(ctx, cfgs, df, runs)
+    summ = summarise(df)
+    claims = [*claims_table5(summ), *claims_scenarios(df)]
+    figs = figures(ctx, df, runs)
+    active = active_counts(np.random.default_rng(ctx.seed), runs=5 if ctx.quick else 50)
+    body = report_text(summ, active, figs, runs) + cmp.section
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+
+
+def summarise(df: pd.DataFrame) -> pd.DataFrame:
+    """Table 5's columns (mean and variance over runs of the per-run RMSE in x and y, seconds)
+    per scenario, threshold and method."""
     per_run = df.groupby(["scenario", "threshold", "method", "run"]).agg(
         ex=("sq_ex", "mean"), ey=("sq_ey", "mean"), seconds=("seconds", "first")
     )
     per_run[["ex", "ey"]] = per_run[["ex", "ey"]].pow(0.5)
     g = per_run.groupby(["scenario", "threshold", "method"])
-    summ = pd.DataFrame(
+    return pd.DataFrame(
         {
             "RMSE x mean": g["ex"].mean(),
             "RMSE x var": g["ex"].var(),
@@ -286,9 +298,17 @@ def run(ctx: RunContext) -> Outcome:
             "time (s)": g["seconds"].mean(),
         }
     )
+
+
+def claims_table5(summ: pd.DataFrame) -> list[Claim]:
+    """C5 (CPF-SP against the bootstrap on S1 at 75%, Table 5) and C6 (78% is similar)."""
     s1 = summ.loc[("S1", 0.75)]
     cp, bs = s1.loc["CPF-SP (200)"], s1.loc["bootstrap (2000)"]
-    claims = [
+    c78 = summ.loc[("S1", 0.78, "CPF-SP (200)")]
+    ratio = float(
+        max(c78["RMSE x mean"] / cp["RMSE x mean"], c78["RMSE y mean"] / cp["RMSE y mean"])
+    )
+    return [
         Claim(
             "C5_cpfsp_vs_bootstrap",
             "S1, 75%: CPF-SP mean RMSE < 25% of the bootstrap's in x and y (Table 5)",
@@ -311,12 +331,6 @@ def run(ctx: RunContext) -> Outcome:
                 and cp["RMSE y var"] < 0.25 * bs["RMSE y var"]
             ),
         ),
-    ]
-    c78 = summ.loc[("S1", 0.78, "CPF-SP (200)")]
-    ratio = float(
-        max(c78["RMSE x mean"] / cp["RMSE x mean"], c78["RMSE y mean"] / cp["RMSE y mean"])
-    )
-    claims.append(
         Claim(
             "C6_threshold_78",
             "CPF-SP at the 78% threshold is similar to 75%",
@@ -324,15 +338,21 @@ def run(ctx: RunContext) -> Outcome:
             ratio,
             "RMSE ratio <= 1.5",
             ratio <= 1.5,
-        )
-    )
+        ),
+    ]
+
+
+def claims_scenarios(df: pd.DataFrame) -> list[Claim]:
+    """C7 (S2: the bootstrap loses the target, CPF-SP does not) and C8 (S3: CPF-SP follows the
+    change of acceleration)."""
     final = df[df["step"] == STEPS].assign(err=lambda d: np.sqrt(d["sq_ex"] + d["sq_ey"]))
     loss = (
         final[final["scenario"] == "S2"]
         .groupby("method")["err"]
         .apply(lambda e: float((e > 3 * SPACING).mean()))
     )
-    claims.append(
+    s3 = rmse_by_method(df[(df["scenario"] == "S3") & (df["step"] > 30)], "sq_vel")
+    return [
         Claim(
             "C7_loss",
             "S2: the bootstrap loses the target in > 80% of runs, CPF-SP never (loss: final error > 150 m)",
@@ -340,12 +360,7 @@ def run(ctx: RunContext) -> Outcome:
             f"bootstrap {loss['bootstrap (2000)']:.2f}, CPF-SP {loss['CPF-SP (200)']:.2f}",
             "bootstrap > 0.8 and CPF-SP <= 0.05",
             bool(loss["bootstrap (2000)"] > 0.8 and loss["CPF-SP (200)"] <= 0.05),
-        )
-    )
-    s3 = (
-        df[(df["scenario"] == "S3") & (df["step"] > 30)].groupby("method")["sq_vel"].mean().pow(0.5)
-    )
-    claims.append(
+        ),
         Claim(
             "C8_acceleration_change",
             "S3: after the switch CPF-SP's velocity RMSE is far below the bootstrap's",
@@ -353,46 +368,39 @@ def run(ctx: RunContext) -> Outcome:
             f"CPF-SP {s3['CPF-SP (200)']:.3g} vs bootstrap {s3['bootstrap (2000)']:.3g} m/s",
             "< 0.5x",
             bool(s3["CPF-SP (200)"] < 0.5 * s3["bootstrap (2000)"]),
-        )
-    )
+        ),
+    ]
+
+
+def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> list[str]:
+    """Per scenario at 75%: position RMSE(t) and run 0's tracks over the grid: file names."""
     figs = []
-    for s, thr in (("S1", 0.75), ("S2", 0.75), ("S3", 0.75)):
-        d = df[(df["scenario"] == s) & (df["threshold"] == thr)]
-        rm = (
-            d.assign(sq=d["sq_ex"] + d["sq_ey"])
-            .groupby(["method", "step"])["sq"]
-            .mean()
-            .pow(0.5)
-            .unstack("method")
+    for s in ("S1", "S2", "S3"):
+        d = df[(df["scenario"] == s) & (df["threshold"] == 0.75)]
+        rm = rmse_by_step(d.assign(sq=d["sq_ex"] + d["sq_ey"]), "sq")
+        title = f"{s}, 75%: {runs} runs"
+        figs.append(
+            plot_rmse(ctx, f"rmse_{s}", rm, rm.columns, title, "t (s)", "position RMSE (m)").name
         )
         figs.append(
-            plots.plot_series(
-                ctx.figure_path(f"rmse_{s}"),
-                rm.index.to_numpy(),
-                {m: rm[m].to_numpy() for m in rm.columns},
-                xlabel="t (s)",
-                ylabel="position RMSE (m)",
-                title=f"{s}, 75%: {runs} runs",
-                logy=True,
-            ).name
-        )
-        r0 = d[d["run"] == 0]
-        figs.append(
-            plots.plot_trajectories(
-                ctx.figure_path(f"run0_{s}"),
-                r0[r0["method"] == "CPF-SP (200)"][["true_x", "true_y"]].to_numpy(),
-                {
-                    m: r0[r0["method"] == m][["x", "y"]].to_numpy()
-                    for m in ("CPF-SP (200)", "bootstrap (2000)")
-                },
-                sensors=[("", np.array(p)) for p in GRID],
+            plot_run_tracks(
+                ctx,
+                f"run0_{s}",
+                d[d["run"] == 0],
+                "CPF-SP (200)",
+                ("CPF-SP (200)", "bootstrap (2000)"),
+                [("", np.array(p)) for p in GRID],
+                f"{s}: run 0",
                 area=(-20, 520, -20, 520),
-                title=f"{s}: run 0",
             ).name
         )
-    active = active_counts(np.random.default_rng(ctx.seed), runs=5 if ctx.quick else 50)
-    table = pd.concat({"paper": PAPER, "ours": s1.loc[PAPER.index]}, axis=1)
-    body = f"""
+    return figs
+
+
+def report_text(summ: pd.DataFrame, active: pd.Series, figs: list[str], runs: int) -> str:
+    """The report's set-up, Table 5 beside ours, every configuration and the differences."""
+    table = pd.concat({"paper": PAPER, "ours": summ.loc[("S1", 0.75)].loc[PAPER.index]}, axis=1)
+    return f"""
 ## Set-up
 
 {__doc__.split("Spec design")[1].split(chr(10) + chr(10))[0] if __doc__ else ""}
@@ -434,5 +442,4 @@ All configurations:
   bootstrap, which with 2-6 DOAs per step needs no help.
 * Times are seconds per 60-step run here (the thesis: MATLAB); compare ratios only.
 
-{cmp.section}"""
-    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+"""
