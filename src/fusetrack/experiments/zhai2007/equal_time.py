@@ -65,13 +65,14 @@ class EqualTime:
         **options: Any,
     ) -> Comparison:
         """:func:`~.comparators.compare` with the calibration note (``calibration`` appended)
-        and the calibrated particle counts."""
+        and the calibrated particle counts (reported as ``n_particles`` unless given)."""
+        n_particles = options.pop("n_particles", self.n_particles)
         return compare(
             per_run,
             reference,
             figure_path,
             calibration=calibration_note(self.n_particles, self.target) + calibration,
             notes=notes,
-            n_particles=self.n_particles,
+            n_particles=n_particles,
             **options,
         )

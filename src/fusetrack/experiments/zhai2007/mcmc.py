@@ -25,6 +25,7 @@ from ...filters.mcmc_moves import IndependenceMove, MHPriorMove, RandomWalkMove
 from ...filters.sis import ProposalParticleFilter
 from ...motion.benchmark import ScalarBenchmark
 from ...sensors.power import Power
+from . import scalar
 from .common import timed_sis
 from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators
 from .equal_time import EqualTime
@@ -56,13 +57,7 @@ def model() -> tuple[ScalarBenchmark, Power, Gaussian]:
 def simulate(rng: np.random.Generator) -> tuple[np.ndarray, list[list[np.ndarray]]]:
     """``x_0`` from the prior, then ``STEPS`` transitions and measurements."""
     motion, sensor, prior = model()
-    x = prior.sample(rng)
-    xs, zs = [], []
-    for _ in range(STEPS):
-        x = motion.sample(x, 1.0, rng)
-        xs.append(x.copy())
-        zs.append([sensor.simulate(x, rng)])
-    return np.array(xs), zs
+    return scalar.simulate(motion, sensor, rng, STEPS, x0=prior.sample(rng))
 
 
 def make_filter(method: str, n: int) -> ProposalParticleFilter:

@@ -35,12 +35,10 @@ from .comparators import (
     UPF_NOTE,
     Comparison,
     Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
     per_run_scores,
     run_comparators,
 )
+from .equal_time import EqualTime
 from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
 
 WEIGHTS = CPFSPProposal.weights_id  # the measurement id of CPF-SP's per-step sensor weights
@@ -226,25 +224,21 @@ def comparators(
     """Beyond the paper: UPF and bootstrap calibrated to CPF-SP (200)'s time per configuration,
     IMM-EKF; on the first ``CMP_RUNS`` runs (same truths as the paper's filters' runs)."""
     k = min(runs, CMP_RUNS)
-    n_equal, target, ccfgs = {}, {}, []
+    eq, ccfgs = EqualTime.for_run(ctx), []
     for c in cfgs:
-        key = f"{c['scenario']} {c['threshold']:.0%}"
         cs, ws, _ = comparator_scenario(c, run_seed(ctx.seed, 0))
-        n_equal[key], target[key] = equal_time_particles(
-            cs, cpf_sp(cs, ws), ("UPF", "bootstrap equal time"), repeats=2 if ctx.quick else 3
-        )
-        ccfgs.append({**c, "n_equal": n_equal[key]})
+        n_equal = eq.calibrate(f"{c['scenario']} {c['threshold']:.0%}", cs, cpf_sp(cs, ws))
+        ccfgs.append({**c, "n_equal": n_equal})
     dc = ctx.monte_carlo(run_once, ccfgs, k, desc="comparators")
     rows = pd.concat([df[df["run"] < k], dc], ignore_index=True)
     rows["sq_pos"] = rows["sq_ex"] + rows["sq_ey"]
-    return compare(
+    return eq.compare(
         per_run_scores(rows, ["scenario", "threshold"], "sq_pos"),
         "CPF-SP (200)",
         ctx.figure_path("error_vs_seconds"),
         by=["scenario", "threshold"],
         ylabel="position RMSE per run (m, mean)",
-        calibration=calibration_note(n_equal, target)
-        + f" Comparators ran on the first {k} of the {runs} runs (same truths); the table "
+        calibration=f" Comparators ran on the first {k} of the {runs} runs (same truths); the table "
         "compares every method on those runs only.",
         notes=[
             "IMM-EKF: CV and left/right coordinated turns at pi/10 rad/s (the S2 truth's rate), "
@@ -253,7 +247,6 @@ def comparators(
             UPF_NOTE,
         ],
         methods=["CPF-SP (200)", "bootstrap (2000)", "bootstrap (200)", *COMPARATORS],
-        n_particles=n_equal,
         runs=k,
     )
 
