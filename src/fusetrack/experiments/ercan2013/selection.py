@@ -412,7 +412,7 @@ differences between methods within a run are the method's alone.
 Tracker and selection use the same occlusion model: Eq. 7 with the rectangles ending one diameter D before the
 particle (`exclusion` = 1 D, an occluder cannot overlap the object) and p(eta | u) floored at 1e-3 for particles the
 reporting cameras can see (`floor`); both are corrections to the printed model, explained in
-`fusetrack.filters.occlusion_likelihood`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
+`fusetrack.sensors.occlusion_aware_camera`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
 likelihood's p(eta | u) for the same option (tested).
 
 Camera layout (reconstructed; the paper draws it only). Fixed list: {fixed_list}.
