@@ -49,3 +49,24 @@ def test_compare_reports_the_calibration(monkeypatch: pytest.MonkeyPatch) -> Non
     assert seen["n_particles"] == {"A": {"UPF": 30}} and seen["notes"] == ["n"]
     eq.compare(pd.DataFrame(), "ref", None, notes=[], n_particles={"UPF": 30})
     assert seen["n_particles"] == {"UPF": 30}
+
+
+def test_compare_runs_scores_each_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    seen: dict[str, Any] = {}
+
+    def fake_compare(per_run: pd.DataFrame, reference: Any, path: Any, **kw: Any) -> str:
+        seen.update(kw, per_run=per_run, path=path)
+        return "comparison"
+
+    class Ctx:
+        def figure_path(self, name: str) -> str:
+            return f"figs/{name}.png"
+
+    monkeypatch.setattr(equal_time, "compare", fake_compare)
+    rows = pd.DataFrame(
+        {"cfg": "A", "method": "m", "run": [0, 0, 1, 1], "sq": [1.0, 3.0, 4.0, 4.0], "seconds": 2.0}
+    )
+    eq = EqualTime(repeats=1)
+    eq.compare_runs(Ctx(), rows, ["cfg"], "sq", "m", notes=[])  # type: ignore[arg-type]
+    assert seen["path"] == "figs/error_vs_seconds.png" and seen["by"] == ["cfg"]
+    assert seen["per_run"]["error"].tolist() == pytest.approx([2**0.5, 2.0])

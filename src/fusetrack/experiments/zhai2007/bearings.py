@@ -32,7 +32,6 @@ from .comparators import (
     UPF_NOTE,
     Comparison,
     Scenario,
-    per_run_scores,
     run_comparators,
 )
 from .equal_time import EqualTime
@@ -230,11 +229,12 @@ def scenario_figures(
 
 def comparison(ctx: RunContext, df: pd.DataFrame, eq: EqualTime) -> Comparison:
     """Beyond the paper: UPF, bootstrap at PF-SP-PEKF's time and the IMM-EKF, per scenario."""
-    return eq.compare(
-        per_run_scores(df, ["scenario"], "sq_err"),
+    return eq.compare_runs(
+        ctx,
+        df,
+        ["scenario"],
+        "sq_err",
         "PF-SP-PEKF",
-        ctx.figure_path("error_vs_seconds"),
-        by=["scenario"],
         ylabel="position RMSE per run (mean over runs)",
         notes=[
             "IMM-EKF: CV and left/right coordinated turns (E2 0.1 rad/s, E3 3 deg/s), regime "

@@ -36,7 +36,6 @@ from .comparators import (
     UPF_NOTE,
     Comparison,
     Scenario,
-    per_run_scores,
     run_comparators,
 )
 from .equal_time import EqualTime
@@ -281,11 +280,12 @@ def comparison(
 ) -> Comparison:
     """The comparators' table and figure on the first ``runs`` (E16, E17) runs of each label."""
     k16, k17 = runs
-    return eq.compare(
-        per_run_scores(rows, ["label"], "sq_pos_err"),
+    return eq.compare_runs(
+        ctx,
+        rows,
+        ["label"],
+        "sq_pos_err",
         ref,
-        ctx.figure_path("error_vs_seconds"),
-        by=["label"],
         ylabel="position RMSE per run (mean)",
         calibration=f" UPF and the equal-time bootstrap ran on the first {k16} (E16) and {k17} (E17) runs "
         "(same truths as the paper's filters' runs; E17's are few because each equal-time "

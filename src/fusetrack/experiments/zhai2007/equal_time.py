@@ -19,6 +19,7 @@ from .comparators import (
     calibration_note,
     compare,
     equal_time_particles,
+    per_run_scores,
     sis_reference,
 )
 
@@ -74,5 +75,27 @@ class EqualTime:
             calibration=calibration_note(self.n_particles, self.target) + calibration,
             notes=notes,
             n_particles=n_particles,
+            **options,
+        )
+
+    def compare_runs(
+        self,
+        ctx: RunContext,
+        rows: pd.DataFrame,
+        by: Sequence[str],
+        sq_error: str,
+        reference: Any,
+        *,
+        notes: Sequence[str],
+        **options: Any,
+    ) -> Comparison:
+        """:meth:`compare` of the per-run RMSE (``sqrt`` of the mean of ``rows[sq_error]`` over
+        a run's steps) per ``by`` configuration, figure ``error_vs_seconds``."""
+        return self.compare(
+            per_run_scores(rows, by, sq_error),
+            reference,
+            ctx.figure_path("error_vs_seconds"),
+            by=by,
+            notes=notes,
             **options,
         )

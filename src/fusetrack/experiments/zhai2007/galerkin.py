@@ -25,7 +25,7 @@ from ...filters.sis import ProposalParticleFilter
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
 from .common import timed_gaussian, timed_sis, track_rows
-from .comparators import Comparison, Scenario, per_run_scores, run_comparators
+from .comparators import Comparison, Scenario, run_comparators
 from .equal_time import EqualTime
 from .reporting import (
     origin_sensor,
@@ -281,11 +281,12 @@ def comparison(
     """Beyond the paper: UPF, bootstrap at the Galerkin PF's time and the IMM-EKF, per example."""
     d = df.assign(sq_err=df["sq_ex"] + df["sq_ey"])
     d["example"] = d["example"].map(lambda e: f"example {int(e)}")
-    return eq.compare(
-        per_run_scores(d, ["example"], "sq_err"),
+    return eq.compare_runs(
+        ctx,
+        d,
+        ["example"],
+        "sq_err",
         "Galerkin PF 200",
-        ctx.figure_path("error_vs_seconds"),
-        by=["example"],
         ylabel="position RMSE per run (mean over runs)",
         notes=[
             "IMM-EKF: CV and left/right coordinated turns at pi/6 rad/step (example 2's turn), "

@@ -35,7 +35,7 @@ from ...motion import ConstantVelocity
 from ...motion.maneuver import ManeuverTurn
 from ...sensors import Bearing
 from .common import timed_gaussian, timed_mm, timed_sis, track_rows
-from .comparators import UPF_NOTE, Comparison, Scenario, per_run_scores, run_comparators
+from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators
 from .equal_time import EqualTime
 from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
 
@@ -288,11 +288,12 @@ def comparators(
         df["experiment"] == "E8", "E8", "E7 sigma " + df["sigma"].map(lambda v: f"{v:g}")
     )
     rows = pd.concat([df[df["run"] < k].assign(label=label[df["run"] < k]), *parts])
-    return eq.compare(
-        per_run_scores(rows, ["label"], "sq_pos_err"),
+    return eq.compare_runs(
+        ctx,
+        rows,
+        ["label"],
+        "sq_pos_err",
         {k: "MMPF multi-sensor (fused)" if k == "E8" else "MM-bootstrap" for k in eq.n_particles},
-        ctx.figure_path("error_vs_seconds"),
-        by=["label"],
         ylabel="position RMSE per run (mean)",
         calibration=f" UPF and the equal-time bootstrap ran on the first {k} of the {runs} runs (same "
         "truths); the table compares every method on those runs. E8's reference is the fused "

@@ -35,7 +35,6 @@ from .comparators import (
     UPF_NOTE,
     Comparison,
     Scenario,
-    per_run_scores,
     run_comparators,
 )
 from .equal_time import EqualTime
@@ -232,11 +231,12 @@ def comparators(
     dc = ctx.monte_carlo(run_once, ccfgs, k, desc="comparators")
     rows = pd.concat([df[df["run"] < k], dc], ignore_index=True)
     rows["sq_pos"] = rows["sq_ex"] + rows["sq_ey"]
-    return eq.compare(
-        per_run_scores(rows, ["scenario", "threshold"], "sq_pos"),
+    return eq.compare_runs(
+        ctx,
+        rows,
+        ["scenario", "threshold"],
+        "sq_pos",
         "CPF-SP (200)",
-        ctx.figure_path("error_vs_seconds"),
-        by=["scenario", "threshold"],
         ylabel="position RMSE per run (m, mean)",
         calibration=f" Comparators ran on the first {k} of the {runs} runs (same truths); the table "
         "compares every method on those runs only.",
