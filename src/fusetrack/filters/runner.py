@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike
 from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, MeasurementError, invalid
 from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
-from ..core.models import Filter, LikelihoodFilter, filter_step
+from ..core.models import Filter, LikelihoodFilter, filter_step, step_with_likelihood
 from ..core.track import Track
 from .stats import validate_measurement
 
@@ -163,10 +163,8 @@ def _filter_loop(
         else:
             dt = 0.0
         if log_likelihood and group:
-            if dt > 0.0:
-                belief = filt.predict(belief, dt, rng)
             assert isinstance(filt, LikelihoodFilter)
-            belief, increment = filt.update_with_likelihood(belief, group, rng)
+            belief, increment = step_with_likelihood(filt, belief, dt, group, rng)
             loglik = loglik + increment
         else:
             belief = filter_step(filt, belief, dt, group, rng)

@@ -374,6 +374,18 @@ class ProposalParticleFilter:
         rng: np.random.Generator | None = None,
     ) -> SISBelief:
         """Draw ``x_t ~ q(x_t | x_{t-1}, z_t)``, weight (Eq. 13), resample, move, feed back."""
+        return self.step_with_likelihood(belief, dt, measurements, rng)[0]
+
+    def step_with_likelihood(
+        self,
+        belief: SISBelief,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> tuple[SISBelief, Array]:
+        """:meth:`step`, and ``log p(z_t | z_1:t-1)`` estimated with this proposal: the log mean
+        of the incremental weights (the particles are equally weighted after every step), 0 where
+        no sensor reported."""
         check_positive("dt", dt)
         gen = check_generator(rng)
         zs, side = aligned_values(self.sensors, measurements, self._side_ids)
@@ -388,7 +400,11 @@ class ProposalParticleFilter:
             log_w = (loglik(x) if loglik else 0.0) + log_q
         else:
             log_w = loglik(x) + self.log_transition(x, prev, dt) - log_q
-        return self._select(x, prev, log_w, loglik, pstate, dt, gen, ctx)
+        if loglik:
+            increment = logsumexp(log_w, axis=-1) - np.log(log_w.shape[-1])
+        else:
+            increment = np.zeros(np.shape(log_w)[:-1])
+        return self._select(x, prev, log_w, loglik, pstate, dt, gen, ctx), increment
 
     def predict(
         self, belief: SISBelief, dt: float, rng: np.random.Generator | None = None
