@@ -28,12 +28,12 @@ from collections.abc import Callable
 import numpy as np
 
 from fusetrack.experiments.ercan2013.scenes import l_scene, square_scene
-from fusetrack.filters.occlusion_likelihood import OcclusionAwareLikelihood
 from fusetrack.management.camera_selection import (
     brute_force_selection,
     greedy_selection,
     selection_moments,
 )
+from fusetrack.sensors.occlusion_aware_camera import OcclusionAwareLikelihood
 from fusetrack.world.occlusion import (
     OccluderPriors,
     occlusion_probability_reference,

@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 
+from fusetrack.core import filter_step
 from fusetrack.experiments.kushwaha2010.cameras import appearance_model
 from fusetrack.filters.smart_camera_trackers import (
     CameraNetwork,
@@ -25,12 +26,8 @@ from fusetrack.filters.smart_camera_trackers import (
     Particle3DTracker,
     TrackerSettings,
 )
-from fusetrack.perception.appearance import (
-    N_HS,
-    FeatureImage,
-    region_histograms,
-    region_histograms_reference,
-)
+from fusetrack.perception.appearance import features_from_rgb
+from fusetrack.sensors.appearance import N_HS, region_histograms, region_histograms_reference
 from fusetrack.sensors.camera_geometry import PinholeCamera
 from fusetrack.sensors.ellipsoid_camera import EllipsoidCamera, look_at
 from fusetrack.world.ellipsoid_scene import Trajectory, render_frames
@@ -70,17 +67,19 @@ def measure(repeats: int = 3, particles: int = 1000) -> dict[str, float]:
         np.array([[0.0, 0.0, 0.0, 1.0]] * 2),
     )
     frames = render_frames(cams, target, truth, np.random.default_rng(0))
-    feats = [FeatureImage.from_rgb(img) for img in frames.images[1]]
+    feats = [features_from_rgb(img) for img in frames.images[1]]
     net = CameraNetwork.build(cams, model, target.semi_axes, (7.0, 0.0, 0.0))
+    measurements = net.measurements(1.0, feats)
     settings = TrackerSettings(n_particles=particles)
     init = (truth.positions[0], truth.velocities[0], truth.quaternions[0])
     rng = np.random.default_rng(1)
 
     def step(mode: str) -> None:
         if mode in ("T0", "T2"):
-            Particle3DTracker(mode, net, *init, settings).step(feats, rng)  # type: ignore[arg-type]
+            tracker: Particle3DTracker | ImagePlaneTracker = Particle3DTracker(mode, net, settings)
         else:
-            ImagePlaneTracker(mode, net, *init, settings).step(feats, rng)  # type: ignore[arg-type]
+            tracker = ImagePlaneTracker(mode, net, settings)
+        filter_step(tracker, tracker.initial_belief(*init), 1.0, measurements, rng)
 
     step("T0")  # compile the Numba kernel
     out = {f"{m}_step_cpu_s": _cpu(lambda m=m: step(m), repeats) for m in ("T0", "T2", "T4")}

@@ -25,7 +25,7 @@ from fusetrack.experiments.kushwaha2010.harmonic_sources import (
     network,
     simulate_features,
 )
-from fusetrack.filters.harmonic_localisation import BeamformModel, localise
+from fusetrack.perception.source_localisation import BeamformModel, localise
 from fusetrack.world.harmonic_sources import random_sources
 
 CYCLE_SECONDS = 0.25

@@ -19,8 +19,12 @@ import time
 import numpy as np
 
 from fusetrack.experiments.kushwaha2010.beamformer import realtime_factor
-from fusetrack.experiments.kushwaha2010.scene import default_layout, tick_likelihoods
-from fusetrack.filters.grid import GridTracker
+from fusetrack.experiments.kushwaha2010.scene import (
+    DT,
+    default_layout,
+    sbe_filter,
+    tick_likelihoods,
+)
 from fusetrack.management.fusion_scheduler import Packet
 
 
@@ -35,11 +39,12 @@ def fusion_step_seconds(repeats: int) -> float:
             sid, 0, 0.0, 100 * np.exp(-0.5 * ((a - rng.uniform(-0.3, 0.3)) / 0.03) ** 2)
         )
     tick_likelihoods(layout, taken)  # builds the per-sensor arc tables once (cached)
-    tracker = GridTracker(layout.grid, "product")
+    filt = sbe_filter(layout, "product", "centralized")
+    belief = filt.initial()
     best = np.inf
     for _ in range(repeats):
         tic = time.perf_counter()
-        tracker.step(tick_likelihoods(layout, taken))
+        belief = filt.step(belief, DT, tick_likelihoods(layout, taken).measurements(0.0))
         best = min(best, time.perf_counter() - tic)
     return float(best)
 

@@ -19,8 +19,7 @@ import numpy as np
 
 from fusetrack.experiments.nott2009.video import ekf_step_time
 from fusetrack.perception.video import HorprasertModel, find_blobs
-from fusetrack.world.rendered_room import Person, RoomRenderer
-from fusetrack.world.walks import crossing_walks
+from fusetrack.world.rendered_room import Person, RoomRenderer, crossing_walks
 
 
 def front_end_fps(n_frames: int) -> dict[str, float]:

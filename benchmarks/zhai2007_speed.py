@@ -29,13 +29,13 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from fusetrack.core import Gaussian
-from fusetrack.experiments.zhai2007.common import timed_gaussian
+from fusetrack.experiments.zhai2007.common import run_steps, timed_gaussian
 from fusetrack.filters.cpf_sp import CPFSPProposal
 from fusetrack.filters.grid_proposals import DiscretisationProposal, GalerkinProposal
 from fusetrack.filters.imm import InteractingMultipleModel
 from fusetrack.filters.mcmc_moves import IndependenceMove, MHPriorMove, RandomWalkMove
-from fusetrack.filters.multiple_model import MultipleModelParticleFilter, run_mm
-from fusetrack.filters.sis import ProposalParticleFilter, run_sis
+from fusetrack.filters.multiple_model import MultipleModelParticleFilter
+from fusetrack.filters.sis import ProposalParticleFilter
 from fusetrack.filters.sp_pekf import SPPEKFProposal
 from fusetrack.filters.unscented_proposal import UnscentedProposal
 from fusetrack.motion import ConstantVelocity, CoordinatedTurn
@@ -109,12 +109,10 @@ def time_filter(make: Callable[[], object], steps: int, repeats: int, clock: str
         f = make()
         rng = np.random.default_rng(r)
         t0 = tick()
-        if isinstance(f, MultipleModelParticleFilter):
-            run_mm(f, prior, zs, 1.0, rng)
-        elif isinstance(f, InteractingMultipleModel):
+        if isinstance(f, InteractingMultipleModel):
             timed_gaussian(f, prior, zs, ["s"], 1.0)
-        else:
-            run_sis(f, prior, zs, 1.0, rng)  # type: ignore[arg-type]
+        else:  # ProposalParticleFilter, MultipleModelParticleFilter
+            run_steps(f, prior, zs, 1.0, rng)
         out.append((tick() - t0) / steps)
     return min(out[1:])
 

@@ -1,14 +1,59 @@
 """``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``
-and ``replay``."""
+and ``replay``; ``--version``, ``-v``/``-q`` (the ``logging`` level), ``run NAME --help`` (the
+experiment's own options)."""
 
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 from collections.abc import Sequence
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+from typing import Any
 
 from .core.errors import ConfigError, FusetrackError, invalid
+
+
+def _version() -> str:
+    try:
+        return version("fusetrack")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        from . import __version__
+
+        return __version__
+
+
+class _RunHelp(argparse.Action):
+    """``run NAME --help``: the usual help, then the options of experiment NAME with defaults."""
+
+    def __init__(self, option_strings: list[str], dest: str, **kwargs: Any) -> None:
+        kwargs.update(nargs=0, default=argparse.SUPPRESS)
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: Any, *_: Any) -> None:
+        parser.print_help()
+        name = getattr(namespace, "name", None)
+        if name:
+            from .core.errors import UnknownExperimentError
+            from .evaluation.options import describe_options
+            from .experiments import options_model
+
+            try:
+                text = describe_options(options_model(name))
+            except UnknownExperimentError as err:
+                text = f"  {err}"
+            print(f"\noptions of {name} (--set KEY=VALUE):\n{text}")
+        parser.exit()
+
+
+def _add_verbosity(p: argparse.ArgumentParser, default: Any) -> None:
+    p.add_argument(
+        "-v", "--verbose", action="count", default=default, help="more log lines (-vv: debug)"
+    )
+    p.add_argument(
+        "-q", "--quiet", action="count", default=default, help="only warnings and errors"
+    )
 
 
 def _add_run_options(p: argparse.ArgumentParser, default_out: str | None) -> None:
@@ -28,7 +73,7 @@ def _add_run_options(p: argparse.ArgumentParser, default_out: str | None) -> Non
     p.add_argument(
         "--workers", type=int, default=None, help="worker processes (default: all cores)"
     )
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar (also -q)")
     p.add_argument(
         "--out",
         type=Path,
@@ -43,12 +88,19 @@ def build_parser() -> argparse.ArgumentParser:
         prog="fusetrack",
         description="Tracking with networks of different sensors, fused in Bayesian filters.",
     )
+    parser.add_argument("--version", action="version", version=f"fusetrack {_version()}")
+    _add_verbosity(parser, 0)
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("list", help="name every experiment")
     run = sub.add_parser(
-        "run", help="run one experiment and write results.parquet, summary.json, report.md"
+        "run",
+        help="run one experiment and write results.parquet, summary.json, report.md",
+        description="Run one experiment; `fusetrack run NAME --help` also lists NAME's options.",
+        add_help=False,
     )
+    run.add_argument("-h", "--help", action=_RunHelp, help="show this help and NAME's options")
     run.add_argument("name")
+    _add_verbosity(run, argparse.SUPPRESS)
     _add_run_options(run, None)
     run.add_argument(
         "--config",
@@ -62,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="experiment option passed to the experiment (repeatable; e.g. measurements=audio)",
+        help="experiment option (repeatable; checked before the run: NAME --help lists them)",
     )
     run.add_argument(
         "--measurements",
@@ -72,6 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo = sub.add_parser("demo", help="= fusetrack run demo (--live: a live fusion node)")
     _add_run_options(demo, "out/demo")
+    _add_verbosity(demo, argparse.SUPPRESS)
     from .service.commands import add_live_options
     from .service.commands import add_parsers as add_service
 
@@ -111,13 +164,30 @@ def _extra_options(args: argparse.Namespace) -> dict[str, str]:
     return extra
 
 
+def _log_to_stderr(args: argparse.Namespace) -> tuple[logging.Handler, int]:
+    """``fusetrack`` log lines to stderr: INFO by default, ``-v`` DEBUG, ``-q`` WARNING. Returns
+    the handler and the logger's previous level, for :func:`main` to restore."""
+    level = logging.INFO + 10 * (getattr(args, "quiet", 0) - getattr(args, "verbose", 0))
+    logger = logging.getLogger("fusetrack")
+    handler = logging.StreamHandler(sys.stderr)  # the stderr of this call (tests capture it)
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    previous = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(min(max(level, logging.DEBUG), logging.CRITICAL))
+    return handler, previous
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    handler, previous = _log_to_stderr(args)
     try:
         return _dispatch(args)
     except FusetrackError as err:
         print(f"fusetrack: error: {err}", file=sys.stderr)
         return 2
+    finally:
+        logging.getLogger("fusetrack").removeHandler(handler)
+        logging.getLogger("fusetrack").setLevel(previous)
 
 
 def _dispatch(args: argparse.Namespace) -> int:
@@ -148,7 +218,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         engine=args.engine,
         scheduler=args.scheduler,
         workers=args.workers,
-        progress=False if args.no_progress else None,
+        progress=False if args.no_progress or getattr(args, "quiet", 0) else None,
         extra=_extra_options(args),
     )
     summary = run_experiment(ctx)

@@ -8,7 +8,7 @@ MAP search) the same chain is far off, so the check has the power to see a wrong
 
 import numpy as np
 
-from fusetrack.association.mcmcda import MCMCDA, MCMCDAConfig
+from fusetrack.association.mcmcda import HypothesisSampler, MCMCDAConfig
 
 CFG = MCMCDAConfig(
     dt=1.0, max_speed=2.0, max_gap=2, obs_std=1.0, accel_std=1.0, p_detect=0.7, p_terminate=0.2,
@@ -18,9 +18,7 @@ OBS = [[[0.0, 0.0], [1.0, 2.0]], [[1.0, 0.5]], [[2.0, 0.8], [2.5, 2.0]], [[3.0, 
 
 
 def _tracker(seed):
-    m = MCMCDA(CFG, rng=np.random.default_rng(seed))
-    m.observations = [np.array(o) for o in OBS]
-    return m
+    return HypothesisSampler(CFG, [np.array(o) for o in OBS], np.random.default_rng(seed))
 
 
 def _posterior(m):
@@ -30,7 +28,7 @@ def _posterior(m):
     def grow(prefix):
         out = [tuple(prefix)] if len(prefix) >= 2 else []
         for o in allobs:
-            if o[0] > prefix[-1][0] and m._gate(prefix[-1], o):
+            if o[0] > prefix[-1][0] and m.gate(prefix[-1], o):
                 out += grow([*prefix, o])
         return out
 
@@ -44,7 +42,7 @@ def _posterior(m):
                     yield (tracks[i], *rest)
 
     hs = [frozenset(h) for h in hyps(set(allobs), 0)]
-    logp = np.array([m._total(list(h), len(OBS) - 1) for h in hs])
+    logp = np.array([m.total(list(h), len(OBS) - 1) for h in hs])
     p = np.exp(logp - logp.max())
     return len(tracks), hs, p / p.sum()
 
@@ -52,7 +50,7 @@ def _posterior(m):
 def _frequencies(m, hs, n):
     index = {h: i for i, h in enumerate(hs)}
     counts = np.zeros(len(hs))
-    cur, score = [], m._total([], len(OBS) - 1)
+    cur, score = [], m.total([], len(OBS) - 1)
     for _ in range(n):
         cur, score = m.mh_step(cur, score, 0, len(OBS) - 1)
         counts[index[frozenset(cur)]] += 1  # KeyError here = the chain left the valid hypotheses
@@ -68,18 +66,18 @@ def test_chain_visits_hypotheses_in_proportion_to_the_posterior():
     assert tv < 0.05, tv  # measured 0.017-0.031 over seeds; Monte Carlo error ~ 1/sqrt(n_eff)
     top = np.argsort(p)[-6:]  # the six most probable hypotheses, each within a few MC sd
     assert np.all(np.abs(f[top] - p[top]) < 0.03 + 0.1 * p[top]), (f[top], p[top])
-    assert 0.05 < m.accepted / m.proposed < 0.9
+    assert 0.05 < m.stats.accepted / m.stats.proposed < 0.9
 
 
 def test_without_proposal_ratios_the_chain_is_wrong():
     m = _tracker(4)
     _, hs, p = _posterior(m)
-    propose = m._propose
+    propose = m.propose
 
     def no_ratio(*args):
         out = propose(*args)
         return None if out is None else (out[0], 0.0)
 
-    m._propose = no_ratio
+    m.propose = no_ratio  # type: ignore[method-assign]
     f = _frequencies(m, hs, 30_000)
     assert 0.5 * np.abs(f - p).sum() > 0.3  # measured 0.57

@@ -78,19 +78,20 @@ def test_comparators_build_and_track_each_family(exp):
     """UPF / IMM-EKF / equal-time bootstrap: the right filter on the family's measurements, and
     on a clean start they stay near the target for the first frames."""
     from fusetrack.experiments.zhai2007.visual import BEYOND, NOT_RUN, make_tracker
+    from fusetrack.filters.imm import InteractingMultipleModel
     from fusetrack.filters.unscented_proposal import UnscentedProposal
-    from fusetrack.perception.visual_tracking import GaussianFrameFilter, track_frames
 
     seq = build(EXPERIMENTS[exp][0], np.random.default_rng(3))
     for m in BEYOND:
         if (exp, m) in NOT_RUN:
             continue
-        filt, prior, fe = make_tracker(m, seq, {"exp": exp, "n_equal": 321})
+        setup = make_tracker(m, seq, {"exp": exp, "n_equal": 321})
+        filt = setup.filt
         if m == "IMM-EKF":
-            assert isinstance(filt, GaussianFrameFilter) and prior.mean.shape == (6,)
+            assert isinstance(filt, InteractingMultipleModel) and setup.prior.mean.shape == (6,)
         else:
             assert (m == "UPF") == isinstance(filt.proposal, UnscentedProposal)
             assert filt.n_particles == (321 if m == "bootstrap equal time" else 200)
-        tk = track_frames(filt, prior, seq.frames[:8], fe, np.random.default_rng(1))
-        err = np.hypot(*(tk.estimates[:, :2] - seq.truth[:8, :2]).T)
+        tk = setup.track(seq.frames[:8], np.random.default_rng(1))
+        err = np.hypot(*(tk.means[:, :2] - seq.truth[:8, :2]).T)
         assert np.all(np.isfinite(err)) and err.max() < 15.0, (m, err)

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from fusetrack.core.errors import ConfigError, ShapeError
+from fusetrack.core.measurement import Measurement
 from fusetrack.filters.detection_fusion import (
     DetectionFusion,
     chair_varshney,
+    frame_measurements,
     fused_position,
     presence_prior,
     quality,
@@ -76,14 +78,38 @@ def test_sequence_recovers_miss_and_rejects_far_false_alarm():
     u = to_image(hs[1], np.array([3.0, 4.0]))
     assert to_ground(hs[1], u) == pytest.approx([3.0, 4.0])
     f = DetectionFusion(hs)
-    f.step([np.array([1.0, 1.0]), to_image(hs[1], np.array([1.0, 1.0]))])
-    d = f.step([np.array([1.1, 1.0]), None])  # camera 2 misses: recovered
+    belief = f.initial_belief()
+
+    def frame(dets):
+        nonlocal belief
+        belief = f.update(f.predict(belief, 1.0), frame_measurements(0.0, dets, f.camera_ids))
+        return belief.decision
+
+    first = frame([np.array([1.0, 1.0]), to_image(hs[1], np.array([1.0, 1.0]))])
+    assert first.real and belief.mean == pytest.approx([1.0, 1.0])
+    d = frame([np.array([1.1, 1.0]), None])  # camera 2 misses: recovered
     assert d.real and d.local[1] is not None
     assert to_ground(hs[1], d.local[1]) == pytest.approx(d.fused)
-    d = f.step([np.array([9.0, 9.0]), None])  # far from the prediction: false
+    assert d.state == pytest.approx([1.1, 0.1, 1.0, 0.0])  # velocity from the previous frame
+    d = frame([np.array([9.0, 9.0]), None])  # far from the prediction: false
     assert not d.real and all(v is None for v in d.local)
     assert np.all(np.isfinite(d.state))
-    empty = f.step([None, None])
+    assert belief.mean == pytest.approx([1.2, 1.0])  # coasted on the prediction
+    empty = frame([None, None])
     assert not empty.real and empty.statistic == -math.inf
     with pytest.raises(ShapeError):
-        f.step([None])
+        frame([None])
+    with pytest.raises(ShapeError, match="sensor_id"):
+        f.update(belief, [Measurement(0.0, "elsewhere", [1.0, 1.0])])
+
+
+def test_ground_plane_detection_is_the_quality_kernel():
+    from fusetrack.sensors.ground_plane_detection import GroundPlaneDetection
+
+    h = np.array([[2.0, 0, 1], [0, 2, 0], [0, 0, 1]])
+    cam = GroundPlaneDetection("c", h, sigma2=0.5)
+    z = to_image(h, np.array([3.0, 4.0]))
+    assert cam.ground(z) == pytest.approx([3.0, 4.0])
+    x = np.array([[3.0, 4.0, 9.9], [4.0, 4.0, 0.0]])  # particles: only (x, y) count
+    assert cam.log_likelihood(z, x) == pytest.approx([0.0, -1.0])
+    assert cam.quality(z, x[1]) == pytest.approx(quality([[3.0, 4.0]], [4.0, 4.0], 0.5)[0])

@@ -3,14 +3,16 @@
 import numpy as np
 import pytest
 
-from fusetrack.core.errors import ConfigError, ShapeError
+from fusetrack.core import Filter, GridBelief, Measurement, SteppingFilter, filter_step
+from fusetrack.core.errors import ConfigError, MeasurementError, ShapeError, UnknownSensorError
 from fusetrack.filters.grid import (
     DirectionalMotion,
+    GridFilter,
     GridSpec,
-    GridTracker,
     SensorLikelihoods,
     fuse_product,
     fuse_weighted_sum,
+    map_sensors,
     sbe_update,
 )
 from fusetrack.sensors.detection_function import (
@@ -19,6 +21,7 @@ from fusetrack.sensors.detection_function import (
     cell_arcs,
     normalize_likelihood,
 )
+from fusetrack.sensors.likelihood_map import LikelihoodMapSensor
 
 
 def test_grid_layout_matches_paper():
@@ -68,23 +71,90 @@ def test_hybrid_product_with_prior_divided_equals_centralized():
         SensorLikelihoods(np.ones((2, 6)), np.ones(3), ("audio", "video", "video"))
 
 
-def test_tracker_follows_a_target_seen_by_bearing_sensors():
+def _bearing_maps(g, sensors, mats, truth):
+    """Per-cell likelihood maps of bearing sensors seeing ``truth`` (a beam pattern on a floor)."""
+    beams = AngularSampling.beams(36)
+    rows = []
+    for (pos, h), w in zip(sensors, mats):
+        bearing = np.arctan2(truth[1] - pos[1], truth[0] - pos[0]) - h
+        d = np.angle(np.exp(1j * (beams.angles - bearing)))
+        lam = 1.0 + np.exp(-0.5 * (d / 0.3) ** 2)
+        rows.append(normalize_likelihood(w @ lam))
+    return rows
+
+
+def test_grid_filter_follows_a_target_seen_by_bearing_sensors():
     g = GridSpec()
     sensors = [((5.0, 4.0), 0.3), ((30.0, 4.0), 2.0), ((17.5, 16.0), -1.0), ((17.5, 0.0), 1.5)]
     beams = AngularSampling.beams(36)
     mats = [arc_mean_matrix(beams, *cell_arcs(pos, h, g.centres, 0.25)[:2]) for pos, h in sensors]
-    tracker = GridTracker(g, "product")
+    ids = [f"A{i}" for i in range(4)]
+    filt = GridFilter(g, map_sensors(g, ids, lambda _: "audio"), "product")
+    assert isinstance(filt, Filter) and isinstance(filt, SteppingFilter)
+    belief = filt.initial()
+    assert isinstance(belief, GridBelief)
     errors = []
     for k in range(14):
         truth = np.array([2.0 + 2.5 * k, 8.5])
-        rows = []
-        for (pos, h), w in zip(sensors, mats):
-            bearing = np.arctan2(truth[1] - pos[1], truth[0] - pos[0]) - h
-            d = np.angle(np.exp(1j * (beams.angles - bearing)))
-            lam = 1.0 + np.exp(-0.5 * (d / 0.3) ** 2)  # a beam pattern with a floor
-            rows.append(normalize_likelihood(w @ lam))
-        mean, cov = tracker.step(SensorLikelihoods(np.array(rows), np.ones(4), ("audio",) * 4))
-        errors.append(np.linalg.norm(mean - truth))
-        assert np.linalg.det(cov) > 0
+        rows = _bearing_maps(g, sensors, mats, truth)
+        z = [Measurement(0.25 * k, sid, row) for sid, row in zip(ids, rows)]
+        before = belief
+        belief = filter_step(filt, belief, 0.25 if k else 0.0, z)
+        assert before.updates == k  # the old belief is untouched: the filter is pure
+        errors.append(np.linalg.norm(belief.mean - truth))
+        assert np.linalg.det(belief.cov) > 0
     assert np.mean(errors[3:]) < 1.0
-    assert np.linalg.norm(tracker.velocity - [2.5, 0.0]) < 1.0
+    assert np.linalg.norm(belief.velocity - [10.0, 0.0]) < 4.0  # 2.5 m per 0.25 s step
+
+
+def test_grid_filter_step_is_predict_then_update_and_coasts():
+    g = GridSpec(0, 10, 0, 10, 1.0)
+    filt = GridFilter(g, map_sensors(g, ["a", "b"]), "product", motion=DirectionalMotion(1.0))
+    rng = np.random.default_rng(2)
+    b0 = filt.initial(rng.random(g.size))
+    z = [Measurement(1.0, "a", rng.random(g.size)), Measurement(1.0, "b", rng.random(g.size))]
+    b1 = filt.step(b0, 0.5, z)
+    manual = filt.update(filt.predict(b0, 0.5), z)
+    np.testing.assert_array_equal(b1.log_prob, manual.log_prob)
+    expected = sbe_update(filt.predict(b0, 0.5).prob.ravel(), filt.likelihoods(z), "product")
+    np.testing.assert_allclose(b1.prob.ravel(), expected, rtol=1e-12)
+    b2 = filt.step(b1, 0.5, z)  # second posterior: the velocity is the mean's displacement / dt
+    np.testing.assert_allclose(b2.velocity, (b2.mean - b1.mean) / 0.5, atol=1e-9)
+    coast = filt.step(b2, 0.5, [])  # no measurement: the predicted density, velocity re-estimated
+    np.testing.assert_allclose(coast.prob, filt.predict(b2, 0.5).prob, atol=1e-15)
+    assert coast.updates == 3 and coast.elapsed == 0.0
+    with pytest.raises(UnknownSensorError):
+        filt.update(b0, [Measurement(0.0, "nobody", np.ones(g.size))])
+    with pytest.raises(MeasurementError):
+        filt.update(b0, [Measurement(0.0, "a", np.ones(3))])
+    with pytest.raises(ShapeError):
+        filt.initial(np.zeros(g.size))
+
+
+def test_sum_fusion_uses_each_measurement_quality():
+    g = GridSpec(0, 4, 0, 2, 1.0)
+    filt = GridFilter(g, map_sensors(g, ["a", "b"]), "sum")
+    la, lb = np.eye(g.size)[0] + 0.1, np.eye(g.size)[5] + 0.1
+    z = [
+        Measurement(0.0, "a", la, metadata={"quality": 1.0}),
+        Measurement(0.0, "b", lb, metadata={"quality": 3.0}),
+    ]
+    post = filt.update(filt.initial(), z).prob.ravel()
+    np.testing.assert_allclose(post, fuse_weighted_sum([la, lb], [1.0, 3.0]), rtol=1e-12)
+
+
+def test_likelihood_map_sensor_reads_the_cell_of_each_state():
+    g = GridSpec(0, 3, 0, 2, 1.0)  # cells centred at x 0.5, 1.5, 2.5 and y 0.5, 1.5
+    s = LikelihoodMapSensor("m", (g.x, g.y))
+    z = np.arange(1.0, 7.0)
+    x = np.array([[0.4, 0.6], [2.6, 1.4], [1.5, 0.5], [9.0, -3.0]])  # the last is off the grid
+    np.testing.assert_allclose(s.log_likelihood(z, x), np.log([1.0, 6.0, 3.0, 5.0]))
+    assert s.log_likelihood(z, np.zeros((5, 7, 2))).shape == (5, 7)
+
+
+def test_detection_quality_is_the_share_of_the_peak():
+    from fusetrack.sensors.likelihood_map import detection_quality
+
+    assert detection_quality([1.0, 1.0, 3.0, 1.0]) == 1.0  # all the excess in one sample
+    assert detection_quality([0.0, 1.0, 2.0]) == pytest.approx(2 / 3)
+    assert detection_quality(np.full(5, 4.0)) is None  # flat: the sensor saw nothing

@@ -4,7 +4,7 @@ Markov chain, batches = separate runs, and a manoeuvre shifts the probability to
 import numpy as np
 import pytest
 
-from fusetrack.core import ConfigError, Gaussian, Measurement
+from fusetrack.core import ConfigError, Gaussian, Measurement, filter_step
 from fusetrack.filters import KalmanFilter
 from fusetrack.filters.imm import IMMBelief, InteractingMultipleModel, imm_mix
 from fusetrack.motion import ConstantVelocity, CoordinatedTurn, RandomWalk
@@ -94,9 +94,10 @@ def test_batch_equals_separate_runs() -> None:
     single = [imm.initialize(prior) for _ in tracks]
     for k in range(6):
         zs = np.stack([t[k] for t in tracks])
-        batched = imm.step(batched, [Measurement(float(k), "p", zs)], 1.0)
+        batched = filter_step(imm, batched, 1.0, [Measurement(float(k), "p", zs)])
         single = [
-            imm.step(s, [Measurement(float(k), "p", t[k])], 1.0) for s, t in zip(single, tracks)
+            filter_step(imm, s, 1.0, [Measurement(float(k), "p", t[k])])
+            for s, t in zip(single, tracks)
         ]
     for r in range(2):
         np.testing.assert_allclose(batched.means[r], single[r].means, rtol=1e-10, atol=1e-12)
@@ -115,7 +116,7 @@ def test_turn_model_takes_over_during_a_turn() -> None:
     for k in range(20):
         x = (cv if k < 8 else turn).mean(x, 1.0)
         z = x[:2] + 0.1 * rng.standard_normal(2)
-        b = imm.step(b, [Measurement(float(k), "p", z)], 1.0)
+        b = filter_step(imm, b, 1.0, [Measurement(float(k), "p", z)])
         probs.append(b.probs[1])
     assert max(probs[:8]) < 0.5
     assert min(probs[12:]) > 0.9

@@ -6,7 +6,7 @@ import pytest
 from fusetrack.core.errors import ConfigError, ShapeError
 from fusetrack.experiments.ercan2013.scenes import square_scene
 from fusetrack.experiments.ercan2013.simulation import run_tracking
-from fusetrack.filters.occlusion_likelihood import OcclusionAwareLikelihood
+from fusetrack.sensors.occlusion_aware_camera import OcclusionAwareLikelihood
 from fusetrack.world.occlusion import OccluderPriors
 
 

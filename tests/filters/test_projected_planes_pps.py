@@ -144,3 +144,40 @@ def test_plane_crlb_switched_is_looser_and_fused_combines():
     printed = plane_crlb(tr, s, "yz", m, 0.1, transition="printed")
     assert printed.shape == on.shape
     assert fused_bound(np.array([1.0]), np.array([1.0]))[0] == pytest.approx(1 / math.sqrt(2))
+
+
+def test_trackers_are_pure_filters_and_run_is_their_loop():
+    from fusetrack.core.models import Filter
+
+    s = DoaSensor3D("a", sigma=SIG)
+    m = AccelTurn(3, (0, 0.1, 0.5), sigma_a=0.1)
+    tr = AccelTurn(3, (0, 0.1, 0.5)).trajectory(np.array([2, 1, 2, 0.3, 0.3, 0.3]), 0.1, 8)
+    z = s.simulate(tr[:, :3], np.random.default_rng(5))[:, None, :]
+    pps = ProjectedPlanesTracker([s], m, 50)
+    assert isinstance(pps, Filter) and isinstance(Direct3DFilter(s, m, 50), Filter)
+    ref = pps.run(z, 0.1, tr[0], np.random.default_rng(1))
+    rng = np.random.default_rng(1)
+    b0 = pps.initial_belief(tr[0])
+    b1 = pps.update(b0, pps.measurements(0.0, z[0]), rng)
+    assert b0.planes == {} and b1.step == 0  # the input belief is untouched
+    b2 = pps.update(pps.predict(b1, 0.1, rng), pps.measurements(0.1, z[1]), rng)
+    assert b2.fused == pytest.approx(ref.weighted[1], abs=0) and b2.mean is b2.fused
+    assert np.all(np.diag(b2.cov) > 0)
+    with pytest.raises(ShapeError, match="measurements"):
+        pps.update(b2, [], rng)
+
+
+def test_projected_plane_likelihood_peaks_at_the_true_plane_bearing():
+    from fusetrack.sensors.doa_plane_likelihood import DoaCone, ProjectedPlaneBearing
+
+    s = DoaSensor3D("a", sigma=SIG)
+    p = np.array([3.0, 4.0, 5.0])
+    z = np.array(s.angles(p))
+    parts = np.array([[3.0, 4.0, 0, 0], [3.0, 5.0, 0, 0], [4.0, 3.0, 0, 0]])
+    ll = ProjectedPlaneBearing(s, "xy").log_likelihood(z, parts)
+    assert ll[0] == pytest.approx(0.0, abs=1e-20) and ll[1] < 0 and ll[2] < 0
+    assert ProjectedPlaneBearing(s, "yz").variance(z) > 0
+    cone = DoaCone(s).log_likelihood(z, np.array([[*p, 0, 0, 0], [*(2 * p), 0, 0, 0]]))
+    assert cone == pytest.approx([0.0, 0.0], abs=1e-20)  # a cone: the whole ray is as likely
+    with pytest.raises(ConfigError):
+        ProjectedPlaneBearing(s, "xz")

@@ -3,8 +3,9 @@
 import numpy as np
 
 from fusetrack.core import Gaussian
+from fusetrack.filters import run_filter
 from fusetrack.filters.cpf_sp import CPFSPProposal, commutes_with_translation, translated_copies
-from fusetrack.filters.sis import ProposalParticleFilter, run_sis
+from fusetrack.filters.sis import ProposalParticleFilter, sensor_measurements
 from fusetrack.motion import ConstantVelocity
 from fusetrack.motion.benchmark import ScalarBenchmark
 from fusetrack.sensors import Bearing, Range
@@ -28,8 +29,8 @@ def test_batched_banks_equal_the_loop() -> None:
     out = []
     for batch in (True, False):
         f = ProposalParticleFilter(motion, sensors, CPFSPProposal(6, batch_sensors=batch), 100)
-        est, _ = run_sis(f, prior, zs, 1.0, np.random.default_rng(11))
-        out.append(est)
+        ms = [m for k, step in enumerate(zs) for m in sensor_measurements(sensors, step, k + 1.0)]
+        out.append(run_filter(f, prior, ms, rng=np.random.default_rng(11), t0=0.0).means)
     assert np.all(np.isfinite(out[0]))
     np.testing.assert_allclose(out[0], out[1], rtol=1e-10, atol=1e-10)
 

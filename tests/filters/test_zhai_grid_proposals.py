@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.filters import KalmanFilter
+from fusetrack.filters import KalmanFilter, run_filter
 from fusetrack.filters.grid_proposals import (
     DiscretisationProposal,
     GalerkinProposal,
     galerkin_predict,
 )
-from fusetrack.filters.sis import ProposalParticleFilter, run_sis
+from fusetrack.filters.sis import ProposalParticleFilter
 from fusetrack.motion import ConstantVelocity
 from fusetrack.sensors import PositionFix
 
@@ -73,7 +73,8 @@ def test_grid_proposals_keep_the_kalman_mean(proposal):
     ests = []
     for r in range(20):
         f = ProposalParticleFilter(motion, [sensor], proposal, 200)
-        ests.append(run_sis(f, prior, zs, 1.0, np.random.default_rng(r))[0][-1])
+        ms = [Measurement(k + 1.0, "p", z) for k, (z,) in enumerate(zs)]
+        ests.append(run_filter(f, prior, ms, rng=np.random.default_rng(r), t0=0.0).means[-1])
     ests = np.array(ests)
     se = ests.std(axis=0) / np.sqrt(len(ests))
     assert np.all(np.abs(ests.mean(axis=0) - b.mean) < 4 * se + 0.02), (ests.mean(axis=0), b.mean)
@@ -86,7 +87,7 @@ def test_a_grid_too_small_is_counted():
     f = ProposalParticleFilter(motion, [sensor], GalerkinProposal(n_grid=20, span=2.0), 100)
     rng = np.random.default_rng(0)
     s = f.initialize(Gaussian(np.zeros(4), np.eye(4) * 0.1), rng)
-    s = f.step(s, [np.array([30.0, 0.0])], 1.0, rng)
+    s = f.step(s, 1.0, [Measurement(1.0, "p", [30.0, 0.0])], rng)
     assert f.stats.grid_too_small == 1
     assert np.all(np.isfinite(s.estimate))
 

@@ -69,11 +69,11 @@ def test_move_inside_the_filter_keeps_the_kalman_mean():
     motion = RandomWalk(dim=1, q=Q)
     sensor = PositionFix("p", cov=[[R]], position_index=(0,))
     pf = ProposalParticleFilter(motion, [sensor], n_particles=400, move=RandomWalkMove(0.3))
-    from fusetrack.core import Gaussian
+    from fusetrack.core import Gaussian, Measurement
 
     rng = np.random.default_rng(2)
     state = pf.initialize(Gaussian(np.zeros(1), np.eye(1)), rng, batch_shape=(300,))
-    state = pf.step(state, [np.array([Z])], 1.0, rng)
+    state = pf.step(state, 1.0, [Measurement(1.0, "p", [Z])], rng)
     kalman_mean = 2.0 / (2.0 + R) * Z  # prior N(0, 1 + Q)
     assert abs(state.estimate.mean() - kalman_mean) < 4 * state.estimate.std() / np.sqrt(300) + 2e-3
     assert 0.2 < pf.stats.acceptance_rate < 0.95

@@ -5,12 +5,11 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian
+from fusetrack.core import Gaussian, Measurement
 from fusetrack.filters.multiple_model import (
     MultipleModelParticleFilter,
     check_transition,
     hmm_filter,
-    run_mm,
     sample_regimes,
     stationary_distribution,
 )
@@ -59,6 +58,16 @@ def test_regime_sampling_follows_the_rows():
     np.testing.assert_allclose(np.bincount(nxt, minlength=4) / modes.size, PI_A[1], atol=0.005)
 
 
+def _model_probs(mm, zs, rng, batch_shape=()):
+    """Regime shares ``(T, *batch, M)`` after each step of ``zs`` (sensor "p", dt 1)."""
+    b = mm.initialize(Gaussian(np.zeros(1), np.eye(1)), rng, batch_shape)
+    out = []
+    for k, z in enumerate(zs):
+        b = mm.step(b, 1.0, [Measurement(k + 1.0, "p", [z])], rng)
+        out.append(b.proposal.model_probs)
+    return np.array(out)
+
+
 @pytest.mark.parametrize("proposal", ["prior", "sp-pekf"])
 def test_model_probabilities_match_the_exact_hmm_filter(proposal):
     """With a discrete state the MM-PF's regime shares are the HMM filter's posterior."""
@@ -71,14 +80,7 @@ def test_model_probabilities_match_the_exact_hmm_filter(proposal):
     ll = np.array([[-0.5 * (z - c) ** 2 / (r + 0.01) for c in levels] for z in zs])
     exact = hmm_filter(pi, ll, np.full(3, 1 / 3) @ np.linalg.matrix_power(pi, 0))
     mm = MultipleModelParticleFilter(models, pi, [sensor], 4000, proposal=proposal, n_channels=4)
-    _, probs = run_mm(
-        mm,
-        Gaussian(np.zeros(1), np.eye(1)),
-        [[np.array([z])] for z in zs],
-        1.0,
-        np.random.default_rng(1),
-        batch_shape=(20,),
-    )
+    probs = _model_probs(mm, zs, np.random.default_rng(1), batch_shape=(20,))
     np.testing.assert_allclose(probs.mean(axis=1), exact, atol=0.02)
 
 
@@ -95,15 +97,7 @@ def test_discretisation_mmpf_matches_the_exact_hmm_filter():
         mm = MultipleModelParticleFilter(
             [Jump(c) for c in levels], pi, [sensor], 600, proposal="cells"
         )
-        probs.append(
-            run_mm(
-                mm,
-                Gaussian(np.zeros(1), np.eye(1)),
-                [[np.array([z])] for z in zs],
-                1.0,
-                np.random.default_rng(r),
-            )[1]
-        )
+        probs.append(_model_probs(mm, zs, np.random.default_rng(r)))
     np.testing.assert_allclose(np.mean(probs, axis=0), exact, atol=0.04)
 
 

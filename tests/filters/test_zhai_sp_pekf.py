@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.filters import KalmanFilter
-from fusetrack.filters.sis import ProposalParticleFilter, run_sis
+from fusetrack.filters import KalmanFilter, run_filter
+from fusetrack.filters.sis import ProposalParticleFilter
 from fusetrack.filters.sp_pekf import BankState, SPPEKFBank, SPPEKFProposal, repair_covariance
 from fusetrack.motion import ConstantVelocity
 from fusetrack.sensors import PositionFix
@@ -55,8 +55,8 @@ def test_pf_sp_pekf_mean_converges_to_the_kalman_mean():
     for k, (z,) in enumerate(zs):
         belief = kf.update(kf.predict(belief, 1.0), [Measurement(float(k), "p", z)])
     pf = ProposalParticleFilter(motion, [sensor], SPPEKFProposal(n_channels=10), n_particles=300)
-    est, _ = run_sis(pf, prior, zs, 1.0, rng, batch_shape=(400,))
-    final = est[-1]
+    ms = [Measurement(k + 1.0, "p", z) for k, (z,) in enumerate(zs)]
+    final = run_filter(pf, pf.initialize(prior, rng, (400,)), ms, rng=rng, t0=0.0).means[-1]
     err = final.mean(axis=0) - belief.mean
     se = final.std(axis=0) / np.sqrt(len(final))
     assert np.all(np.abs(err) < 4 * se + 1e-3), (err, se)

@@ -3,8 +3,8 @@
 import numpy as np
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.filters import KalmanFilter
-from fusetrack.filters.sis import ProposalParticleFilter, run_sis
+from fusetrack.filters import KalmanFilter, run_filter
+from fusetrack.filters.sis import ProposalParticleFilter
 from fusetrack.filters.unscented_proposal import UnscentedProposal
 from fusetrack.motion import ConstantVelocity
 from fusetrack.sensors import PositionFix
@@ -19,6 +19,8 @@ def test_upf_mean_is_the_kalman_mean():
     for k, (z,) in enumerate(zs):
         b = kf.update(kf.predict(b, 1.0), [Measurement(float(k), "p", z)])
     pf = ProposalParticleFilter(motion, [sensor], UnscentedProposal(), n_particles=300)
-    final = run_sis(pf, prior, zs, 1.0, np.random.default_rng(0), batch_shape=(200,))[0][-1]
+    rng = np.random.default_rng(0)
+    ms = [Measurement(k + 1.0, "p", z) for k, (z,) in enumerate(zs)]
+    final = run_filter(pf, pf.initialize(prior, rng, (200,)), ms, rng=rng, t0=0.0).means[-1]
     se = final.std(axis=0) / np.sqrt(len(final))
     assert np.all(np.abs(final.mean(axis=0) - b.mean) < 4 * se + 1e-3)

@@ -39,11 +39,11 @@ def run_quick(name: str) -> dict:
 def check(names: list[str]) -> int:
     """Run ``names`` (default: all) and print where they differ from the fixture; 1 if any does."""
     sys.path.insert(0, str(Path(__file__).parent))
-    from golden import differences, load
+    from golden import claim_differences, load
 
     golden, bad = load(), 0
     for name in names or sorted(golden):
-        diff = differences(golden[name]["claims"], run_quick(name)["claims"], name)
+        diff = claim_differences(name, golden[name]["claims"], run_quick(name)["claims"])
         bad += bool(diff)
         print(f"{name}: {'OK' if not diff else 'DIFFERS'}", *diff, sep="\n  ", flush=True)
     return int(bad > 0)

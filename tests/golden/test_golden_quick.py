@@ -10,7 +10,7 @@ import os
 
 import pytest
 
-from .golden import differences, load
+from .golden import claim_differences, load
 from .record import run_quick
 
 GOLDEN = load()
@@ -28,4 +28,4 @@ def test_fixture_covers_every_experiment():
 @pytest.mark.parametrize("name", NAMES)
 def test_quick_claims_unchanged(name):
     got = run_quick(name)["claims"]
-    assert differences(GOLDEN[name]["claims"], got, name) == []
+    assert claim_differences(name, GOLDEN[name]["claims"], got) == []

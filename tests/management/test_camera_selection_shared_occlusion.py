@@ -7,7 +7,6 @@ import pytest
 from fusetrack.core.errors import ConfigError
 from fusetrack.experiments.ercan2013.scenes import l_scene
 from fusetrack.experiments.ercan2013.simulation import run_tracking
-from fusetrack.filters.occlusion_likelihood import OcclusionAwareLikelihood
 from fusetrack.management.camera_selection import (
     brute_force_selection,
     greedy_selection,
@@ -15,6 +14,7 @@ from fusetrack.management.camera_selection import (
     subset_mse,
     visibility_probabilities,
 )
+from fusetrack.sensors.occlusion_aware_camera import OcclusionAwareLikelihood
 from fusetrack.sensors.perspective_camera import ring_of_cameras
 from fusetrack.world.occlusion import (
     OccluderPriors,

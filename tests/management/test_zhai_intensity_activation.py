@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian
+from fusetrack.core import Gaussian, Measurement
 from fusetrack.filters.cpf_sp import CPFSPProposal
-from fusetrack.filters.sis import ProposalParticleFilter, run_sis
+from fusetrack.filters.sis import ProposalParticleFilter, sensor_measurements
 from fusetrack.management.intensity_activation import (
     activation_radius,
     active_sensors,
@@ -59,6 +59,14 @@ def test_cpf_sp_tracks_with_two_sensors_and_handles_silent_steps():
     aux = [np.array([0.5, 0.5])] * 15
     f = ProposalParticleFilter(motion, sensors, CPFSPProposal(5), 300, transition="marginal")
     prior = Gaussian(np.array([10.0, 20.0, 1.0, 0.0]), np.diag([4.0, 4.0, 0.1, 0.1]))
-    est, _ = run_sis(f, prior, zs, 1.0, rng, aux=aux)
+    b, est = f.initialize(prior, rng), []
+    for k, (step, w) in enumerate(zip(zs, aux)):
+        ms = [
+            *sensor_measurements(sensors, step, k + 1.0),
+            Measurement(k + 1.0, "sensor-weights", w),
+        ]
+        b = f.step(b, 1.0, ms, rng)
+        est.append(b.mean)
+    est = np.array(est)
     err = np.hypot(*(est[:, :2] - np.array(truth)[:, :2]).T)
     assert np.all(np.isfinite(est)) and err[-5:].mean() < 2.0

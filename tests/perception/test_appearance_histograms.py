@@ -2,13 +2,11 @@
 
 import numpy as np
 
-from fusetrack.perception.appearance import (
+from fusetrack.perception.appearance import appearance_model_from_views, features_from_rgb, hs_bins
+from fusetrack.sensors.appearance import (
     N_HS,
     N_LBP,
-    AppearanceModel,
-    FeatureImage,
     bhattacharyya,
-    hs_bins,
     region_histograms,
     region_histograms_reference,
 )
@@ -56,10 +54,10 @@ def test_reference_view_matches_itself_best():
     target = EllipsoidTarget()
     views = cube_viewpoints()
     images, centres, shapes = reference_views(target, views)
-    model = AppearanceModel.from_views(images, centres, shapes, views)
+    model = appearance_model_from_views(images, centres, shapes, views)
     assert model.hs.shape == (26, N_HS) and model.lbp.shape == (26, N_LBP)
     np.testing.assert_allclose(model.hs.sum(1), 1.0)
     for j in (0, 5, 13, 25):
-        rho = model.all_views(FeatureImage.from_rgb(images[j]), centres[j], shapes[j])
+        rho = model.all_views(features_from_rgb(images[j]), centres[j], shapes[j])
         assert int(np.argmax(rho)) == j
         assert np.isclose(rho[j], 1.0)

@@ -11,7 +11,8 @@ from fusetrack.perception.video_detection import (
     detection_from_mask,
     fit_angle_mixture,
 )
-from fusetrack.world.road_video import PinholeCamera, RoadRenderer, Vehicle
+from fusetrack.sensors.camera_geometry import PinholeCamera
+from fusetrack.world.road_video import RoadRenderer, Vehicle
 
 
 def test_column_counts_into_bins():
@@ -55,7 +56,7 @@ def test_mixture_fit_two_blobs():
 def test_rendered_vehicle_bearing_is_recovered():
     rng = np.random.default_rng(0)
     yaw = np.arctan2(8.0, 17.5)
-    cam = PinholeCamera((0.0, 2.0, 3.0), yaw)
+    cam = PinholeCamera.from_pose((0.0, 2.0, 3.0), yaw)
     renderer = RoadRenderer(cam, rng, clutter=0.0)
     det = VideoDetector(cam.column_angles(), cam.hfov)
     for _ in range(15):

@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from fusetrack.core import ConfigError, Measurement
+from fusetrack.core import ConfigError, Filter, Measurement, SteppingFilter
 from fusetrack.filters import run_filter
-from fusetrack.filters.grid import DirectionalMotion, GridSpec, GridTracker, SensorLikelihoods
+from fusetrack.filters.grid import DirectionalMotion, GridFilter, GridSpec, map_sensors
 from fusetrack.sensors import HomographyCamera
 from fusetrack.sensors.detection_function import (
     AngularSampling,
@@ -21,7 +21,7 @@ from fusetrack.sensors.detection_function import (
     normalize_likelihood,
 )
 from fusetrack.service.config import parse_config
-from fusetrack.service.engine import build_filter
+from fusetrack.service.engine import FusionEngine, build_engine, build_filter
 from fusetrack.service.node import FusionNode
 from fusetrack.service.schema import SensorMessage, reading_from_vector
 
@@ -145,11 +145,16 @@ def _offline_grid(cfg, readings, ticks):
     built by hand: Eq. 32 arc means for the detection functions, the camera's Gaussian for the
     image positions."""
     grid = GridSpec(0, 40, 0, 30, 1.0)
-    tracker = GridTracker(
-        grid, "product", motion=DirectionalMotion(1.0), first_delta=2.0, max_step=5.0
+    filt = GridFilter(
+        grid,
+        map_sensors(grid, [s.id for s in cfg.sensors]),
+        "product",
+        motion=DirectionalMotion(1.0),
+        first_delta=2.0,
+        max_speed=20.0,
     )
     u = (grid.centres - [8.0, 10.0]) / 3.0
-    tracker.initialize(np.exp(-0.5 * np.sum(u * u, axis=1)))
+    belief = filt.initial(np.exp(-0.5 * np.sum(u * u, axis=1)))
     cam = HomographyCamera("cam_img", foot_homography=_homography(), variant="foot", sigma_px=2.0)
     weights = {}
     for s in cfg.sensors:
@@ -165,7 +170,7 @@ def _offline_grid(cfg, readings, ticks):
     states4[:, :2] = grid.centres
     means = []
     for k in ticks:
-        rows, quality = [], []
+        maps = []
         for t, sid, z in readings:
             if not (k - 1) / RATE < t <= k / RATE:
                 continue
@@ -176,12 +181,9 @@ def _offline_grid(cfg, readings, ticks):
                 ll = cam.log_likelihood(z, states4)
                 lik = normalize_likelihood(np.exp(ll - ll.max()))
                 q = (lik - lik.min()).max() / (lik - lik.min()).sum()
-            rows.append(lik)
-            quality.append(q)
-        mean, _ = tracker.step(
-            SensorLikelihoods(np.array(rows), np.array(quality), ("all",) * len(rows))
-        )
-        means.append(mean)
+            maps.append(Measurement(k / RATE, sid, lik, metadata={"quality": q}))
+        belief = filt.step(belief, 1 / RATE, maps)
+        means.append(belief.mean)
     return np.array(means)
 
 
@@ -201,6 +203,15 @@ def test_grid_tracker_fuses_detection_functions_and_image_positions():
     cov = np.array(states[-1].position_covariance)
     assert np.all(np.linalg.eigvalsh(cov) > 0) and np.sqrt(np.trace(cov)) < 2.0
     assert node.tracks_view()["tracks"][0]["position"] == states[-1].position
+
+
+def test_the_grid_filter_runs_in_the_one_engine():
+    """No engine of its own: the node's engine steps the grid filter like any other Filter."""
+    cfg = _network()
+    engine = build_engine(cfg, 0.0)
+    assert type(engine) is FusionEngine
+    assert isinstance(engine.filter, GridFilter) and isinstance(engine.filter, SteppingFilter)
+    assert isinstance(build_filter(_network("ekf", with_functions=False)), Filter)
 
 
 def test_each_grid_input_alone_tracks():

@@ -71,10 +71,8 @@ def _plots(duration, seed=0):
 
 def _offline(plots, ticks):
     """MCMCDA straight from the association module: the plots as positions, one step per tick."""
-    mc = MCMCDA(
-        MCMCDAConfig(dt=1 / RATE, window=8, n_mc=N_MC, p_detect=0.95, area=100 * 60.0),
-        rng=np.random.default_rng(0),
-    )
+    mc = MCMCDA(MCMCDAConfig(dt=1 / RATE, window=8, n_mc=N_MC, p_detect=0.95, area=100 * 60.0))
+    state, rng = mc.initial_state(), np.random.default_rng(0)
     out = []
     for k in ticks:
         y = [
@@ -85,8 +83,8 @@ def _offline(plots, ticks):
             for p in plots
             if (k - 1) / RATE < p.time <= k / RATE
         ]
-        mc.step(np.array(y).reshape(-1, 2))
-        out.append({i + 1: x for i, (x, _) in mc.current_tracks().items()})
+        state = mc.step(state, np.array(y).reshape(-1, 2), rng)
+        out.append({i + 1: x for i, (x, _) in mc.current_tracks(state).items()})
     return out
 
 
@@ -214,6 +212,7 @@ def test_forgetting_the_past_keeps_the_current_tracks_and_memory_flat():
     runs = []
     for forget in (False, True):
         mc = MCMCDA(MCMCDAConfig(dt=1 / RATE, window=6, n_mc=60, p_detect=0.95, area=6000.0))
+        state, rng = mc.initial_state(), np.random.default_rng(0)
         now = []
         for k in range(1, 41):
             y = [
@@ -224,10 +223,10 @@ def test_forgetting_the_past_keeps_the_current_tracks_and_memory_flat():
                 for p in plots
                 if (k - 1) / RATE < p.time <= k / RATE
             ]
-            mc.step(np.array(y).reshape(-1, 2))
+            state = mc.step(state, np.array(y).reshape(-1, 2), rng)
             if forget:
-                mc.forget_past()
-                assert sum(len(o) > 0 for o in mc.observations) <= 6 and not mc.committed
-            now.append({i: x.tolist() for i, (x, _) in mc.current_tracks().items()})
+                state = mc.forget_past(state)
+                assert len(state.observations) <= 6 and not state.committed
+            now.append({i: x.tolist() for i, (x, _) in mc.current_tracks(state).items()})
         runs.append(now)
     assert runs[0] == runs[1]

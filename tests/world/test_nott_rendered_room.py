@@ -6,8 +6,14 @@ import pytest
 from fusetrack.sensors import NferTagSimulator
 from fusetrack.sensors.camera_geometry import ground_homography, plane_homography
 from fusetrack.tools.video_tracker import TrackerConfig, VideoRadioTracker
-from fusetrack.world.rendered_room import Person, RoomRenderer
-from fusetrack.world.walks import WALL, behind_wall_walk, crossing_walks, single_person_walk
+from fusetrack.world.rendered_room import (
+    WALL,
+    Person,
+    RoomRenderer,
+    behind_wall_walk,
+    crossing_walks,
+    single_person_walk,
+)
 
 
 @pytest.fixture(scope="module")

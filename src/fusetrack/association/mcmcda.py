@@ -14,7 +14,7 @@ one per step, consecutive ones within the gate) and false alarms, and
 
 with z_t terminated, c_t continuing, a_t new, d_t detected, u_t = c_t + a_t - d_t undetected
 tracks and f_t = n_t - d_t false alarms. Since f_t = n_t - d_t, log P is a constant plus a sum
-of independent per-track scores (:meth:`MCMCDA.track_score`), which the sampler caches.
+of independent per-track scores (:meth:`HypothesisSampler.track_score`), which are memoised.
 
 Moves (Oh et al., Sec. IV): birth/death, split/merge, extension/reduction, track update and
 track switch, one of the eight chosen uniformly at every iteration. Growth (birth, extension,
@@ -29,14 +29,16 @@ paper's in details (e.g. a birth starts from a uniform free observation, not a u
 
 Online: a sliding window of ``window`` steps; each new step starts the chain from the previous
 best hypothesis (restricted to the window) and runs ``n_mc`` iterations; observations leaving the
-window are committed to their track, and track identities persist through the overlap.
+window are committed to their track, and track identities persist through the overlap. The
+tracker is pure: everything carried between steps is an :class:`AssociationState` value
+(``state = tracker.step(state, observations, rng)``).
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -45,7 +47,7 @@ from ..core.errors import ConfigError, invalid
 
 Obs = tuple[int, int]  # (time step, index of the observation at that step)
 TrackKey = tuple[Obs, ...]
-STOP: Obs = (-1, -1)  # end of a growth path (see MCMCDA._grow)
+STOP: Obs = (-1, -1)  # end of a growth path (see HypothesisSampler._grow)
 
 
 @dataclass(frozen=True)
@@ -86,45 +88,102 @@ def _cv_matrices(dt: float, q: float) -> tuple[NDArray[np.float64], NDArray[np.f
 
 
 @dataclass
-class MCMCDA:
-    """Online MCMCDA. Feed each step's observations with :meth:`step`; read :meth:`tracks`
-    (committed, at the end) or :meth:`current_tracks` (the current estimates, after each step)."""
+class MCMCDAStats:
+    """Diagnostic counters of the Metropolis-Hastings chain (not part of any result)."""
 
-    config: MCMCDAConfig = field(default_factory=MCMCDAConfig)
-    rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
-    observations: list[NDArray[np.float64]] = field(default_factory=list)
-    best: list[TrackKey] = field(default_factory=list)
-    ids: dict[TrackKey, int] = field(default_factory=dict)
-    committed: dict[int, dict[int, int]] = field(default_factory=dict)  # id -> {t: obs index}
     accepted: int = 0
     proposed: int = 0
-    _next_id: int = 0
-    _forgotten: int = 0  # observations before this step were freed (forget_past)
-    _cache: dict[TrackKey, float] = field(default_factory=dict)
-    _gate_cache: dict[tuple[Obs, Obs], bool] = field(default_factory=dict)
+
+
+@dataclass
+class _Memo:
+    """Scores and gate tests already computed for one observation history (pure functions of
+    it, kept only for speed). ``steps`` is the length of the history it belongs to: a state
+    that is not at the end of this history (an older state stepped again) starts a fresh memo."""
+
+    steps: int = 0
+    scores: dict[TrackKey, float] = field(default_factory=dict)
+    gates: dict[tuple[Obs, Obs], bool] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class AssociationState:
+    """Everything online MCMCDA carries from one step to the next.
+
+    ``observations[k]`` holds the ``(n, 2)`` observations of step ``offset + k`` (steps before
+    ``offset`` were forgotten, :meth:`MCMCDA.forget_past`); ``best`` the MAP hypothesis of the
+    window (tracks as tuples of ``(step, index)``); ``ids`` its track identities; ``committed``
+    id -> {step: observation index} for observations that have left the window.
+    """
+
+    observations: tuple[NDArray[np.float64], ...] = ()
+    offset: int = 0
+    best: tuple[TrackKey, ...] = ()
+    ids: Mapping[TrackKey, int] = field(default_factory=dict)
+    committed: Mapping[int, Mapping[int, int]] = field(default_factory=dict)
+    next_id: int = 0
+    memo: _Memo = field(default_factory=_Memo, repr=False)
+
+    @property
+    def steps(self) -> int:
+        """Number of steps seen so far (the next step's index)."""
+        return self.offset + len(self.observations)
+
+    def observation(self, o: Obs) -> NDArray[np.float64]:
+        return self.observations[o[0] - self.offset][o[1]]
+
+
+class HypothesisSampler:
+    """The Metropolis-Hastings chain over association hypotheses of a fixed set of observations
+    (Oh et al. 2009, Alg. 1; module docstring): the posterior score of a track, the eight moves
+    and the accept/reject step. ``observations[t]`` are the ``(n, 2)`` observations of step
+    ``offset + t``."""
+
+    def __init__(
+        self,
+        config: MCMCDAConfig,
+        observations: Sequence[NDArray[np.float64]],
+        rng: np.random.Generator,
+        *,
+        offset: int = 0,
+        stats: MCMCDAStats | None = None,
+        memo: _Memo | None = None,
+    ) -> None:
+        self.config = config
+        self.observations = [np.asarray(o, float).reshape(-1, 2) for o in observations]
+        self.offset = offset
+        self.rng = rng
+        self.stats = MCMCDAStats() if stats is None else stats
+        memo = _Memo() if memo is None else memo
+        self._cache = memo.scores
+        self._gate_cache = memo.gates
+
+    def _obs(self, o: Obs) -> NDArray[np.float64]:
+        return self.observations[o[0] - self.offset][o[1]]
 
     # ---- model -------------------------------------------------------------------------
-    def _gate(self, a: Obs, b: Obs) -> bool:
+    def gate(self, a: Obs, b: Obs) -> bool:
+        """Can observation ``b`` follow ``a`` on one track (within ``max_gap`` steps and reach)."""
         gap = b[0] - a[0]
         if gap < 1 or gap > self.config.max_gap:
             return False
-        d = self.observations[b[0]][b[1]] - self.observations[a[0]][a[1]]
+        d = self._obs(b) - self._obs(a)
         reach = self.config.max_speed * gap * self.config.dt + 2 * self.config.obs_std
         return bool(d @ d <= reach * reach)
 
-    def _kalman(self, track: TrackKey) -> tuple[float, list[tuple[int, NDArray[np.float64]]]]:
+    def kalman(self, track: TrackKey) -> tuple[float, list[tuple[int, NDArray[np.float64]]]]:
         """Innovation log-likelihood of a track and its filtered states at its observations."""
-        ll, states = self._kalman_full(track)
+        ll, states = self.kalman_full(track)
         return ll, [(t, x) for t, x, _ in states]
 
-    def _kalman_full(
+    def kalman_full(
         self, track: TrackKey
     ) -> tuple[float, list[tuple[int, NDArray[np.float64], NDArray[np.float64]]]]:
-        """:meth:`_kalman` with the filtered covariances too: ``(ll, [(t, x, P), ...])``."""
+        """:meth:`kalman` with the filtered covariances too: ``(ll, [(t, x, P), ...])``."""
         c = self.config
         f1, q1 = _cv_matrices(c.dt, c.accel_std)
         r = c.obs_std**2 * np.eye(2)
-        y0 = self.observations[track[0][0]][track[0][1]]
+        y0 = self._obs(track[0])
         x = np.array([y0[0], y0[1], 0.0, 0.0])
         p = np.diag([c.obs_std**2, c.obs_std**2, c.init_speed_std**2, c.init_speed_std**2])
         ll = 0.0
@@ -133,7 +192,7 @@ class MCMCDA:
             for _ in range(cur[0] - prev[0]):
                 x = f1 @ x
                 p = f1 @ p @ f1.T + q1
-            y = self.observations[cur[0]][cur[1]]
+            y = self._obs(cur)
             s = p[:2, :2] + r
             innov = y - x[:2]
             det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
@@ -160,15 +219,16 @@ class MCMCDA:
             score += np.log(c.p_terminate)
         score += n * np.log(c.p_detect) + (span - n) * np.log(1 - c.p_detect)
         score -= n * np.log(c.false_alarm_rate / c.area)
-        score += self._kalman(track)[0]
+        score += self.kalman(track)[0]
         self._cache[key] = float(score)
         return float(score)
 
     # ---- moves -------------------------------------------------------------------------
     def _free(self, used: set[Obs], t: int) -> list[Obs]:
-        if t < 0 or t >= len(self.observations):
+        k = t - self.offset
+        if k < 0 or k >= len(self.observations):
             return []
-        return [(t, j) for j in range(len(self.observations[t])) if (t, j) not in used]
+        return [(t, j) for j in range(len(self.observations[k])) if (t, j) not in used]
 
     def _candidates(
         self, end: Obs, used: set[Obs], t_lo: int, t_hi: int, forward: bool
@@ -186,7 +246,7 @@ class MCMCDA:
         key = (end, o) if forward else (o, end)
         hit = self._gate_cache.get(key)
         if hit is None:
-            hit = self._gate_cache[key] = self._gate(*key)
+            hit = self._gate_cache[key] = self.gate(*key)
         return hit
 
     def _grow(
@@ -257,7 +317,7 @@ class MCMCDA:
             if self._gated(a[p], b[q + 1], True) and self._gated(b[q], a[p + 1], True)
         ]
 
-    def _propose(
+    def propose(
         self, tracks: list[TrackKey], t_lo: int, t_hi: int
     ) -> tuple[list[TrackKey], float] | None:
         """One of the eight moves, chosen uniformly; returns (proposal, log q(back)/q(forth)).
@@ -348,7 +408,7 @@ class MCMCDA:
         out = [t for n, t in enumerate(tracks) if n not in (i, j)] + [na, nb]
         return out, np.log(len(options)) - np.log(len(self._switch_options(na, nb)))
 
-    def _total(self, tracks: Sequence[TrackKey], t_end: int) -> float:
+    def total(self, tracks: Sequence[TrackKey], t_end: int) -> float:
         return sum(self.track_score(t, t_end) for t in tracks)
 
     def mh_step(
@@ -359,129 +419,145 @@ class MCMCDA:
         Accepts with ``min(1, P(ω'|Y) q(ω|ω') / (P(ω|Y) q(ω'|ω)))`` (Oh et al. 2009, Alg. 1),
         so the chain's stationary law is ``P(ω | Y)``; ``score`` is ``log P(ω | Y)`` up to a constant.
         """
-        self.proposed += 1
-        move = self._propose(tracks, t_lo, t_hi)
+        self.stats.proposed += 1
+        move = self.propose(tracks, t_lo, t_hi)
         if move is None:
             return tracks, score
         proposal, log_ratio = move
-        new = self._total(proposal, t_hi)
+        new = self.total(proposal, t_hi)
         if np.log(self.rng.random() + 1e-300) < new - score + log_ratio:
-            self.accepted += 1
+            self.stats.accepted += 1
             return proposal, new
         return tracks, score
 
+
+@dataclass
+class MCMCDA:
+    """Online MCMCDA, pure: ``state = tracker.step(state, observations, rng)`` per step, from
+    ``tracker.initial_state()``; read :meth:`current_tracks` (the estimates now, after each step)
+    or, at the end, :meth:`tracks` of ``tracker.finish(state)`` (the committed tracks). The
+    tracker holds its configuration and diagnostic counters (``stats``) only."""
+
+    config: MCMCDAConfig = field(default_factory=MCMCDAConfig)
+    stats: MCMCDAStats = field(default_factory=MCMCDAStats)
+
+    def initial_state(self) -> AssociationState:
+        return AssociationState()
+
+    def sampler(
+        self, state: AssociationState, rng: np.random.Generator | None = None
+    ) -> HypothesisSampler:
+        """The chain over ``state``'s observations (sharing its memo and this tracker's stats)."""
+        return HypothesisSampler(
+            self.config,
+            state.observations,
+            np.random.default_rng(0) if rng is None else rng,
+            offset=state.offset,
+            stats=self.stats,
+            memo=state.memo,
+        )
+
     # ---- online loop -------------------------------------------------------------------
-    def step(self, observations: ArrayLike) -> None:
-        """Add one step's observations ``(n, 2)`` and update the MAP hypothesis of the window."""
+    def step(
+        self, state: AssociationState, observations: ArrayLike, rng: np.random.Generator
+    ) -> AssociationState:
+        """Add one step's observations ``(n, 2)``; the new state holds the window's MAP hypothesis."""
         y = np.asarray(observations, float).reshape(-1, 2)
         y = y[np.all(np.isfinite(y), axis=1)]
-        self.observations.append(y)
-        t_hi = len(self.observations) - 1
+        memo = state.memo if state.memo.steps == state.steps else _Memo()
+        memo.steps = state.steps + 1
+        new_obs = (*state.observations, y)
+        chain = HypothesisSampler(
+            self.config, new_obs, rng, offset=state.offset, stats=self.stats, memo=memo
+        )
+        t_hi = state.steps
         t_lo = max(0, t_hi - self.config.window + 1)
         # Observations at t_lo - 1 just left the window: commit them.
-        self._commit(t_lo - 1)
+        committed = _commit(state.committed, state.best, state.ids, lambda t: t == t_lo - 1)
+        ids = dict(state.ids)
         current = []
-        for tr in self.best:
+        for tr in state.best:
             kept = tuple(o for o in tr if o[0] >= t_lo)
             if len(kept) >= 2:
                 current.append(kept)
-                if tr in self.ids:
-                    self.ids.setdefault(kept, self.ids[tr])
-        current_score = self._total(current, t_hi)
+                if tr in ids:
+                    ids.setdefault(kept, ids[tr])
+        current_score = chain.total(current, t_hi)
         best, best_score = list(current), current_score
         for _ in range(self.config.n_mc):
-            current, current_score = self.mh_step(current, current_score, t_lo, t_hi)
+            current, current_score = chain.mh_step(current, current_score, t_lo, t_hi)
             if current_score > best_score:
                 best, best_score = list(current), current_score
-        self._assign_ids(best)
-        self.best = best
-        if len(self._cache) > 200_000:
-            self._cache.clear()
-            self._gate_cache.clear()
-
-    def _assign_ids(self, new: list[TrackKey]) -> None:
-        old = [(set(t), self.ids[t]) for t in self.best if t in self.ids]
-        old += [
-            (set(t), i)
-            for t, i in self.ids.items()
-            if t not in self.best and any(set(t) & set(n) for n in new)
-        ]
-        taken: set[int] = set()
-        for tr in sorted(new, key=len, reverse=True):
-            s = set(tr)
-            overlap = sorted(
-                ((len(s & o), i) for o, i in old if i not in taken and s & o), reverse=True
-            )
-            if overlap:
-                ident = overlap[0][1]
-            else:
-                ident = self._next_id
-                self._next_id += 1
-            taken.add(ident)
-            self.ids[tr] = ident
-        self.ids = {t: i for t, i in self.ids.items() if t in new}
-
-    def _commit(self, t: int) -> None:
-        if t < 0:
-            return
-        for tr in self.best:
-            for o in tr:
-                if o[0] == t and tr in self.ids:
-                    self.committed.setdefault(self.ids[tr], {})[t] = o[1]
+        ids, next_id = _assign_ids(state.best, ids, best, state.next_id)
+        if len(memo.scores) > 200_000:
+            memo.scores.clear()
+            memo.gates.clear()
+        return replace(
+            state,
+            observations=new_obs,
+            best=tuple(best),
+            ids=ids,
+            committed=committed,
+            next_id=next_id,
+            memo=memo,
+        )
 
     def current_tracks(
-        self, max_age: int | None = None
+        self, state: AssociationState, max_age: int | None = None
     ) -> dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]]:
         """The tracks of the current MAP hypothesis, now: id -> ``(x, P)``, the constant-velocity
         state ``[x, y, vx, vy]`` and covariance filtered through the track's observations in the
         window and predicted to the latest step. Tracks whose last observation is more than
-        ``max_age`` steps old (default ``max_gap``) are left out. Call after :meth:`step`."""
+        ``max_age`` steps old (default ``max_gap``) are left out."""
         c = self.config
-        now = len(self.observations) - 1
+        now = state.steps - 1
         age_limit = c.max_gap if max_age is None else max_age
         f1, q1 = _cv_matrices(c.dt, c.accel_std)
+        chain = self.sampler(state)
         out = {}
-        for tr in self.best:
-            ident = self.ids.get(tr)
+        for tr in state.best:
+            ident = state.ids.get(tr)
             if ident is None or now - tr[-1][0] > age_limit:
                 continue
-            _, states = self._kalman_full(tr)
+            _, states = chain.kalman_full(tr)
             t, x, p = states[-1]
             for _ in range(now - t):
                 x, p = f1 @ x, f1 @ p @ f1.T + q1
             out[ident] = (x, 0.5 * (p + p.T))
         return dict(sorted(out.items()))
 
-    def forget_past(self) -> None:
-        """Free what has left the window, for a tracker that runs indefinitely and reads
-        :meth:`current_tracks`: the observations before the window (their steps stay, empty)
-        and the committed associations (:meth:`tracks` then covers only later commits). The
-        current tracks are unchanged: the sampler only looks inside the window."""
-        t_lo = max(0, len(self.observations) - self.config.window)
-        empty = np.empty((0, 2))
-        for t in range(self._forgotten, t_lo):
-            self.observations[t] = empty
-        self._forgotten = max(self._forgotten, t_lo)
-        self.committed.clear()
+    def forget_past(self, state: AssociationState) -> AssociationState:
+        """Drop what has left the window, for a tracker that runs indefinitely and reads
+        :meth:`current_tracks`: the observations before the window and the committed
+        associations (:meth:`tracks` then covers only later commits). The current tracks are
+        unchanged: the sampler only looks inside the window."""
+        t_lo = max(0, state.steps - self.config.window)
+        drop = max(0, t_lo - state.offset)
+        return replace(
+            state,
+            observations=state.observations[drop:],
+            offset=state.offset + drop,
+            committed={},
+        )
 
-    def finish(self) -> None:
+    def finish(self, state: AssociationState) -> AssociationState:
         """Commit every observation still in the window (end of the data)."""
-        for tr in self.best:
-            for o in tr:
-                if tr in self.ids:
-                    self.committed.setdefault(self.ids[tr], {})[o[0]] = o[1]
-        self.best = []
+        committed = _commit(state.committed, state.best, state.ids, lambda t: True)
+        return replace(state, best=(), committed=committed)
 
-    def tracks(self) -> dict[int, tuple[NDArray[np.int64], NDArray[np.float64]]]:
+    def tracks(
+        self, state: AssociationState
+    ) -> dict[int, tuple[NDArray[np.int64], NDArray[np.float64]]]:
         """Committed tracks: id → (time steps, Kalman-filtered positions (n, 2)) from the first to
-        the last observation, predictions at missed steps. Call :meth:`finish` first at the end."""
+        the last observation, predictions at missed steps. :meth:`finish` the state first."""
+        chain = self.sampler(state)
+        f1, _ = _cv_matrices(self.config.dt, self.config.accel_std)
         out = {}
-        for ident, assoc in sorted(self.committed.items()):
+        for ident, assoc in sorted(state.committed.items()):
             if len(assoc) < 2:
                 continue
             key = tuple(sorted(assoc.items()))
-            _, states = self._kalman(key)
-            f1, _ = _cv_matrices(self.config.dt, self.config.accel_std)
+            _, states = chain.kalman(key)
             times, pos = [], []
             for (t0, x0), (t1, _) in zip(states, [*states[1:], (states[-1][0] + 1, None)]):
                 x = x0
@@ -491,3 +567,45 @@ class MCMCDA:
                     x = f1 @ x
             out[ident] = (np.array(times), np.array(pos))
         return out
+
+
+def _commit(
+    committed: Mapping[int, Mapping[int, int]],
+    best: Sequence[TrackKey],
+    ids: Mapping[TrackKey, int],
+    when: Callable[[int], bool],
+) -> dict[int, dict[int, int]]:
+    """``committed`` plus the observations of ``best``'s identified tracks at steps ``when``."""
+    out = {k: dict(v) for k, v in committed.items()}
+    for tr in best:
+        for o in tr:
+            if when(o[0]) and tr in ids:
+                out.setdefault(ids[tr], {})[o[0]] = o[1]
+    return out
+
+
+def _assign_ids(
+    previous: Sequence[TrackKey], ids: dict[TrackKey, int], new: list[TrackKey], next_id: int
+) -> tuple[dict[TrackKey, int], int]:
+    """Identities for the tracks of the new MAP hypothesis: each takes the identity of the old
+    track it shares most observations with (longest first), else a fresh one."""
+    old = [(set(t), ids[t]) for t in previous if t in ids]
+    old += [
+        (set(t), i)
+        for t, i in ids.items()
+        if t not in previous and any(set(t) & set(n) for n in new)
+    ]
+    taken: set[int] = set()
+    for tr in sorted(new, key=len, reverse=True):
+        s = set(tr)
+        overlap = sorted(
+            ((len(s & o), i) for o, i in old if i not in taken and s & o), reverse=True
+        )
+        if overlap:
+            ident = overlap[0][1]
+        else:
+            ident = next_id
+            next_id += 1
+        taken.add(ident)
+        ids[tr] = ident
+    return {t: i for t, i in ids.items() if t in new}, next_id

@@ -1,4 +1,4 @@
-"""Core values: beliefs, measurements, tracks, model interfaces, errors, angles, resampling."""
+"""Core values: beliefs, measurements, tracks, model interfaces, errors, angles, resampling, slice sampling."""
 
 from .angles import angle_diff, circular_mean, wrap_angle
 from .beliefs import Gaussian, GaussianMixture, GridBelief, Particles
@@ -26,6 +26,7 @@ from .models import (
     filter_step,
 )
 from .resampling import RESAMPLERS, get_resampler, multinomial, residual, stratified, systematic
+from .slice_sampling import SliceDraw, slice_sample
 from .track import Estimate, Track
 
 __all__ = [
@@ -47,6 +48,7 @@ __all__ = [
     "SensorMap",
     "SensorModel",
     "ShapeError",
+    "SliceDraw",
     "SteppingFilter",
     "Track",
     "UnknownExperimentError",
@@ -63,6 +65,7 @@ __all__ = [
     "multinomial",
     "order_by_time",
     "residual",
+    "slice_sample",
     "stack_values",
     "stratified",
     "systematic",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import numbers
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -13,14 +14,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import MeasurementError, invalid
 
+_VECTOR_TYPES = (np.ndarray, np.generic, numbers.Number, list, tuple)
+
 
 @dataclass(frozen=True, eq=False)
 class Measurement:
     """One sensor report.
 
     ``value`` has shape ``(m,)`` for one run, or ``(..., m)`` when the leading axes are batched
-    Monte Carlo runs (one report per run at the same time). ``covariance`` overrides the sensor's
-    own noise when given. ``metadata`` carries anything else (frame index, SNR, ...).
+    Monte Carlo runs (one report per run at the same time). A report that is not a vector (a
+    video frame's features, a detection list) is any other object, kept as given and read by
+    its sensor model. ``covariance`` overrides the sensor's own noise when given. ``metadata``
+    carries anything else (frame index, SNR, ...).
 
     >>> Measurement(0.5, "mic1", [0.3]).value
     array([0.3])
@@ -28,7 +33,7 @@ class Measurement:
 
     time: float
     sensor_id: str
-    value: NDArray[np.float64]
+    value: Any  # NDArray[np.float64] (m,) or (..., m), or a non-vector report (see above)
     covariance: NDArray[np.float64] | None = None
     metadata: Mapping[str, Any] = field(default_factory=dict)
 
@@ -44,6 +49,12 @@ class Measurement:
         object.__setattr__(self, "time", t)
         if not isinstance(self.sensor_id, str) or not self.sensor_id:
             raise MeasurementError(invalid("sensor_id", self.sensor_id, "a non-empty string"))
+        if not isinstance(self.value, _VECTOR_TYPES):
+            if self.covariance is not None:
+                raise MeasurementError(
+                    invalid("covariance", self.covariance, "None when the value is not a vector")
+                )
+            return
         v = np.atleast_1d(np.asarray(self.value, dtype=float))
         object.__setattr__(self, "value", v)
         if self.covariance is not None:
@@ -60,6 +71,8 @@ class Measurement:
     @property
     def is_finite(self) -> bool:
         """False when any entry of the value is NaN or infinite (such reports are skipped)."""
+        if not isinstance(self.value, np.ndarray):
+            return True  # a non-vector report: its sensor model judges it
         return bool(np.all(np.isfinite(self.value)))
 
 

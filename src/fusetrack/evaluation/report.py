@@ -19,6 +19,7 @@ import pandas as pd
 
 from ..core.errors import ConfigError, invalid
 from .montecarlo import ENGINES, RunFunction, run_monte_carlo
+from .options import ExperimentOptions
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,11 @@ class Claim:
 
 @dataclass
 class RunContext:
-    """Options of one ``fusetrack run``: the CLI builds it, the experiment reads it."""
+    """Options of one ``fusetrack run``: the CLI builds it, the experiment reads it.
+
+    ``extra`` holds the experiment's own options as given (``--set KEY=VALUE``, ``--config``,
+    ``--measurements``; the report repeats them); ``options`` the same validated against the
+    experiment's options model (:mod:`.options`), set by the registry before the run."""
 
     name: str
     out_dir: Path
@@ -50,6 +55,7 @@ class RunContext:
     workers: int | None = None
     progress: bool | None = None
     extra: dict[str, Any] = field(default_factory=dict)
+    options: ExperimentOptions | None = None
 
     def __post_init__(self) -> None:
         self.out_dir = Path(self.out_dir)

@@ -1,5 +1,19 @@
 """Reproduced experiments and the demo; ``REGISTRY`` names them (modules load only when run)."""
 
-from .registry import REGISTRY, ExperimentInfo, describe, run_experiment
+from .registry import (
+    REGISTRY,
+    ExperimentInfo,
+    describe,
+    options_model,
+    run_experiment,
+    validate_options,
+)
 
-__all__ = ["REGISTRY", "ExperimentInfo", "describe", "run_experiment"]
+__all__ = [
+    "REGISTRY",
+    "ExperimentInfo",
+    "describe",
+    "options_model",
+    "run_experiment",
+    "validate_options",
+]

@@ -7,94 +7,33 @@ view and not behind an occluder, and a radio tag reports a noisy position fix ev
 EKF, a UKF and a bootstrap particle filter fuse all of it; the posterior Cramér–Rao bound
 (Tichavský et al. 1998) over the same random trajectories and the same report pattern is the
 floor none of them can beat. The truth is drawn from the filters' own motion model and prior,
-so the bound is a real bound here, not an approximation.
+so the bound is a real bound here, not an approximation. The scene itself (world, sensors,
+reports) is :mod:`fusetrack.world.demo_scene`, which the live node's ``demo`` replay uses too.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from ..core import Filter, Gaussian, Measurement
+from ..core import Filter, Measurement
 from ..evaluation import plots, position_rmse_bound, posterior_crlb
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
 from ..filters.particle import BootstrapFilter
-from ..motion import CoordinatedTurnRate
-from ..sensors import Bearing, PositionFix
+from ..world.demo_scene import AREA, DemoScene, simulate_demo
 
-AREA = (0.0, 100.0, 0.0, 60.0)
+logger = logging.getLogger(__name__)
+
 POSITION = (0, 1)
 VELOCITY = (2, 3)
 
 
-@dataclass(frozen=True)
-class Scenario:
-    """Everything the demo's world and sensors are made of (SI units, radians)."""
-
-    dt: float = 0.5
-    duration: float = 60.0
-    q: float = 0.05  # acceleration noise PSD (m^2/s^3)
-    q_omega: float = 2e-4  # turn-rate noise PSD (rad^2/s^3)
-    prior_mean: tuple[float, ...] = (20.0, 20.0, 1.5, 0.8, 0.02)
-    prior_std: tuple[float, ...] = (2.0, 2.0, 0.5, 0.5, 0.02)
-    sigma_mic: float = np.deg2rad(3.0)
-    sigma_camera: float = np.deg2rad(0.5)
-    camera_fov: float = np.deg2rad(70.0)
-    occluded: tuple[tuple[float, float], ...] = ((18.0, 26.0), (40.0, 46.0))
-    tag_period: float = 2.0
-    tag_cov: tuple[tuple[float, float], tuple[float, float]] = ((4.0, 1.2), (1.2, 2.25))
-
-    @property
-    def times(self) -> np.ndarray:
-        return self.dt * np.arange(1, round(self.duration / self.dt) + 1)
-
-    def motion(self) -> CoordinatedTurnRate:
-        return CoordinatedTurnRate(q=self.q, q_omega=self.q_omega)
-
-    def prior(self) -> Gaussian:
-        return Gaussian(np.array(self.prior_mean), np.diag(np.square(self.prior_std)))
-
-    def sensors(self) -> dict[str, Any]:
-        return {
-            "mic_west": Bearing("mic_west", position=[0.0, 0.0], sigma=self.sigma_mic),
-            "mic_east": Bearing("mic_east", position=[100.0, 0.0], sigma=self.sigma_mic),
-            "camera": Bearing(
-                "camera",
-                position=[50.0, 62.0],
-                sigma=self.sigma_camera,
-                heading=-np.pi / 2,
-                fov=self.camera_fov,
-            ),
-            "tag": PositionFix("tag", cov=np.array(self.tag_cov)),
-        }
-
-
-def simulate(scn: Scenario, rng: np.random.Generator) -> tuple[np.ndarray, list[Measurement]]:
-    """A true trajectory ``(T + 1, 5)`` (row 0: the initial state at t = 0, drawn from the prior)
-    drawn from the motion model, and the reports of every sensor at ``scn.times``."""
-    motion, sensors = scn.motion(), scn.sensors()
-    x = scn.prior().sample(rng)
-    truth, reports = [x], []
-    for t in scn.times:
-        x = motion.sample(x, scn.dt, rng)
-        truth.append(x)
-        for sid, sensor in sensors.items():
-            if sid == "tag" and not np.isclose(t % scn.tag_period, 0.0):
-                continue
-            if sid == "camera" and any(a <= t < b for a, b in scn.occluded):
-                continue
-            z = sensor.simulate(x, rng)
-            if np.all(np.isfinite(z)):
-                reports.append(Measurement(float(t), sid, z))
-    return np.array(truth), reports
-
-
-def report_mask(scn: Scenario, truth: np.ndarray, reports: list[Measurement]) -> np.ndarray:
+def report_mask(scn: DemoScene, truth: np.ndarray, reports: list[Measurement]) -> np.ndarray:
     """``(T + 1, S)`` booleans: which sensor reported at which step (row 0, the prior's time: none)."""
     index = {t: k + 1 for k, t in enumerate(np.round(scn.times, 9))}
     names = list(scn.sensors())
@@ -106,9 +45,9 @@ def report_mask(scn: Scenario, truth: np.ndarray, reports: list[Measurement]) ->
 
 def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     """One Monte Carlo run: simulate, run the three filters, return one row per method and step."""
-    scn = Scenario()
+    scn = DemoScene()
     rng = np.random.default_rng(seed)
-    truth, reports = simulate(scn, rng)
+    truth, reports = simulate_demo(scn, rng)
     truth = truth[1:]
     motion, sensors, prior = scn.motion(), scn.sensors(), scn.prior()
     filters: dict[str, Filter[Any]] = {
@@ -143,7 +82,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
-def bounds(scn: Scenario, runs: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+def bounds(scn: DemoScene, runs: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """Position RMSE bounds per step over the same trajectories and report patterns as the runs.
 
     Returns the PCRB (information averaged over the runs, then inverted: a true bound on the
@@ -154,7 +93,7 @@ def bounds(scn: Scenario, runs: int, seed: int) -> tuple[np.ndarray, np.ndarray]
 
     truths, masks = [], []
     for r in range(runs):
-        truth, reports = simulate(scn, np.random.default_rng(run_seed(seed, r)))
+        truth, reports = simulate_demo(scn, np.random.default_rng(run_seed(seed, r)))
         truths.append(truth)
         masks.append(report_mask(scn, truth, reports))
     args = (scn.motion(), list(scn.sensors().values()), np.array(truths), scn.dt, scn.prior().cov)
@@ -165,8 +104,11 @@ def bounds(scn: Scenario, runs: int, seed: int) -> tuple[np.ndarray, np.ndarray]
     return pcrb, per_run_rms
 
 
+METHODS = ["EKF", "UKF", "PF"]
+
+
 def run(ctx: RunContext) -> Outcome:
-    scn = Scenario()
+    scn = DemoScene()
     runs = ctx.n_runs(full=100, quick=8)
     n_particles = 1000 if ctx.quick else 4000
     df = ctx.monte_carlo(run_once, [{"n_particles": n_particles}], runs)
@@ -177,9 +119,30 @@ def run(ctx: RunContext) -> Outcome:
     vel = df.groupby(["method", "step"])["sq_vel_err"].mean().pow(0.5).unstack("method")
     avg = rmse.mean()
     bound_avg = float(pcrb.mean())
-    factor = 3.0 if ctx.quick else 2.0
+    claims = _claims(avg, bound_avg, ctx.quick)
+    figs = _figures(ctx, scn, df, rmse, pcrb, per_run_bound, runs)
+    table = pd.DataFrame(
+        {
+            "position RMSE (m)": avg,
+            "velocity RMSE (m/s)": vel.mean(),
+            "RMSE / PCRB": avg / bound_avg,
+        }
+    ).loc[METHODS]
+    logger.info(
+        "\nTime-averaged over %d runs (PCRB position bound %.3f m):\n%s",
+        runs,
+        bound_avg,
+        table.to_string(float_format=lambda v: f"{v:.3f}"),
+    )
+    body = _report_text(scn, runs, n_particles, table, figs, rmse, pcrb, per_run_bound)
+    return Outcome(df, claims, body, runs)
+
+
+def _claims(avg: pd.Series, bound_avg: float, quick: bool) -> list[Claim]:
+    """Every filter above the PCRB and within a factor of it; the PF not worse than the EKF."""
+    factor = 3.0 if quick else 2.0
     claims = []
-    for method in ["EKF", "UKF", "PF"]:
+    for method in METHODS:
         claims.append(
             Claim(
                 f"{method.lower()}_above_bound",
@@ -200,7 +163,7 @@ def run(ctx: RunContext) -> Outcome:
                 avg[method] <= factor * bound_avg,
             )
         )
-    tol = 0.15 if ctx.quick else 0.05
+    tol = 0.15 if quick else 0.05
     claims.append(
         Claim(
             "pf_not_worse_than_ekf",
@@ -211,13 +174,24 @@ def run(ctx: RunContext) -> Outcome:
             avg["PF"] <= (1 + tol) * avg["EKF"],
         )
     )
+    return claims
 
-    times = scn.times
+
+def _figures(
+    ctx: RunContext,
+    scn: DemoScene,
+    df: pd.DataFrame,
+    rmse: pd.DataFrame,
+    pcrb: np.ndarray,
+    per_run_bound: np.ndarray,
+    runs: int,
+) -> dict[str, Any]:
+    """RMSE against time with the bounds; run 0's truth and estimates."""
     fig_rmse = plots.plot_series(
         ctx.figure_path("rmse_vs_time"),
-        times,
+        scn.times,
         {
-            **{m: rmse[m].to_numpy() for m in ["EKF", "UKF", "PF"]},
+            **{m: rmse[m].to_numpy() for m in METHODS},
             "PCRB": pcrb,
             "per-trajectory bound (RMS)": per_run_bound,
         },
@@ -228,33 +202,40 @@ def run(ctx: RunContext) -> Outcome:
     )
     run0 = df[df["run"] == 0]
     truth0 = run0[run0["method"] == "EKF"][["true_x", "true_y"]].to_numpy()
-    sensors = scn.sensors()
     fig_traj = plots.plot_trajectories(
         ctx.figure_path("trajectory"),
         truth0,
-        {m: run0[run0["method"] == m][["x", "y"]].to_numpy() for m in ["EKF", "UKF", "PF"]},
+        {m: run0[run0["method"] == m][["x", "y"]].to_numpy() for m in METHODS},
         sensors=[
             (sid, s.position)
-            for sid, s in sensors.items()
+            for sid, s in scn.sensors().items()
             if hasattr(s, "sensor_id") and sid != "tag"
         ],
         area=(AREA[0] - 5, AREA[1] + 5, AREA[2] - 5, AREA[3] + 5),
         title="Run 0: truth and estimates",
     )
-    table = pd.DataFrame(
-        {
-            "position RMSE (m)": avg,
-            "velocity RMSE (m/s)": vel.mean(),
-            "RMSE / PCRB": avg / bound_avg,
-        }
-    ).loc[["EKF", "UKF", "PF"]]
-    print(f"\nTime-averaged over {runs} runs (PCRB position bound {bound_avg:.3f} m):")
-    print(table.to_string(float_format=lambda v: f"{v:.3f}"))
-    hidden = np.array([any(a <= t < b for a, b in scn.occluded) for t in times])
+    return {"rmse": fig_rmse, "trajectory": fig_traj}
+
+
+def _report_text(
+    scn: DemoScene,
+    runs: int,
+    n_particles: int,
+    table: pd.DataFrame,
+    figs: dict[str, Any],
+    rmse: pd.DataFrame,
+    pcrb: np.ndarray,
+    per_run_bound: np.ndarray,
+) -> str:
+    """The report's set-up, results and discussion."""
+    sensors = scn.sensors()
+    fig_rmse, fig_traj = figs["rmse"], figs["trajectory"]
+    avg = rmse.mean()
+    hidden = np.array([any(a <= t < b for a, b in scn.occluded) for t in scn.times])
     ratio_seen = rmse.loc[~hidden].mean() / pcrb[~hidden].mean()
     ratio_hidden = rmse.loc[hidden].mean() / pcrb[hidden].mean()
     pf_vs_ekf = float(avg["PF"] / avg["EKF"])
-    body = f"""
+    return f"""
 ## Set-up
 
 A target moves for {scn.duration:.0f} s (step {scn.dt} s) under the coordinated-turn model with the
@@ -297,7 +278,6 @@ information its run's reports carry: with three bearings and tag fixes the poste
 to Gaussian, so the EKF is near-optimal and the particle filter's advantage, if any, is within
 Monte Carlo error.
 """
-    return Outcome(df, claims, body, runs)
 
 
 def _where(sensor: Any) -> str:

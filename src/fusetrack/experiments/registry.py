@@ -1,7 +1,10 @@
 """The experiment registry and the one way every experiment is run (DESIGN.md contract).
 
 An experiment is a module with ``run(ctx: RunContext) -> Outcome``. The registry maps a name to
-``module:function`` so that ``fusetrack list`` does not import every experiment.
+``module:function`` so that ``fusetrack list`` does not import every experiment. The experiment's
+options are a pydantic model in the same module, named by :class:`ExperimentInfo` (``None``: it
+takes no options, and checking that needs no import); :func:`run_experiment` validates
+``ctx.extra`` against it before any work and hands the experiment ``ctx.options``.
 """
 
 from __future__ import annotations
@@ -11,7 +14,8 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from ..core.errors import UnknownExperimentError
+from ..core.errors import ConfigError, UnknownExperimentError
+from ..evaluation.options import ExperimentOptions, parse_options
 from ..evaluation.report import Outcome, RunContext, peak_memory_mb, write_outputs
 
 
@@ -21,6 +25,7 @@ class ExperimentInfo:
     target: str  # "module:function", relative to fusetrack.experiments
     title: str
     paper: str
+    options: str | None = None  # its options model (a class in the target module), if any
 
 
 REGISTRY: dict[str, ExperimentInfo] = {
@@ -86,6 +91,7 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "lee2009.projected_planes:run",
             "Lee 2009 Ch. 2: 3-D acoustic tracking on projected planes (PPS) vs direct 3-D, with CRLB",
             "Lee 2009 (seed 000)",
+            options="Options",
         ),
         ExperimentInfo(
             "nott2009-simulation",
@@ -173,12 +179,14 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "ercan2013.selection:run",
             "Ercan 2013 E6 (Figs. 11-12): greedy, brute-force and heuristic camera selection in the L-shaped room",
             "Ercan, El Gamal, Guibas 2013 (seed 002)",
+            options="Options",
         ),
         ExperimentInfo(
             "ercan2013-lab",
             "ercan2013.lab:run",
             "Ercan 2013 E7-E8 (Figs. 13-15): lab replica, fixed subsets vs prior accuracy and selection methods",
             "Ercan, El Gamal, Guibas 2013 (seed 002)",
+            options="Options",
         ),
         ExperimentInfo(
             "kushwaha2010-mcmcda",
@@ -248,6 +256,7 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "features (ML fundamentals, Gibbs + slice-sampling MAP) against number, SNR, separation, "
             "harmonicity and directivity, with energy-based localisation",
             "Kushwaha 2010 Ch. IV (seed 003)",
+            options="Options",
         ),
         ExperimentInfo(
             "kushwaha2010-cameras-a",
@@ -266,6 +275,7 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "lee2009.camera_triggering:run_sweep",
             "Lee 2009 E3.2 (Fig. 3-6): periodic camera cooperation, error against the camera period, 1,000 trials",
             "Lee 2009 (seed 000)",
+            options="SweepOptions",
         ),
     ]
 }
@@ -280,11 +290,36 @@ def describe(name: str) -> ExperimentInfo:
         ) from None
 
 
+def _module(info: ExperimentInfo) -> Any:
+    return importlib.import_module(f"{__package__}.{info.target.split(':')[0]}")
+
+
+def options_model(name: str) -> type[ExperimentOptions]:
+    """The pydantic model of experiment ``name``'s options (imports its module if it has one)."""
+    info = describe(name)
+    if info.options is None:
+        return ExperimentOptions
+    model = getattr(_module(info), info.options, None)
+    if not (isinstance(model, type) and issubclass(model, ExperimentOptions)):
+        raise TypeError(f"{info.target}: {info.options} is not an ExperimentOptions model")
+    return model
+
+
+def validate_options(name: str, raw: dict[str, Any]) -> ExperimentOptions:
+    """``--set``/``--config`` values of experiment ``name`` validated against its options model;
+    an unknown key or a bad value raises :class:`ConfigError` naming the valid keys or values."""
+    try:
+        return parse_options(options_model(name), raw)
+    except ConfigError as err:
+        raise ConfigError(f"{name}: {err}") from None
+
+
 def run_experiment(ctx: RunContext) -> dict[str, Any]:
-    """Run the experiment ``ctx.name`` and write its three output files; return the summary."""
+    """Validate the options of the experiment ``ctx.name`` (before any work), run it and write
+    its three output files; return the summary."""
     info = describe(ctx.name)
-    module_name, func_name = info.target.split(":")
-    fn = getattr(importlib.import_module(f"{__package__}.{module_name}"), func_name)
+    ctx.options = validate_options(ctx.name, ctx.extra)
+    fn = getattr(_module(info), info.target.split(":")[1])
     start = time.perf_counter()
     outcome: Outcome = fn(ctx)
     if not outcome.title:

@@ -3,8 +3,8 @@ Sec. 3.3.4, Algorithm 2 / Table 4, Fig 14).
 
 Every active sensor runs its own SP-PEKF bank (:class:`~fusetrack.filters.sp_pekf.SPPEKFBank`) on
 its own measurement (its DOA); the fusion centre moment-matches the banks' Gaussians with the
-sensor weights ``W_k`` (received-intensity shares, passed per step as ``aux``; equal weights when
-``aux`` is None), ``x_all = sum W_k x_k``, ``R_all = sum W_k [R_k + (x_k - x_all)(.)^T]`` (the
+sensor weights ``W_k`` (received-intensity shares, a side input of each step; equal weights when
+absent), ``x_all = sum W_k x_k``, ``R_all = sum W_k [R_k + (x_k - x_all)(.)^T]`` (the
 thesis writes the mixture as if it were this Gaussian; spec choice 24), draws the particles from
 ``N(x_all, R_all)`` and weights them with the product of all active sensors' likelihoods (Eq. 13).
 After resampling, the estimate is sent back and every active bank is re-partitioned at it.
@@ -104,8 +104,11 @@ def step_translated(
     ]
 
 
-@dataclass
+@dataclass(frozen=True)
 class CPFSPState:
+    """The fusion centre's state, kept in the belief: each active sensor's bank, and the last
+    particle mean and covariance (where a newly active sensor's bank starts)."""
+
     banks: dict[int, BankState] = field(default_factory=dict)
     mean: Array | None = None
     cov: Array | None = None
@@ -113,7 +116,9 @@ class CPFSPState:
 
 @dataclass
 class CPFSPProposal:
-    """Fusion-centre proposal of CPF-SP (Algorithm 2). ``aux`` per step: weights ``(K,)``."""
+    """Fusion-centre proposal of CPF-SP (Algorithm 2). The sensor weights ``W_k`` ``(K,)``
+    arrive each step as a measurement from ``weights_id`` (a side input: the received-intensity
+    shares; equal weights when it is absent)."""
 
     n_channels: int = 10
     feedback_cov: str = (
@@ -121,6 +126,11 @@ class CPFSPProposal:
     )
     repartition: str = "residual"  # "residual" (as printed) or "nominal" (see SPPEKFBank.feedback)
     batch_sensors: bool = True  # one batched bank step for translated sensor copies (same numbers)
+    weights_id: str = "sensor-weights"
+
+    @property
+    def side_inputs(self) -> tuple[str, ...]:
+        return (self.weights_id,)
 
     def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> CPFSPState:
         return CPFSPState({}, np.asarray(prior.mean, float), np.asarray(prior.cov, float))
@@ -135,7 +145,8 @@ class CPFSPProposal:
         ]
         if not active:
             return filt.motion.sample(prev, dt, rng), None, CPFSPState({}, state.mean, state.cov)
-        weights = np.ones(len(zs)) if filt.aux is None else np.asarray(filt.aux, float)
+        given = filt.side.get(self.weights_id)
+        weights = np.ones(len(zs)) if given is None else np.asarray(given, float)
         states = []
         for k in active:
             bs = state.banks.get(k)

@@ -20,13 +20,16 @@ The baseline without quality or prior is the Chair-Varshney rule (Eq. 4.3).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.errors import ConfigError, ShapeError, check_probability, invalid
+from ..core.measurement import Measurement
 from ..sensors.camera_geometry import apply_homography
+from ..sensors.ground_plane_detection import GroundPlaneDetection
 
 Array = np.ndarray
 
@@ -145,52 +148,139 @@ class FrameDecision:
     local: list[Array | None]  # per camera: recovered/corrected image position, or None
 
 
-@dataclass
-class DetectionFusion:
-    """Per-frame quality-weighted fusion over cameras with homographies (Lee 2009, Sec. 4.3).
+@dataclass(frozen=True, eq=False)
+class FusionBelief:
+    """What :class:`DetectionFusion` carries from frame to frame.
 
-    ``sigma2`` is the ``sigma^2`` of Eqs. 4.20 and 4.23 (ground units squared). The state starts
-    at the first frame with detections (fused position, zero velocity, ``P1 = 0.5``); frames
-    without any detection or decided false coast on the prediction.
+    ``state`` is ``[g_x, g_vx, g_y, g_vy]`` (None before the first frame with detections);
+    ``anchor`` the ground position of the frame before the last prediction (the fused velocity
+    is ``g - anchor``); ``decision`` the last frame's :class:`FrameDecision`. ``mean`` is the
+    ground position; ``cov`` the ``sigma^2 I`` of the presence kernel (Eq. 4.23), the only
+    spread the method models.
     """
 
-    homographies: list[Array]
+    state: Array | None = None
+    anchor: Array | None = None
+    decision: FrameDecision | None = None
+    sigma2: float = 1.0
+
+    @property
+    def mean(self) -> Array:
+        if self.state is None:
+            return np.full(2, np.nan)
+        return np.array([self.state[0], self.state[2]])
+
+    @property
+    def cov(self) -> Array:
+        return self.sigma2 * np.eye(2)
+
+
+def frame_measurements(
+    time: float, detections: Sequence[ArrayLike | None], camera_ids: Sequence[str]
+) -> list[Measurement]:
+    """One frame's detections as measurements: camera ``j``'s image position ``(u, v)`` from
+    sensor ``camera_ids[j]``; a camera that detected nothing (None) sends none."""
+    if len(detections) != len(camera_ids):
+        raise ShapeError(
+            invalid("detections", len(detections), f"{len(camera_ids)} entries (one per camera)")
+        )
+    return [
+        Measurement(time, cid, np.asarray(d, float))
+        for cid, d in zip(camera_ids, detections)
+        if d is not None
+    ]
+
+
+@dataclass(frozen=True)
+class DetectionFusion:
+    """Per-frame quality-weighted fusion over cameras with homographies (Lee 2009, Sec. 4.3), a
+    :class:`~fusetrack.core.models.Filter` over :class:`FusionBelief`.
+
+    ``predict`` moves the state by ``dt`` frames (Eq. 4.19); ``update`` takes the frame's image
+    detections (``Measurement`` from sensor ``camera_ids[j]``, value ``(u, v)``; a camera without
+    a measurement did not detect) and decides. ``sigma2`` is the ``sigma^2`` of Eqs. 4.20 and
+    4.23 (ground units squared). The state starts at the first frame with detections (fused
+    position, zero velocity, ``P1 = 0.5``); frames without any detection or decided false coast
+    on the prediction. Call ``update`` every frame, also with no measurement: that no camera
+    detected is evidence (every camera in ``E0``).
+    """
+
+    homographies: Sequence[Array]
     p_miss: float = 0.2
     p_false: float = 0.2
     sigma2: float = 1.0
     quality_term: str = "logW"
     use_prior: bool = True
     use_quality: bool = True
-    state: Array | None = None
+    camera_ids: tuple[str, ...] = ()
 
-    def reset(self) -> None:
-        self.state = None
+    def __post_init__(self) -> None:
+        if not self.camera_ids:
+            ids = tuple(f"camera{j}" for j in range(len(self.homographies)))
+            object.__setattr__(self, "camera_ids", ids)
+        if len(self.camera_ids) != len(self.homographies):
+            raise ConfigError(
+                invalid("camera_ids", self.camera_ids, f"{len(self.homographies)} ids")
+            )
 
-    def predicted(self) -> Array | None:
-        if self.state is None:
-            return None
-        gx, vx, gy, vy = self.state
-        return np.array([gx + vx, gy + vy])  # Lee 2009, Eq. 4.19 with T = 1 frame
+    @property
+    def sensors(self) -> list[GroundPlaneDetection]:
+        """Each camera as a sensor model: its homography and the quality kernel (Eq. 4.20)."""
+        return [
+            GroundPlaneDetection(cid, np.asarray(h, float), self.sigma2)
+            for cid, h in zip(self.camera_ids, self.homographies)
+        ]
 
-    def step(self, detections: list[ArrayLike | None]) -> FrameDecision:
-        """Fuse one frame: ``detections[j]`` is camera j's image position or None (no detection)."""
+    def initial_belief(self) -> FusionBelief:
+        return FusionBelief(sigma2=self.sigma2)
+
+    def predict(
+        self, belief: FusionBelief, dt: float = 1.0, rng: np.random.Generator | None = None
+    ) -> FusionBelief:
+        """Constant velocity over ``dt`` frames (Lee 2009, Eq. 4.19)."""
+        if belief.state is None:
+            return belief
+        gx, vx, gy, vy = belief.state
+        state = np.array([gx + vx * dt, vx, gy + vy * dt, vy])
+        return replace(belief, state=state, anchor=np.array([gx, gy]))
+
+    def update(
+        self,
+        belief: FusionBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> FusionBelief:
+        """Fuse one frame's detections (module docstring, steps 2-6)."""
+        detections: list[Array | None] = [None] * len(self.camera_ids)
+        for m in measurements:
+            if m.sensor_id not in self.camera_ids:
+                raise ShapeError(invalid("sensor_id", m.sensor_id, f"one of {self.camera_ids}"))
+            detections[self.camera_ids.index(m.sensor_id)] = m.value
+        decision = self.decide(belief, detections)
+        if decision.real:
+            g = decision.fused
+            prev = belief.anchor if belief.anchor is not None else belief.mean
+            vx, vy = (0.0, 0.0) if belief.state is None else (g[0] - prev[0], g[1] - prev[1])
+            state = np.array([g[0], vx, g[1], vy])
+            decision = replace(decision, state=state.copy())
+            return replace(belief, state=state, anchor=None, decision=decision)
+        return replace(belief, anchor=None, decision=decision)
+
+    def decide(self, belief: FusionBelief, detections: Sequence[ArrayLike | None]) -> FrameDecision:
+        """The decision for one frame, ``detections[j]`` camera j's image position or None;
+        ``belief`` holds the predicted state (``FrameDecision.state`` is the coasted state; on
+        ``G1`` :meth:`update` replaces it with the fused one)."""
         n_cam = len(self.homographies)
-        if len(detections) != n_cam:
-            raise ShapeError(
-                invalid("detections", len(detections), f"{n_cam} entries (one per camera)")
-            )
         det = np.array([d is not None for d in detections])
-        g_pred = self.predicted()
+        g_pred = None if belief.state is None else belief.mean
+        coast = np.full(4, np.nan) if belief.state is None else belief.state.copy()
         if not det.any():
-            state = self._coast(g_pred)
             return FrameDecision(
-                False, -math.inf, 0.0, np.full(2, np.nan), np.zeros(n_cam), state, [None] * n_cam
+                False, -math.inf, 0.0, np.full(2, np.nan), np.zeros(n_cam), coast, [None] * n_cam
             )
+        cams = self.sensors
         g_cams = np.array(
-            [
-                to_ground(h, d) if d is not None else (np.nan, np.nan)
-                for h, d in zip(self.homographies, detections)
-            ],
+            [c.ground(d) if d is not None else (np.nan, np.nan) for c, d in zip(cams, detections)],
             dtype=float,
         )
         if not np.all(np.isfinite(g_cams[det])):
@@ -202,7 +292,9 @@ class DetectionFusion:
             g = g_cams[det].mean(axis=0)
             p1 = 0.5
         else:
-            w = np.where(det, quality(np.nan_to_num(g_cams), g_pred, self.sigma2), 0.0)
+            w = np.array(
+                [c.quality(d, g_pred) if d is not None else 0.0 for c, d in zip(cams, detections)]
+            )
             g = fused_position(g_cams[det], w[det]) if self.use_quality else g_cams[det].mean(0)
             p1 = float(presence_prior(g, g_pred, self.sigma2)) if self.use_prior else 0.5
         p1 = min(max(p1, 1e-300), 1.0 - 1e-16)
@@ -220,16 +312,6 @@ class DetectionFusion:
         else:
             y = chair_varshney(p1, det, self.p_miss, self.p_false)
         if y > 0:
-            prev = self.state
-            vx, vy = (0.0, 0.0) if prev is None else (g[0] - prev[0], g[1] - prev[2])
-            self.state = np.array([g[0], vx, g[1], vy])
             local: list[Array | None] = [to_image(h, g) for h in self.homographies]
-            return FrameDecision(True, y, p1, g, w, self.state.copy(), local)
-        state = self._coast(g_pred)
-        return FrameDecision(False, y, p1, g, w, state, [None] * n_cam)
-
-    def _coast(self, g_pred: Array | None) -> Array:
-        if self.state is None or g_pred is None:
-            return np.full(4, np.nan)
-        self.state = np.array([g_pred[0], self.state[1], g_pred[1], self.state[3]])
-        return self.state.copy()
+            return FrameDecision(True, y, p1, g, w, coast, local)
+        return FrameDecision(False, y, p1, g, w, coast, [None] * n_cam)

@@ -3,102 +3,117 @@
 The grid SBE of Kushwaha 2010 evaluates each sensor's detection function on 2800 cells. Here the
 same detection functions weight particles in a continuous state [x, y, vx, vy]: a particle's
 weight is the product over sensors (Kushwaha 2010, Eq. 30) of the sensor's normalised detection
-function at the particle's bearing, ``λ̃_k(θ_k(x))`` — the piecewise-linear beams of an acoustic
-node (Eq. 34) or the Gaussian mixture of a camera (Eq. 35), a neutral constant outside a camera's
-field of view. Motion is any :mod:`fusetrack.motion` model (constant velocity by default) instead
-of the grid's shift-and-box; resampling is systematic every step.
+function at the particle's bearing -- :class:`~fusetrack.sensors.bearing_detection.DetectionFunctionSensor`,
+the piecewise-linear beams of an acoustic node (Eq. 34) or the Gaussian mixture of a camera
+(Eq. 35). Motion is any :mod:`fusetrack.motion` model (constant velocity by default) instead of
+the grid's shift-and-box; resampling is systematic every step.
+
+The filter is pure: the belief is a :class:`~fusetrack.core.beliefs.Particles` whose weights are
+those of the last update (``info["resample"]``: resample before the next prediction, which is
+where the systematic draw happens). A step whose weights all vanish keeps the predicted particles
+with equal weights and is counted in ``stats.degenerate_steps``. The particle loop stays private
+(not the shared engine) so that the published runs' random draws are unchanged.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..core.beliefs import Particles
+from ..core.errors import MeasurementError, invalid
+from ..core.measurement import Measurement
 from ..core.models import MotionModel
 from ..core.resampling import systematic
-from ..sensors.detection_function import AngularSampling, interpolate
+from ..sensors.bearing_detection import DetectionFunctionSensor
+
+Array = NDArray[np.float64]
 
 
-@dataclass(frozen=True)
-class BearingDetection:
-    """One sensor's report at a step: its pose and a detection function over its own bearings.
+@dataclass
+class DetectionPFStats:
+    """Diagnostic counters (not part of the belief)."""
 
-    Either ``sampling``/``values`` (beams, interpolated) or ``mixture`` = (weights, means, sigmas)
-    for a camera with field of view ``fov`` (bearings outside it get the neutral value)."""
+    degenerate_steps: int = 0
 
-    position: tuple[float, float]
-    heading: float
-    sampling: AngularSampling | None = None
-    values: NDArray[np.float64] | None = None
-    mixture: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None = None
-    fov: float = 2 * np.pi
-    floor: float = 1e-3
 
-    def likelihood(self, xy: ArrayLike) -> NDArray[np.float64]:
-        p = np.asarray(xy, float)
-        theta = (
-            np.arctan2(p[..., 1] - self.position[1], p[..., 0] - self.position[0]) - self.heading
-        )
-        theta = np.mod(theta + np.pi, 2 * np.pi) - np.pi
-        if self.mixture is not None:
-            a, mu, sd = self.mixture
-            z = (theta[..., None] - mu) / sd
-            dens = (a * np.exp(-0.5 * z * z) / (np.sqrt(2 * np.pi) * sd)).sum(-1)
-            neutral = 1.0 / self.fov
-            dens = np.where(np.abs(theta) <= self.fov / 2, dens, neutral)
-            return dens + self.floor * neutral
-        assert self.sampling is not None and self.values is not None
-        v = np.asarray(self.values, float)
-        v = v - v.min()
-        total = v.sum()
-        if not total > 0:
-            return np.ones(theta.shape)
-        density = v / (total * self.sampling.step)  # a density over the sensor's bearings
-        return interpolate(self.sampling, density, theta) + self.floor / (2 * np.pi)
+def _normalised(log_w: Array) -> tuple[Array, float, float]:
+    """Weights ``w / sum w``, ``max log w`` and ``sum exp(log w - max)``."""
+    m = float(log_w.max())
+    w = np.exp(log_w - m)
+    total = float(w.sum())
+    return w / total, m, total
 
 
 @dataclass
 class DetectionParticleFilter:
-    """Bootstrap particle filter whose likelihood is a product of :class:`BearingDetection` s."""
+    """Bootstrap particle filter weighting by the detection functions of ``sensors`` (by id)."""
 
     motion: MotionModel
+    sensors: Mapping[str, DetectionFunctionSensor]
     n_particles: int = 2000
-    particles: NDArray[np.float64] | None = None
-    log_evidence: list[float] = field(default_factory=list)
-    degenerate_steps: int = 0
+    stats: DetectionPFStats = field(default_factory=DetectionPFStats)
 
-    def initialize(
+    def initial_belief(
         self, positions: ArrayLike, velocity_std: float, rng: np.random.Generator
-    ) -> None:
+    ) -> Particles:
         """Particles at ``positions (N, 2)`` (e.g. drawn from a grid prior) with N(0, σ²) velocities."""
         pos = np.asarray(positions, float).reshape(-1, 2)
         vel = rng.normal(0.0, velocity_std, pos.shape)
-        self.particles = np.concatenate([pos, vel], axis=1)
+        return Particles.uniform(np.concatenate([pos, vel], axis=1))
 
-    def step(
-        self, dt: float, detections: Sequence[BearingDetection], rng: np.random.Generator
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Predict by ``dt``, weight by the detections, resample; returns the position mean and covariance."""
-        if self.particles is None:
-            raise RuntimeError("call initialize() first")
-        x = self.motion.sample(self.particles, dt, rng)
-        logw = np.zeros(x.shape[0])
-        for det in detections:
-            logw += np.log(np.maximum(det.likelihood(x[:, :2]), 1e-300))
-        m = logw.max()
-        w = np.exp(logw - m)
-        total = w.sum()
+    def predict(
+        self, belief: Particles, dt: float, rng: np.random.Generator | None = None
+    ) -> Particles:
+        """Resample the last update's weights (systematic), then move every particle by ``dt``."""
+        gen = np.random.default_rng() if rng is None else rng
+        x = belief.states
+        if belief.info.get("resample"):
+            w, _, _ = _normalised(belief.log_weights)
+            x = x[systematic(w, gen)]
+        return Particles.uniform(self.motion.sample(x, dt, gen))
+
+    def update(
+        self,
+        belief: Particles,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> Particles:
+        """Weight by the product of the reporting sensors' detection functions (Eq. 30)."""
+        return self.update_with_likelihood(belief, measurements, rng)[0]
+
+    def update_with_likelihood(
+        self,
+        belief: Particles,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> tuple[Particles, Array]:
+        """:meth:`update` and ``log p(z_k | z_1:k-1)`` (the mean weight; NaN if degenerate)."""
+        x = belief.states
+        log_w = np.zeros(x.shape[0])
+        for m in measurements:
+            sensor = self.sensors.get(m.sensor_id)
+            if sensor is None:
+                raise MeasurementError(
+                    invalid("sensor_id", m.sensor_id, f"one of {sorted(self.sensors)}")
+                )
+            log_w += sensor.log_likelihood(m.value, x)
+        m_ = log_w.max()
+        total = np.exp(log_w - m_).sum()
         if not np.isfinite(total) or total <= 0:
-            self.degenerate_steps += 1
-            w = np.full(x.shape[0], 1.0 / x.shape[0])
-        else:
-            self.log_evidence.append(float(m + np.log(total / x.shape[0])))
-            w = w / total
-        mean = w @ x[:, :2]
-        r = x[:, :2] - mean
-        cov = (r * w[:, None]).T @ r
-        self.particles = x[systematic(w, rng)]
-        return mean, cov
+            self.stats.degenerate_steps += 1
+            return Particles(x, np.zeros(x.shape[0]), {"resample": True}), np.array(np.nan)
+        log_evidence = float(m_ + np.log(total / x.shape[0]))
+        return Particles(x, log_w, {"resample": True}), np.array(log_evidence)
+
+
+def position_estimate(belief: Particles) -> tuple[Array, Array]:
+    """Weighted mean and covariance of the position ``(x, y)`` of a (weighted) particle belief."""
+    x = belief.states
+    w, _, _ = _normalised(belief.log_weights)
+    mean = w @ x[:, :2]
+    r = x[:, :2] - mean
+    return mean, (r * w[:, None]).T @ r

@@ -10,15 +10,19 @@ grid by v followed by a convolution with a uniform box, and a likelihood fused f
 sensors by product (Eq. 30) or by quality-weighted sum (Eq. 31), either over all sensors at once
 (*centralized*) or per modality cluster whose posteriors are then combined (*hybrid*, Eqs. 36–37).
 
-Probabilities are kept as plain arrays normalised to 1 each step (no log domain is needed: every
-likelihood is floored, see :func:`fusetrack.sensors.detection_function.normalize_likelihood`).
-:meth:`GridSpec.belief` converts to :class:`fusetrack.core.GridBelief` for the rest of the library.
+:class:`GridFilter` is the pure filter: its belief, :class:`DirectionalGridBelief`, is a
+:class:`fusetrack.core.GridBelief` that also carries the motion model's velocity estimate; its
+measurements are likelihood maps read by
+:class:`~fusetrack.sensors.likelihood_map.LikelihoodMapSensor`. Inside a step the probabilities
+are plain arrays normalised to 1 (every likelihood is floored, see
+:func:`fusetrack.sensors.detection_function.normalize_likelihood`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -27,7 +31,9 @@ from scipy.ndimage import shift as nd_shift
 from scipy.ndimage import uniform_filter1d
 
 from ..core.beliefs import GridBelief
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core.errors import ConfigError, ShapeError, UnknownSensorError, invalid
+from ..core.measurement import Measurement
+from ..sensors.likelihood_map import LikelihoodMapSensor
 
 Fusion = Literal["product", "sum"]
 Architecture = Literal["centralized", "hybrid"]
@@ -55,19 +61,19 @@ class GridSpec:
     def size(self) -> int:
         return self.shape[0] * self.shape[1]
 
-    @property
+    @cached_property
     def x(self) -> NDArray[np.float64]:
-        return np.asarray(self.x0 + self.cell * (np.arange(self.shape[0]) + 0.5), dtype=np.float64)
+        return _frozen(self.x0 + self.cell * (np.arange(self.shape[0]) + 0.5))
 
-    @property
+    @cached_property
     def y(self) -> NDArray[np.float64]:
-        return np.asarray(self.y0 + self.cell * (np.arange(self.shape[1]) + 0.5), dtype=np.float64)
+        return _frozen(self.y0 + self.cell * (np.arange(self.shape[1]) + 0.5))
 
-    @property
+    @cached_property
     def centres(self) -> NDArray[np.float64]:
         """Cell centres ``(size, 2)`` in C order of ``shape`` (x index slow, y index fast)."""
         xx, yy = np.meshgrid(self.x, self.y, indexing="ij")
-        return np.stack([xx.ravel(), yy.ravel()], axis=1)
+        return _frozen(np.stack([xx.ravel(), yy.ravel()], axis=1))
 
     def contains(self, xy: ArrayLike) -> NDArray[np.bool_]:
         p = np.asarray(xy, float)
@@ -81,18 +87,12 @@ class GridSpec:
     def uniform(self) -> NDArray[np.float64]:
         return np.full(self.size, 1.0 / self.size)
 
-    def belief(self, prob: ArrayLike) -> GridBelief:
-        p = np.asarray(prob, float).reshape(self.shape)
-        with np.errstate(divide="ignore"):
-            return GridBelief((self.x, self.y), np.log(p))
 
-    def mean_cov(self, prob: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Posterior mean and covariance Σ p_i (c_i - x̂)(c_i - x̂)^T (spec 003 §2.5 step 4)."""
-        p = np.asarray(prob, float).ravel()
-        c = self.centres
-        m = p @ c
-        r = c - m
-        return m, (r * p[:, None]).T @ r
+def _frozen(a: ArrayLike) -> NDArray[np.float64]:
+    """A read-only float array (cached geometry is shared by every caller)."""
+    out = np.array(a, dtype=np.float64)
+    out.flags.writeable = False
+    return out
 
 
 @dataclass(frozen=True)
@@ -152,22 +152,24 @@ def fuse(likelihoods: ArrayLike, quality: ArrayLike, rule: Fusion) -> NDArray[np
 
 @dataclass(frozen=True)
 class SensorLikelihoods:
-    """The per-cell likelihoods of one fusion step: ``values (K, n)``, ``quality (K,)`` and the
-    modality (cluster) of each sensor (``"audio"``/``"video"``)."""
+    """The per-cell likelihoods of one fusion step: ``values (K, n)``, ``quality (K,)``, the
+    modality (cluster) of each sensor (``"audio"``/``"video"``) and, when known, the sensor ids."""
 
     values: NDArray[np.float64]
     quality: NDArray[np.float64]
     modality: tuple[str, ...]
+    sensor_ids: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         v = np.atleast_2d(np.asarray(self.values, float))
         q = np.asarray(self.quality, float).ravel()
-        if not (v.shape[0] == q.size == len(self.modality)):
+        ids_ok = not self.sensor_ids or len(self.sensor_ids) == q.size
+        if not (v.shape[0] == q.size == len(self.modality)) or not ids_ok:
             raise ShapeError(
                 invalid(
-                    "values/quality/modality",
-                    (v.shape, q.size, len(self.modality)),
-                    "one row, quality and modality per sensor",
+                    "values/quality/modality/sensor_ids",
+                    (v.shape, q.size, len(self.modality), len(self.sensor_ids)),
+                    "one row, quality and modality (and id, if any) per sensor",
                 )
             )
         object.__setattr__(self, "values", v)
@@ -179,7 +181,21 @@ class SensorLikelihoods:
             self.values[keep].reshape(-1, self.values.shape[-1]),
             self.quality[keep],
             tuple(m for m in self.modality if m in modalities),
+            tuple(s for s, k in zip(self.sensor_ids, keep) if k),
         )
+
+    def measurements(
+        self, time: float, modalities: Sequence[str] | None = None
+    ) -> list[Measurement]:
+        """One likelihood-map :class:`~fusetrack.core.Measurement` per row (of ``modalities``,
+        default all), its quality in ``metadata["quality"]``, for :class:`GridFilter` (the id is
+        the modality when unknown)."""
+        ids = self.sensor_ids or self.modality
+        return [
+            Measurement(time, sid, row, metadata={"quality": float(q)})
+            for sid, row, q, m in zip(ids, self.values, self.quality, self.modality)
+            if modalities is None or m in modalities
+        ]
 
 
 def sbe_update(
@@ -230,59 +246,190 @@ def _normalise(p: NDArray[np.float64], fallback: NDArray[np.float64]) -> NDArray
     return p / total
 
 
-@dataclass
-class GridTracker:
-    """The SBE tracker: motion prediction with a velocity from smoothed posterior-mean
-    displacements (spec 003 §2.5, [C]: v ← 0.5 v + 0.5 (x̂_t - x̂_{t-1}); δ doubled at the first
-    prediction) and one :func:`sbe_update` per fusion step. ``estimates`` and ``covariances``
-    collect the posterior mean and covariance (the paper reports det Σ as uncertainty)."""
+@dataclass(frozen=True, eq=False)
+class DirectionalGridBelief(GridBelief):
+    """A grid posterior and what the directional motion model carries from step to step:
+    ``velocity`` (m/s, from smoothed posterior-mean displacements), ``last_estimate`` (the mean
+    of the latest posterior; None before the first update), ``updates`` (posteriors so far) and
+    ``elapsed`` (seconds predicted since the latest posterior).
+
+    ``linear`` keeps the probabilities per cell (flat, C order, summing to 1) exactly as the
+    filter computed them (``log_prob`` is their log), and ``centres`` the cell centres ``(n, 2)``:
+    ``prob``, ``mean`` and ``cov`` read them directly (no round trip through the log, no meshgrid).
+    """
+
+    velocity: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
+    last_estimate: NDArray[np.float64] | None = None
+    updates: int = 0
+    elapsed: float = 0.0
+    linear: NDArray[np.float64] | None = field(default=None, repr=False)
+    centres: NDArray[np.float64] | None = field(default=None, repr=False)
+
+    @property
+    def prob(self) -> NDArray[np.float64]:
+        if self.linear is None:
+            return super().prob
+        return self.linear.reshape(self.log_prob.shape)
+
+    def _flat(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        c = self.points.reshape(-1, self.dim) if self.centres is None else self.centres
+        return self.prob.ravel(), c
+
+    @property
+    def mean(self) -> NDArray[np.float64]:
+        """Σ p_i c_i."""
+        p, c = self._flat()
+        return np.asarray(p @ c, dtype=np.float64)
+
+    @property
+    def cov(self) -> NDArray[np.float64]:
+        """Σ p_i (c_i - x̂)(c_i - x̂)^T (spec 003 §2.5 step 4: the paper reports det Σ)."""
+        p, c = self._flat()
+        r = c - p @ c
+        return np.asarray((r * p[:, None]).T @ r, dtype=np.float64)
+
+
+@dataclass(frozen=True, eq=False)
+class GridFilter:
+    """Grid SBE as a pure :class:`~fusetrack.core.Filter` (Kushwaha 2010, Eq. 28).
+
+    ``predict`` shifts the grid by the belief's velocity × dt and spreads it by the directional
+    box (Eq. 29; δ = ``first_delta`` for the first two predictions, spec 003 §2.5 [C]).
+    ``update`` multiplies by the fused likelihood maps of the measurements (Eqs. 30/31, hybrid
+    Eqs. 36–37, :func:`sbe_update`); each measurement's value is a likelihood map interpreted by
+    its sensor in ``sensors`` (:class:`~fusetrack.sensors.likelihood_map.LikelihoodMapSensor`,
+    which also names its modality), its quality q_k is ``metadata["quality"]`` (default 1). An
+    update then re-estimates the velocity: v ← 0.5 v + 0.5 (x̂_t − x̂_{t−1}) / dt (the first
+    displacement as is), clipped at ``max_speed`` (spec 003 §2.5 [C]). An update without
+    measurements keeps the predicted density (a coasting step) and still re-estimates the
+    velocity, so :meth:`step` always updates.
+    """
 
     grid: GridSpec
-    fusion: Fusion
+    sensors: Mapping[str, LikelihoodMapSensor]
+    fusion: Fusion = "product"
     architecture: Architecture = "centralized"
     motion: DirectionalMotion = field(default_factory=DirectionalMotion)
     first_delta: float = 3.0
-    max_step: float = 5.0  # |v| per step is clipped here (20 m/s at 4 Hz)
+    max_speed: float = 20.0  # m/s (5 m per step at 4 Hz)
     hybrid_alpha: float = 0.5
     hybrid_divide_prior: bool = False
-    prob: NDArray[np.float64] | None = None
-    velocity: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
-    estimates: list[NDArray[np.float64]] = field(default_factory=list)
-    covariances: list[NDArray[np.float64]] = field(default_factory=list)
 
-    def initialize(self, prior: ArrayLike) -> None:
-        """Start from a given prior (Kushwaha 2010: from the audio detections at track start)."""
-        p = np.asarray(prior, float).ravel()
-        if p.shape != (self.grid.size,) or not p.sum() > 0:
-            raise ShapeError(invalid("prior", p.shape, f"({self.grid.size},) with positive mass"))
-        self.prob = p / p.sum()
-
-    def step(self, lik: SensorLikelihoods) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        if self.prob is None:
-            predicted = self.grid.uniform()
-        else:
-            first = len(self.estimates) < 2
-            predicted = self.motion.predict(
-                self.grid, self.prob, self.velocity, self.first_delta if first else None
+    def __post_init__(self) -> None:
+        if self.fusion not in ("product", "sum"):
+            raise ConfigError(invalid("fusion", self.fusion, "'product' or 'sum'"))
+        if self.architecture not in ("centralized", "hybrid"):
+            raise ConfigError(
+                invalid("architecture", self.architecture, "'centralized' or 'hybrid'")
             )
-        self.prob = sbe_update(
-            predicted,
-            lik,
+
+    def initial(self, prior: ArrayLike | None = None) -> DirectionalGridBelief:
+        """The belief before any step: ``prior`` per cell (normalised; default uniform)
+        (Kushwaha 2010: from the audio detections at track start)."""
+        if prior is None:
+            p = self.grid.uniform()
+        else:
+            p = np.asarray(prior, float).ravel()
+            if p.shape != (self.grid.size,) or not p.sum() > 0:
+                raise ShapeError(
+                    invalid("prior", p.shape, f"({self.grid.size},) with positive mass")
+                )
+            p = p / p.sum()
+        return self._belief(p)
+
+    def predict(
+        self, belief: DirectionalGridBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> DirectionalGridBelief:
+        delta = self.first_delta if belief.updates < 2 else None
+        p = self.motion.predict(self.grid, belief.prob, belief.velocity * dt, delta)
+        return self._belief(
+            p, belief.velocity, belief.last_estimate, belief.updates, belief.elapsed + dt
+        )
+
+    def update(
+        self,
+        belief: DirectionalGridBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> DirectionalGridBelief:
+        post = sbe_update(
+            belief.prob.ravel(),
+            self.likelihoods(measurements),
             self.fusion,
             self.architecture,
             self.hybrid_alpha,
             self.hybrid_divide_prior,
         )
-        mean, cov = self.grid.mean_cov(self.prob)
-        if self.estimates:
-            step = mean - self.estimates[-1]
-            v = step if len(self.estimates) == 1 else 0.5 * self.velocity + 0.5 * step
-            speed = float(np.hypot(*v))
-            self.velocity = v if speed <= self.max_step else v * (self.max_step / speed)
-        self.estimates.append(mean)
-        self.covariances.append(cov)
-        return mean, cov
+        mean = post @ self.grid.centres  # the posterior mean, as DirectionalGridBelief.mean
+        return self._belief(post, self._velocity(belief, mean), mean, belief.updates + 1, 0.0)
 
-    def coast(self) -> None:
-        """A step with no measurement at all: predict only."""
-        self.step(SensorLikelihoods(np.empty((0, self.grid.size)), np.empty(0), ()))
+    def step(
+        self,
+        belief: DirectionalGridBelief,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> DirectionalGridBelief:
+        """Predict by ``dt`` (when > 0), then update, also without measurements."""
+        predicted = self.predict(belief, dt) if dt > 0 else belief
+        return self.update(predicted, measurements)
+
+    def likelihoods(self, measurements: Sequence[Measurement]) -> SensorLikelihoods:
+        """The measurements' likelihood maps, qualities and modalities, in their order."""
+        rows, quality, modality = [], [], []
+        for m in measurements:
+            sensor = self.sensors.get(m.sensor_id)
+            if sensor is None:
+                raise UnknownSensorError(
+                    invalid("sensor_id", m.sensor_id, f"one of {sorted(self.sensors)}")
+                )
+            rows.append(sensor.cell_likelihood(m.value))
+            quality.append(float(m.metadata.get("quality", 1.0)))
+            modality.append(sensor.modality)
+        return SensorLikelihoods(
+            np.array(rows).reshape(-1, self.grid.size), np.array(quality), tuple(modality)
+        )
+
+    def _velocity(
+        self, belief: DirectionalGridBelief, mean: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        if belief.last_estimate is None or not belief.elapsed > 0:
+            return belief.velocity
+        step = (mean - belief.last_estimate) / belief.elapsed
+        v = step if belief.updates == 1 else 0.5 * belief.velocity + 0.5 * step
+        speed = float(np.hypot(*v))
+        return v if speed <= self.max_speed else v * (self.max_speed / speed)
+
+    def _belief(
+        self,
+        prob: NDArray[np.float64],
+        velocity: NDArray[np.float64] | None = None,
+        last_estimate: NDArray[np.float64] | None = None,
+        updates: int = 0,
+        elapsed: float = 0.0,
+    ) -> DirectionalGridBelief:
+        prob.flags.writeable = False  # the belief is a value: its arrays are never changed
+        with np.errstate(divide="ignore"):
+            log_prob = np.log(prob).reshape(self.grid.shape)
+        return DirectionalGridBelief(
+            (self.grid.x, self.grid.y),
+            log_prob,
+            np.zeros(2) if velocity is None else velocity,
+            last_estimate,
+            updates,
+            elapsed,
+            prob,
+            self.grid.centres,
+        )
+
+
+def map_sensors(
+    grid: GridSpec, sensor_ids: Sequence[str], modality: Callable[[str], str] | None = None
+) -> dict[str, LikelihoodMapSensor]:
+    """One :class:`LikelihoodMapSensor` per id on ``grid`` (``modality(id)``, default "all")."""
+    return {
+        sid: LikelihoodMapSensor(
+            sid, (grid.x, grid.y), "all" if modality is None else modality(sid)
+        )
+        for sid in sensor_ids
+    }

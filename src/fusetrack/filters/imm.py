@@ -210,12 +210,6 @@ class InteractingMultipleModel:
         probs = np.where(bad, belief.probs, np.exp(log_mu - np.where(bad, 0.0, norm)))
         return IMMBelief(np.stack(means, axis=-2), np.stack(covs, axis=-3), probs)
 
-    def step(
-        self, belief: IMMBelief, measurements: Sequence[Measurement] | Measurement, dt: float
-    ) -> IMMBelief:
-        """:meth:`predict` then :meth:`update`."""
-        return self.update(self.predict(belief, dt), measurements)
-
     def filter_stats(self) -> dict[str, Any]:
         """The IMM's own counters plus the sums of its model filters'."""
         out = self.stats.as_dict()

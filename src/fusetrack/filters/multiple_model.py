@@ -21,8 +21,7 @@ the set; spec choice 22).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
-from types import SimpleNamespace
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -30,10 +29,19 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, invalid
+from ..core.measurement import Measurement  # noqa: F401  (doctest)
 from ..core.models import MotionModel, SensorModel
-from ..core.resampling import get_resampler
+from ..motion.switching import MarkovSwitching
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
-from .sis import Array, LogLikelihood, SISStats, Zs, resample_log_weights
+from .sis import (
+    Array,
+    LogLikelihood,
+    ProposalContext,
+    ProposalParticleFilter,
+    SISBelief,
+    Zs,
+    check_generator,
+)
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
 
 IntArray = NDArray[np.intp]
@@ -125,17 +133,164 @@ class PaddedModel:
         )
 
 
-@dataclass(frozen=True)
-class MMState:
-    particles: Array  # (..., N, d)
-    modes: IntArray  # (..., N)
-    estimate: Array  # (..., d)
-    model_probs: Array  # (..., M) regime shares after resampling
-    banks: tuple[BankState | None, ...] = ()
+@dataclass(frozen=True, eq=False)
+class RegimeState:
+    """The per-particle part of a regime-switching belief: ``modes`` ``(..., N)`` (the regime
+    of each particle, resampled with it) and the SP-PEKF bank state of each regime (MMPF-SP)."""
+
+    modes: IntArray
+    n_models: int
+    banks: tuple[BankState | Gaussian | None, ...] = ()
+
+    @property
+    def model_probs(self) -> Array:
+        """Regime shares of the (equally weighted) particles, ``(..., M)`` (Fig 28)."""
+        m = self.n_models
+        return np.asarray((self.modes[..., None] == np.arange(m)).mean(axis=-2), dtype=np.float64)
 
 
-class MultipleModelParticleFilter:
-    """Jump-Markov particle filter: MM-bootstrap (``proposal="prior"``) or MMPF-SP (``"sp-pekf"``).
+@dataclass(frozen=True, eq=False)
+class RegimeSwitchingProposal:
+    """Jump-Markov proposal (Zhai 2007, Algorithms 3, 4, 7): each particle draws its regime from
+    its row of ``transition`` (Eq. 47), then its state from that regime's proposal:
+
+    ``"prior"``
+        the regime's motion model (MM-bootstrap, Sec. 3.4.4);
+    ``"sp-pekf"``
+        the moment-matched Gaussian of an SP-PEKF bank run under that regime (MMPF-SP, Eq. 54;
+        weight ``p(x | x_{t-1}, r) / q(x | r)``, Eq. 53);
+    ``"cells"``
+        the regime's discretisation cells with the marginal weight (Algorithm 7).
+
+    ``motion`` is the switching motion (:class:`~fusetrack.motion.MarkovSwitching`: a state
+    draw given each particle's regime); ``transition`` the checked matrix the regimes are drawn
+    from (the switching motion's copy is renormalised, which could move a draw by a rounding).
+    It returns the weight ratio (``returns_log_ratio``): the filter adds the likelihood (Eq. 48).
+    Regimes follow their particles through resampling (:meth:`reindex`); after it bank ``r`` is
+    re-partitioned at the mean of the particles in regime ``r`` (or the overall mean when there
+    are none; MISSING in the thesis, spec choice).
+    """
+
+    motion: MarkovSwitching
+    transition: Array
+    kind: Literal["prior", "sp-pekf", "cells"] = "prior"
+    n_channels: int = 10
+    initial_probs: Array | None = None
+    cell_proposal: DiscretisationProposal = field(default_factory=DiscretisationProposal)
+
+    returns_log_ratio = True
+
+    @property
+    def models(self) -> tuple[MotionModel, ...]:
+        return self.motion.models
+
+    def _banks(self, ctx: ProposalContext) -> list[SPPEKFBank]:
+        return [SPPEKFBank(m, ctx.sensors, self.n_channels, stats=ctx.stats) for m in self.models]
+
+    def initialize(
+        self, prior: Gaussian, particles: Array, rng: np.random.Generator
+    ) -> RegimeState:
+        """Regimes from ``initial_probs``, then each regime's bank from the prior."""
+        batch = particles.shape[:-2]
+        p0 = self.initial_probs if self.initial_probs is not None else np.ones(1)
+        modes = sample_regimes(
+            np.zeros(particles.shape[:-1], dtype=np.intp), np.tile(p0, (1, 1)), rng
+        )
+        banks: tuple[BankState | Gaussian | None, ...] = ()
+        if self.kind == "sp-pekf":
+            banks = tuple(
+                SPPEKFBank(m, [], self.n_channels).initialize(prior, rng, batch)
+                for m in self.models
+            )
+        return RegimeState(modes, len(self.models), banks)
+
+    def draw(
+        self,
+        state: RegimeState,
+        prev: Array,
+        zs: Zs,
+        dt: float,
+        rng: np.random.Generator,
+        filt: ProposalContext,
+    ) -> tuple[Array, Array, RegimeState]:
+        modes = sample_regimes(state.modes, self.transition, rng)  # Eq. 47
+        if self.kind == "prior":  # the switching motion (MM-bootstrap, Sec. 3.4.4)
+            x = self.motion.sample(prev, dt, rng, modes)
+            # 0 where the previous particle's likelihood is finite (NaN, i.e. no weight,
+            # elsewhere: as this filter always computed it)
+            log_r = LogLikelihood(filt.sensors, zs)(prev) * 0.0
+            return x, log_r, RegimeState(modes, len(self.models), state.banks)
+        x = np.empty_like(prev)
+        log_r = np.zeros(prev.shape[:-1])  # every particle's entry is set below
+        banks = list(state.banks)
+        steppers = self._banks(filt) if self.kind == "sp-pekf" else []
+        for r, model in enumerate(self.models):
+            sel = modes == r
+            if self.kind == "cells":
+                if np.any(sel):
+                    x[sel], log_r[sel] = self._from_cells(
+                        r, prev, state.modes, int(sel.sum()), zs, dt, rng, filt
+                    )
+                continue
+            bs = steppers[r].step(banks[r], zs, dt, rng)  # type: ignore[arg-type]  # Eq. 54
+            banks[r] = bs
+            draw, log_q = gaussian_draw(bs.mean, bs.total_cov, prev.shape[-2], rng)
+            x = np.where(sel[..., None], draw, x)
+            lt = np.asarray(model.log_density(draw, prev, dt))
+            log_r = np.where(sel, lt - log_q, log_r)  # Eq. 53 (likelihood added by the filter)
+        return x, log_r, RegimeState(modes, len(self.models), tuple(banks))
+
+    def _from_cells(
+        self,
+        r: int,
+        prev: Array,
+        prev_modes: IntArray,
+        n_r: int,
+        zs: Zs,
+        dt: float,
+        rng: np.random.Generator,
+        filt: ProposalContext,
+    ) -> tuple[Array, Array]:
+        """Discretisation MMPF (Algorithm 7): ``n_r`` particles from regime r's cells (Eq. 84),
+        with log weight ``log p̂(p, r) - log q(p, r)``."""
+        if prev.ndim != 2:
+            raise ConfigError(invalid("batch_shape", prev.shape[:-2], "() for proposal='cells'"))
+        model = self.models[r]
+        view = ProposalContext(model, filt.sensors, filt.stats)
+        centre, w, delta = self.cell_proposal.cells(prev, zs, dt, view)
+        pos = list(model.position_index)  # type: ignore[attr-defined]
+        p, log_q = sample_cells(centre[:, pos], w, delta, n_r, rng)
+        log_a = np.log(np.maximum(self.transition[prev_modes, r], 1e-300))
+        x, log_pred = complete_from_ancestors(p, prev, model, dt, rng, log_a)
+        n = prev.shape[0]
+        return x, log_pred - (log_q + np.log(n_r / n))
+
+    def reindex(self, state: RegimeState, ancestors: IntArray) -> RegimeState:
+        """The regimes follow their particles through resampling."""
+        modes = np.take_along_axis(state.modes, ancestors, axis=-1)
+        return RegimeState(modes, state.n_models, state.banks)
+
+    def feedback(
+        self, state: RegimeState, particles: Array, estimate: Array, filt: ProposalContext
+    ) -> RegimeState:
+        if self.kind != "sp-pekf":
+            return state
+        fed = list(state.banks)
+        for r, bank in enumerate(self._banks(filt)):
+            sel = (state.modes == r)[..., None]
+            cnt = sel.sum(axis=-2)
+            sub = np.where(cnt > 0, (particles * sel).sum(axis=-2) / np.maximum(cnt, 1), estimate)
+            fed[r] = bank.feedback(fed[r], sub)  # type: ignore[arg-type]
+        return RegimeState(state.modes, state.n_models, tuple(fed))
+
+
+class MultipleModelParticleFilter(ProposalParticleFilter):
+    """Jump-Markov particle filter: the one SIS engine (:class:`ProposalParticleFilter`) with a
+    :class:`RegimeSwitchingProposal` — MM-bootstrap (``proposal="prior"``), MMPF-SP
+    (``"sp-pekf"``) or the discretisation MMPF (``"cells"``). The belief is a
+    :class:`~fusetrack.filters.sis.SISBelief` whose ``proposal`` is a :class:`RegimeState`
+    (``modes``, ``model_probs``, banks). ``predict`` draws regimes (Eq. 47) and states from each
+    regime's motion model; followed by ``update`` it is the MM-bootstrap step.
 
     >>> from fusetrack.motion import ConstantVelocity
     >>> from fusetrack.motion.maneuver import ManeuverTurn
@@ -145,8 +300,8 @@ class MultipleModelParticleFilter:
     >>> mm = MultipleModelParticleFilter(models, pi, [Bearing("b", [0, 0], 0.05)], 500)
     >>> rng = np.random.default_rng(0)
     >>> s = mm.initialize(Gaussian(np.array([10.0, 30, 1, 0]), np.diag([1, 1, 0.1, 0.1])), rng)
-    >>> s = mm.step(s, [np.array([1.25])], 1.0, rng)
-    >>> s.model_probs.shape
+    >>> s = mm.step(s, 1.0, [Measurement(1.0, "b", [1.25])], rng)
+    >>> s.proposal.model_probs.shape
     (3,)
     """
 
@@ -162,138 +317,39 @@ class MultipleModelParticleFilter:
         resampler: str = "systematic",
         initial_probs: ArrayLike | None = None,
     ) -> None:
-        self.models = list(models)
-        if not self.models:
+        models = list(models)
+        if not models:
             raise ConfigError(invalid("models", models, "at least one motion model"))
-        dims = {m.dim for m in self.models}
+        dims = {m.dim for m in models}
         if len(dims) != 1:
             raise ConfigError(invalid("models", sorted(dims), "models sharing one state dimension"))
-        self.transition = check_transition(transition, len(self.models))
-        self.sensors: list[SensorModel] = (
-            [sensors] if hasattr(sensors, "sensor_id") else list(sensors)  # type: ignore[list-item]
-        )
-        if isinstance(n_particles, bool) or int(n_particles) != n_particles or n_particles < 1:
-            raise ConfigError(invalid("n_particles", n_particles, "an integer >= 1"))
-        self.n_particles = int(n_particles)
         if proposal not in ("prior", "sp-pekf", "cells"):
             raise ConfigError(invalid("proposal", proposal, "'prior', 'sp-pekf' or 'cells'"))
-        self.cell_proposal = DiscretisationProposal()
-        self.proposal = proposal
-        self.resample = get_resampler(resampler)
-        self.initial_probs = check_initial_probs(initial_probs, len(self.models))
-        self.stats = SISStats()
-        self.banks = (
-            [SPPEKFBank(mod, self.sensors, n_channels, stats=self.stats) for mod in self.models]
-            if proposal == "sp-pekf"
-            else []
+        p = check_transition(transition, len(models))
+        switching = RegimeSwitchingProposal(
+            MarkovSwitching(tuple(models), p),
+            p,
+            proposal,
+            n_channels,
+            check_initial_probs(initial_probs, len(models)),
         )
+        # motion: the first regime's model, used only where no regime is drawn (never: the
+        # proposal and predict draw per regime); the proposal's ratio needs no transition density
+        super().__init__(models[0], sensors, switching, n_particles, resampler=resampler)
+        self.models = models
+        self.switching = switching
 
-    def initialize(
-        self, prior: Gaussian, rng: np.random.Generator, batch_shape: tuple[int, ...] = ()
-    ) -> MMState:
-        mean, cov = np.asarray(prior.mean, float), np.asarray(prior.cov, float)
-        d, n = len(mean), self.n_particles
-        x = mean + rng.standard_normal((*batch_shape, n, d)) @ np.linalg.cholesky(cov).T
-        modes = sample_regimes(
-            np.zeros((*batch_shape, n), dtype=np.intp), np.tile(self.initial_probs, (1, 1)), rng
-        )
-        banks = tuple(b.initialize(prior, rng, batch_shape) for b in self.banks)
-        return MMState(
-            x, modes, np.broadcast_to(mean, (*batch_shape, d)).copy(), self._shares(modes), banks
-        )
-
-    def _shares(self, modes: IntArray) -> Array:
-        m = len(self.models)
-        return np.asarray((modes[..., None] == np.arange(m)).mean(axis=-2), dtype=np.float64)
-
-    def _from_cells(
-        self,
-        r: int,
-        prev: Array,
-        prev_modes: IntArray,
-        n_r: int,
-        zs: Zs,
-        dt: float,
-        rng: np.random.Generator,
-    ) -> tuple[Array, Array]:
-        """Discretisation MMPF (Algorithm 7): ``n_r`` particles from regime r's cells (Eq. 84),
-        with log weight ``log p̂(p, r) - log q(p, r)`` (likelihood added by the caller)."""
-        if prev.ndim != 2:
-            raise ConfigError(invalid("batch_shape", prev.shape[:-2], "() for proposal='cells'"))
-        model = self.models[r]
-        view = SimpleNamespace(motion=model, sensors=self.sensors, stats=self.stats)
-        centre, w, delta = self.cell_proposal.cells(prev, zs, dt, view)
-        pos = list(model.position_index)  # type: ignore[attr-defined]
-        p, log_q = sample_cells(centre[:, pos], w, delta, n_r, rng)
-        log_a = np.log(np.maximum(self.transition[prev_modes, r], 1e-300))
-        x, log_pred = complete_from_ancestors(p, prev, model, dt, rng, log_a)
-        n = prev.shape[0]
-        return x, log_pred - (log_q + np.log(n_r / n))
-
-    def step(self, state: MMState, zs: Zs, dt: float, rng: np.random.Generator) -> MMState:
-        prev = state.particles
-        modes = sample_regimes(state.modes, self.transition, rng)  # Eq. 47
-        loglik = LogLikelihood(self.sensors, zs, self.stats)
-        x = np.empty_like(prev)
-        log_w = loglik(prev) * 0.0
-        banks = list(state.banks)
-        for r, model in enumerate(self.models):
-            sel = modes == r
-            if self.proposal == "cells":
-                if np.any(sel):
-                    x[sel], log_w[sel] = self._from_cells(
-                        r, prev, state.modes, int(sel.sum()), zs, dt, rng
-                    )
-                continue
-            if self.proposal == "prior":
-                if np.any(sel):
-                    x[sel] = model.sample(prev[sel], dt, rng)
-                continue
-            bank = self.banks[r]
-            bs = bank.step(banks[r], zs, dt, rng)  # type: ignore[arg-type]  # Eq. 54
-            banks[r] = bs
-            draw, log_q = gaussian_draw(bs.mean, bs.total_cov, self.n_particles, rng)
-            x = np.where(sel[..., None], draw, x)
-            lt = np.asarray(model.log_density(draw, prev, dt))
-            log_w = np.where(sel, lt - log_q, log_w)  # Eq. 53 (likelihood added below)
-        if loglik:
-            log_w = log_w + loglik(x)
-        idx = resample_log_weights(log_w, self.resample, rng, self.stats)
-        x = np.take_along_axis(x, idx[..., None], axis=-2)
-        modes = np.take_along_axis(modes, idx, axis=-1)
-        est = x.mean(axis=-2)
-        if self.banks:
-            for r, bank in enumerate(self.banks):
-                sel = (modes == r)[..., None]
-                cnt = sel.sum(axis=-2)
-                sub = np.where(cnt > 0, (x * sel).sum(axis=-2) / np.maximum(cnt, 1), est)
-                banks[r] = bank.feedback(banks[r], sub)  # type: ignore[arg-type]
-        return replace(
-            state,
-            particles=x,
-            modes=modes,
-            estimate=est,
-            model_probs=self._shares(modes),
-            banks=tuple(banks),
-        )
-
-
-def run_mm(
-    filt: MultipleModelParticleFilter,
-    prior: Gaussian,
-    measurements: Sequence[Zs],
-    dt: float,
-    rng: np.random.Generator,
-    batch_shape: tuple[int, ...] = (),
-) -> tuple[Array, Array]:
-    """Estimates ``(T, *batch, d)`` and model probabilities ``(T, *batch, M)``."""
-    s = filt.initialize(prior, rng, batch_shape)
-    est, probs = [], []
-    for zs in measurements:
-        s = filt.step(s, zs, dt, rng)
-        est.append(s.estimate)
-        probs.append(s.model_probs)
-    return np.array(est), np.array(probs)
+    def predict(
+        self, belief: SISBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> SISBelief:
+        """``r_t`` by Eq. 47 and ``x_t ~ p(x_t | x_{t-1}, r_t)``; the parents wait for update."""
+        gen = check_generator(rng)
+        state: RegimeState = belief.proposal
+        prev = belief.states
+        modes = sample_regimes(state.modes, self.switching.transition, gen)
+        x = self.switching.motion.sample(prev, dt, gen, modes)
+        regimes = RegimeState(modes, state.n_models, state.banks)
+        return SISBelief(x, x.mean(axis=-2), regimes, prev, dt)
 
 
 def hmm_filter(transition: ArrayLike, loglik: Array, initial: ArrayLike) -> Array:

@@ -19,6 +19,10 @@ measurements of an update are summed and normalised once (the degeneracy rules b
 per measurement: a cheap bound vouches for each, and the exact one-at-a-time update runs when it
 cannot).
 
+:meth:`ParticleFilter.update_with_likelihood` also returns the log-likelihood increment
+``log p(z_k | z_1:k-1)`` per run, the log normaliser of the same pass (so the filters are
+:class:`~fusetrack.core.LikelihoodFilter` s: parameter estimation, model comparison).
+
 Resampling sits at the start of ``predict`` rather than the end of ``update`` so that the
 estimate after an update (:meth:`ParticleFilter.estimate`) is taken from the weighted particles,
 which has lower variance than taking it after resampling; the sequence of particle sets is the
@@ -90,7 +94,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from itertools import repeat
@@ -104,7 +107,6 @@ from ..core import resampling
 from ..core.beliefs import Gaussian, Particles
 from ..core.errors import (
     ConfigError,
-    DegenerateWeightsWarning,
     MeasurementError,
     ShapeError,
     check_positive,
@@ -272,7 +274,6 @@ class ParticleFilter:
         self.temper_factor = tf
         self.min_log_evidence = mle
         self.stats = FilterStats()
-        self._warned = False
         self._fused_dt: tuple[float, tuple[Array, Array] | None] | None = None
         self._fused_ll: dict[int, tuple[SensorModel, tuple[int, Array] | None]] = {}
         self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...], Any]] = {}
@@ -400,16 +401,33 @@ class ParticleFilter:
         rng: Rng | None = None,
     ) -> Particles:
         """Weight by each usable measurement in turn (``log w += log p(z | x)``, normalised)."""
-        checked = self._check_measurements(measurements, particles.batch_shape)
+        return self.update_with_likelihood(particles, measurements, rng)[0]
+
+    def update_with_likelihood(
+        self,
+        particles: Particles,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: Rng | None = None,
+    ) -> tuple[Particles, Array]:
+        """:meth:`update` and the log-likelihood increment ``log p(z_k | z_1:k-1)`` ``(...)``
+        per run, from the same pass: ``logsumexp_i(log w_i + sum_m log p(z_m | x_i))`` with the
+        prior weights ``w`` normalised (the particle estimate of the predictive density,
+        Doucet & Johansen 2009, Eq. 47). Measurements are chained: the sum over ``m`` of each
+        one's ``log sum_i w_i^(m-1) p(z_m | x_i)``. A measurement that a run skips adds 0; one
+        recovered by the degeneracy policy adds its (untempered) evidence estimate, very
+        negative or ``-inf``: the particles could not explain it."""
+        batch = particles.batch_shape
+        checked = self._check_measurements(measurements, batch)
         if not checked:
-            return particles
+            return particles, np.zeros(batch)
         W = self._weights(particles)
         fast = self._reweight_fused(particles.states, W, checked)
         if fast is not None:  # weights and their mean in one pass (see mean())
-            return self._particles(particles.states, fast[0], mean=fast[1])
-        W, degenerate = self._reweight(particles.states, W, checked, rng, fused=False)
+            W2, mean, lse = fast
+            return self._particles(particles.states, W2, mean=mean), lse.reshape(batch)
+        W, degenerate, lse = self._reweight(particles.states, W, checked, rng, fused=False)
         self._note_degenerate(degenerate)
-        return self._particles(particles.states, W)
+        return self._particles(particles.states, W), lse.reshape(batch)
 
     def estimate(self, particles: Particles) -> Gaussian:
         """Weighted mean ``(..., d)`` and covariance ``(..., d, d)`` of the particles."""
@@ -771,9 +789,11 @@ class ParticleFilter:
         rng: Rng | None,
         subtract: list[Array] | None = None,
         fused: bool = True,
-    ) -> tuple[_Weights, bool]:
+    ) -> tuple[_Weights, bool, Array]:
         """Apply the measurements in sequence; ``subtract[k]`` (auxiliary filter) is removed from
-        measurement ``k``'s log-likelihood. Returns the new weights and whether any recovered.
+        measurement ``k``'s log-likelihood. Returns the new weights, whether any recovered and
+        the log normaliser per run ``(R,)`` (the log-likelihood increment, see
+        :meth:`update_with_likelihood`).
 
         Fast path: the log-likelihoods are summed into one buffer and normalised once (one
         ``exp`` per particle however many measurements). Measurement ``k`` cannot be degenerate
@@ -786,7 +806,7 @@ class ParticleFilter:
         if subtract is None and fused:
             fast = self._reweight_fused(states, W, checked)
             if fast is not None:
-                return fast[0], False
+                return fast[0], False, fast[2]
         per_run = rng is not None and not isinstance(rng, np.random.Generator)
         lls = []
         for k, c in enumerate(checked):
@@ -808,8 +828,8 @@ class ParticleFilter:
             if not np.all(safe | ~c.usable):
                 return self._reweight_exact(W, checked, lls)
             bound = np.where(c.usable, rowmax + log_n, bound)
-        lw, w, _, ess = self._k.normalize(acc, rowmax, overwrite=True)
-        return _Weights(lw, w, ess), False
+        lw, w, lse, ess = self._k.normalize(acc, rowmax, overwrite=True)
+        return _Weights(lw, w, ess), False, lse
 
     def _fused_sensor(self, sensor: SensorModel) -> tuple[int, Array] | None:
         """``(kind, params)`` of the sensor's fused form (engine "numba"), else None."""
@@ -826,7 +846,7 @@ class ParticleFilter:
 
     def _reweight_fused(
         self, states: Array, W: _Weights, checked: list[_Checked]
-    ) -> tuple[_Weights, Array] | None:
+    ) -> tuple[_Weights, Array, Array] | None:
         """:meth:`_reweight` in one pass over the particles when every sensor has a fused form
         and no measurement carries its own covariance; None otherwise, or when the degeneracy
         bound cannot vouch for a measurement (the caller then takes the generic path)."""
@@ -850,12 +870,12 @@ class ParticleFilter:
         for k, c in enumerate(checked):
             z[:, k, : c.z.shape[-1]] = c.z
         usable = np.stack([c.usable for c in checked], axis=1)
-        lw, w, _, ess, mean, maxima = fused_update.log_weight_update_rows(
+        lw, w, lse, ess, mean, maxima = fused_update.log_weight_update_rows(
             s3, W.lw, kinds, params, z, usable
         )
         if not self._bound_holds(maxima, usable, n):
             return None
-        return _Weights(lw, w, ess), mean
+        return _Weights(lw, w, ess), mean, lse
 
     def _bound_holds(self, maxima: Array, usable: NDArray[np.bool_], n: int) -> bool:
         """The degeneracy bound of :meth:`_reweight` for every measurement ``k`` and run:
@@ -883,11 +903,14 @@ class ParticleFilter:
 
     def _reweight_exact(
         self, W: _Weights, checked: list[_Checked], lls: list[Array]
-    ) -> tuple[_Weights, bool]:
-        """One measurement at a time, each normalised and checked for degeneracy."""
+    ) -> tuple[_Weights, bool, Array]:
+        """One measurement at a time, each normalised and checked for degeneracy; the summed
+        (untempered) log evidences ``(R,)`` as the third value."""
         degenerate = False
+        total = np.zeros(W.lw.shape[0])
         for c, ll in zip(checked, lls):
             lw, w, lse, ess = self._k.update(W.lw, ll)
+            total += np.where(c.usable, lse, 0.0)
             ok = np.isfinite(lse) & (lse >= self.min_log_evidence)
             bad = c.usable & ~ok
             keep = ~c.usable
@@ -899,7 +922,7 @@ class ParticleFilter:
             if keep.any():
                 lw[keep], w[keep], ess[keep] = W.lw[keep], W.w[keep], W.ess[keep]
             W = _Weights(lw, w, ess)
-        return W, degenerate
+        return W, degenerate, total
 
     def _temper(
         self, W: _Weights, ll: Array, bad: NDArray[np.bool_], lw: Array, w: Array, ess: Array
@@ -927,18 +950,12 @@ class ParticleFilter:
         return recovered
 
     def _note_degenerate(self, degenerate: bool) -> None:
-        if not degenerate:
-            return
-        self.stats.degenerate_steps += 1
-        if not self._warned:
-            self._warned = True
-            warnings.warn(
-                f"{type(self).__name__}: every particle's likelihood vanished for a measurement "
-                f"(log evidence not finite or below min_log_evidence={self.min_log_evidence:.1f}); "
-                f"recovered with degenerate={self.degenerate!r}. Counted in "
-                "stats.degenerate_steps; this warning is shown once per filter.",
-                DegenerateWeightsWarning,
-                stacklevel=3,
+        if degenerate:
+            self.stats.note_degenerate(
+                type(self).__name__,
+                "for a measurement: log evidence not finite or below min_log_evidence="
+                f"{self.min_log_evidence:.1f}; recovered with degenerate={self.degenerate!r}",
+                stacklevel=4,
             )
 
 
@@ -1094,22 +1111,26 @@ class AuxiliaryParticleFilter(ParticleFilter):
         children = self._sample_motion(particles.states, dt, gens)
         return self._particles(children, W, None, **{_PARENTS: (particles.states, dt)})
 
-    def update(
+    def update_with_likelihood(
         self,
         particles: Particles,
         measurements: Sequence[Measurement] | Measurement,
         rng: Rng | None = None,
-    ) -> Particles:
-        """First-stage selection at the predicted means, fresh children, second-stage weights."""
-        checked = self._check_measurements(measurements, particles.batch_shape)
+    ) -> tuple[Particles, Array]:
+        """First-stage selection at the predicted means, fresh children, second-stage weights;
+        the log-likelihood increment is the product of the two stages' normalisers,
+        ``log sum_i w_i p(z | mu_i) + log sum_j lambda_j p(z | x_j) / p(z | mu_{a_j})``
+        (Pitt & Shephard 1999; per run, ``(...)``)."""
+        batch = particles.batch_shape
+        checked = self._check_measurements(measurements, batch)
         stash = particles.info.get(_PARENTS)
         if not checked:
-            return particles
+            return particles, np.zeros(batch)
         W = self._weights(particles)
         if stash is None:
-            W2, degenerate = self._reweight(particles.states, W, checked, rng)
+            W2, degenerate, lse = self._reweight(particles.states, W, checked, rng)
             self._note_degenerate(degenerate)
-            return self._particles(particles.states, W2)
+            return self._particles(particles.states, W2), lse.reshape(batch)
         parents, dt = stash
         per_run = rng is not None and not isinstance(rng, np.random.Generator)
         n, d = parents.shape[-2:]
@@ -1130,6 +1151,7 @@ class AuxiliaryParticleFilter(ParticleFilter):
             lam_lw[bad], lam_w[bad], lam_ess[bad] = W.lw[bad], W.w[bad], W.ess[bad]
             for l_k in lmu:
                 l_k[bad] = 0.0
+            lse = np.where(bad, 0.0, lse)
         lam = _Weights(lam_lw, lam_w, lam_ess)
         # 2. resample ancestors by lambda and draw fresh children
         need = lam.ess < self.ess_threshold * n
@@ -1154,6 +1176,6 @@ class AuxiliaryParticleFilter(ParticleFilter):
                 lw[rows], w[rows], ess[rows] = -math.log(n), 1.0 / n, float(n)
                 lam = _Weights(lw, w, ess)
         # 3. second stage: p(z | x_k^j) / p(z | mu_{a_j})
-        W2, degenerate2 = self._reweight(children, lam, checked, rng, subtract=lmu)
+        W2, degenerate2, lse2 = self._reweight(children, lam, checked, rng, subtract=lmu)
         self._note_degenerate(degenerate or degenerate2)
-        return self._particles(children, W2)
+        return self._particles(children, W2), (lse + lse2).reshape(batch)

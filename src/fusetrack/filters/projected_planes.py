@@ -31,22 +31,24 @@ weights all underflow is counted in ``degenerate_steps`` and keeps the predicted
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.special import logsumexp
 
-from ..core.angles import wrap_angle_inplace
 from ..core.errors import ConfigError, ShapeError, invalid
+from ..core.measurement import Measurement
 from ..core.resampling import systematic
 from ..motion.accel_turn import AccelTurn
+from ..sensors.doa_plane_likelihood import DoaCone, ProjectedPlaneBearing
 from ..sensors.doa_projection import (
     PLANE_AXES,
     PLANES,
     DoaSensor3D,
     check_angles,
     literal_second_plane,
-    projected_angles,
     projected_variance,
 )
 
@@ -62,7 +64,7 @@ def plane_state_index(plane: str) -> list[int]:
     return [a, b, a + 3, b + 3]
 
 
-@dataclass
+@dataclass(frozen=True)
 class SirStep:
     """What one SIR step reports: the posterior mean and the log of the unnormalised weight sum."""
 
@@ -150,9 +152,72 @@ def fuse_planes(
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class SirBelief:
+    """Equal-weight particles ``(N, d)`` after a SIR step and what the step reported: ``mean``
+    the weighted mean before resampling (the estimate), ``log_weight_sum`` the log of the
+    unnormalised weight sum ``W``, ``degenerate`` whether every weight vanished."""
+
+    particles: Array
+    estimate: Array
+    log_weight_sum: float = float("nan")
+    degenerate: bool = False
+
+    @classmethod
+    def around(cls, x: Array, std: Array, n: int, rng: np.random.Generator) -> SirBelief:
+        parts = np.asarray(x, float) + std * rng.standard_normal((n, len(std)))
+        return cls(parts, parts.mean(axis=0))
+
+    @property
+    def mean(self) -> Array:
+        return self.estimate
+
+    @property
+    def cov(self) -> Array:
+        return np.atleast_2d(np.cov(self.particles, rowvar=False, bias=True))
+
+
+@dataclass(frozen=True, eq=False)
+class PlanesBelief:
+    """What :class:`ProjectedPlanesTracker` carries from step to step.
+
+    ``planes`` holds the particles ``(N, 4)`` of every running plane filter (key: sensor index,
+    plane); ``fused`` the weighted fused state ``[x, y, z, vx, vy, vz]`` (Eqs. 2.17-2.20; the given
+    initial state before the first update) and ``equal`` the equal-weight one (Eq. 2.21);
+    ``step`` the index of the step the filters are at (0: the initial state's time) and ``dt``
+    the last prediction's interval. ``pairs``, ``log_weight_sums``, ``estimates`` and
+    ``degenerate`` report the last update.
+    """
+
+    planes: Mapping[Pair, Array]
+    fused: Array
+    equal: Array
+    step: int = 0
+    dt: float = 0.0
+    pairs: tuple[Pair, Pair] | None = None
+    log_weight_sums: Mapping[Pair, float] = field(default_factory=dict)
+    estimates: Mapping[Pair, Array] = field(default_factory=dict)
+    degenerate: int = 0
+
+    @property
+    def mean(self) -> Array:
+        return self.fused
+
+    @property
+    def cov(self) -> Array:
+        """Diagonal: each coordinate's spread in the first running plane filter that has it
+        (the plane filters are separate filters; their cross terms are not modelled)."""
+        var = np.full(6, np.nan)
+        for (_, plane), parts in self.planes.items():
+            for j, axis in enumerate(PLANE_AXES[plane]):
+                if np.isnan(var[axis]):
+                    var[axis], var[axis + 3] = parts[:, j].var(), parts[:, j + 2].var()
+        return np.diag(var)
+
+
 @dataclass
 class PpsResult:
-    """Per-step output of :class:`ProjectedPlanesTracker`."""
+    """Per-step output of :meth:`ProjectedPlanesTracker.run`."""
 
     weighted: Array  # (T, 6)
     equal: Array  # (T, 6)
@@ -162,12 +227,23 @@ class PpsResult:
     degenerate_steps: int = 0
 
 
+def _angles(measurements: Array, n_sensors: int) -> Array:
+    z_all = np.asarray(measurements, dtype=float)
+    if z_all.ndim != 3 or z_all.shape[1:] != (n_sensors, 2):
+        raise ShapeError(invalid("measurements.shape", z_all.shape, f"(T, {n_sensors}, 2)"))
+    return z_all
+
+
 @dataclass
 class ProjectedPlanesTracker:
-    """PPS with one or several sensors (Lee 2009, Algorithm 1 and Sec. 2.2.3).
+    """PPS with one or several sensors (Lee 2009, Algorithm 1 and Sec. 2.2.3), a
+    :class:`~fusetrack.core.models.Filter` over :class:`PlanesBelief`.
 
-    ``model`` is the 3-D motion model; each plane filter uses ``model.restrict(plane axes)``
-    unless ``plane_model(step, plane)`` returns another one (used to mismatch a filter).
+    ``predict`` moves every running plane filter; ``update`` takes one ``(theta, phi)``
+    :class:`Measurement` per sensor (``sensor_id`` of the sensor), selects the two planes, starts
+    a newly selected one, weights each with :class:`ProjectedPlaneBearing` and fuses. ``model``
+    is the 3-D motion model; each plane filter uses ``model.restrict(plane axes)`` unless
+    ``plane_model_override`` gives another one for a range of steps (to mismatch a filter).
     """
 
     sensors: list[DoaSensor3D]
@@ -198,72 +274,112 @@ class ProjectedPlanesTracker:
         state = fused if self.coupling == "fused" else None
         return self.model.restrict(PLANE_AXES[plane], state)
 
+    def initial_belief(self, x0: ArrayLike) -> PlanesBelief:
+        """The given initial state (the text: "initial object state is given"); the plane
+        filters start at the first update, around it."""
+        x = np.asarray(x0, dtype=float)
+        return PlanesBelief({}, x.copy(), x.copy())
+
+    def measurements(self, time: float, z: Array) -> list[Measurement]:
+        """One step's ``(K, 2)`` angles as one measurement per sensor."""
+        return [Measurement(time, s.sensor_id, zk) for s, zk in zip(self.sensors, z)]
+
+    def predict(
+        self, belief: PlanesBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> PlanesBelief:
+        """Predict every plane filter that ran at the last step by ``dt``."""
+        gen = np.random.default_rng() if rng is None else rng
+        n = belief.step + 1
+        planes = {
+            (k, plane): self.plane_model(n, plane, belief.fused).sample(parts, dt, gen)
+            for (k, plane), parts in belief.planes.items()
+        }
+        return replace(belief, planes=planes, step=n, dt=dt)
+
+    def _angles_of(self, measurements: Sequence[Measurement]) -> Array:
+        by_id = {m.sensor_id: m.value for m in measurements}
+        missing = [s.sensor_id for s in self.sensors if s.sensor_id not in by_id]
+        if missing:
+            raise ShapeError(
+                invalid("measurements", sorted(by_id), f"one (theta, phi) from each of {missing}")
+            )
+        z = np.array([by_id[s.sensor_id] for s in self.sensors], dtype=float)
+        for zk in z:
+            check_angles(zk)
+        return z
+
+    def update(
+        self,
+        belief: PlanesBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> PlanesBelief:
+        """Select two planes, weight and resample their filters, fuse (Lee 2009, Algorithm 1)."""
+        gen = np.random.default_rng() if rng is None else rng
+        z = self._angles_of(measurements)
+        pairs, var = select_pairs(z, self.sensors, self.selection)
+        new: dict[Pair, Array] = {}
+        for pair in pairs:
+            if pair in belief.planes:
+                new[pair] = belief.planes[pair]
+            elif belief.step == 0:
+                new[pair] = self._init_particles(belief.fused, pair[1], gen)
+            else:
+                new[pair] = self._start_from(belief.planes, pair[1], belief.fused, gen, belief.dt)
+        est: dict[Pair, Array] = {}
+        logw: dict[Pair, float] = {}
+        degenerate = 0
+        for pair in pairs:
+            k, plane = pair
+            lik = ProjectedPlaneBearing(self.sensors[k], plane)
+            log_lik = lik.log_likelihood(z[k], new[pair], var[k, PLANES.index(plane)])
+            new[pair], step = sir_update(new[pair], log_lik, gen)
+            degenerate += step.degenerate
+            est[pair], logw[pair] = step.mean, step.log_weight_sum
+        return replace(
+            belief,
+            planes=new,
+            fused=fuse_planes(est, logw, pairs, weighted=True),
+            equal=fuse_planes(est, logw, pairs, weighted=False),
+            pairs=pairs,
+            log_weight_sums=logw,
+            estimates=est,
+            degenerate=degenerate,
+        )
+
+    def run(self, measurements: Array, dt: float, x0: Array, rng: np.random.Generator) -> PpsResult:
+        """Track over ``measurements`` ``(T, K, 2)`` (azimuth, polar per sensor, radians).
+
+        Particles start at ``x0`` plus ``init_std`` noise. Step 0 is an update at ``x0``'s time,
+        later steps predict by ``dt`` first.
+        """
+        z_all = _angles(measurements, len(self.sensors))
+        belief = self.initial_belief(x0)
+        res = PpsResult(np.zeros((len(z_all), 6)), np.zeros((len(z_all), 6)), [], [], [])
+        for n, z in enumerate(z_all):
+            if n > 0:
+                belief = self.predict(belief, dt, rng)
+            belief = self.update(belief, self.measurements(n * dt, z), rng)
+            assert belief.pairs is not None
+            res.weighted[n], res.equal[n] = belief.fused, belief.equal
+            res.degenerate_steps += belief.degenerate
+            res.pairs.append(belief.pairs)
+            res.log_weight_sums.append(dict(belief.log_weight_sums))
+            res.plane_estimates.append(dict(belief.estimates))
+        return res
+
     def _init_particles(self, x: Array, plane: str, rng: np.random.Generator) -> Array:
         idx = plane_state_index(plane)
         std = np.array([self.init_std[0]] * 2 + [self.init_std[1]] * 2)
         return x[idx] + std * rng.standard_normal((self.n_particles, 4))
 
-    def run(self, measurements: Array, dt: float, x0: Array, rng: np.random.Generator) -> PpsResult:
-        """Track over ``measurements`` ``(T, K, 2)`` (azimuth, polar per sensor, radians).
-
-        ``x0`` is the given initial state ``[x, y, z, vx, vy, vz]`` (the text: "initial object
-        state is given"); particles start at ``x0`` plus ``init_std`` noise. Step 0 is an
-        update at ``x0``'s time, later steps predict by ``dt`` first.
-        """
-        z_all = np.asarray(measurements, dtype=float)
-        if z_all.ndim != 3 or z_all.shape[1:] != (len(self.sensors), 2):
-            raise ShapeError(
-                invalid("measurements.shape", z_all.shape, f"(T, {len(self.sensors)}, 2)")
-            )
-        x0 = np.asarray(x0, dtype=float)
-        particles: dict[Pair, Array] = {}
-        res = PpsResult(np.zeros((len(z_all), 6)), np.zeros((len(z_all), 6)), [], [], [])
-        fused = x0.copy()
-        for n, z in enumerate(z_all):
-            for zk in z:
-                check_angles(zk)
-            pairs, var = select_pairs(z, self.sensors, self.selection)
-            if n > 0:  # predict every filter that ran at n - 1
-                for (k, plane), parts in particles.items():
-                    particles[(k, plane)] = self.plane_model(n, plane, fused).sample(parts, dt, rng)
-            new: dict[Pair, Array] = {}
-            for pair in pairs:
-                if pair in particles:
-                    new[pair] = particles[pair]
-                elif n == 0:
-                    new[pair] = self._init_particles(x0, pair[1], rng)
-                else:
-                    new[pair] = self._start_from(particles, pair[1], fused, rng, dt, n)
-            est: dict[Pair, Array] = {}
-            logw: dict[Pair, float] = {}
-            for pair in pairs:
-                k, plane = pair
-                sensor = self.sensors[k]
-                zp = projected_angles(z[k, 0], z[k, 1])[PLANES.index(plane)]
-                parts = new[pair]
-                r = sensor.plane_bearing_2d(parts[:, 0], parts[:, 1], plane) - zp
-                wrap_angle_inplace(r)
-                log_lik = -0.5 * r * r / var[k, PLANES.index(plane)]  # Lee 2009, Eq. 2.16
-                new[pair], step = sir_update(parts, log_lik, rng)
-                res.degenerate_steps += step.degenerate
-                est[pair], logw[pair] = step.mean, step.log_weight_sum
-            particles = new
-            res.weighted[n] = fuse_planes(est, logw, pairs, weighted=True)
-            res.equal[n] = fuse_planes(est, logw, pairs, weighted=False)
-            fused = res.weighted[n]
-            res.pairs.append(pairs)
-            res.log_weight_sums.append(logw)
-            res.plane_estimates.append(est)
-        return res
-
     def _start_from(
         self,
-        running: dict[Pair, Array],
+        running: Mapping[Pair, Array],
         plane: str,
         fused: Array,
         rng: np.random.Generator,
         dt: float,
-        step: int,
     ) -> Array:
         """Particles of a newly selected plane, axis by axis from running filters (else the fused estimate)."""
         out = np.empty((self.n_particles, 4))
@@ -293,39 +409,62 @@ class Direct3DResult:
 
 @dataclass
 class Direct3DFilter:
-    """The baseline: one SIR filter on ``[x, y, z, vx, vy, vz]`` with both angles (Lee 2009, Sec. 2.2.2).
-
-    Likelihood ``exp(-dtheta^2/(2 s^2)) exp(-dphi^2/(2 s^2))`` (unnormalised, the "cone" of [22])
-    with the azimuth residual wrapped.
-    """
+    """The baseline: one SIR filter on ``[x, y, z, vx, vy, vz]`` with both angles (Lee 2009,
+    Sec. 2.2.2), a :class:`~fusetrack.core.models.Filter` over :class:`SirBelief` weighting with
+    :class:`DoaCone`. The particle loop is :func:`sir_update` (weight, estimate, systematic
+    resampling), kept here rather than on the shared particle engine so that the published
+    reproduction's random draws stay the same."""
 
     sensor: DoaSensor3D
     model: AccelTurn
     n_particles: int = 1000
     init_std: tuple[float, float] = (0.1, 0.05)
 
+    def initial_belief(self, x0: ArrayLike, rng: np.random.Generator) -> SirBelief:
+        std = np.array([self.init_std[0]] * 3 + [self.init_std[1]] * 3)
+        return SirBelief.around(np.asarray(x0, float), std, self.n_particles, rng)
+
+    def predict(
+        self, belief: SirBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> SirBelief:
+        gen = np.random.default_rng() if rng is None else rng
+        parts = self.model.sample(belief.particles, dt, gen)
+        return SirBelief(parts, parts.mean(axis=0))
+
+    def update(
+        self,
+        belief: SirBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> SirBelief:
+        """Weight by the sensor's measurement (:class:`DoaCone`) and resample."""
+        gen = np.random.default_rng() if rng is None else rng
+        for m in measurements:
+            if m.sensor_id != self.sensor.sensor_id:
+                continue
+            z = check_angles(m.value)
+            log_lik = DoaCone(self.sensor).log_likelihood(z, belief.particles)
+            parts, step = sir_update(belief.particles, log_lik, gen)
+            belief = SirBelief(parts, step.mean, step.log_weight_sum, step.degenerate)
+        return belief
+
     def run(
         self, measurements: Array, dt: float, x0: Array, rng: np.random.Generator
     ) -> Direct3DResult:
+        """Track over ``measurements`` ``(T, 2)`` or ``(T, K, 2)`` (the first sensor's angles)."""
         z_all = np.asarray(measurements, dtype=float)
         if z_all.ndim == 3:
             z_all = z_all[:, 0]
         if z_all.ndim != 2 or z_all.shape[1] != 2:
             raise ShapeError(invalid("measurements.shape", z_all.shape, "(T, 2) or (T, K, 2)"))
-        std = np.array([self.init_std[0]] * 3 + [self.init_std[1]] * 3)
-        parts = np.asarray(x0, float) + std * rng.standard_normal((self.n_particles, 6))
-        s2 = self.sensor.sigma**2
+        belief = self.initial_belief(x0, rng)
         out = Direct3DResult(np.zeros((len(z_all), 6)), np.zeros(len(z_all)))
         for n, z in enumerate(z_all):
             check_angles(z)
             if n > 0:
-                parts = self.model.sample(parts, dt, rng)
-            theta, phi = self.sensor.angles(parts[:, :3])
-            dth = wrap_angle_inplace(theta - z[0])
-            dph = phi - z[1]
-            log_lik = -0.5 * (dth * dth + dph * dph) / s2
-            parts, step = sir_update(parts, log_lik, rng)
-            out.estimates[n] = step.mean
-            out.log_weight_sums[n] = step.log_weight_sum
-            out.degenerate_steps += step.degenerate
+                belief = self.predict(belief, dt, rng)
+            belief = self.update(belief, [Measurement(n * dt, self.sensor.sensor_id, z)], rng)
+            out.estimates[n] = belief.estimate
+            out.log_weight_sums[n] = belief.log_weight_sum
+            out.degenerate_steps += belief.degenerate
         return out

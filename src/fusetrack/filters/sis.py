@@ -11,19 +11,27 @@ dissertation (bootstrap, PF-SP-PEKF, Galerkin and grid proposals, MCMC moves):
    with an MCMC kernel that leaves ``p(z_t | x) p(x | x_{t-1}^{a_i})`` invariant (Algorithms 8-10);
 4. output the mean of the resampled particles and hand it back to the proposal ("feedback").
 
+Proposals: the transition prior (:class:`PriorProposal`), the EKF bank of PF-SP-PEKF
+(:mod:`.sp_pekf`), CPF-SP (:mod:`.cpf_sp`), unscented (:mod:`.unscented_proposal`), Galerkin and
+discretisation (:mod:`.grid_proposals`), and regime switching (:mod:`.multiple_model`: the
+multiple-model filters are this engine with a regime per particle); MCMC moves in
+:mod:`.mcmc_moves`.
+
 Pairing (spec Sec. 2.1): when the proposal ignores the particle's own past, Eq. 13 pairs new
 particle i with resampled ancestor i ("paired", the thesis's literal weight). ``transition=
 "marginal"`` uses ``(1/N) sum_j p(x_t^i | x_{t-1}^j)`` instead (O(N^2), the marginal-proposal weight).
 
 Shapes: particles ``(..., N, d)``; leading axes are independent runs advanced together. A
-step's measurements are a sequence aligned with ``sensors``: each entry ``(m,)`` or ``(..., m)``
-or ``None``; entries with NaN are skipped and counted.
+step's measurements are :class:`~fusetrack.core.Measurement` values ``(m,)`` or ``(..., m)``,
+at most one per sensor; values with NaN are skipped and counted. Inside, proposals see them
+aligned with ``sensors`` (``zs``: one value or None per sensor) and the filter through a
+:class:`ProposalContext` (its models, counters and the step's side inputs).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
 import numpy as np
@@ -31,9 +39,17 @@ from numpy.typing import NDArray
 from scipy.special import logsumexp
 
 from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, check_positive, invalid
+from ..core.errors import (
+    ConfigError,
+    MeasurementError,
+    UnknownSensorError,
+    check_positive,
+    invalid,
+)
+from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
+from . import kernels
 from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .stats import FilterStats
 
@@ -94,7 +110,14 @@ class LogLikelihood:
 
 
 class Proposal(Protocol):
-    """``q(x_t | x_{t-1}, z_t)``: draws particles and returns their log proposal density."""
+    """``q(x_t | x_{t-1}, z_t)``: draws particles and returns their log proposal density.
+
+    ``filt`` is the step's :class:`ProposalContext`; everything a proposal carries from step to
+    step is its ``state`` (returned by ``initialize``/``draw``/``feedback``, kept in the belief).
+    Optional members: ``returns_log_ratio`` (see :meth:`draw`), ``side_inputs`` (measurement ids
+    the proposal reads, see :class:`ProposalContext`) and ``reindex(state, ancestors)``, which
+    makes per-particle parts of the state (regimes, :mod:`.multiple_model`) follow resampling.
+    """
 
     def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> Any: ...
 
@@ -130,17 +153,8 @@ class PriorProposal:
 
 Move = Callable[[Array, Array, Callable[[Array], Array], float, np.random.Generator, Any], Array]
 """An MCMC kernel applied after resampling (Zhai 2007, Algorithms 8-10):
-``move(x, parents, loglik, dt, rng, filt) -> x`` (see :mod:`.mcmc_moves`)."""
-
-
-@dataclass(frozen=True)
-class SISState:
-    """Equally weighted particles ``(..., N, d)``, the proposal's state and the estimate."""
-
-    particles: Array
-    estimate: Array
-    proposal: Any = None
-    info: dict[str, Any] = field(default_factory=dict)
+``move(x, parents, loglik, dt, rng, ctx) -> x`` with ``ctx`` the step's
+:class:`ProposalContext` (see :mod:`.mcmc_moves`)."""
 
 
 def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
@@ -159,36 +173,130 @@ def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
 
 
 def resample_log_weights(
-    log_w: Array, resample: Callable[..., Any], rng: np.random.Generator, stats: FilterStats
+    log_w: Array,
+    resample: Callable[..., Any],
+    rng: np.random.Generator,
+    stats: FilterStats,
+    owner: str = "particle filter",
 ) -> NDArray[np.intp]:
     """Normalise log-weights ``(..., N)`` per run and resample: ancestor indices ``(..., N)``.
 
-    NaN counts as ``-inf``; a run whose weights all vanished keeps them equal and the step is
-    counted in ``stats.degenerate_steps`` (never NaN).
+    The normalisation is the particle filters' shared kernel
+    (:func:`~fusetrack.filters.kernels.normalize_log_weights`). NaN counts as ``-inf``; a run
+    whose weights all vanished keeps them equal and the step is counted and warned
+    (:meth:`~fusetrack.filters.stats.FilterStats.note_degenerate`; never NaN).
     """
-    log_w = np.where(np.isnan(log_w), -np.inf, log_w)
-    top = np.max(log_w, axis=-1, keepdims=True)
-    bad = ~np.isfinite(top)
+    _, w, lse, _ = kernels.normalize_log_weights(log_w)
+    bad = ~np.isfinite(lse)
     if np.any(bad):
-        stats.degenerate_steps += 1
-        log_w = np.where(bad, 0.0, log_w)
-        top = np.where(bad, 0.0, top)
-    w = np.exp(log_w - top)
-    w /= w.sum(axis=-1, keepdims=True)
+        stats.note_degenerate(owner, "every weight of a run was zero; it kept them equal", 5)
+        w[bad] = 1.0 / w.shape[-1]
     stats.resample_count += 1
     return np.asarray(resample(w, rng), dtype=np.intp)
 
 
+@dataclass(frozen=True, eq=False)
+class SISBelief:
+    """What :class:`ProposalParticleFilter` carries from step to step.
+
+    ``states`` ``(..., N, d)`` equally weighted after a step (every step resamples),
+    ``estimate`` ``(..., d)`` their mean, ``proposal`` the proposal's own state (an EKF bank, the
+    CPF-SP banks, the UKF covariance; None for the transition prior). Between :meth:`predict
+    <ProposalParticleFilter.predict>` and :meth:`update <ProposalParticleFilter.update>`,
+    ``parents`` ``(..., N, d)`` holds the states each particle was drawn from and ``dt`` the step.
+    """
+
+    states: Array
+    estimate: Array
+    proposal: Any = None
+    parents: Array | None = None
+    dt: float = 0.0
+
+    @property
+    def mean(self) -> Array:
+        return self.estimate
+
+    @property
+    def cov(self) -> Array:
+        """Sample covariance of the (equally weighted) particles, ``(..., d, d)``."""
+        dev = self.states - self.estimate[..., None, :]
+        n = self.states.shape[-2]
+        return np.asarray(np.einsum("...ni,...nj->...ij", dev, dev) / max(n - 1, 1))
+
+    @property
+    def batch_shape(self) -> tuple[int, ...]:
+        return tuple(self.states.shape[:-2])
+
+
+@dataclass(frozen=True)
+class ProposalContext:
+    """What a proposal or a move sees of the filter at one step: its models, its counters and
+    the step's side inputs (measurements that no sensor model explains but a proposal reads,
+    e.g. CPF-SP's received-intensity shares), keyed by sensor id."""
+
+    motion: MotionModel
+    sensors: list[SensorModel]
+    stats: SISStats
+    side: Mapping[str, Array] = field(default_factory=dict)
+
+
+def sensor_measurements(
+    sensors: Sequence[SensorModel], zs: Zs, time: float = 0.0
+) -> list[Measurement]:
+    """A sensor-aligned step (one value or None per sensor) as measurements at ``time``."""
+    return [
+        Measurement(time, s.sensor_id, np.asarray(z, dtype=float))
+        for s, z in zip(sensors, zs)
+        if z is not None
+    ]
+
+
+def aligned_values(
+    sensors: Sequence[SensorModel],
+    measurements: Sequence[Measurement],
+    side_ids: Sequence[str] = (),
+) -> tuple[list[Array | None], dict[str, Array]]:
+    """The step's values aligned with ``sensors`` (None where a sensor did not report) and the
+    side inputs whose ids are in ``side_ids``; any other sensor id raises
+    :class:`~fusetrack.core.UnknownSensorError`, a second report of one sensor
+    :class:`~fusetrack.core.MeasurementError`."""
+    index = {s.sensor_id: k for k, s in enumerate(sensors)}
+    zs: list[Array | None] = [None] * len(sensors)
+    side: dict[str, Array] = {}
+    for m in measurements:
+        k = index.get(m.sensor_id)
+        if k is None:
+            if m.sensor_id not in side_ids:
+                valid = sorted(index) + sorted(side_ids)
+                raise UnknownSensorError(invalid("sensor_id", m.sensor_id, f"one of {valid}"))
+            side[m.sensor_id] = m.value
+        elif zs[k] is not None:
+            raise MeasurementError(
+                invalid("measurements", f"two reports of {m.sensor_id!r}", "one per sensor a step")
+            )
+        else:
+            zs[k] = m.value
+    return zs, side
+
+
 class ProposalParticleFilter:
-    """SIS with proposal ``proposal``, resampling every step, optional MCMC ``move``.
+    """SIS with proposal ``proposal``, resampling every step, optional MCMC ``move``: a
+    :class:`~fusetrack.core.SteppingFilter` over :class:`SISBelief`.
+
+    ``step(belief, dt, measurements, rng)`` draws from the proposal with the measurements in view
+    (the thesis's loop, module docstring); ``predict`` draws from the transition prior and
+    ``update`` weights by the likelihood, resamples and moves: their composition is the
+    bootstrap step (the proposal's state is carried through and fed back the particle
+    estimate). Measurements name the filter's sensors; ``proposal.side_inputs`` lists other ids
+    the proposal reads (e.g. CPF-SP's sensor weights).
 
     >>> from fusetrack.motion.benchmark import ScalarBenchmark
     >>> from fusetrack.sensors.power import Power
     >>> pf = ProposalParticleFilter(ScalarBenchmark(), [Power("z", 3)], n_particles=100)
     >>> rng = np.random.default_rng(0)
-    >>> s = pf.initialize(Gaussian(np.zeros(1), np.eye(1)), rng)
-    >>> s = pf.step(s, [np.array([8.0])], 1.0, rng)
-    >>> bool(abs(s.estimate[0] - 2.0) < 0.2)
+    >>> b = pf.initialize(Gaussian(np.zeros(1), np.eye(1)), rng)
+    >>> b = pf.step(b, 1.0, [Measurement(1.0, "z", [8.0])], rng)
+    >>> bool(abs(b.mean[0] - 2.0) < 0.2)
     True
     """
 
@@ -217,7 +325,7 @@ class ProposalParticleFilter:
             raise ConfigError(invalid("transition", transition, "'paired' or 'marginal'"))
         self.transition = transition
         self.stats = SISStats()
-        self.aux: Any = None
+        self._side_ids: tuple[str, ...] = tuple(getattr(self.proposal, "side_inputs", ()))
 
     def __repr__(self) -> str:
         return (
@@ -225,14 +333,18 @@ class ProposalParticleFilter:
             f"n_particles={self.n_particles}, move={type(self.move).__name__ if self.move else None})"
         )
 
+    def context(self, side: Mapping[str, Array] | None = None) -> ProposalContext:
+        """The view of this filter that proposals and moves get (see :class:`ProposalContext`)."""
+        return ProposalContext(self.motion, self.sensors, self.stats, side or {})
+
     def initialize(
         self, prior: Gaussian, rng: np.random.Generator, batch_shape: tuple[int, ...] = ()
-    ) -> SISState:
+    ) -> SISBelief:
         """Particles drawn from ``prior``, shape ``(*batch_shape, N, d)``."""
         mean, cov = np.asarray(prior.mean, float), np.asarray(prior.cov, float)
         g = np.linalg.cholesky(cov + 1e-300 * np.eye(len(mean)))
         x = mean + rng.standard_normal((*batch_shape, self.n_particles, len(mean))) @ g.T
-        return SISState(
+        return SISBelief(
             x,
             np.broadcast_to(mean, (*batch_shape, len(mean))).copy(),
             self.proposal.initialize(prior, x, rng),
@@ -255,18 +367,20 @@ class ProposalParticleFilter:
         return np.asarray(logsumexp(lp, axis=-1) - np.log(prev.shape[-2]))
 
     def step(
-        self, state: SISState, zs: Zs, dt: float, rng: np.random.Generator, aux: Any = None
-    ) -> SISState:
-        """One predict-weight-resample(-move) step; returns the new equally weighted set.
-
-        ``aux`` is side information for the proposal at this step (e.g. the received intensities
-        that weight the sensors of CPF-SP); proposals read it as ``filt.aux``.
-        """
+        self,
+        belief: SISBelief,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> SISBelief:
+        """Draw ``x_t ~ q(x_t | x_{t-1}, z_t)``, weight (Eq. 13), resample, move, feed back."""
         check_positive("dt", dt)
-        self.aux = aux
-        prev = state.particles
+        gen = check_generator(rng)
+        zs, side = aligned_values(self.sensors, measurements, self._side_ids)
+        ctx = self.context(side)
+        prev = belief.states
         loglik = LogLikelihood(self.sensors, zs, self.stats)
-        x, log_q, pstate = self.proposal.draw(state.proposal, prev, zs, dt, rng, self)
+        x, log_q, pstate = self.proposal.draw(belief.proposal, prev, zs, dt, gen, ctx)
         if log_q is None:
             log_w = loglik(x) if loglik else np.zeros(x.shape[:-1])
         elif getattr(self.proposal, "returns_log_ratio", False):
@@ -274,37 +388,80 @@ class ProposalParticleFilter:
             log_w = (loglik(x) if loglik else 0.0) + log_q
         else:
             log_w = loglik(x) + self.log_transition(x, prev, dt) - log_q
-        idx = resample_log_weights(log_w, self.resample, rng, self.stats)
+        return self._select(x, prev, log_w, loglik, pstate, dt, gen, ctx)
+
+    def predict(
+        self, belief: SISBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> SISBelief:
+        """``x_t ~ p(x_t | x_{t-1})`` for every particle; the parents wait for :meth:`update`."""
+        check_positive("dt", dt)
+        x = np.asarray(self.motion.sample(belief.states, dt, check_generator(rng)), dtype=float)
+        return SISBelief(x, x.mean(axis=-2), belief.proposal, belief.states, dt)
+
+    def update(
+        self,
+        belief: SISBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> SISBelief:
+        """Weight the predicted particles by ``p(z_t | x_t)``, resample, move, feed back."""
+        return self.update_with_likelihood(belief, measurements, rng)[0]
+
+    def update_with_likelihood(
+        self,
+        belief: SISBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> tuple[SISBelief, Array]:
+        """:meth:`update` and ``log p(z_t | z_1:t-1)`` ``(...)`` per run, estimated by
+        ``log (1/N) sum_i p(z_t | x_t^i)`` over the equally weighted predicted particles
+        (0 when no sensor reported)."""
+        zs, side = aligned_values(self.sensors, measurements, self._side_ids)
+        loglik = LogLikelihood(self.sensors, zs, self.stats)
+        if not loglik:
+            return belief, np.zeros(belief.batch_shape)
+        parents = belief.parents if belief.parents is not None else belief.states
+        x = belief.states
+        ll = loglik(x)
+        increment = logsumexp(ll, axis=-1) - np.log(x.shape[-2])
+        return self._select(
+            x,
+            parents,
+            ll,
+            loglik,
+            belief.proposal,
+            belief.dt,
+            check_generator(rng),
+            self.context(side),
+        ), np.asarray(increment, dtype=float)
+
+    def _select(
+        self,
+        x: Array,
+        prev: Array,
+        log_w: Array,
+        loglik: LogLikelihood,
+        pstate: Any,
+        dt: float,
+        rng: np.random.Generator,
+        ctx: ProposalContext,
+    ) -> SISBelief:
+        """Resample by ``log_w``, move (with the likelihood in view), estimate, feed back."""
+        idx = resample_log_weights(log_w, self.resample, rng, self.stats, type(self).__name__)
         x_res = np.take_along_axis(x, idx[..., None], axis=-2)
+        reindex = getattr(self.proposal, "reindex", None)
+        if reindex is not None:  # per-particle parts of the proposal state (regimes)
+            pstate = reindex(pstate, idx)
         if self.move is not None and loglik:
             parents = np.take_along_axis(prev, idx[..., None], axis=-2)
-            x_res = self.move(x_res, parents, loglik, dt, rng, self)
+            x_res = self.move(x_res, parents, loglik, dt, rng, ctx)
         est = x_res.mean(axis=-2)
-        pstate = self.proposal.feedback(pstate, x_res, est, self)
-        return replace(state, particles=x_res, estimate=est, proposal=pstate)
+        pstate = self.proposal.feedback(pstate, x_res, est, ctx)
+        return SISBelief(x_res, est, pstate)
 
 
-def run_sis(
-    filt: ProposalParticleFilter,
-    prior: Gaussian,
-    measurements: Sequence[Zs],
-    dt: float,
-    rng: np.random.Generator,
-    batch_shape: tuple[int, ...] = (),
-    *,
-    keep: Callable[[SISState], Any] | None = None,
-    aux: Sequence[Any] | None = None,
-) -> tuple[Array, list[Any]]:
-    """Run ``filt`` over ``measurements`` (one sensor-aligned sequence per step).
-
-    Returns the estimates ``(T, *batch_shape, d)`` and, if ``keep`` is given, ``keep(state)`` per
-    step. ``aux`` (one entry per step) is passed to :meth:`ProposalParticleFilter.step`.
-    """
-    state = filt.initialize(prior, rng, batch_shape)
-    out, kept = [], []
-    for k, zs in enumerate(measurements):
-        state = filt.step(state, zs, dt, rng, None if aux is None else aux[k])
-        out.append(state.estimate)
-        if keep is not None:
-            kept.append(keep(state))
-    return np.array(out), kept
+def check_generator(rng: np.random.Generator | None) -> np.random.Generator:
+    """``rng`` when it is a numpy Generator (these filters draw from one), else ConfigError."""
+    if not isinstance(rng, np.random.Generator):
+        raise ConfigError(invalid("rng", rng, "a numpy.random.Generator"))
+    return rng

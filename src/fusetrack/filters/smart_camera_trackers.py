@@ -1,8 +1,12 @@
 """3-D tracking with a network of smart cameras (Kushwaha 2010, Ch. V, Algorithms 2-3, Eqs. 70-103).
 
-Every tracker follows one ellipsoidal target (position, velocity, scalar-last orientation
-quaternion) from per-frame colour/texture bins of each camera, and counts the bytes its cameras
-send per step:
+Every tracker is a :class:`~fusetrack.core.Filter` over a :class:`SmartCameraBelief`: the
+velocity filter's Gaussian over position and velocity, the target's orientation (scalar-last
+quaternion), what the last update sent over the network, and (baseline P) its per-camera 2-D
+particle sets. Each camera's frame arrives as ``Measurement(time, camera_id, FeatureImage)``;
+its likelihood is the camera's appearance sensor model
+(:class:`~fusetrack.sensors.appearance_camera.AppearanceCamera`). The trackers differ in how the
+cameras' evidence is fused and what they send per step:
 
 * ``T0`` (Alg. 2) -- synchronised 3-D particles ``x_i ~ N(x0 + v0, S)`` drawn alike on every
   camera; each camera sends its weights ``rho_n(x_i)`` (8 B each); the base multiplies them
@@ -17,24 +21,25 @@ send per step:
   give this step; spec A-V-3) and aggregates them in-network like T2.
 * ``T4`` -- cameras send 2-D mixtures; the base finds the MAP of
   ``N(x | x0, S0) prod_i sum_j a_ij N(pi_i(x) | u_ij, S_ij)`` (Eq. 99) numerically; the one-step
-  closed form of Eq. 103 is returned beside it.
+  closed form of Eq. 103 is returned beside it (``belief.extra["eq103"]``).
 * ``P`` -- the baseline: an independent colour particle filter per camera (Perez et al.) and the
   least-squares intersection of the rays through the 2-D estimates.
 
 The paper weighs a particle by ``rho`` itself; ``rho`` of a wrong region is rarely far below
 that of the right one, so all trackers here use ``rho^gamma`` (``sharpness`` gamma, 1 = the
 paper). A camera takes part in a step when the target's predicted ellipse is usable in its image
-(:meth:`EllipsoidCamera.participates`); otherwise it contributes the factor 1 and sends nothing.
-After each estimate a constant-velocity Kalman filter gives the position and velocity that
-predict the next step (the paper's N-scan smoother; at the newest step a fixed-lag smoother's
-estimate is the filtered one), and the orientation is updated from the viewpoint similarities
+(:meth:`EllipsoidCamera.participates`) and its frame arrived; otherwise it contributes the factor
+1 and sends nothing. ``predict`` is the constant-velocity Kalman prediction (``x0 + v0`` with
+``dt = 1`` per frame, Alg. 2); ``update`` fuses the frames into a position estimate, updates the
+velocity filter with it (the paper's N-scan smoother; at the newest step a fixed-lag smoother's
+estimate is the filtered one), and then the orientation from the viewpoint similarities
 (Eqs. 77-78).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -42,19 +47,19 @@ from numpy.typing import NDArray
 from scipy.optimize import minimize
 from scipy.special import logsumexp
 
-from ..core.beliefs import Gaussian, GaussianMixture
-from ..core.errors import ConfigError, invalid
+from ..core.beliefs import Gaussian, GaussianMixture, Particles
+from ..core.errors import ConfigError, MeasurementError, invalid
 from ..core.measurement import Measurement
 from ..core.resampling import systematic
 from ..motion import ConstantVelocity
-from ..perception.appearance import (
-    N_HS,
-    AppearanceModel,
-    FeatureImage,
-    bhattacharyya,
-    region_histograms,
-)
 from ..sensors import PositionFix
+from ..sensors.appearance import AppearanceModel, FeatureImage
+from ..sensors.appearance_camera import (
+    RHO_FLOOR,
+    AppearanceCamera,
+    colour_log_likelihood,
+    reference_histogram,
+)
 from ..sensors.ellipsoid_camera import (
     EllipsoidCamera,
     axis_angle_quaternion,
@@ -80,7 +85,6 @@ WEIGHT_BYTES = 8
 GMM3_BYTES = 80  # weight + 3 mean + 6 covariance doubles
 GMM2_BYTES = 48  # weight + 2 mean + 3 covariance doubles
 PIXEL_BYTES = 16  # the baseline's 2-D estimate
-RHO_FLOOR = 1e-3
 
 
 def routing_tree(positions: Array, base: Array) -> list[int]:
@@ -126,11 +130,10 @@ def children_first(parent: Sequence[int]) -> list[int]:
 
 @dataclass(frozen=True)
 class CameraNetwork:
-    """The cameras, the target's appearance model and shape, and the routing tree."""
+    """The cameras' appearance sensor models (one per camera, in network order) and the routing
+    tree (``parent[n]``, ``-1`` = the base station)."""
 
-    cameras: tuple[EllipsoidCamera, ...]
-    model: AppearanceModel
-    semi_axes: tuple[float, float, float]
+    sensors: tuple[AppearanceCamera, ...]
     parent: tuple[int, ...]
 
     @classmethod
@@ -141,44 +144,60 @@ class CameraNetwork:
         semi_axes: Sequence[float],
         base: Sequence[float],
     ) -> CameraNetwork:
+        axes = (float(semi_axes[0]), float(semi_axes[1]), float(semi_axes[2]))
+        ids = [c.sensor_id for c in cameras]
+        if len(set(ids)) != len(ids):
+            raise ConfigError(invalid("cameras[].sensor_id", ids, "distinct camera ids"))
         pos = np.array([c.centre for c in cameras])
         parent = routing_tree(pos, np.asarray(base, float))
-        return cls(tuple(cameras), model, tuple(semi_axes), tuple(parent))  # type: ignore[arg-type]
+        return cls(tuple(AppearanceCamera(c, model, axes) for c in cameras), tuple(parent))
+
+    @property
+    def cameras(self) -> tuple[EllipsoidCamera, ...]:
+        return tuple(s.camera for s in self.sensors)
+
+    @property
+    def semi_axes(self) -> tuple[float, float, float]:
+        return self.sensors[0].semi_axes
 
     def usable(self, x: Array, q: Array) -> list[int]:
         """Cameras whose image holds a usable ellipse of the target at ``x``."""
-        out = []
-        for n, cam in enumerate(self.cameras):
-            yc, B = cam.ellipse(x, q, self.semi_axes)
-            if bool(cam.participates(yc, B)):
-                out.append(n)
+        return [n for n, s in enumerate(self.sensors) if s.participates(x, q)]
+
+    def frames(self, measurements: Sequence[Measurement]) -> dict[int, FeatureImage]:
+        """Each camera's frame by camera index; measurements of other sensors are left out."""
+        index = {s.sensor_id: n for n, s in enumerate(self.sensors)}
+        out: dict[int, FeatureImage] = {}
+        for m in measurements:
+            n = index.get(m.sensor_id)
+            if n is None:
+                continue
+            if not isinstance(m.value, FeatureImage):
+                raise MeasurementError(
+                    invalid(f"value of camera {m.sensor_id!r}", type(m.value), "a FeatureImage")
+                )
+            out[n] = m.value
         return out
 
-    def log_similarity(
-        self, n: int, features: FeatureImage, x: Array, q: Array, sharpness: float
-    ) -> Array:
-        """``gamma log rho_n(x_i)`` for 3-D candidates ``x`` ``(M, 3)`` (Eqs. 71, 74-76, 81)."""
-        cam = self.cameras[n]
-        yc, B = cam.ellipse(x, q, self.semi_axes)
-        view = self.model.view_index(cam.centre, x, quaternion_to_rotation(q))
-        rho = self.model.similarity(features, yc, B, view)
-        return sharpness * np.log(np.maximum(rho, RHO_FLOOR))
+    def measurements(self, time: float, frames: Sequence[FeatureImage]) -> list[Measurement]:
+        """One measurement per camera from frames in network order."""
+        return [Measurement(time, s.sensor_id, f) for s, f in zip(self.sensors, frames)]
 
-    def camera_view(
-        self, n: int, features: FeatureImage, x: Array, q: Array, sharpness: float
-    ) -> tuple[Array, Array, float]:
-        """Camera ``n``'s evidence on the orientation (Eq. 77): the similarity-weighted mean
-        viewpoint ``e_avg`` (body frame, towards the camera), the world direction from the target
-        to the camera, and the weight ``max_j rho_j``. The viewpoints are weighted by
-        ``rho_j^gamma`` like the particles (``gamma = 1`` is the paper's ``rho_j``)."""
-        cam = self.cameras[n]
-        yc, B = cam.ellipse(x, q, self.semi_axes)
-        rho = self.model.all_views(features, yc, B)
-        w = np.maximum(rho, RHO_FLOOR) ** sharpness
-        e_avg = w @ self.model.viewpoints / max(w.sum(), 1e-300)
-        e_avg /= max(np.linalg.norm(e_avg), 1e-12)
-        to_cam = (cam.centre - x) / np.linalg.norm(cam.centre - x)
-        return e_avg, to_cam, float(rho.max())
+
+def camera_view(
+    sensor: AppearanceCamera, frame: FeatureImage, x: Array, q: Array, sharpness: float
+) -> tuple[Array, Array, float]:
+    """A camera's evidence on the orientation (Eq. 77): the similarity-weighted mean viewpoint
+    ``e_avg`` (body frame, towards the camera), the world direction from the target to the
+    camera, and the weight ``max_j rho_j``. The viewpoints are weighted by ``rho_j^gamma`` like
+    the particles (``gamma = 1`` is the paper's ``rho_j``)."""
+    rho = sensor.view_similarities(frame, x, q)
+    w = np.maximum(rho, RHO_FLOOR) ** sharpness
+    e_avg = w @ sensor.model.viewpoints / max(w.sum(), 1e-300)
+    e_avg /= max(np.linalg.norm(e_avg), 1e-12)
+    centre = sensor.camera.centre
+    to_cam = (centre - x) / np.linalg.norm(centre - x)
+    return e_avg, to_cam, float(rho.max())
 
 
 def minimal_rotation_quaternion(e_avg: Array, to_cam: Array) -> Array:
@@ -258,94 +277,185 @@ class TrackerSettings:
     orientation_fusion: Literal["paper", "wahba"] = "wahba"
 
 
-@dataclass
-class StepReport:
-    """What a tracker produced at one step."""
+@dataclass(frozen=True)
+class Communication:
+    """What the cameras sent in one update: the payload they originate (the paper's accounting,
+    one hop each), the same payload counted on every link it crosses on the routing tree, and the
+    number of cameras whose evidence was fused."""
 
-    position: Array
+    bytes_sent: int = 0
+    link_bytes: int = 0
+    cameras_used: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class PixelTrack:
+    """One camera's 2-D colour particle filter (baseline P): its fixed ellipse ``shape``
+    ``(2, 2)`` and its equally weighted pixel particles."""
+
+    shape: Array
+    particles: Particles
+
+
+@dataclass(frozen=True, eq=False)
+class SmartCameraBelief:
+    """Everything a smart-camera tracker carries from one step to the next.
+
+    ``kinematics``: the velocity filter's ``N([position, velocity], P)``; ``quaternion``: the
+    target's orientation; ``sent``: the last update's communication; ``particles``: the last
+    update's weighted 3-D particles (T0-T2, for inspection); ``extra``: other estimates of the
+    last update (T4: ``"eq103"``); ``references`` and ``pixel_tracks``: baseline P's reference
+    histograms and running 2-D trackers, by camera index. ``mean``/``cov`` are the position's.
+    """
+
+    kinematics: Gaussian
     quaternion: Array
-    bytes_sent: int  # payload the cameras originate (the paper's accounting, one hop each)
-    link_bytes: int  # the same payload counted on every link it crosses on the routing tree
-    cameras_used: int
-    extra: dict[str, Array] = field(default_factory=dict)
+    sent: Communication = Communication()
+    particles: Particles | None = None
+    extra: Mapping[str, Array] = field(default_factory=dict)
+    references: Mapping[int, Array] = field(default_factory=dict)
+    pixel_tracks: Mapping[int, PixelTrack] = field(default_factory=dict)
+
+    @property
+    def position(self) -> Array:
+        return self.kinematics.mean[:3]
+
+    @property
+    def velocity(self) -> Array:
+        return self.kinematics.mean[3:]
+
+    @property
+    def mean(self) -> Array:
+        return self.position
+
+    @property
+    def cov(self) -> Array:
+        return self.kinematics.cov[:3, :3]
 
 
-class _Tracker:
-    """Shared skeleton: prediction, the velocity filter and the orientation update."""
+@dataclass(frozen=True, eq=False)
+class Fusion:
+    """What one update's fusion produced: the position estimate (None: nothing to fuse), the
+    cameras whose frames inform the orientation, the communication and the extras."""
+
+    estimate: Array | None
+    orientation_cameras: Sequence[int]
+    sent: Communication
+    particles: Particles | None = None
+    extra: Mapping[str, Array] = field(default_factory=dict)
+    pixel_tracks: Mapping[int, PixelTrack] | None = None  # P: the 2-D trackers after the step
+
+
+def _require_rng(rng: np.random.Generator | None) -> np.random.Generator:
+    if rng is None:
+        raise ConfigError(invalid("rng", rng, "a numpy.random.Generator (the update draws)"))
+    return rng
+
+
+class SmartCameraTracker:
+    """The part every tracker shares: the velocity filter's prediction, the update's skeleton
+    (fuse the frames, update the velocity filter, then the orientation) and the configuration.
+    A subclass supplies :meth:`fuse`."""
 
     name = "tracker"
 
-    def __init__(
-        self,
-        net: CameraNetwork,
-        position: Array,
-        velocity: Array,
-        quaternion: Array,
-        settings: TrackerSettings = TrackerSettings(),
-    ) -> None:
+    def __init__(self, net: CameraNetwork, settings: TrackerSettings = TrackerSettings()) -> None:
         self.net = net
         self.s = settings
-        self.q = np.asarray(quaternion, float) / np.linalg.norm(quaternion)
         self.kf = KalmanFilter(
             ConstantVelocity(ndim=3, q=settings.kf_q),
             [PositionFix("estimate", cov=settings.kf_r**2 * np.eye(3), position_index=(0, 1, 2))],
         )
-        self.belief = Gaussian(
-            np.concatenate([position, velocity]),
-            np.diag([0.05**2] * 3 + [0.05**2] * 3),
+
+    def initial_belief(
+        self,
+        position: Array,
+        velocity: Array,
+        quaternion: Array,
+        frames: Sequence[Measurement] = (),
+    ) -> SmartCameraBelief:
+        """The manual initialisation: state known to 5 cm and 5 cm/step; ``frames`` (the first
+        frame of each camera) is read by trackers that take a reference from it (P)."""
+        kin = Gaussian(np.concatenate([position, velocity]), np.diag([0.05**2] * 3 + [0.05**2] * 3))
+        q = np.asarray(quaternion, float) / np.linalg.norm(quaternion)
+        return SmartCameraBelief(kin, q)
+
+    def predict(
+        self, belief: SmartCameraBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> SmartCameraBelief:
+        """Constant-velocity prediction of the velocity filter (``x0 + v0`` for ``dt = 1``)."""
+        return replace(belief, kinematics=self.kf.predict(belief.kinematics, dt))
+
+    def update(
+        self,
+        belief: SmartCameraBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> SmartCameraBelief:
+        """Fuse the cameras' frames at the predicted position, then update the velocity filter
+        with the estimate and the orientation from the frames (Eqs. 77-78)."""
+        frames = self.net.frames(measurements)
+        fused = self.fuse(belief, frames, _require_rng(rng))
+        kin = belief.kinematics
+        est = fused.estimate
+        if est is not None and np.all(np.isfinite(est)):
+            time = max((m.time for m in measurements), default=0.0)
+            kin = self.kf.update(kin, [Measurement(time, "estimate", est)])
+        q = belief.quaternion
+        if self.s.estimate_orientation and fused.orientation_cameras:
+            x = kin.mean[:3]
+            views = [
+                camera_view(self.net.sensors[n], frames[n], x, q, self.s.sharpness)
+                for n in fused.orientation_cameras
+            ]
+            q = fuse_orientation(views, q, self.s.orientation_alpha, self.s.orientation_fusion)
+        return replace(
+            belief,
+            kinematics=kin,
+            quaternion=q,
+            sent=fused.sent,
+            particles=fused.particles,
+            extra=fused.extra,
+            pixel_tracks=belief.pixel_tracks if fused.pixel_tracks is None else fused.pixel_tracks,
         )
-        self.t = 0
 
-    @property
-    def position(self) -> Array:
-        return self.belief.mean[:3]
-
-    @property
-    def velocity(self) -> Array:
-        return self.belief.mean[3:]
-
-    def predicted(self) -> Array:
-        return self.position + self.velocity  # x0 + v0 (dt absorbed, Alg. 2)
-
-    def _finish(
-        self, estimate: Array | None, frames: Sequence[FeatureImage], used: Sequence[int]
-    ) -> Array:
-        """Velocity filter on the new estimate, then the orientation update; returns the position."""
-        self.t += 1
-        prior = self.kf.predict(self.belief, 1.0)
-        if estimate is not None and np.all(np.isfinite(estimate)):
-            prior = self.kf.update(prior, [Measurement(float(self.t), "estimate", estimate)])
-        self.belief = prior
-        if self.s.estimate_orientation and used:
-            x = self.position
-            views = [self.net.camera_view(n, frames[n], x, self.q, self.s.sharpness) for n in used]
-            self.q = fuse_orientation(
-                views, self.q, self.s.orientation_alpha, self.s.orientation_fusion
-            )
-        return self.position.copy()
-
-    def step(self, frames: Sequence[FeatureImage], rng: np.random.Generator) -> StepReport:
+    def fuse(
+        self,
+        belief: SmartCameraBelief,
+        frames: Mapping[int, FeatureImage],
+        rng: np.random.Generator,
+    ) -> Fusion:
+        """The cameras' evidence fused into a position estimate at the predicted ``belief``."""
         raise NotImplementedError
 
+    def participating(
+        self, belief: SmartCameraBelief, frames: Mapping[int, FeatureImage]
+    ) -> list[int]:
+        """Cameras that see the predicted target and sent a frame, in network order."""
+        return [n for n in self.net.usable(belief.position, belief.quaternion) if n in frames]
 
-class _ModalTracker(_Tracker):
+
+class _ModalTracker(SmartCameraTracker):
     """A tracker family whose variants (the paper's T0..T4) differ by ``mode`` only."""
 
     modes: tuple[str, ...] = ()
 
     def __init__(
-        self,
-        mode: str,
-        net: CameraNetwork,
-        position: Array,
-        velocity: Array,
-        quaternion: Array,
-        settings: TrackerSettings = TrackerSettings(),
+        self, mode: str, net: CameraNetwork, settings: TrackerSettings = TrackerSettings()
     ) -> None:
         if mode not in self.modes:
             raise ConfigError(invalid("mode", mode, f"one of {list(self.modes)}"))
-        super().__init__(net, position, velocity, quaternion, settings)
+        super().__init__(net, settings)
         self.name = self.mode = mode
+
+
+def _mixture_bytes(
+    parent: Sequence[int], mixtures: Mapping[int, GaussianMixture], size: int
+) -> Communication:
+    """Every camera's mixture sent straight to the base (T1, T4)."""
+    sent = sum(size * len(g.weights) for g in mixtures.values())
+    links = sum(size * len(g.weights) * hops(parent, n) for n, g in mixtures.items())
+    return Communication(STATE_BYTES + sent, STATE_BYTES + links, len(mixtures))
 
 
 class Particle3DTracker(_ModalTracker):
@@ -353,43 +463,41 @@ class Particle3DTracker(_ModalTracker):
 
     modes = ("T0", "T1", "T2")
 
-    def step(self, frames: Sequence[FeatureImage], rng: np.random.Generator) -> StepReport:
+    def fuse(
+        self,
+        belief: SmartCameraBelief,
+        frames: Mapping[int, FeatureImage],
+        rng: np.random.Generator,
+    ) -> Fusion:
         s = self.s
-        x0 = self.predicted()
-        used = self.net.usable(x0, self.q)
-        particles = x0 + s.sigma * rng.standard_normal((s.n_particles, 3))
+        x0, q = belief.position, belief.quaternion
+        used = self.participating(belief, frames)
+        states = x0 + s.sigma * rng.standard_normal((s.n_particles, 3))
         logw = {
-            n: self.net.log_similarity(n, frames[n], particles, self.q, s.sharpness) for n in used
+            n: s.sharpness * self.net.sensors[n].log_likelihood(frames[n], states, q) for n in used
         }
-        nbytes = links = STATE_BYTES
         parent = self.net.parent
-        estimate: Array | None = None
         if not used:
-            estimate = None
-        elif self.mode == "T0":
-            total = sum(logw.values())
+            return Fusion(None, used, Communication(STATE_BYTES, STATE_BYTES, 0))
+        total = np.asarray(sum(logw.values()), dtype=np.float64)
+        particles = Particles(states, total)
+        if self.mode == "T0":
             w = np.exp(total - logsumexp(total))
-            estimate = w @ particles  # MMSE, Eq. 82
-            nbytes += WEIGHT_BYTES * s.n_particles * len(used)
-            links += sum(WEIGHT_BYTES * s.n_particles * hops(parent, n) for n in used)
+            nbytes = STATE_BYTES + WEIGHT_BYTES * s.n_particles * len(used)
+            links = STATE_BYTES + sum(WEIGHT_BYTES * s.n_particles * hops(parent, n) for n in used)
+            sent = Communication(nbytes, links, len(used))
+            return Fusion(w @ states, used, sent, particles)  # MMSE, Eq. 82
+        mixtures = {}
+        for n in used:
+            w = np.exp(logw[n] - logw[n].max())
+            mixtures[n], _ = fit_kde_mixture(states, w, rng, m_max=s.m_max)
+        if self.mode == "T1":
+            fused = _product_all(list(mixtures.values()), s.base_components)
+            sent = _mixture_bytes(parent, mixtures, GMM3_BYTES)
         else:
-            mixtures = {}
-            for n in used:
-                w = np.exp(logw[n] - logw[n].max())
-                mixtures[n], _ = fit_kde_mixture(particles, w, rng, m_max=s.m_max)
-            if self.mode == "T1":
-                nbytes += sum(GMM3_BYTES * len(g.weights) for g in mixtures.values())
-                links += sum(
-                    GMM3_BYTES * len(g.weights) * hops(parent, n) for n, g in mixtures.items()
-                )
-                fused = _product_all(list(mixtures.values()), s.base_components)
-            else:
-                fused, sent = _aggregate(parent, mixtures, s.k_reduce, rng)
-                nbytes += sent
-                links += sent
-            estimate = mixture_mode(fused)
-        pos = self._finish(estimate, frames, used)
-        return StepReport(pos, self.q.copy(), nbytes, links, len(used))
+            fused, nbytes = _aggregate(parent, mixtures, s.k_reduce, rng)
+            sent = Communication(STATE_BYTES + nbytes, STATE_BYTES + nbytes, len(used))
+        return Fusion(mixture_mode(fused), used, sent, particles)
 
 
 def _product_all(mixtures: Sequence[GaussianMixture], keep: int) -> GaussianMixture:
@@ -428,17 +536,15 @@ class ImagePlaneTracker(_ModalTracker):
     modes = ("T3", "T4")
 
     def _camera_mixture(
-        self, n: int, frame: FeatureImage, x0: Array, rng: np.random.Generator
+        self, n: int, frame: FeatureImage, x0: Array, q: Array, rng: np.random.Generator
     ) -> GaussianMixture:
         """2-D particles around the predicted pixel, weighed by ``rho^gamma`` in the predicted
         ellipse moved to each particle (Alg. 3, Eqs. 94-98), compressed to a 2-D mixture."""
         s = self.s
-        cam = self.net.cameras[n]
-        yc, B = cam.ellipse(x0, self.q, self.net.semi_axes)
+        sensor = self.net.sensors[n]
+        yc, _ = sensor.predicted_region(x0, q)
         pts = yc + s.sigma_px * rng.standard_normal((s.n_particles_2d, 2))
-        view = self.net.model.view_index(cam.centre, x0, quaternion_to_rotation(self.q))
-        rho = self.net.model.similarity(frame, pts, np.broadcast_to(B, (len(pts), 2, 2)), view)
-        lw = s.sharpness * np.log(np.maximum(rho, RHO_FLOOR))
+        lw = s.sharpness * sensor.log_likelihood_pixels(frame, pts, x0, q)
         gm, _ = fit_kde_mixture(pts, np.exp(lw - lw.max()), rng, m_max=s.m_max)
         return gm
 
@@ -465,31 +571,28 @@ class ImagePlaneTracker(_ModalTracker):
         depth = (self.s.depth_fraction * z) ** 2 * a[:, :, None] * a[:, None, :]
         return GaussianMixture(gm.weights, means, floor_covariances(lateral + depth, 1e-6))
 
-    def step(self, frames: Sequence[FeatureImage], rng: np.random.Generator) -> StepReport:
-        x0 = self.predicted()
-        used = self.net.usable(x0, self.q)
-        mixtures = {n: self._camera_mixture(n, frames[n], x0, rng) for n in used}
-        nbytes = links = STATE_BYTES
-        estimate: Array | None = None
-        extra: dict[str, Array] = {}
-        if used and self.mode == "T3":
+    def fuse(
+        self,
+        belief: SmartCameraBelief,
+        frames: Mapping[int, FeatureImage],
+        rng: np.random.Generator,
+    ) -> Fusion:
+        x0, q = belief.position, belief.quaternion
+        used = self.participating(belief, frames)
+        mixtures = {n: self._camera_mixture(n, frames[n], x0, q, rng) for n in used}
+        if not used:
+            return Fusion(None, used, Communication(STATE_BYTES, STATE_BYTES, 0))
+        if self.mode == "T3":
             lifted = {n: self._lift(n, g, x0) for n, g in mixtures.items()}
-            fused, sent = _aggregate(self.net.parent, lifted, self.s.k_reduce, rng)
-            nbytes += sent
-            links += sent
-            estimate = mixture_mode(fused)
-        elif used:
-            nbytes += sum(GMM2_BYTES * len(g.weights) for g in mixtures.values())
-            links += sum(
-                GMM2_BYTES * len(g.weights) * hops(self.net.parent, n) for n, g in mixtures.items()
-            )
-            cams = [self.net.cameras[n] for n in used]
-            gms = [mixtures[n] for n in used]
-            prior_cov = self.s.sigma**2 * np.eye(3)
-            estimate = map_estimate(cams, gms, x0, prior_cov)
-            extra["eq103"] = closed_form_map(cams, gms, x0, prior_cov)
-        pos = self._finish(estimate, frames, used)
-        return StepReport(pos, self.q.copy(), nbytes, links, len(used), extra)
+            fused, nbytes = _aggregate(self.net.parent, lifted, self.s.k_reduce, rng)
+            sent = Communication(STATE_BYTES + nbytes, STATE_BYTES + nbytes, len(used))
+            return Fusion(mixture_mode(fused), used, sent)
+        cams = [self.net.cameras[n] for n in used]
+        gms = [mixtures[n] for n in used]
+        prior_cov = self.s.sigma**2 * np.eye(3)
+        sent = _mixture_bytes(self.net.parent, mixtures, GMM2_BYTES)
+        eq103 = closed_form_map(cams, gms, x0, prior_cov)
+        return Fusion(map_estimate(cams, gms, x0, prior_cov), used, sent, extra={"eq103": eq103})
 
 
 def _neg_log_posterior(
@@ -586,69 +689,89 @@ def closed_form_map(
     return xh_new[:3] / xh_new[3]
 
 
-class RayIntersectionTracker(_Tracker):
+class RayIntersectionTracker(SmartCameraTracker):
     """Baseline P: a colour particle filter per camera (Perez et al.: fixed ellipse, random-walk
     pixels, likelihood ``exp(-20 (1 - rho))``) and least-squares ray intersection in 3-D."""
 
     name = "P"
 
-    def __init__(
+    def initial_belief(
         self,
-        net: CameraNetwork,
         position: Array,
         velocity: Array,
         quaternion: Array,
-        first_frames: Sequence[FeatureImage],
-        settings: TrackerSettings = TrackerSettings(),
-        rng: np.random.Generator | None = None,
-    ) -> None:
-        super().__init__(net, position, velocity, quaternion, settings)
-        self.shape: dict[int, Array] = {}
-        self.reference: dict[int, Array] = {}
-        self.pixels: dict[int, Array] = {}
-        for n in net.usable(position, self.q):  # manual initialisation at the first frame
-            self._start(n, first_frames[n], position, reference_from_frame=True)
+        frames: Sequence[Measurement] = (),
+    ) -> SmartCameraBelief:
+        """Manual initialisation at the first frames: each camera that sees the target takes its
+        reference histogram from its frame and starts a 2-D tracker there."""
+        belief = super().initial_belief(position, velocity, quaternion)
+        first = self.net.frames(frames)
+        refs: dict[int, Array] = {}
+        tracks: dict[int, PixelTrack] = {}
+        for n in self.net.usable(belief.position, belief.quaternion):
+            if n not in first:
+                continue
+            yc, B = self.net.sensors[n].predicted_region(belief.position, belief.quaternion)
+            refs[n] = reference_histogram(first[n], yc, B)
+            tracks[n] = self._start(yc, B)
+        return replace(belief, references=refs, pixel_tracks=tracks)
 
-    def _start(self, n: int, frame: FeatureImage, x: Array, reference_from_frame: bool) -> None:
-        cam = self.net.cameras[n]
-        yc, B = cam.ellipse(x, self.q, self.net.semi_axes)
-        self.shape[n] = B
-        if reference_from_frame or n not in self.reference:
-            if reference_from_frame:
-                self.reference[n] = region_histograms(frame.hs, yc, B, N_HS)[0]
-            elif self.reference:
-                self.reference[n] = np.mean(list(self.reference.values()), axis=0)
-            else:
-                return
-        self.pixels[n] = np.repeat(yc[None], self.s.n_particles_2d, axis=0)
+    def _start(self, yc: Array, B: Array) -> PixelTrack:
+        return PixelTrack(B, Particles.uniform(np.repeat(yc[None], self.s.n_particles_2d, axis=0)))
 
-    def step(self, frames: Sequence[FeatureImage], rng: np.random.Generator) -> StepReport:
-        s = self.s
+    def fuse(
+        self,
+        belief: SmartCameraBelief,
+        frames: Mapping[int, FeatureImage],
+        rng: np.random.Generator,
+    ) -> Fusion:
+        """Each camera's colour particle filter (random walk, weigh, estimate, resample); a
+        tracker whose estimate leaves the image has lost the target and stops."""
         estimates: dict[int, Array] = {}
-        for n in list(self.pixels):
+        tracks: dict[int, PixelTrack] = {}
+        for n, track in belief.pixel_tracks.items():
+            if n not in frames:
+                tracks[n] = track
+                continue
             cam = self.net.cameras[n]
-            pts = self.pixels[n] + s.sigma_px * rng.standard_normal(self.pixels[n].shape)
-            B = np.broadcast_to(self.shape[n], (len(pts), 2, 2))
-            p = region_histograms(frames[n].hs, pts, B, N_HS)
-            lw = -20.0 * (1.0 - bhattacharyya(p, self.reference[n]))
+            pixels = track.particles.states
+            pts = pixels + self.s.sigma_px * rng.standard_normal(pixels.shape)
+            lw = colour_log_likelihood(frames[n], pts, track.shape, belief.references[n])
             w = np.exp(lw - logsumexp(lw))
             est = w @ pts
             wd, ht = cam.size
             if not (0 <= est[0] < wd and 0 <= est[1] < ht):
-                del self.pixels[n]  # the 2-D tracker lost the target
-                continue
+                continue  # the 2-D tracker lost the target
             estimates[n] = est
-            self.pixels[n] = pts[systematic(w, rng)]
+            tracks[n] = PixelTrack(track.shape, Particles.uniform(pts[systematic(w, rng)]))
         estimate: Array | None = None
         if len(estimates) >= 2:
             cams = [self.net.cameras[n] for n in estimates]
             rays = np.array([c.ray(estimates[n]) for c, n in zip(cams, estimates)])
             estimate = intersect_rays(np.array([c.centre for c in cams]), rays)
-        used = list(estimates)
         nbytes = PIXEL_BYTES * len(estimates)
         links = sum(PIXEL_BYTES * hops(self.net.parent, n) for n in estimates)
-        pos = self._finish(estimate, frames, [])
-        for n in self.net.usable(pos, self.q):  # cameras the target enters start a 2-D tracker
-            if n not in self.pixels:
-                self._start(n, frames[n], pos, reference_from_frame=False)
-        return StepReport(pos, self.q.copy(), nbytes, links, len(used))
+        sent = Communication(nbytes, links, len(estimates))
+        return Fusion(estimate, (), sent, pixel_tracks=tracks)
+
+    def update(
+        self,
+        belief: SmartCameraBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> SmartCameraBelief:
+        """The shared update, then a 2-D tracker starts in every camera the target has entered
+        (reference: the camera's earlier one, else the mean of the others')."""
+        out = super().update(belief, measurements, rng)
+        refs = dict(out.references)
+        tracks = dict(out.pixel_tracks)
+        for n in self.net.usable(out.position, out.quaternion):
+            if n in tracks:
+                continue
+            if n not in refs:
+                if not refs:
+                    continue
+                refs[n] = np.mean(list(refs.values()), axis=0)
+            yc, B = self.net.sensors[n].predicted_region(out.position, out.quaternion)
+            tracks[n] = self._start(yc, B)
+        return replace(out, references=refs, pixel_tracks=tracks)

@@ -242,9 +242,12 @@ class SPPEKFProposal:
     memoryless: bool = True
     repartition: str = "residual"  # "residual" (as printed) or "nominal" (see SPPEKFBank.feedback)
 
-    def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> BankState:
-        self._prior = prior
-        return None  # type: ignore[return-value]  # the bank is built lazily (needs the filter)
+    def initialize(
+        self, prior: Gaussian, particles: Array, rng: np.random.Generator
+    ) -> BankState | Gaussian:
+        """The prior itself: the bank is drawn at the first step (it needs the filter's models),
+        after the particles, so the draws keep their order."""
+        return prior
 
     def _bank(self, filt: object) -> SPPEKFBank:
         bank = getattr(self, "_bank_obj", None)
@@ -261,7 +264,7 @@ class SPPEKFProposal:
 
     def draw(
         self,
-        state: BankState | None,
+        state: BankState | Gaussian,
         prev: Array,
         zs: Zs,
         dt: float,
@@ -269,8 +272,8 @@ class SPPEKFProposal:
         filt: object,
     ) -> tuple[Array, Array, BankState]:
         bank = self._bank(filt)
-        if state is None:
-            state = bank.initialize(self._prior, rng, prev.shape[:-2])
+        if isinstance(state, Gaussian):  # the first step: nominals from the prior
+            state = bank.initialize(state, rng, prev.shape[:-2])
         state = bank.step(state, zs, dt, rng)
         x, log_q = gaussian_draw(state.mean, self.inflation * state.total_cov, prev.shape[-2], rng)
         return x, log_q, state

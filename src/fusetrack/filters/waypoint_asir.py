@@ -15,6 +15,11 @@ throws away a cloud that is usually only slightly off (a narrow occluder shadow 
 in), so here the step's readings are ignored instead (predicted particles, equal weights), and
 the cloud is drawn afresh only after ``patience`` such steps in a row. All three events are
 counted in :class:`ASIRStats`; weights never become NaN.
+
+The filter is pure: everything carried between steps (particles, weights, the count of
+consecutive ignored steps) is an :class:`ASIRBelief`. The likelihood is passed to each step as a
+function of positions, since the Ercan et al. camera likelihood also depends on the step's
+occluder priors (:class:`~fusetrack.sensors.OcclusionAwareLikelihood`).
 """
 
 from __future__ import annotations
@@ -36,13 +41,31 @@ LogLikelihood = Callable[[Array], Array]
 
 @dataclass
 class ASIRStats:
-    """Counters of one filter's life."""
+    """Diagnostic counters of one filter's life (not part of the belief)."""
 
     steps: int = 0
     first_stage_fallbacks: int = 0
     ignored_steps: int = 0
     reinitialisations: int = 0
-    consecutive_ignored: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class ASIRBelief:
+    """Particles ``(L, 5)`` ``[x, y, tau_x, tau_y, s]``, normalised weights ``(L,)`` and the
+    number of consecutive steps whose readings were ignored (all weights vanished)."""
+
+    particles: Array
+    weights: Array
+    ignored: int = 0
+
+    @property
+    def mean(self) -> Array:
+        return np.asarray(self.weights @ self.particles)
+
+    @property
+    def cov(self) -> Array:
+        r = self.particles - self.mean
+        return np.asarray((r * self.weights[:, None]).T @ r)
 
 
 def _normalise(log_w: Array) -> Array:
@@ -69,19 +92,20 @@ class WaypointASIR:
     def _sample_free(self, rng: np.random.Generator, n: int) -> Array:
         return self.room.sample_free(rng, n)
 
-    def initialize(self, rng: np.random.Generator) -> tuple[Array, Array]:
+    def initialize(self, rng: np.random.Generator) -> ASIRBelief:
         """Particles uniform over the free floor, equal weights (Sec. 6.1)."""
         u = self.dynamics.initial(self.n_particles, rng, self._sample_free, self.initial_speed)
-        return u, np.full(self.n_particles, 1.0 / self.n_particles)
+        return ASIRBelief(u, np.full(self.n_particles, 1.0 / self.n_particles))
 
     def propagate(self, u: Array, rng: np.random.Generator) -> Array:
         """``u(t) ~ f(u | u(t-1))``: also the predicted cloud the camera selection uses (Alg. 3)."""
         return self.dynamics.sample(u, rng, self._sample_free, self.room.free)
 
     def step(
-        self, u: Array, w: Array, log_likelihood: LogLikelihood, rng: np.random.Generator
-    ) -> tuple[Array, Array]:
+        self, belief: ASIRBelief, log_likelihood: LogLikelihood, rng: np.random.Generator
+    ) -> ASIRBelief:
         """One ASIR step (Algorithm 1); ``log_likelihood`` maps positions ``(L, 2)`` to ``(L,)``."""
+        u, w = belief.particles, belief.weights
         self.stats.steps += 1
         kappa = self.dynamics.mean(u)
         log_l1 = log_likelihood(kappa[:, :2])
@@ -98,14 +122,11 @@ class WaypointASIR:
         log_w2 = log_l2 - np.where(np.isfinite(denom), denom, 0.0)
         if not np.any(np.isfinite(log_w2)):
             self.stats.ignored_steps += 1
-            self.stats.consecutive_ignored += 1
-            if self.stats.consecutive_ignored >= self.patience:
+            if belief.ignored + 1 >= self.patience:
                 self.stats.reinitialisations += 1
-                self.stats.consecutive_ignored = 0
                 return self.initialize(rng)
-            return self.propagate(u, rng), w
-        self.stats.consecutive_ignored = 0
-        return new, _normalise(log_w2)
+            return ASIRBelief(self.propagate(u, rng), w, belief.ignored + 1)
+        return ASIRBelief(new, _normalise(log_w2))
 
     @staticmethod
     def estimate(u: Array, w: Array) -> Array:

@@ -83,7 +83,7 @@ def visibility_probabilities(
     ``sum_l w_l P{...| u_l}``, with the conditional probabilities of Eq. 8 (``Q = {i}`` or
     ``{i, j}``) on the cameras assigned to each particle, or the deterministic visibility of the
     extreme priors (Sec. 6.1). ``exclusion``: Eq. 7's rectangles end this far before the particle,
-    the option of :class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`
+    the option of :class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`
     (both call :func:`~fusetrack.world.occlusion.occlusion_probability`'s per-triple kernel).
     """
     assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)

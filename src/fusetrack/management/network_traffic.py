@@ -165,134 +165,135 @@ class _Sim:
             fn(t)
 
 
-def simulate_traffic(cfg: NetworkConfig) -> dict[str, float]:
-    """Mean end-to-end delay per round and mean delay per message kind (seconds)."""
-    sim = _Sim(cfg)
-    rec = cfg.record_bytes
-    n_img = cfg.images_per_camera or max(1, round(10 * cfg.alpha))
-    round_delays: list[float] = []
+class _Round:
+    """One round's message exchange (module docstring, steps 1-3 then RBVC or SBVC); appends
+    the round's end-to-end delay to ``delays`` when the last router has its final estimation."""
 
-    def one_round(rnd: int) -> None:
-        t0 = float(rnd)
-        pending = {"routers": set(cfg.routers_with_objects)}
-        finish: dict[int, float] = {}
-        tracked = {
+    def __init__(
+        self, sim: _Sim, cfg: NetworkConfig, rnd: int, n_img: int, delays: list[float]
+    ) -> None:
+        self.sim, self.cfg, self.n_img, self.delays = sim, cfg, n_img, delays
+        self.rec = cfg.record_bytes
+        self.t0 = float(rnd)
+        self.pending = set(cfg.routers_with_objects)
+        self.finish: dict[int, float] = {}
+        self.tracked = {
             r: sum(round(s * cfg.alpha) for s in cfg.assigned_share)
             for r in cfg.routers_with_objects
         }
-        images_needed = len(cfg.camera_routers) * n_img
+        self.images_needed = len(cfg.camera_routers) * n_img
+        self.state = {r: {"acoustic": 0, "images": 0} for r in cfg.routers_with_objects}
+        self.server = {"estimates": 0, "images": 0}
 
-        def router_done(r: int, t: float, pending=pending, finish=finish, t0=t0) -> None:
-            finish[r] = t
-            pending["routers"].discard(r)
-            if not pending["routers"]:
-                round_delays.append(max(finish.values()) - t0)
-
-        state = {r: {"acoustic": 0, "images": 0} for r in cfg.routers_with_objects}
-        server = {"estimates": 0, "images": 0}
-
-        def server_check(t: float, server=server, state=state, tracked=tracked) -> None:
-            if server["estimates"] == len(state) and server["images"] == images_needed:
-                for r in state:
-                    sim.message(
-                        "Final estimation data",
-                        "srv",
-                        f"R{r}",
-                        rec * tracked[r],
-                        t,
-                        partial(router_done, r),
-                    )
-
-        def router_check(r: int, t: float, state=state, tracked=tracked, server=server) -> None:
-            st = state[r]
-            if cfg.protocol == "RBVC":
-                if st["acoustic"] == 3 and st["images"] == images_needed:
-                    sim.message(
-                        "Final estimation data",
-                        f"R{r}",
-                        "srv",
-                        rec * tracked[r],
-                        t,
-                        partial(router_done, r),
-                    )
-            elif st["acoustic"] == 3:
-                st["acoustic"] = -1
-
-                def got(te: float, server=server) -> None:
-                    server["estimates"] += 1
-                    server_check(te)
-
-                sim.message(
-                    "Estimation based on acoustic sensors", f"R{r}", "srv", rec * tracked[r], t, got
-                )
-
-        for r in cfg.routers_with_objects:
+    def start(self) -> None:
+        """Schedule the round's first messages: RFID detections, then the cameras' images."""
+        for r in self.cfg.routers_with_objects:
             for j in range(3):
-                assigned = round(cfg.assigned_share[j] * cfg.alpha)
-
-                def after_rfid(t: float, r=r, assigned=assigned) -> None:
-                    def after_assign(t2: float) -> None:
-                        def after_acoustic(t3: float) -> None:
-                            state[r]["acoustic"] += 1
-                            router_check(r, t3)
-
-                        sim.message(
-                            "Acoustic sensing data",
-                            f"S{r}",
-                            f"R{r}",
-                            rec * max(assigned, 1),
-                            t2,
-                            after_acoustic,
-                        )
-
-                    sim.message(
-                        "Assigned object data",
-                        f"R{r}",
-                        f"S{r}",
-                        rec * max(assigned, 1),
-                        t,
-                        after_assign,
-                    )
-
-                sim.message(
-                    "RFID detection data", f"S{r}", f"R{r}", rec * cfg.detected[j], t0, after_rfid
-                )
-        for c in cfg.camera_routers:
-            for _ in range(n_img):
-                if cfg.protocol == "RBVC":
-                    for r in cfg.routers_with_objects:
-
-                        def img_at_router(t: float, r=r) -> None:
-                            state[r]["images"] += 1
-                            router_check(r, t)
-
-                        sim.message(
+                self._sense(r, j)
+        for c in self.cfg.camera_routers:
+            for _ in range(self.n_img):
+                if self.cfg.protocol == "RBVC":
+                    for r in self.cfg.routers_with_objects:
+                        self.sim.message(
                             "Visual sensing data",
                             f"S{c}",
                             f"R{r}",
-                            cfg.image_bytes,
-                            t0,
-                            img_at_router,
+                            self.cfg.image_bytes,
+                            self.t0,
+                            partial(self._image_at_router, r),
                             ack=True,
                         )
                 else:
-
-                    def img_at_server(t: float) -> None:
-                        server["images"] += 1
-                        server_check(t)
-
-                    sim.message(
+                    self.sim.message(
                         "Visual sensing data",
                         f"S{c}",
                         "srv",
-                        cfg.image_bytes,
-                        t0,
-                        img_at_server,
+                        self.cfg.image_bytes,
+                        self.t0,
+                        self._image_at_server,
                         ack=True,
                     )
 
+    def _sense(self, r: int, j: int) -> None:
+        """Steps 1-3 for sensor node ``j`` of router ``r``: RFID, assignment, acoustic data."""
+        size = self.rec * max(round(self.cfg.assigned_share[j] * self.cfg.alpha), 1)
+
+        def after_acoustic(t3: float) -> None:
+            self.state[r]["acoustic"] += 1
+            self._router_check(r, t3)
+
+        def after_assign(t2: float) -> None:
+            self.sim.message("Acoustic sensing data", f"S{r}", f"R{r}", size, t2, after_acoustic)
+
+        def after_rfid(t: float) -> None:
+            self.sim.message("Assigned object data", f"R{r}", f"S{r}", size, t, after_assign)
+
+        detected = self.rec * self.cfg.detected[j]
+        self.sim.message("RFID detection data", f"S{r}", f"R{r}", detected, self.t0, after_rfid)
+
+    def _image_at_router(self, r: int, t: float) -> None:
+        self.state[r]["images"] += 1
+        self._router_check(r, t)
+
+    def _image_at_server(self, t: float) -> None:
+        self.server["images"] += 1
+        self._server_check(t)
+
+    def _estimate_at_server(self, t: float) -> None:
+        self.server["estimates"] += 1
+        self._server_check(t)
+
+    def _router_done(self, r: int, t: float) -> None:
+        self.finish[r] = t
+        self.pending.discard(r)
+        if not self.pending:
+            self.delays.append(max(self.finish.values()) - self.t0)
+
+    def _server_check(self, t: float) -> None:
+        """SBVC: with every estimate and image in, the server sends each router its final estimation."""
+        if (
+            self.server["estimates"] == len(self.state)
+            and self.server["images"] == self.images_needed
+        ):
+            for r in self.state:
+                self.sim.message(
+                    "Final estimation data",
+                    "srv",
+                    f"R{r}",
+                    self.rec * self.tracked[r],
+                    t,
+                    partial(self._router_done, r),
+                )
+
+    def _router_check(self, r: int, t: float) -> None:
+        """RBVC: with all acoustic data and images in, the router sends its final estimation;
+        SBVC: with all acoustic data in, it sends its acoustic estimation to the server."""
+        st = self.state[r]
+        size = self.rec * self.tracked[r]
+        if self.cfg.protocol == "RBVC":
+            if st["acoustic"] == 3 and st["images"] == self.images_needed:
+                self.sim.message(
+                    "Final estimation data", f"R{r}", "srv", size, t, partial(self._router_done, r)
+                )
+        elif st["acoustic"] == 3:
+            st["acoustic"] = -1
+            self.sim.message(
+                "Estimation based on acoustic sensors",
+                f"R{r}",
+                "srv",
+                size,
+                t,
+                self._estimate_at_server,
+            )
+
+
+def simulate_traffic(cfg: NetworkConfig) -> dict[str, float]:
+    """Mean end-to-end delay per round and mean delay per message kind (seconds)."""
+    sim = _Sim(cfg)
+    n_img = cfg.images_per_camera or max(1, round(10 * cfg.alpha))
+    round_delays: list[float] = []
     for rnd in range(cfg.rounds):
-        one_round(rnd)
+        _Round(sim, cfg, rnd, n_img, round_delays).start()
         sim.run()
     out = {"end_to_end": sum(round_delays) / max(len(round_delays), 1)}
     for kind, v in sim.hop_delays.items():

@@ -1,5 +1,6 @@
 """fusetrack.perception (see DESIGN.md)."""
 
+from . import source_localisation as source_localisation
 from .audio_beamforming import Beamformer as Beamformer
 from .audio_beamforming import MicrophoneArray as MicrophoneArray
 from .harmonic_features import CompressedPsd as CompressedPsd

@@ -11,6 +11,10 @@ On a horizontal plane ``Z = h`` this is a homography of the plane's ``(X, Y)``::
 
 ``H(0)`` is the ground-plane (foot) homography, ``H(h)`` at the person's height the head-plane
 homography (the thesis only says "a different homography"; this is its form in terms of P).
+
+:class:`PinholeCamera` is fusetrack's one camera model: built from ``K, R, C`` (Nott 2009) or from
+a pose (position, yaw, downward pitch, field of view; :meth:`PinholeCamera.from_pose`, the road
+cameras of Kushwaha 2010), it renders the simulated scenes in :mod:`fusetrack.world`.
 """
 
 from __future__ import annotations
@@ -41,9 +45,20 @@ def look_rotation(tilt_deg: float, pan_deg: float = 0.0) -> Array:
     """World-to-camera rotation of a zero-roll camera looking along ``+Y`` turned by ``pan``
     (anticlockwise, degrees) and tilted down by ``tilt``: rows = right, down, forward."""
     t, p = np.deg2rad(tilt_deg), np.deg2rad(pan_deg)
-    fwd_h = np.array([-np.sin(p), np.cos(p), 0.0])  # horizontal viewing direction
-    right = np.array([np.cos(p), np.sin(p), 0.0])
-    fwd = np.cos(t) * fwd_h + np.array([0.0, 0.0, -np.sin(t)])
+    return _zero_roll(-np.sin(p), np.cos(p), np.cos(t), np.sin(t))
+
+
+def yaw_pitch_rotation(yaw: float, pitch: float) -> Array:
+    """World-to-camera rotation of a zero-roll camera looking along ``yaw`` (rad, CCW from ``+X``)
+    and tilted down by ``pitch`` (rad): rows = right, down, forward."""
+    return _zero_roll(np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch))
+
+
+def _zero_roll(cos_h: float, sin_h: float, cos_t: float, sin_t: float) -> Array:
+    """Rows right, down, forward for the horizontal viewing direction ``(cos_h, sin_h)`` tilted
+    down by the angle whose cosine and sine are ``cos_t, sin_t``."""
+    fwd = np.array([cos_h * cos_t, sin_h * cos_t, -sin_t])
+    right = np.array([sin_h, -cos_h, 0.0])
     down = np.cross(fwd, right)
     return np.vstack([right, down, fwd])
 
@@ -58,9 +73,37 @@ class PinholeCamera:
     width: int = 640
     height: int = 480
 
+    @classmethod
+    def from_pose(
+        cls,
+        position: ArrayLike,
+        yaw: float,
+        pitch: float = np.deg2rad(8.0),
+        hfov: float = np.deg2rad(60.0),
+        width: int = 320,
+        height: int = 240,
+    ) -> PinholeCamera:
+        """A camera at ``position (x, y, z)`` looking along ``yaw`` (rad, CCW from ``+X``), tilted
+        down by ``pitch``, with horizontal field of view ``hfov``, square pixels and the principal
+        point at the image centre."""
+        focal = (width / 2) / np.tan(hfov / 2)
+        K = np.array([[focal, 0.0, width / 2], [0.0, focal, height / 2], [0.0, 0.0, 1.0]])
+        centre = np.asarray(position, float)
+        return cls(K, yaw_pitch_rotation(yaw, pitch), centre, width, height)
+
     @property
     def P(self) -> Array:
         return camera_matrix(self.K, self.R, self.centre)
+
+    @property
+    def focal(self) -> float:
+        """Horizontal focal length in pixels."""
+        return float(self.K[0, 0])
+
+    @property
+    def hfov(self) -> float:
+        """Horizontal field of view (rad)."""
+        return float(2 * np.arctan((self.width / 2) / self.K[0, 0]))
 
     def project(self, points: ArrayLike) -> Array:
         """Pixels ``(..., 2)`` of world points ``(..., 3)`` (Nott 2009, Eqs. 3.2-3.3)."""
@@ -70,6 +113,13 @@ class PinholeCamera:
         """Distance along the optical axis ``(...)`` (positive in front of the camera)."""
         x = np.asarray(points, float)
         return (x - self.centre) @ self.R[2]
+
+    def column_angles(self) -> Array:
+        """Bearing of each pixel column relative to the optical axis (CCW positive):
+        ``atan((c_x - j - 1/2) / f)`` (spec 003 §2.3 step 5; exact for zero pitch, within a
+        fraction of a degree at 8 degrees)."""
+        j = np.arange(self.width)
+        return np.asarray(np.arctan((self.K[0, 2] - (j + 0.5)) / self.K[0, 0]))
 
 
 def default_camera() -> PinholeCamera:
@@ -138,4 +188,5 @@ __all__ = [
     "look_rotation",
     "plane_homography",
     "project_points",
+    "yaw_pitch_rotation",
 ]

@@ -23,7 +23,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from importlib import resources
 from typing import Any
 
@@ -80,8 +80,24 @@ async def _read_limited(request: Request, limit: int) -> bytes | None:
 
 def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> FastAPI:
     """The ASGI application of ``node`` (and its UDP listener on ``udp_socket``, if given)."""
-    period = node.cfg.fusion.period
-    poll = min(0.05, period / 4)
+    app = FastAPI(
+        title="fusetrack fusion node",
+        version="1",
+        summary="Sensor nodes stream readings; the node fuses them and publishes tracks.",
+        lifespan=_lifespan(node, udp_socket),
+    )
+    app.state.node = node
+    _reading_routes(app, node)
+    _ingest_routes(app, node)
+    app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
+    return app
+
+
+def _lifespan(
+    node: FusionNode, udp_socket: socket.socket | None
+) -> Callable[[FastAPI], contextlib.AbstractAsyncContextManager[None]]:
+    """Runs the tick loop (and the UDP listener) while the app serves."""
+    poll = min(0.05, node.cfg.fusion.period / 4)
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -113,14 +129,11 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
                 listener.close()
             node.commit()
 
-    app = FastAPI(
-        title="fusetrack fusion node",
-        version="1",
-        summary="Sensor nodes stream readings; the node fuses them and publishes tracks.",
-        lifespan=lifespan,
-    )
-    app.state.node = node
-    limit = node.cfg.limits.max_message_bytes
+    return lifespan
+
+
+def _reading_routes(app: FastAPI, node: FusionNode) -> None:
+    """The dashboard, tracks, sensors, health, metrics, schema and the tracks' WebSocket."""
 
     @app.get("/", response_class=HTMLResponse, include_in_schema=False)
     async def dashboard() -> HTMLResponse:
@@ -150,12 +163,32 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
     async def schema() -> dict[str, Any]:
         return message_json_schema()
 
-    body_schema = {
-        "oneOf": [
-            {"$ref": "#/components/schemas/SensorMessage"},
-            {"$ref": "#/components/schemas/MessageBatch"},
-        ]
-    }
+    @app.websocket("/ws/tracks")
+    async def ws_tracks(ws: WebSocket) -> None:
+        await ws.accept()
+        q = node.subscribe()
+        try:
+            hello = {"type": "hello", **node.tracks_view(), "area": node.cfg.area}
+            await ws.send_json(hello)
+            while True:
+                await ws.send_text(await q.get())
+        except (WebSocketDisconnect, RuntimeError):
+            pass
+        finally:
+            node.unsubscribe(q)
+
+
+_BODY_SCHEMA = {
+    "oneOf": [
+        {"$ref": "#/components/schemas/SensorMessage"},
+        {"$ref": "#/components/schemas/MessageBatch"},
+    ]
+}
+
+
+def _ingest_routes(app: FastAPI, node: FusionNode) -> None:
+    """``POST /ingest`` and ``WS /ws/ingest`` (a node's bearer token)."""
+    limit = node.cfg.limits.max_message_bytes
 
     @app.post(
         "/ingest",
@@ -164,8 +197,8 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
             "requestBody": {
                 "required": True,
                 "content": {
-                    "application/json": {"schema": body_schema},
-                    "application/msgpack": {"schema": body_schema},
+                    "application/json": {"schema": _BODY_SCHEMA},
+                    "application/msgpack": {"schema": _BODY_SCHEMA},
                 },
             }
         },
@@ -188,20 +221,6 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
         status = _status(outcomes)
         headers = {"Retry-After": "1"} if status == 503 else None
         return JSONResponse(_summary(outcomes), status, headers)
-
-    @app.websocket("/ws/tracks")
-    async def ws_tracks(ws: WebSocket) -> None:
-        await ws.accept()
-        q = node.subscribe()
-        try:
-            hello = {"type": "hello", **node.tracks_view(), "area": node.cfg.area}
-            await ws.send_json(hello)
-            while True:
-                await ws.send_text(await q.get())
-        except (WebSocketDisconnect, RuntimeError):
-            pass
-        finally:
-            node.unsubscribe(q)
 
     @app.websocket("/ws/ingest")
     async def ws_ingest(ws: WebSocket) -> None:
@@ -226,22 +245,21 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
         except WebSocketDisconnect:
             pass
 
-    def openapi() -> dict[str, Any]:
-        if app.openapi_schema is None:
-            from fastapi.openapi.utils import get_openapi
 
-            doc = get_openapi(title=app.title, version=app.version, routes=app.routes)
-            _, defs = models_json_schema(
-                [
-                    (SensorMessage, "validation"),
-                    (MessageBatch, "validation"),
-                    (TrackState, "serialization"),
-                ],
-                ref_template="#/components/schemas/{model}",
-            )
-            doc.setdefault("components", {}).setdefault("schemas", {}).update(defs["$defs"])
-            app.openapi_schema = doc
-        return app.openapi_schema
+def _openapi(app: FastAPI) -> dict[str, Any]:
+    """The OpenAPI document, with the message and track schemas in its components."""
+    if app.openapi_schema is None:
+        from fastapi.openapi.utils import get_openapi
 
-    app.openapi = openapi  # type: ignore[method-assign]
-    return app
+        doc = get_openapi(title=app.title, version=app.version, routes=app.routes)
+        _, defs = models_json_schema(
+            [
+                (SensorMessage, "validation"),
+                (MessageBatch, "validation"),
+                (TrackState, "serialization"),
+            ],
+            ref_template="#/components/schemas/{model}",
+        )
+        doc.setdefault("components", {}).setdefault("schemas", {}).update(defs["$defs"])
+        app.openapi_schema = doc
+    return app.openapi_schema

@@ -174,7 +174,7 @@ class SensorConfig(_Section):
 class DetectionFunctionSensor:
     """A sensor that reports a detection function (Kushwaha 2010, Ch. III): beam energies of a
     microphone array or per-column foreground scores of a camera, ``dim`` = its samples. Only the
-    grid tracker fuses it (:mod:`fusetrack.service.grid_engine`)."""
+    grid tracker fuses it (:mod:`fusetrack.service.grid_cells`)."""
 
     sensor_id: str
     position: list[float]

@@ -1,4 +1,5 @@
-"""Several targets inside the node: position detections associated by online MCMCDA.
+"""Several targets inside the node: position detections associated by online MCMCDA, behind the
+same :class:`~.engine.Engine` interface as the single-target :class:`~.engine.FusionEngine`.
 
 ``tracker.association.method: mcmcda``. Every tick, the tick's readings become position
 detections (:func:`detections`):
@@ -25,11 +26,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..association.mcmcda import MCMCDA, MCMCDAConfig
+from ..association.mcmcda import MCMCDA, AssociationState, MCMCDAConfig
 from ..association.peaks import likelihood_peaks
 from .alignment import Reading
 from .config import NetworkConfig
-from .grid_engine import CellLikelihoods, grid_of
+from .engine import track_state
+from .grid_cells import CellLikelihoods, grid_of
 from .schema import TrackState
 
 _POSITION_KINDS = ("position_fix", "range_bearing")
@@ -67,6 +69,18 @@ def detections(
     return np.array(out, dtype=float).reshape(-1, 2)
 
 
+def associate(
+    mcmcda: MCMCDA, state: AssociationState, y: np.ndarray, rng: np.random.Generator
+) -> tuple[AssociationState, dict[int, tuple[np.ndarray, np.ndarray]]]:
+    """One MCMCDA step on the tick's detections ``y (k, 2)``: the new association state and the
+    current tracks by id (the Kalman state and covariance of each, predicted to the tick). The
+    engine's only call into :mod:`fusetrack.association.mcmcda`."""
+    state = mcmcda.forget_past(
+        mcmcda.step(state, y, rng)
+    )  # a node runs for days: memory stays flat
+    return state, dict(mcmcda.current_tracks(state))
+
+
 class MultiTargetEngine:
     """The node's multi-target tracker (module docstring)."""
 
@@ -80,8 +94,9 @@ class MultiTargetEngine:
                 area=(x1 - x0) * (y1 - y0),
                 **a.model_dump(exclude={"method"}),  # the section's fields are MCMCDAConfig's
             ),
-            rng=np.random.default_rng(cfg.tracker.seed),
         )
+        self.rng = np.random.default_rng(cfg.tracker.seed)
+        self.association = self.mcmcda.initial_state()
         self.cells = CellLikelihoods(cfg, grid_of(cfg)) if cfg.tracker.filter == "grid" else None
         self.time = float(start)
         self.resets = 0
@@ -90,24 +105,11 @@ class MultiTargetEngine:
     def step_all(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]:
         """Associate the tick's detections; publish every current track."""
         y = detections(self.cfg, readings, self.cells)
-        self.mcmcda.step(y)
-        self.mcmcda.forget_past()  # a node runs for days: memory stays flat
+        self.association, tracks = associate(self.mcmcda, self.association, y, self.rng)
         self.last_detections = y
         self.time = t
-        sensors = sorted({r.sensor for r in readings})
-        out = []
-        for ident, (x, p) in self.mcmcda.current_tracks().items():
-            out.append(
-                TrackState(
-                    track=ident + 1,  # ids from 1, as the single-target trackers'
-                    tick=tick,
-                    time=t,
-                    state=x.tolist(),
-                    covariance=p.tolist(),
-                    position=x[:2].tolist(),
-                    position_covariance=p[:2, :2].tolist(),
-                    sensors=sensors,
-                    readings=len(readings),
-                )
-            )
-        return out
+        # ids from 1, as the single-target trackers'
+        return [
+            track_state(ident + 1, tick, t, x, p, (0, 1), readings)
+            for ident, (x, p) in tracks.items()
+        ]

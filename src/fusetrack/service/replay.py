@@ -27,6 +27,7 @@ import httpx
 import numpy as np
 
 from ..core.errors import ConfigError, invalid
+from ..world.demo_scene import AREA, DemoScene, simulate_demo
 from .auth import bearer_token, seal
 from .config import NetworkConfig, parse_config
 from .log import DurableLog
@@ -59,14 +60,12 @@ class Scenario:
 
 
 def demo_network(keys: dict[str, str] | None = None, **fusion: Any) -> NetworkConfig:
-    """The network of the demo experiment's sensors (``examples/network.yaml`` is the same).
+    """The network of the demo scene's sensors (``examples/network.yaml`` is the same).
 
     ``keys``: node id -> key (default: fresh random keys); ``fusion``: overrides of the fusion
     section (default: 2 Hz, every reading in order, data clock, 1 s lag, start at 0).
     """
-    from ..experiments.demo import AREA, Scenario
-
-    scn = Scenario()
+    scn = DemoScene()
     nodes = {
         "array-west": "mic_west",
         "array-east": "mic_east",
@@ -116,14 +115,12 @@ def demo_network(keys: dict[str, str] | None = None, **fusion: Any) -> NetworkCo
 
 
 def demo_scenario(network: NetworkConfig, seed: int = 0, duration: float | None = None) -> Scenario:
-    """The demo experiment's simulation (one Monte Carlo run) as readings to send."""
-    from ..experiments.demo import Scenario as DemoScenario
-    from ..experiments.demo import simulate
-
-    scn = DemoScenario()
+    """The demo scene's simulation (:mod:`fusetrack.world.demo_scene`, one Monte Carlo run of the
+    demo experiment) as readings to send."""
+    scn = DemoScene()
     if duration is not None:
         scn = dataclasses.replace(scn, duration=duration)
-    truth, reports = simulate(scn, np.random.default_rng(seed))
+    truth, reports = simulate_demo(scn, np.random.default_rng(seed))
     readings = [Recorded(m.time, m.sensor_id, tuple(float(v) for v in m.value)) for m in reports]
     times = np.concatenate([[0.0], scn.times])
     return Scenario(readings, times, truth, network)

@@ -12,8 +12,8 @@ import pandas as pd
 
 from ..sensors import NferTagSimulator
 from ..sensors.camera_geometry import ground_homography, plane_homography
-from ..world.rendered_room import Person, RoomRenderer, write_video
-from ..world.walks import Walk, single_person_walk
+from ..world.rendered_room import Person, RoomRenderer, single_person_walk, write_video
+from ..world.walkers import Walk
 
 
 def write_recording(

@@ -37,8 +37,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ..core.errors import ConfigError, FusetrackError, MeasurementError, invalid
+from ..evaluation.options import load_yaml
 from .video_tracker import FrameResult, TrackerConfig, VideoRadioTracker
 
 REQUIRED_COLUMNS = ("time", "tag", "x", "y")
@@ -94,28 +96,36 @@ def read_frames(path: Path) -> Iterator[NDArray[np.uint8]]:
         cap.release()
 
 
-def read_calibration(path: Path) -> dict[str, Any]:
-    import yaml
+class Calibration(BaseModel):
+    """The camera calibration YAML of ``fusetrack track-video`` (Nott 2009, Sec. 4.1)."""
 
-    if not path.is_file():
-        raise InputError(invalid("calibration", str(path), "an existing YAML file"))
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    foot_homography: list[list[float]] = Field(description="3x3 floor-to-image homography")
+    head_homography: list[list[float]] | None = Field(
+        default=None, description="3x3 head-plane homography (head rows of the image)"
+    )
+    tag_cov: list[list[float]] = Field(default=[[0.36, 0.0], [0.0, 0.16]])
+    sigma_px: float = Field(default=1.0, gt=0)
+    fps: float | None = Field(default=None, gt=0, description="default: the video's")
+    background_frames: int = Field(default=30, ge=1)
+    min_area: int = Field(default=150, ge=1)
+    video_start: float = 0.0
+    subject_tag: str | int | None = Field(default=None, description="default: the log's first")
+
+    @field_validator("foot_homography", "head_homography")
+    @classmethod
+    def _three_by_three(cls, v: list[list[float]] | None) -> list[list[float]] | None:
+        if v is not None and np.shape(v) != (3, 3):
+            raise ValueError("a 3x3 matrix of numbers")
+        return v
+
+
+def read_calibration(path: Path) -> dict[str, Any]:
+    """The calibration file checked against :class:`Calibration`; the keys it sets."""
     try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as e:
-        raise InputError(f"calibration={str(path)!r} is not valid YAML: {e}") from None
-    if not isinstance(data, dict) or "foot_homography" not in data:
-        raise InputError(
-            invalid("calibration", str(path), "a YAML mapping with a 3x3 foot_homography")
-        )
-    try:
-        hf = np.asarray(data["foot_homography"], float)
-    except (TypeError, ValueError):
-        raise InputError(
-            invalid("foot_homography", data["foot_homography"], "a 3x3 matrix of numbers")
-        ) from None
-    if hf.shape != (3, 3):
-        raise InputError(invalid("foot_homography", data["foot_homography"], "a 3x3 matrix"))
-    return data
+        return load_yaml(Calibration, path, "calibration").model_dump(exclude_none=True)
+    except ConfigError as err:
+        raise InputError(str(err)) from None
 
 
 def read_radio(
@@ -478,7 +488,7 @@ def main(args: Any) -> int:
         args.calibration,
         args.out,
         clock_offset=args.clock_offset,
-        progress=False if args.no_progress else None,
+        progress=False if args.no_progress or getattr(args, "quiet", 0) else None,
         drop_frames=drop,
     )
     print(

@@ -14,4 +14,6 @@ from .occlusion import pattern_probability as pattern_probability
 from .room import Room as Room
 from .room import l_shaped_room as l_shaped_room
 from .room import square_room as square_room
+from .walkers import Walk as Walk
 from .walkers import WaypointWalkers as WaypointWalkers
+from .walkers import polyline_walk as polyline_walk

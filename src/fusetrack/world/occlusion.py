@@ -130,7 +130,7 @@ def occlusion_probability_reference(
     """NumPy reference of :func:`occlusion_probability` (every triple evaluated).
 
     ``exclusion``: the rectangle ``A_i(x)`` ends this far before the point (0: Eq. 7 as printed;
-    see :class:`fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`).
+    see :class:`fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`).
     """
     c = np.asarray(viewers, float).reshape(-1, 2)
     x = np.asarray(points, float).reshape(-1, 2)

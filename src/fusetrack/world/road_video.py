@@ -1,6 +1,8 @@
 """Rendered camera frames of vehicles on a road (the video substitute of spec 003 §3.2).
 
-A :class:`PinholeCamera` at a pose (position, height, yaw, downward pitch) renders 320×240
+A :class:`~fusetrack.sensors.camera_geometry.PinholeCamera` at a pose
+(:meth:`~fusetrack.sensors.camera_geometry.PinholeCamera.from_pose`: position, height, yaw,
+downward pitch) renders 320×240
 grey-level frames: a fixed textured background with sensor noise and a slow illumination drift,
 each vehicle as the convex hull of its projected 3-D box with its ground shadow, and the urban
 clutter the paper names — a swaying tree (random foreground blobs in one image region) and
@@ -14,52 +16,9 @@ from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-
-@dataclass(frozen=True)
-class PinholeCamera:
-    """A camera at ``position (x, y, z)`` looking along ``yaw`` (rad, world frame, CCW from +x),
-    tilted down by ``pitch``; ``hfov`` the horizontal field of view; ``width × height`` pixels."""
-
-    position: tuple[float, float, float]
-    yaw: float
-    pitch: float = np.deg2rad(8.0)
-    hfov: float = np.deg2rad(60.0)
-    width: int = 320
-    height: int = 240
-
-    @property
-    def focal(self) -> float:
-        return (self.width / 2) / np.tan(self.hfov / 2)
-
-    def axes(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        cy, sy, cp, sp = np.cos(self.yaw), np.sin(self.yaw), np.cos(self.pitch), np.sin(self.pitch)
-        forward = np.array([cy * cp, sy * cp, -sp])
-        right = np.array([sy, -cy, 0.0])
-        up = np.cross(right, forward)
-        return forward, right, up
-
-    def project(self, points: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Pixel coordinates ``(n, 2)`` (u right, v down) and depths ``(n,)`` of world points."""
-        p = np.asarray(points, float).reshape(-1, 3) - np.asarray(self.position, float)
-        f, r, u = self.axes()
-        depth = p @ f
-        safe = np.where(depth > 1e-6, depth, 1e-6)
-        uv = np.stack(
-            [
-                self.width / 2 + self.focal * (p @ r) / safe,
-                self.height / 2 - self.focal * (p @ u) / safe,
-            ],
-            axis=1,
-        )
-        return uv, depth
-
-    def column_angles(self) -> NDArray[np.float64]:
-        """Bearing of each pixel column relative to ``yaw`` (CCW positive): atan((c_x - j - ½)/f)
-        (spec 003 §2.3 step 5; exact for zero pitch, within a fraction of a degree at 8°)."""
-        j = np.arange(self.width)
-        return np.arctan((self.width / 2 - (j + 0.5)) / self.focal)
+from ..sensors.camera_geometry import PinholeCamera
 
 
 @dataclass(frozen=True)
@@ -111,7 +70,7 @@ class RoadRenderer:
         self.frame_index += 1
         drift = 1.0 + 0.03 * np.sin(2 * np.pi * self.frame_index / 400)
         img = self.background * drift
-        order = sorted(vehicles, key=lambda v: -np.linalg.norm(np.asarray(v.xy) - cam.position[:2]))
+        order = sorted(vehicles, key=lambda v: -np.linalg.norm(np.asarray(v.xy) - cam.centre[:2]))
         for v in order:
             shadow = Vehicle(
                 (v.xy[0] + self.shadow_offset[0], v.xy[1] + self.shadow_offset[1]),
@@ -142,9 +101,9 @@ class RoadRenderer:
         grey: float | None,
         scale: float | None,
     ) -> None:
-        uv, depth = self.camera.project(corners)
-        if np.any(depth < 0.5):
+        if np.any(self.camera.depth(corners) < 0.5):
             return  # (partly) behind the camera: not drawn
+        uv = self.camera.project(corners)
         if np.all(uv[:, 0] < -50) or np.all(uv[:, 0] > self.camera.width + 50):
             return
         hull = cv2.convexHull(np.round(uv).astype(np.int32))

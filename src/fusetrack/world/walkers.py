@@ -1,8 +1,12 @@
-"""People walking between random waypoints, going around each other (Ercan et al. 2013, Sec. 6).
+"""People walking on a floor: one walker model for every simulated scene.
 
-The data-generating motion of the tracked object and of every moving occluder (procedure
-``move_objects``): each walker heads for a destination at a constant speed ``s`` with white
-Gaussian noise,
+A :class:`Walk` is one person's floor positions ``xy (T, 2)`` at ``times (T,)``; it is made
+either along a scripted path (:func:`polyline_walk`, the Nott 2009 rendered videos) or by
+:class:`WaypointWalkers`, people walking between random waypoints and going around each other
+(Ercan et al. 2013, Sec. 6), whose whole crowd moves at once.
+
+Random waypoints (procedure ``move_objects``): each walker heads for a destination at a constant
+speed ``s`` with white Gaussian noise,
 
     x(t) = x(t-1) + s (tau - x(t-1)) / |tau - x(t-1)| + v(t),  v ~ N(0, sigma^2 I)   # Eq. 5 form
 
@@ -22,11 +26,40 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import check_positive
+from ..core.errors import ConfigError, check_positive, invalid
 from .geometry import Array
 from .room import Room
+
+
+@dataclass(frozen=True)
+class Walk:
+    """Foot positions ``xy`` ``(T, 2)`` at ``times`` ``(T,)`` (s) of one person."""
+
+    times: Array
+    xy: Array
+
+    @property
+    def velocity(self) -> Array:
+        return (
+            np.gradient(self.xy, self.times, axis=0)
+            if len(self.times) > 1
+            else np.zeros_like(self.xy)
+        )
+
+
+def polyline_walk(waypoints: ArrayLike, speed: float, fps: float, t0: float = 0.0) -> Walk:
+    """Constant-speed walk through ``waypoints`` ``(K, 2)``, sampled at ``fps``."""
+    w = np.asarray(waypoints, float)
+    if w.ndim != 2 or w.shape[1] != 2 or len(w) < 2:
+        raise ConfigError(invalid("waypoints", w.tolist(), "(K >= 2, 2) floor points"))
+    seg = np.linalg.norm(np.diff(w, axis=0), axis=1)
+    s_way = np.concatenate([[0.0], np.cumsum(seg)])
+    n = int(np.floor(s_way[-1] / speed * fps)) + 1
+    s = np.arange(n) * speed / fps
+    xy = np.column_stack([np.interp(s, s_way, w[:, 0]), np.interp(s, s_way, w[:, 1])])
+    return Walk(t0 + np.arange(n) / fps, xy)
 
 
 def first_free_heading_reference(
@@ -167,3 +200,9 @@ class WaypointWalkers:
             pos, dest = self.step(pos, dest, rng)
             out[t] = pos
         return out
+
+    def walks(self, n: int, steps: int, dt: float, rng: np.random.Generator) -> list[Walk]:
+        """The :meth:`trajectory` of ``n`` walkers as one :class:`Walk` each, a step every ``dt`` s."""
+        xy = self.trajectory(n, steps, rng)
+        times = dt * np.arange(steps + 1, dtype=np.float64)
+        return [Walk(times, np.ascontiguousarray(xy[:, i])) for i in range(n)]

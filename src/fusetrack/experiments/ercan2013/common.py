@@ -17,8 +17,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.patches import Circle, Polygon, Wedge
+from pydantic import Field
 
 from ...core.errors import ConfigError, invalid
+from ...evaluation import plots
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.report import RunContext
 from .scenes import Scene
 
@@ -40,7 +43,18 @@ def sizes(ctx: RunContext, *, steps: int = 4000, particles: int = 1000) -> dict[
     return {"steps": steps, "particles": particles, "burn_in": 0}
 
 
-SIZE_OPTIONS = ("steps", "particles", "burn_in")
+class SizeOptions(ExperimentOptions):
+    """``--set steps=N`` / ``particles=L`` / ``burn_in=B``: a full-size run that must fit a time
+    budget (fewer steps per run, the paper's number of runs); unset: the run's own sizes."""
+
+    steps: int | None = Field(None, ge=1, description="time steps per run (default: the run's)")
+    particles: int | None = Field(
+        None, ge=1, description="particles of the tracker (default: the run's)"
+    )
+    burn_in: int | None = Field(
+        None, ge=0, description="steps left out of RMSE_tr, < steps (default: the run's)"
+    )
+
 
 PRINTED_PREFIX = "printed "
 """Label prefix of a series run with the likelihood exactly as printed (hard zeros, full rectangles)."""
@@ -88,27 +102,10 @@ def printed_runs(results: pd.DataFrame, no_prior: pd.DataFrame) -> pd.DataFrame:
     )
 
 
-def number_option(
-    ctx: RunContext, key: str, default: float, kind: type = int, least: float = 1
-) -> Any:
-    """``--set key=value`` as ``kind`` (int or float), at least ``least``; ``default`` if unset."""
-    if key not in ctx.extra:
-        return default
-    raw = ctx.extra[key]
-    try:
-        value = kind(raw)
-    except (TypeError, ValueError):
-        value = None
-    if value is None or not np.isfinite(value) or value < least:
-        what = "an integer" if kind is int else "a number"
-        raise ConfigError(invalid(f"--set {key}", raw, f"{what} >= {least:g}"))
-    return value
-
-
 def size_options(ctx: RunContext, size: dict[str, int]) -> dict[str, int]:
-    """``size`` with ``--set steps=N`` / ``particles=L`` / ``burn_in=B`` applied (a full-size run
-    that must fit a time budget: fewer steps per run, the paper's number of runs)."""
-    out = {k: number_option(ctx, k, v, int, 0 if k == "burn_in" else 1) for k, v in size.items()}
+    """``size`` with the :class:`SizeOptions` the user set applied."""
+    opts = SizeOptions.of(ctx).model_dump()
+    out = {k: v if opts[k] is None else opts[k] for k, v in size.items()}
     if out["burn_in"] >= out["steps"]:
         raise ConfigError(invalid("--set burn_in", out["burn_in"], f"< steps = {out['steps']}"))
     return out
@@ -186,10 +183,7 @@ def curve_plot(
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return plots.save(fig, path)
 
 
 def room_plot(
@@ -234,10 +228,7 @@ def room_plot(
     ax.set_title(title)
     if truth is not None or obj is not None:
         ax.legend(fontsize=8, loc="upper right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return plots.save(fig, path)
 
 
 def md(df: pd.DataFrame, floatfmt: str = ".3g") -> str:

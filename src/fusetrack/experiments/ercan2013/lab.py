@@ -18,9 +18,14 @@ import numpy as np
 import pandas as pd
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from .common import curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
+from .common import SizeOptions, curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
 from .scenes import lab_scene
 from .simulation import run_tracking, simulate_world
+
+
+class Options(SizeOptions):
+    """``fusetrack run ercan2013-lab`` options: ``steps``, ``particles``, ``burn_in``."""
+
 
 SIGMA_PSI = (
     26.0  # inches: random-walk Kalman priors with RMSE_occ ~ 12.1 in (measured in the report)
@@ -191,7 +196,7 @@ Synthetic replica of the lab (the recordings are not public; spec §7.3, §10): 
 M = 20 virtual occluders (D = 12 in, 3.6 in/step), the object on an ellipse (semi-axes 120 and 98 in) in 200 steps,
 L = {size["particles"]}, T = 5, {runs} runs x {size["steps"]} steps (paper: 50 x 200), RMSE from t = 5. Tracker and selection share
 the occlusion model (Eq. 7 rectangles ending one D before the particle, p(eta | u) floored at 1e-3; see
-`fusetrack.filters.occlusion_likelihood`).
+`fusetrack.sensors.occlusion_aware_camera`).
 
 ![Fig. 13(b)](fig13b_lab.png)
 

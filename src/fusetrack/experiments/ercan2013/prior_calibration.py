@@ -14,7 +14,7 @@ priors are made, at the same virtual-reading noise ``sigma_psi``
 * ``white`` (oracle): the random walk's accuracy and calibration, but fresh errors every step --
   if only this fixes it, the cause is that a prior's error persists over many steps;
 * ``random-walk, gamma g``: the default priors with the occlusion evidence tempered,
-  ``p(eta | u)^g`` (:class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`).
+  ``p(eta | u)^g`` (:class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`).
   A real occluder that hides the object does so for many steps in a row, but Eq. 6 counts
   each step's pattern as new evidence given the current priors; if tempering fixes the ordering,
   the cause is this repeated counting of one event, whatever the priors.

@@ -15,8 +15,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
 
 from ...core.errors import ConfigError, invalid
+from ...evaluation.options import load_yaml, parse_options
 from ...sensors.perspective_camera import CameraArray, ring_of_cameras
 from ...world.geometry import Array, rectangle
 from ...world.room import Room, l_shaped_room, square_room
@@ -165,8 +167,43 @@ def get_scene(name: str) -> Scene:
         ) from None
 
 
+class CameraConfig(BaseModel):
+    """One camera of a ``--config`` room: position, yaw (degrees, anticlockwise from +x), fov."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    position: tuple[float, float]
+    yaw: float
+    fov: float | None = Field(None, gt=0, le=360, description="degrees (default: the room's)")
+
+
+class NoiseConfig(BaseModel):
+    """Reading noise of every camera (Ercan et al. 2013, Eq. 3)."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    sigma_theta: float = Field(default=SIM_NOISE["sigma_theta"], ge=0)
+    sigma_pos: float = Field(default=SIM_NOISE["sigma_pos"], ge=0)
+    sigma_read: float = Field(default=SIM_NOISE["sigma_read"], ge=0)
+
+
+class RoomConfig(BaseModel):
+    """The YAML format of ``fusetrack run ercan2013-selection --config`` (examples/ercan2013_room.yaml)."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    room: list[tuple[float, float]] = Field(description="floor polygon")
+    static_occluders: list[list[tuple[float, float]]] = []
+    cameras: list[CameraConfig] = Field(min_length=1)
+    fov: float = Field(90.0, gt=0, le=360, description="default field of view (degrees)")
+    noise: NoiseConfig = NoiseConfig()
+    fixed_order: list[int] | None = Field(None, description="1-based camera order (default 1..N)")
+    occluder_diameter: float = Field(3.33, gt=0)
+    speed: float = Field(1.0, gt=0)
+    motion_noise: float = Field(0.33, ge=0)
+    prior_q: float = Field(3.0, gt=0)
+    prior_q_cv: float = Field(0.03, gt=0)
+
+
 def scene_from_mapping(spec: Mapping[str, Any], name: str = "custom") -> Scene:
-    """A scene from a mapping (the YAML format of ``--config``)::
+    """A scene from a mapping (the YAML format of ``--config``, :class:`RoomConfig`)::
 
     room: [[0, 0], [120, 0], [120, 80], [0, 80]]     # floor polygon
     static_occluders: [[[50, 30], [70, 30], [70, 50], [50, 50]]]
@@ -180,34 +217,21 @@ def scene_from_mapping(spec: Mapping[str, Any], name: str = "custom") -> Scene:
     speed: 1.0
     motion_noise: 0.33
     """
-    if not isinstance(spec, Mapping):
-        raise ConfigError(invalid("config", type(spec).__name__, "a mapping with room and cameras"))
-    for key in ("room", "cameras"):
-        if key not in spec:
-            raise ConfigError(invalid(f"config.{key}", None, "present"))
+    return scene_from_config(parse_options(RoomConfig, spec, "config"), name)
+
+
+def scene_from_config(cfg: RoomConfig, name: str = "custom") -> Scene:
+    """The :class:`Scene` a validated :class:`RoomConfig` describes."""
     room = Room(
-        np.asarray(spec["room"], float),
-        tuple(np.asarray(o, float) for o in spec.get("static_occluders", [])),
-        name,
+        np.asarray(cfg.room, float), tuple(np.asarray(o, float) for o in cfg.static_occluders), name
     )
-    cams_spec = spec["cameras"]
-    if not isinstance(cams_spec, list) or not cams_spec:
-        raise ConfigError(
-            invalid("config.cameras", cams_spec, "a non-empty list of {position, yaw}")
+    noise = cfg.noise.model_dump()
+    arrays = [
+        ring_of_cameras(
+            [c.position], [c.yaw], cfg.fov if c.fov is None else c.fov, **noise, inset=0.0
         )
-    default_fov = float(spec.get("fov", 90.0))
-    noise = {**SIM_NOISE, **dict(spec.get("noise", {}))}
-    arrays = []
-    for i, c in enumerate(cams_spec):
-        if not isinstance(c, Mapping) or "position" not in c or "yaw" not in c:
-            raise ConfigError(
-                invalid(f"config.cameras[{i}]", c, "{position: [x, y], yaw: degrees}")
-            )
-        arrays.append(
-            ring_of_cameras(
-                [c["position"]], [c["yaw"]], float(c.get("fov", default_fov)), **noise, inset=0.0
-            )
-        )
+        for c in cfg.cameras
+    ]
     cams = CameraArray(
         np.concatenate([a.positions for a in arrays]),
         np.concatenate([a.yaws for a in arrays]),
@@ -218,29 +242,20 @@ def scene_from_mapping(spec: Mapping[str, Any], name: str = "custom") -> Scene:
         np.concatenate([a.sigma_read for a in arrays]),
         tuple(f"cam{i + 1}" for i in range(len(arrays))),
     )
-    order = tuple(int(i) - 1 for i in spec.get("fixed_order", range(1, len(arrays) + 1)))
+    order = list(range(1, len(arrays) + 1)) if cfg.fixed_order is None else cfg.fixed_order
     return Scene(
         name,
         room,
         cams,
-        order,
-        diameter=float(spec.get("occluder_diameter", 3.33)),
-        speed=float(spec.get("speed", 1.0)),
-        motion_noise=float(spec.get("motion_noise", 0.33)),
-        prior_q=float(spec.get("prior_q", 3.0)),
-        prior_q_cv=float(spec.get("prior_q_cv", 0.03)),
+        tuple(i - 1 for i in order),
+        diameter=cfg.occluder_diameter,
+        speed=cfg.speed,
+        motion_noise=cfg.motion_noise,
+        prior_q=cfg.prior_q,
+        prior_q_cv=cfg.prior_q_cv,
     )
 
 
 def load_scene(path: str | Path) -> Scene:
-    """A scene from a YAML file (see :func:`scene_from_mapping`)."""
-    import yaml
-
-    p = Path(path)
-    if not p.is_file():
-        raise ConfigError(invalid("config", str(p), "an existing YAML file"))
-    try:
-        spec = yaml.safe_load(p.read_text())
-    except yaml.YAMLError as err:
-        raise ConfigError(invalid("config", str(p), f"valid YAML ({err})")) from None
-    return scene_from_mapping(spec, p.stem)
+    """A scene from a YAML file (:class:`RoomConfig`, see :func:`scene_from_mapping`)."""
+    return scene_from_config(load_yaml(RoomConfig, path, "config"), Path(path).stem)

@@ -12,18 +12,20 @@ in the user's room, and the report shows the room, its cameras and one tracked r
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
 from ...evaluation.report import Claim, Outcome, RunContext
 from .common import (
+    SizeOptions,
     curve_plot,
     fmt,
     md,
     mean_std,
-    number_option,
     room_plot,
     size_options,
     sizes,
@@ -35,6 +37,24 @@ from .simulation import run_tracking, simulate_world
 SIGMA_PSI = (
     31.0  # random-walk Kalman priors with RMSE_occ ~ 11.5 in the L room (measured in the report)
 )
+
+
+class Options(SizeOptions):
+    """``fusetrack run ercan2013-selection`` options (and ``steps``/``particles``/``burn_in``)."""
+
+    config: Path | None = Field(
+        None, description="YAML room and cameras to run in (e.g. examples/ercan2013_room.yaml)"
+    )
+    occluders: int | None = Field(
+        None,
+        ge=0,
+        description="moving occluders M (default: 40 in the L room, 20 in a --config room)",
+    )
+    sigma_psi: float = Field(
+        SIGMA_PSI, ge=0.01, description="random-walk std of the occluder-prior Kalman filters"
+    )
+
+
 METHODS = {
     "greedy-perspective": ("greedy", "perspective"),
     "greedy-weak": ("greedy", "weak"),
@@ -399,7 +419,7 @@ differences between methods within a run are the method's alone.
 Tracker and selection use the same occlusion model: Eq. 7 with the rectangles ending one diameter D before the
 particle (`exclusion` = 1 D, an occluder cannot overlap the object) and p(eta | u) floored at 1e-3 for particles the
 reporting cameras can see (`floor`); both are corrections to the printed model, explained in
-`fusetrack.filters.occlusion_likelihood`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
+`fusetrack.sensors.occlusion_aware_camera`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
 likelihood's p(eta | u) for the same option (tested).
 
 Camera layout (reconstructed; the paper draws it only). Fixed list: {fixed_list}.
@@ -467,13 +487,14 @@ def run(ctx: RunContext) -> Outcome:
         size = {"steps": 100, "particles": 400, "burn_in": 10}
     size = size_options(ctx, size)
     runs = ctx.n_runs(full=10, quick=2)
-    cfg_path = ctx.extra.get("config")
+    cfg_path = Options.of(ctx).config
     scene = load_scene(cfg_path) if cfg_path else None
     shown = scene or l_scene()
     n = len(shown.cameras)
     ks = selection_sizes(n, ctx.quick)
-    m = number_option(ctx, "occluders", 40 if scene is None else 20, int, 0)
-    sigma_psi = number_option(ctx, "sigma_psi", SIGMA_PSI, float, 0.01)
+    m = Options.of(ctx).occluders
+    m = (40 if scene is None else 20) if m is None else m
+    sigma_psi = Options.of(ctx).sigma_psi
     st = _Setup(scene, shown, cfg_path, ks, m, sigma_psi, size, runs)
     tb = _estimate(ctx, st)
     claims = [*_method_claims(tb), *_ordering_claims(st, tb), *_search_claims(st, tb)]

@@ -15,7 +15,7 @@ rectangles of Eq. 7 end this many occluder diameters before the particle; 0 = as
 ``tracker_sigma_v`` (the tracker's motion noise sigma_v of Eq. 5, "assumed to be known" by the
 paper; None = the walkers' true 0.33 units, spec §8 item 15), ``occlusion_power`` (p(eta | u)
 enters the likelihood to this power; 1 = the paper): see
-:class:`~fusetrack.filters.occlusion_likelihood.OcclusionAwareLikelihood`.
+:class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`.
 """
 
 from __future__ import annotations
@@ -30,7 +30,6 @@ from typing import Any
 import numpy as np
 
 from ...core.errors import ConfigError, invalid
-from ...filters.occlusion_likelihood import OcclusionAwareLikelihood
 from ...filters.waypoint_asir import WaypointASIR
 from ...management.camera_selection import (
     SELECTION_METHODS,
@@ -44,6 +43,7 @@ from ...management.camera_selection import (
     subset_mse,
 )
 from ...motion.waypoint_regime import WaypointRegimeDynamics
+from ...sensors.occlusion_aware_camera import OcclusionAwareLikelihood
 from ...world.geometry import Array
 from ...world.occluder_priors import (
     PRIOR_FILTERS,
@@ -288,7 +288,8 @@ def _track(
     steps, prior = int(cfg["steps"]), cfg["prior"]
     rng_f = np.random.default_rng([seed, 3])
     rng_s = np.random.default_rng([seed, 4])
-    u, w = asir.initialize(rng_f)
+    belief = asir.initialize(rng_f)
+    u, w = belief.particles, belief.weights
     n_cams = len(scene.cameras)
     method, k, period = cfg["method"], int(cfg["k"]), int(cfg["period"])
     selected = (
@@ -320,7 +321,8 @@ def _track(
             clock.likelihood += time.perf_counter() - t1
             return out
 
-        u, w = asir.step(u, w, loglik, rng_f)
+        belief = asir.step(belief, loglik, rng_f)
+        u, w = belief.particles, belief.weights
         est[t - 1] = asir.estimate(u, w)
     return _Track(est, n_seen, clock, gaps)
 

@@ -11,7 +11,7 @@ T0-T4 and the baseline P on the same frames (``fusetrack.filters.smart_camera_tr
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from ...core import Measurement, filter_step
 from ...evaluation import plots
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.smart_camera_trackers import (
@@ -29,12 +30,17 @@ from ...filters.smart_camera_trackers import (
     ImagePlaneTracker,
     Particle3DTracker,
     RayIntersectionTracker,
+    SmartCameraBelief,
+    SmartCameraTracker,
     TrackerSettings,
 )
-from ...perception.appearance import AppearanceModel, FeatureImage
+from ...perception.appearance import appearance_model_from_views, features_from_rgb
+from ...sensors.appearance import AppearanceModel
 from ...sensors.ellipsoid_camera import EllipsoidCamera
 from ...world.ellipsoid_scene import (
     EllipsoidTarget,
+    Frames,
+    Trajectory,
     corner_cameras,
     cube_viewpoints,
     perimeter_cameras,
@@ -77,7 +83,7 @@ def appearance_model() -> tuple[EllipsoidTarget, AppearanceModel]:
     target = EllipsoidTarget()
     views = cube_viewpoints()
     images, centres, shapes = reference_views(target, views)
-    return target, AppearanceModel.from_views(images, centres, shapes, views)
+    return target, appearance_model_from_views(images, centres, shapes, views)
 
 
 def gap_mask(
@@ -102,10 +108,21 @@ def gap_mask(
     return hidden
 
 
-def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    """Render one trajectory and run every tracker on it; one row per tracker and step."""
+@dataclass(frozen=True)
+class Scene:
+    """One rendered run: the truth, every camera's measurements per step, the network."""
+
+    truth: Trajectory
+    cameras: list[EllipsoidCamera]
+    frames: Frames
+    measurements: list[list[Measurement]]  # per step: one frame per camera
+    net: CameraNetwork
+    scale_change: float  # linear image-size change in the camera where it changes most
+
+
+def render_scene(config: Mapping[str, Any], rng: np.random.Generator) -> Scene:
+    """A smooth trajectory rendered by every camera of the set-up (with the gap, if any)."""
     setup = SETUPS[str(config["setup"])]
-    rng = np.random.default_rng(seed)
     target, model = appearance_model()
     cams = setup.cameras()
     steps = int(config["steps"])
@@ -122,69 +139,101 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         cams, target, truth.positions, truth.quaternions, range(GAP_START, GAP_START + gap)
     )
     frames = render_frames(cams, target, truth, rng, hidden=hidden)
-    feats = [[FeatureImage.from_rgb(img) for img in row] for row in frames.images]
     net = CameraNetwork.build(cams, model, target.semi_axes, setup.base)
+    measurements = [
+        net.measurements(float(t), [features_from_rgb(img) for img in row])
+        for t, row in enumerate(frames.images)
+    ]
+    seen_px = np.where(frames.participating, frames.target_pixels, np.nan).astype(float)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # cameras that never see the target
+        ratio = np.nanmax(seen_px, axis=0) / np.nanmin(seen_px, axis=0)
+    scale_change = float(np.sqrt(np.nanmax(ratio))) if np.any(np.isfinite(ratio)) else np.nan
+    return Scene(truth, cams, frames, measurements, net, scale_change)
+
+
+def trackers(net: CameraNetwork, settings: TrackerSettings) -> dict[str, SmartCameraTracker]:
+    """The paper's trackers and the ablations, by name."""
+    return {
+        "P": RayIntersectionTracker(net, settings),
+        "T0": Particle3DTracker("T0", net, settings),
+        "T1": Particle3DTracker("T1", net, settings),
+        "T2": Particle3DTracker("T2", net, settings),
+        "T3": ImagePlaneTracker("T3", net, settings),
+        "T4": ImagePlaneTracker("T4", net, settings),
+        "T0-rho1": Particle3DTracker("T0", net, replace(settings, sharpness=1.0)),
+        "T0-paper-orientation": Particle3DTracker(
+            "T0", net, replace(settings, orientation_fusion="paper")
+        ),
+    }
+
+
+def track(
+    tracker: SmartCameraTracker, scene: Scene, rng: np.random.Generator
+) -> list[SmartCameraBelief]:
+    """The tracker's beliefs at steps 1..T-1, from the manual initialisation at step 0."""
+    truth = scene.truth
+    belief = tracker.initial_belief(
+        truth.positions[0], truth.velocities[0], truth.quaternions[0], scene.measurements[0]
+    )
+    out = []
+    for t in range(1, len(scene.measurements)):
+        belief = filter_step(tracker, belief, 1.0, scene.measurements[t], rng)
+        out.append(belief)
+    return out
+
+
+def error_rows(
+    name: str, beliefs: Sequence[SmartCameraBelief], scene: Scene
+) -> list[dict[str, Any]]:
+    """One row per step (and per estimate: T4 adds its Eq. 103 closed form) with the errors."""
+    frames, truth, cams = scene.frames, scene.truth, scene.cameras
+    rows: list[dict[str, Any]] = []
+    for t, belief in enumerate(beliefs, start=1):
+        estimates = {
+            name: belief.position,
+            **({"T4-eq103": belief.extra["eq103"]} if "eq103" in belief.extra else {}),
+        }
+        seen = np.flatnonzero(frames.participating[t])
+        for label, est in estimates.items():
+            err2d = [
+                float(np.linalg.norm(cams[n].project(est) - cams[n].project(truth.positions[t])))
+                for n in seen
+            ]
+            own = label == name
+            rows.append(
+                {
+                    "tracker": label,
+                    "t": t,
+                    "err3d": float(np.linalg.norm(est - truth.positions[t])),
+                    "err2d": float(np.mean(err2d)) if err2d else np.nan,
+                    "participating": len(seen),
+                    "pixel_fraction": float(
+                        frames.target_pixels[t, seen].mean() / IMAGE_PIXELS if len(seen) else 0.0
+                    ),
+                    "bytes": int(belief.sent.bytes_sent) if own else np.nan,
+                    "link_bytes": int(belief.sent.link_bytes) if own else np.nan,
+                    "cameras_used": int(belief.sent.cameras_used),
+                    "scale_change": scene.scale_change,
+                }
+            )
+    return rows
+
+
+def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    """Render one trajectory and run every tracker on it; one row per tracker and step."""
+    setup = SETUPS[str(config["setup"])]
+    scene = render_scene(config, np.random.default_rng(seed))
     settings = TrackerSettings(
         n_particles=int(config["n_particles"]),
         n_particles_2d=int(config["n_particles_2d"]),
         sigma=setup.sigma,
         sharpness=float(config.get("sharpness", 20.0)),
     )
-    init = (truth.positions[0], truth.velocities[0], truth.quaternions[0])  # manual initialisation
-    trackers: dict[str, Any] = {
-        "P": RayIntersectionTracker(net, *init, feats[0], settings),
-        "T0": Particle3DTracker("T0", net, *init, settings),
-        "T1": Particle3DTracker("T1", net, *init, settings),
-        "T2": Particle3DTracker("T2", net, *init, settings),
-        "T3": ImagePlaneTracker("T3", net, *init, settings),
-        "T4": ImagePlaneTracker("T4", net, *init, settings),
-        "T0-rho1": Particle3DTracker("T0", net, *init, replace(settings, sharpness=1.0)),
-        "T0-paper-orientation": Particle3DTracker(
-            "T0", net, *init, replace(settings, orientation_fusion="paper")
-        ),
-    }
-    participating = frames.participating
-    seen_px = np.where(participating, frames.target_pixels, np.nan).astype(float)
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore", RuntimeWarning)  # cameras that never see the target
-        ratio = np.nanmax(seen_px, axis=0) / np.nanmin(seen_px, axis=0)
-    # linear scale change of the target image in the camera where it changes most
-    scale_change = float(np.sqrt(np.nanmax(ratio))) if np.any(np.isfinite(ratio)) else np.nan
     rows: list[dict[str, Any]] = []
-    for name, tracker in trackers.items():
+    for name, tracker in trackers(scene.net, settings).items():
         trng = np.random.default_rng([seed, [*TRACKERS, *ABLATIONS].index(name)])
-        for t in range(1, steps):
-            rep = tracker.step(feats[t], trng)
-            estimates = {
-                name: rep.position,
-                **({"T4-eq103": rep.extra["eq103"]} if "eq103" in rep.extra else {}),
-            }
-            seen = np.flatnonzero(participating[t])
-            for label, est in estimates.items():
-                err2d = [
-                    float(
-                        np.linalg.norm(cams[n].project(est) - cams[n].project(truth.positions[t]))
-                    )
-                    for n in seen
-                ]
-                rows.append(
-                    {
-                        "tracker": label,
-                        "t": t,
-                        "err3d": float(np.linalg.norm(est - truth.positions[t])),
-                        "err2d": float(np.mean(err2d)) if err2d else np.nan,
-                        "participating": len(seen),
-                        "pixel_fraction": float(
-                            frames.target_pixels[t, seen].mean() / IMAGE_PIXELS
-                            if len(seen)
-                            else 0.0
-                        ),
-                        "bytes": int(rep.bytes_sent) if label == name else np.nan,
-                        "link_bytes": int(rep.link_bytes) if label == name else np.nan,
-                        "cameras_used": int(rep.cameras_used),
-                        "scale_change": scale_change,
-                    }
-                )
+        rows += error_rows(name, track(tracker, scene, trng), scene)
     return rows
 
 
@@ -396,6 +445,14 @@ def run_a(ctx: RunContext) -> Outcome:
 def outcome_a(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     """Claims, figures and report of setup A from its rows (also usable on a saved parquet)."""
     table = _means(df)
+    claims = _claims_a(table)
+    claims += _bandwidth_claims(df, table, int(df.n_particles.iloc[0]), "a_")
+    figs = _figures(ctx, df, table, "a")
+    return Outcome(df, claims, _text_a(df, table, figs), int(df.experiment_run.nunique()))
+
+
+def _claims_a(table: pd.DataFrame) -> list[Claim]:
+    """Setup A's accuracy claims: the paper's ranking (Figs 48-49) and rotation."""
     e = table["err3d"]
     claims = [
         Claim(
@@ -458,8 +515,11 @@ def outcome_a(ctx: RunContext, df: pd.DataFrame) -> Outcome:
             bool(abs(e["T2"] - e["T1"]) <= 0.25 * e["T1"]),
         ),
     ]
-    claims += _bandwidth_claims(df, table, int(df.n_particles.iloc[0]), "a_")
-    figs = _figures(ctx, df, table, "a")
+    return claims
+
+
+def _text_a(df: pd.DataFrame, table: pd.DataFrame, figs: list[str]) -> str:
+    """Setup A's report: set-up, paper vs ours, differences."""
     pix = df[df.tracker == "T0"].pixel_fraction
     body = f"""
 ## Set-up
@@ -503,7 +563,7 @@ All rows (errors by orientation, bytes, steps without anything to fuse):
 
 {_common_differences(table)}
 """
-    return Outcome(df, claims, body, int(df.experiment_run.nunique()))
+    return body
 
 
 def run_b(ctx: RunContext) -> Outcome:
@@ -513,15 +573,41 @@ def run_b(ctx: RunContext) -> Outcome:
 def outcome_b(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     """Claims, figures and report of setup B from its rows (also usable on a saved parquet)."""
     table = _means(df)
-    e = table["err3d"]
-    runs = df.experiment_run.nunique()
+    pre, post = _gap_errors(df)
+    claims = _claims_b(df, table, pre, post)
+    claims += _bandwidth_claims(df, table, int(df.n_particles.iloc[0]), "b_")
+    figs = _figures(ctx, df, table, "b")
+    body = _text_b(df, table, pre, post, figs)
+    return Outcome(df, claims, body, int(df.experiment_run.nunique()))
+
+
+def _gap_errors(df: pd.DataFrame) -> tuple[pd.Series, pd.Series]:
+    """Mean 3-D error per tracker over the steps before and after the one-camera gap."""
     per_step = df[df.tracker.isin(TRACKERS)]
     steps_t = per_step.groupby(["tracker", "t"])["err3d"].mean().unstack(0)
     pre = steps_t.loc[GAP_START - 8 : GAP_START - 1].mean()
     post = steps_t.loc[GAP_START + 4 : GAP_START + 12].mean()
-    recovered = post <= 2.0 * pre + 0.1
-    pix = per_step[per_step.tracker == "T0"]
-    share_small = float((pix.pixel_fraction < 0.01).mean())
+    return pre, post
+
+
+def _recovered(pre: pd.Series, post: pd.Series) -> pd.Series:
+    """Re-converged after the gap: error after at most twice that before, plus 0.1 m."""
+    return post <= 2.0 * pre + 0.1
+
+
+def _small_target_share(pix: pd.DataFrame) -> float:
+    """Share of (step, participating camera) pairs where the target covers < 1 % of the image."""
+    return float((pix.pixel_fraction < 0.01).mean())
+
+
+def _claims_b(
+    df: pd.DataFrame, table: pd.DataFrame, pre: pd.Series, post: pd.Series
+) -> list[Claim]:
+    """Setup B's claims: the ranking of Fig. 56, the gap, the small target, rotation."""
+    e = table["err3d"]
+    recovered = _recovered(pre, post)
+    pix = df[df.tracker == "T0"]
+    share_small = _small_target_share(pix)
     gap_cams = (
         int(pix[pix.t == GAP_START].participating.max()) if (pix.t == GAP_START).any() else -1
     )
@@ -601,8 +687,17 @@ def outcome_b(ctx: RunContext, df: pd.DataFrame) -> Outcome:
             ),
         ),
     ]
-    claims += _bandwidth_claims(df, table, int(df.n_particles.iloc[0]), "b_")
-    figs = _figures(ctx, df, table, "b")
+    return claims
+
+
+def _text_b(
+    df: pd.DataFrame, table: pd.DataFrame, pre: pd.Series, post: pd.Series, figs: list[str]
+) -> str:
+    """Setup B's report: set-up, paper vs ours, the gap, differences."""
+    runs = df.experiment_run.nunique()
+    recovered = _recovered(pre, post)
+    pix = df[df.tracker == "T0"]
+    share_small = _small_target_share(pix)
     gap_table = pd.DataFrame({"before gap": pre, "after gap": post, "recovered": recovered})
     body = f"""
 ## Set-up
@@ -666,7 +761,14 @@ Mean 3-D error over runs before (steps {GAP_START - 8}-{GAP_START - 1}) and afte
 
 ![bandwidth]({figs[2]})
 
-## Differences from the paper and their causes
+{_differences_b(table, pix, recovered)}"""
+    return body
+
+
+def _differences_b(table: pd.DataFrame, pix: pd.DataFrame, recovered: pd.Series) -> str:
+    """Setup B's differences from the paper: target size, the gap, then the shared ones."""
+    e = table["err3d"]
+    return f"""## Differences from the paper and their causes
 
 * The paper's network (Fig. 50) is not given numerically. Our target covers
   {100 * pix.pixel_fraction.quantile(0.1):.2f}-{
@@ -695,7 +797,6 @@ Mean 3-D error over runs before (steps {GAP_START - 8}-{GAP_START - 1}) and afte
   the hidden cameras still take part (their predicted ellipse is in view) and contribute clutter.
 {_common_differences(table)}
 """
-    return Outcome(df, claims, body, int(runs))
 
 
 def _common_differences(table: pd.DataFrame) -> str:

@@ -21,29 +21,43 @@ import json
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
+from pydantic import Field
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import spearmanr
 
-from ...core.errors import ConfigError, invalid
 from ...evaluation import plots
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.energy_localisation import energy_localise
-from ...filters.harmonic_localisation import (
+from ...perception.harmonic_features import NodeFeatures, compress_psd, psd
+from ...perception.harmonic_features import beamform as beamform_energies
+from ...perception.source_localisation import (
     AcousticNetwork,
     BeamformModel,
     FrequencyModel,
+    energy_localise,
     estimate_frequencies,
     harmonic_powers,
     localise,
     match_error,
 )
-from ...perception.harmonic_features import NodeFeatures, compress_psd, psd
-from ...perception.harmonic_features import beamform as beamform_energies
 from ...world.harmonic_sources import HarmonicSource, noise_sigma, random_sources, received_signals
+
+
+class Options(ExperimentOptions):
+    """``fusetrack run kushwaha2010-harmonic-sources`` options."""
+
+    results: Path | None = Field(
+        None, description="a saved results.parquet to analyse instead of simulating"
+    )
+    seconds: float | None = Field(
+        None, ge=0, description="the time of the run that made --set results (report text)"
+    )
+
 
 FIELD = (0.0, 10.0, 0.0, 5.0)
 SENSORS = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0], [0.0, 5.0]])
@@ -251,11 +265,8 @@ def _mean(df: pd.DataFrame, sweep: str, key: str, method: str = "beamform") -> p
 def run(ctx: RunContext) -> Outcome:
     """Simulate every sweep point ``runs`` times and analyse; with ``--set results=PATH`` analyse a
     saved ``results.parquet`` instead (``--set seconds=S``: the time of the run that made it)."""
-    unknown = sorted(set(ctx.extra) - {"results", "seconds", "config"})
-    if unknown:
-        raise ConfigError(invalid("--set", unknown, "results=PATH and seconds=S"))
-    if "results" in ctx.extra:
-        df = pd.read_parquet(ctx.extra["results"])
+    if Options.of(ctx).results is not None:
+        df = pd.read_parquet(Options.of(ctx).results)
         for col in ("f0_errors", "resolved"):  # JSON-encoded by write_outputs
             df[col] = [json.loads(v) if isinstance(v, str) else v for v in df[col]]
         runs = int(df["run"].max()) + 1 if "run" in df else 1
@@ -269,57 +280,143 @@ def run(ctx: RunContext) -> Outcome:
 
 def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome:
     """Claims, tables, figures and the report body from the tidy rows."""
-    claims: list[Claim] = []
+    s = _summarise(df)
     loose = 2.0 if ctx.quick else 1.0
+    claims = _frequency_claims(s, loose) + _sweep_claims(s, loose) + _robustness_claims(s, loose)
+    views = _sweep_views(s.by_m, s.per_node, s.by_snr, s.by_sep, s.by_h, s.bf, s.ebl, s.by_n)
+    figs = [_plot_sweep(ctx, v) for v in views]
+    table = "\n\n".join(_sweep_table(v) for v in views)
+    body = _setup_text(ctx, s, table, figs, runs, gibbs) + _differences_text(s, runs)
+    return Outcome(df, claims, body, runs)
 
+
+@dataclass(frozen=True)
+class _Summary:
+    """What the claims and the report read from the tidy rows: the 0.1 Hz discrimination rate by
+    PSD pairs, the two-source fundamental errors, and the mean error of every sweep."""
+
+    resolved: dict[int, float]  # share of runs discriminating 0.1 Hz, by PSD pairs sent
+    f0_errors: dict[int, np.ndarray]  # |f0 error| (Hz) of every fundamental, by number of sources
+    by_m: pd.Series
+    per_node: pd.Series | None  # the sources sweep with Eq. 43 powers per node, if run
+    by_snr: pd.Series
+    by_sep: pd.Series
+    by_h: pd.Series
+    bf: pd.Series  # directivity sweep, beamform
+    ebl: pd.Series  # directivity sweep, EBL
+    by_n: pd.Series
+    cpu: pd.Series  # CPU seconds of one localisation by number of sources
+    medians: pd.Series  # median error by (sweep, n_sources)
+
+    @property
+    def gross(self) -> float:
+        """Share of two-source fundamentals off by more than 0.5 Hz."""
+        return float(np.mean(self.f0_errors[2] > 0.5))
+
+    @property
+    def f0_rms(self) -> float:
+        fine = self.f0_errors[2][self.f0_errors[2] <= 0.5]
+        return float(np.sqrt(np.mean(fine**2))) if fine.size else float("nan")
+
+    @property
+    def f0_median(self) -> float:
+        errs = self.f0_errors[2]
+        return float(np.median(errs)) if errs.size else float("nan")
+
+    @property
+    def single(self) -> float:
+        return float(self.by_m.loc[1])
+
+    @property
+    def wide(self) -> float:
+        return float(self.by_sep[self.by_sep.index >= 5].mean())
+
+    @property
+    def r_bf1(self) -> float:
+        return float(self.bf.loc[1.0] / self.bf.loc[0.0])
+
+    @property
+    def r_bf3(self) -> float:
+        return float(self.bf.loc[3.0] / self.bf.loc[0.0])
+
+    @property
+    def r_ebl1(self) -> float:
+        return float(self.ebl.loc[1.0] / self.ebl.loc[0.0])
+
+
+def _summarise(df: pd.DataFrame) -> _Summary:
     fq = df[df["sweep"] == "frequency"]
     resolved = {
         int(k): float(np.mean([bool(x) for x in v])) for k, v in fq.groupby("n_psd")["resolved"]
     }
-    claims.append(
+    src = df[(df["sweep"] == "sources") & (df["method"] == "beamform")]
+    f0_errors = {
+        m: np.concatenate([np.asarray(v, float) for v in src[src["n_sources"] == m]["f0_errors"]])
+        for m in SOURCES
+        if (src["n_sources"] == m).any()
+    }
+    alt = df[(df["sweep"] == "sources") & (df["method"] == "beamform, Eq. 43 per node")]
+    return _Summary(
+        resolved=resolved,
+        f0_errors=f0_errors,
+        by_m=_mean(df, "sources", "n_sources"),
+        per_node=alt.groupby("n_sources")["error"].mean() if len(alt) else None,
+        by_snr=_mean(df, "snr", "snr_db"),
+        by_sep=_mean(df, "separation", "separation"),
+        by_h=_mean(df, "harmonicity", "harmonicity"),
+        bf=_mean(df, "directivity", "directivity"),
+        ebl=_mean(df, "directivity", "directivity", "EBL"),
+        by_n=_mean(df, "n_psd", "n_psd"),
+        cpu=src.groupby("n_sources")["cpu_seconds"].mean(),
+        medians=df[df["method"] == "beamform"].groupby(["sweep", "n_sources"])["error"].median(),
+    )
+
+
+def _frequency_claims(s: _Summary, loose: float) -> list[Claim]:
+    """Fig. 29 and the ML fundamentals' spread."""
+    return [
         Claim(
             "f0_discrimination_0p1hz",
             "two sources whose fundamentals (40–60 Hz) are 0.1 Hz apart are both estimated within "
             "0.05 Hz, with the 30 PSD pairs the node sends (share of runs)",
             "discriminated at 0.1 Hz",
-            resolved[30],
+            s.resolved[30],
             f">= {0.8 / loose:.1f}",
-            resolved[30] >= 0.8 / loose,
-        )
-    )
-    claims.append(
+            s.resolved[30] >= 0.8 / loose,
+        ),
         Claim(
             "f0_discrimination_0p1hz_60_pairs",
             "the same with 60 PSD pairs sent (Table 10 gives no N_PSD for the simulations)",
             "discriminated at 0.1 Hz",
-            resolved[60],
+            s.resolved[60],
             f">= {0.8 / loose:.1f}",
-            resolved[60] >= 0.8 / loose,
-        )
-    )
-    src = df[(df["sweep"] == "sources") & (df["method"] == "beamform")]
-    errs = np.concatenate([np.asarray(v, float) for v in src[src["n_sources"] == 2]["f0_errors"]])
-    gross = float(np.mean(errs > 0.5))
-    fine = errs[errs <= 0.5]
-    f0_rms = float(np.sqrt(np.mean(fine**2))) if fine.size else float("nan")
-    f0_median = float(np.median(errs)) if errs.size else float("nan")
-    claims.append(
+            s.resolved[60] >= 0.8 / loose,
+        ),
         Claim(
             "f0_spread_below_0p01hz",
             "ML fundamentals (two sources, 25 dB) spread less than 0.01 Hz about the truth "
-            f"(RMS of errors below 0.5 Hz; {gross:.0%} of fundamentals off by more)",
+            f"(RMS of errors below 0.5 Hz; {s.gross:.0%} of fundamentals off by more)",
             "< 0.01 Hz",
-            {"rms": f0_rms, "median": f0_median, "share off > 0.5 Hz": gross},
+            {"rms": s.f0_rms, "median": s.f0_median, "share off > 0.5 Hz": s.gross},
             f"rms < {0.01 * loose:.2f} Hz",
-            f0_rms < 0.01 * loose,
-        )
-    )
-    by_m = _mean(df, "sources", "n_sources")
+            s.f0_rms < 0.01 * loose,
+        ),
+    ]
+
+
+def _sweep_claims(s: _Summary, loose: float) -> list[Claim]:
+    """Figs. 30a-d: error against the number of sources, SNR and separation."""
+    by_m, by_snr, by_sep = s.by_m, s.by_snr, s.by_sep
     slope, intercept = np.polyfit(by_m.index.to_numpy(float), np.log(by_m.to_numpy()), 1)
     pred = intercept + slope * by_m.index.to_numpy(float)
     ss = float(np.sum((np.log(by_m.to_numpy()) - np.log(by_m.to_numpy()).mean()) ** 2))
     r2 = 1 - float(np.sum((np.log(by_m.to_numpy()) - pred) ** 2)) / ss if ss > 0 else 0.0
-    claims.append(
+    high = by_snr[by_snr.index >= 25]
+    flat = float(high.max() / high.min())
+    rel = by_sep / by_sep.index.to_numpy(float)
+    small = rel[rel.index <= 0.2]
+    big = rel[rel.index > 0.5]
+    return [
         Claim(
             "error_grows_with_sources",
             "the error grows about exponentially from 1 to 4 sources (log-error linear in M)",
@@ -332,12 +429,7 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             },
             f"slope > 0 and R² >= {0.8 / loose:.1f}",
             slope > 0 and r2 >= 0.8 / loose,
-        )
-    )
-    by_snr = _mean(df, "snr", "snr_db")
-    high = by_snr[by_snr.index >= 25]
-    flat = float(high.max() / high.min())
-    claims.append(
+        ),
         Claim(
             "error_falls_with_snr",
             "the error falls with SNR (7 dB worse than 25 dB)",
@@ -345,9 +437,7 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             {"7 dB": float(by_snr.loc[7.0]), "25 dB": float(by_snr.loc[25.0])},
             "err(7) > err(25)",
             float(by_snr.loc[7.0]) > float(by_snr.loc[25.0]),
-        )
-    )
-    claims.append(
+        ),
         Claim(
             "error_flat_above_25db",
             "the error is about constant above 25 dB (max/min of the mean error over 25–52 dB)",
@@ -355,12 +445,7 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             flat,
             f"<= {1.5 * loose:.1f}",
             flat <= 1.5 * loose,
-        )
-    )
-    by_sep = _mean(df, "separation", "separation")
-    rel = by_sep / by_sep.index.to_numpy(float)
-    small = rel[rel.index <= 0.2]
-    claims.append(
+        ),
         Claim(
             "unresolved_at_0p2m",
             "at 0.1 and 0.2 m separation the error is of the order of the separation (error/separation)",
@@ -368,10 +453,7 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             {str(k): float(v) for k, v in small.items()},
             ">= 0.3",
             bool(np.all(small >= 0.3)),
-        )
-    )
-    big = rel[rel.index > 0.5]
-    claims.append(
+        ),
         Claim(
             "resolved_above_0p5m",
             "above 0.5 m the error is a small fraction of the separation (max error/separation)",
@@ -379,27 +461,27 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             float(big.max()),
             f"<= {0.2 * loose:.1f}",
             float(big.max()) <= 0.2 * loose,
-        )
-    )
-    wide = float(by_sep[by_sep.index >= 5].mean())
-    single = float(by_m.loc[1])
-    claims.append(
+        ),
         Claim(
             "single_source_accuracy_above_5m",
             "above 5 m separation the mean error equals the single-source error (ratio)",
             "≈ 1",
-            wide / single,
+            s.wide / s.single,
             f"<= {1.5 * loose:.1f}",
-            wide / single <= 1.5 * loose,
-        )
-    )
-    by_h = _mean(df, "harmonicity", "harmonicity")
+            s.wide / s.single <= 1.5 * loose,
+        ),
+    ]
+
+
+def _robustness_claims(s: _Summary, loose: float) -> list[Claim]:
+    """Figs. 31b, 32a-b: harmonicity, directivity (against EBL) and PSD pairs sent."""
+    by_h, bf, ebl, by_n = s.by_h, s.bf, s.ebl, s.by_n
     rho = (
         float(spearmanr(by_h.index.to_numpy(float), by_h.to_numpy()).statistic)
         if len(by_h) > 2
         else -1.0
     )
-    claims.append(
+    return [
         Claim(
             "graceful_with_harmonicity",
             "the error decreases as harmonicity rises (err(0.4) > err(1.0))",
@@ -407,51 +489,35 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             {"h=0.4": float(by_h.iloc[0]), "h=1.0": float(by_h.iloc[-1]), "spearman": rho},
             "err(0.4) > err(1.0)",
             float(by_h.iloc[0]) > float(by_h.iloc[-1]),
-        )
-    )
-    bf = _mean(df, "directivity", "directivity")
-    ebl = _mean(df, "directivity", "directivity", "EBL")
-    r_bf1 = float(bf.loc[1.0] / bf.loc[0.0])
-    r_ebl1 = float(ebl.loc[1.0] / ebl.loc[0.0])
-    claims.append(
+        ),
         Claim(
             "beamform_unaffected_to_beta1",
             "beamform localisation is not affected up to β = 1 (err(β=1)/err(β=0))",
             "unaffected up to 1.0",
-            r_bf1,
+            s.r_bf1,
             f"<= {1.5 * loose:.1f}",
-            r_bf1 <= 1.5 * loose,
-        )
-    )
-    r_bf3 = float(bf.loc[3.0] / bf.loc[0.0])
-    claims.append(
+            s.r_bf1 <= 1.5 * loose,
+        ),
         Claim(
             "beamform_degrades_beyond_beta1",
             "beyond β = 1 the beamform error rises rapidly (err(β=3)/err(β=0))",
             "rises rapidly after 1.0",
-            r_bf3,
+            s.r_bf3,
             ">= 2",
-            r_bf3 >= 2.0,
-        )
-    )
-    claims.append(
+            s.r_bf3 >= 2.0,
+        ),
         Claim(
             "beamform_more_robust_than_ebl",
             "beamform localisation copes with directivity better than EBL (error at β = 1)",
             "BF < EBL under directivity",
-            {"beamform": float(bf.loc[1.0]), "EBL": float(ebl.loc[1.0]), "EBL ratio β1/β0": r_ebl1},
+            {
+                "beamform": float(bf.loc[1.0]),
+                "EBL": float(ebl.loc[1.0]),
+                "EBL ratio β1/β0": s.r_ebl1,
+            },
             "err_BF(1) < err_EBL(1)",
             float(bf.loc[1.0]) < float(ebl.loc[1.0]),
-        )
-    )
-    cpu = (
-        df[(df["method"] == "beamform") & (df["sweep"] == "sources")]
-        .groupby("n_sources")["cpu_seconds"]
-        .mean()
-    )
-
-    by_n = _mean(df, "n_psd", "n_psd")
-    claims.append(
+        ),
         Claim(
             "more_psd_pairs_lower_error",
             "more PSD pairs give a lower error; few pairs are poor (err(10 pairs) > err(30 pairs))",
@@ -459,34 +525,28 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
             {f"{int(k)} pairs": float(v) for k, v in by_n.items()},
             "err(10) > err(30)",
             float(by_n.loc[10]) > float(by_n.loc[30]),
-        )
-    )
-    alt = df[(df["sweep"] == "sources") & (df["method"] == "beamform, Eq. 43 per node")]
-    per_node = alt.groupby("n_sources")["error"].mean() if len(alt) else None
-    views = _sweep_views(by_m, per_node, by_snr, by_sep, by_h, bf, ebl, by_n)
-    figs = [_plot_sweep(ctx, v) for v in views]
-    table = "\n\n".join(_sweep_table(v) for v in views)
-    med = df[df["method"] == "beamform"].groupby(["sweep", "n_sources"])["error"].median()
-    gross_share = {
-        m: float(
-            np.mean(
-                np.concatenate(
-                    [np.asarray(v, float) for v in src[src["n_sources"] == m]["f0_errors"]]
-                )
-                > 0.5
-            )
-        )
-        for m in SOURCES
-    }
+        ),
+    ]
+
+
+def _gross_text(s: _Summary) -> str:
+    """Share of fundamentals off by more than 0.5 Hz, by number of sources."""
+    return " · ".join(f"M={m}: {float(np.mean(s.f0_errors[m] > 0.5)):.0%}" for m in SOURCES)
+
+
+def _setup_text(
+    ctx: RunContext, s: _Summary, table: str, figs: list[Any], runs: int, gibbs: int
+) -> str:
+    """The report's set-up (Table 10 beside ours) and results sections."""
     origin = (
         f"Re-analysed from the saved results of the full run, which took "
-        f"{float(ctx.extra['seconds']):.0f} s (`--workers 1`, 2 shared cores). "
-        if "seconds" in ctx.extra
+        f"{Options.of(ctx).seconds:.0f} s (`--workers 1`, 2 shared cores). "
+        if Options.of(ctx).seconds is not None
         else ""
     )
-    medians = " · ".join(f"M={int(m)}: {med.loc[('sources', m)]:.3f} m" for m in SOURCES)
-    gross_text = " · ".join(f"M={m}: {v:.0%}" for m, v in gross_share.items())
-    body = f"""
+    medians = " · ".join(f"M={int(m)}: {s.medians.loc[('sources', m)]:.3f} m" for m in SOURCES)
+    gross_text = _gross_text(s)
+    return f"""
 ## Set-up
 
 Table 10 of the paper beside ours:
@@ -519,12 +579,17 @@ Median errors by number of sources: {medians}. Share of fundamentals off by more
 {gross_text}.
 
 Mean CPU seconds of one localisation (Alg. 1: frequencies then positions) by number of sources:
-{", ".join(f"M={int(k)}: {v:.2f} s" for k, v in cpu.items())} (the 4 Hz node cycle leaves 0.25 s;
+{", ".join(f"M={int(k)}: {v:.2f} s" for k, v in s.cpu.items())} (the 4 Hz node cycle leaves 0.25 s;
 see `benchmarks/kushwaha2010_harmonic_speed.py`).
 
 {chr(10).join(f"![{f.stem}]({f.name})" for f in figs)}
 
-## Differences from the paper and their causes
+"""
+
+
+def _differences_text(s: _Summary, runs: int) -> str:
+    """The report's paragraph on every difference from the paper and its cause."""
+    return f"""## Differences from the paper and their causes
 
 **Fundamentals.** Eq. 46 alone is minimised by subharmonics (A-IV-3): ours adds a penalty per
 claimed harmonic bin with no transmitted peak (0.3 × the node's median P²), and counts a peak as
@@ -533,17 +598,17 @@ window; with half a bin the weaker of the two bins a line lights is unexplained 
 fundamental can claim it). The ML estimate on 1 Hz bins is only good to about ``f0 / 1000 Hz``
 (the highest harmonic decides), so a sub-bin line fit (two adjacent bins of one harmonic give the
 line's offset through the rectangular window's sinc) refines it: the median error is
-{f0_median:.4f} Hz, but the RMS over fundamentals within 0.5 Hz is {f0_rms:.3f} Hz because a few
-are left on a neighbouring consistent value (0.05–0.3 Hz off) and {gross:.0%} are lost altogether
+{s.f0_median:.4f} Hz, but the RMS over fundamentals within 0.5 Hz is {s.f0_rms:.3f} Hz because a few
+are left on a neighbouring consistent value (0.05–0.3 Hz off) and {s.gross:.0%} are lost altogether
 (two sources, 25 dB). With 30 pairs sent, two sources 0.1 Hz apart are separated in
-{resolved[30]:.0%} of runs: their harmonics below the tenth fall in the same bins, the 30
+{s.resolved[30]:.0%} of runs: their harmonics below the tenth fall in the same bins, the 30
 strongest bins are mostly those shared low harmonics, and a second fundamental claiming the few
 distinct high harmonics pays more empty-bin penalty than one put on a multiple of the first. With
-60 pairs the high harmonics are sent and {resolved[60]:.0%} of runs separate them. The paper does
+60 pairs the high harmonics are sent and {s.resolved[60]:.0%} of runs separate them. The paper does
 not state N_PSD for its simulations.
 
 **Number of sources.** Fundamentals lost (off by more than 0.5 Hz, matched on their own):
-{gross_text}; so most of the growth with M comes from the position step. Each node's beamform
+{_gross_text(s)}; so most of the growth with M comes from the position step. Each node's beamform
 is a sum of M broad patterns (a 10 cm array at ≤ 1 kHz), and 36 beams at 4 nodes constrain 2M
 coordinates weakly: the posterior has several modes, and the harmonic powers read from 30
 compressed PSD pairs (leakage, shared bins split by the M'² rule of Eq. 43, A-IV-4; harmonics not
@@ -556,8 +621,8 @@ log-error is not linear in M. The harmonic powers are fitted as ``λ_k² ψ_h`` 
 the sources table shows both. Alg. 1 moves one coordinate at a time, so we added a Metropolis
 swap of two sources' positions per sweep.
 
-**SNR.** The error changes little from 7 to 52 dB here (7 dB: {float(by_snr.iloc[0]):.3f} m,
-25 dB: {float(by_snr.loc[25.0]):.3f} m): the beamform integrates 2^14 samples and the PSD 4000, so
+**SNR.** The error changes little from 7 to 52 dB here (7 dB: {float(s.by_snr.iloc[0]):.3f} m,
+25 dB: {float(s.by_snr.loc[25.0]):.3f} m): the beamform integrates 2^14 samples and the PSD 4000, so
 even 7 dB per sample leaves the features nearly noise-free, and the error is set by the model
 mismatch and search failures described under the number of sources, which do not depend on SNR.
 The paper's curve is flat above 25 dB as ours is; its clear fall below 25 dB is not reproduced
@@ -567,8 +632,8 @@ The paper's curve is flat above 25 dB as ours is; its clear fall below 25 dB is 
 two sources closer than a few tenths of a metre have nearly the same bearings at all four nodes,
 so at 0.1–0.2 m the error is several times the separation (not resolved, as in the paper); the
 fundamentals of such a pair are also lost more often, since each node hears both equally. Far
-apart, the two-source error stays above the single-source error ({single:.3f} m; ratio
-{wide / single:.1f} at ≥ 5 m): the harmonic powers read from 30 compressed PSD pairs (leakage,
+apart, the two-source error stays above the single-source error ({s.single:.3f} m; ratio
+{s.wide / s.single:.1f} at ≥ 5 m): the harmonic powers read from 30 compressed PSD pairs (leakage,
 shared bins, harmonics not sent) and the cross-terms of harmonics a few Hz apart over 2^14
 samples, which Eq. 53 assumes zero, bias each source's share of the beamform, while a single
 source's PSD peaks describe its beamform almost exactly (the Eq. 56 test reproduces a simulated
@@ -577,13 +642,13 @@ beamform to 2 % with the true powers).
 **Directivity.** A directional source changes
 only its level λ_k² at each node, which the model reads from that node's PSD, and the bearings are
 intact; our beamform error
-{"does not rise" if r_bf3 < 1.5 else "rises"} beyond β = 1 (err(β=3)/err(β=0) = {r_bf3:.2f}; the paper
+{"does not rise" if s.r_bf3 < 1.5 else "rises"} beyond β = 1 (err(β=3)/err(β=0) = {s.r_bf3:.2f}; the paper
 saw a rapid rise, perhaps from tying the powers to one source spectrum with 1/r decay, the spec's
 "range-aware" variant, not implemented here). EBL reads range from energy, so a source louder on
-one side is misplaced at once: its error ratio β=1/β=0 is {r_ebl1:.1f}, against {r_bf1:.2f} for the
+one side is misplaced at once: its error ratio β=1/β=0 is {s.r_ebl1:.1f}, against {s.r_bf1:.2f} for the
 beamform. Without directivity, EBL on the separated harmonic powers is
-{"more" if float(ebl.loc[0.0]) < float(bf.loc[0.0]) else "less"} accurate than the beamform here
-({float(ebl.loc[0.0]):.3f} against {float(bf.loc[0.0]):.3f} m): with the sources already separated in
+{"more" if float(s.ebl.loc[0.0]) < float(s.bf.loc[0.0]) else "less"} accurate than the beamform here
+({float(s.ebl.loc[0.0]):.3f} against {float(s.bf.loc[0.0]):.3f} m): with the sources already separated in
 frequency, each source's powers at four nodes fix its range well. The beamform error does not
 grow with β at all, so the differences between β values are run-to-run scatter.
 
@@ -592,7 +657,6 @@ bins and the beamform with power the model does not explain, and fewer PSD pairs
 harmonics unsent; the error is larger at the lowest harmonicity and with 10 pairs, as in the
 paper, but not monotone in between with {runs} runs per point (the scatter of the means is large).
 """
-    return Outcome(df, claims, body, runs)
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...filters.grid import GridSpec, SensorLikelihoods
+from ...filters.grid import (
+    DirectionalMotion,
+    GridFilter,
+    GridSpec,
+    SensorLikelihoods,
+    map_sensors,
+)
 from ...management.fusion_scheduler import FusionScheduler, IntakeStats, Packet
 from ...perception.audio_beamforming import (
     Beamformer,
@@ -38,6 +44,7 @@ from ...perception.audio_beamforming import (
     unpack_audio_message,
 )
 from ...perception.video_detection import VideoDetector, fit_angle_mixture
+from ...sensors.camera_geometry import PinholeCamera
 from ...sensors.detection_function import (
     AngularSampling,
     arc_mean_matrix,
@@ -45,9 +52,10 @@ from ...sensors.detection_function import (
     mixture_arc_mean,
     normalize_likelihood,
 )
+from ...sensors.likelihood_map import detection_quality
 from ...world.acoustics import harmonic_engine, pink_noise, propagate
 from ...world.clocks import HopTranslation, NodeClock, RbsDomain, fit_clock_map
-from ...world.road_video import PinholeCamera, RoadRenderer, Vehicle
+from ...world.road_video import RoadRenderer, Vehicle
 
 FS = 100e3
 DT = 0.25
@@ -282,11 +290,9 @@ def sensor_likelihood(
     """Per-cell likelihood (unit sum, floored) and quality q_k = max λ̃ (Kushwaha 2010, Eqs. 31–32);
     None when the sensor detects nothing (a camera with an empty mixture)."""
     v = np.asarray(values, float)
-    shifted = v - v.min()
-    total = shifted.sum()
-    if not total > 0:
+    quality = detection_quality(v)  # r_k = 1 (spec 003 A-III-11)
+    if quality is None:
         return None
-    quality = float(shifted.max() / total)  # r_k = 1 (spec 003 A-III-11)
     if geo.kind == "audio":
         assert geo.audio_w is not None
         return normalize_likelihood(geo.audio_w @ v), quality
@@ -302,7 +308,7 @@ def sensor_likelihood(
 
 def tick_likelihoods(layout: Layout, taken: dict[str, Packet]) -> SensorLikelihoods:
     geo = sensor_geometry(layout)
-    rows, qual, mods = [], [], []
+    rows, qual, mods, ids = [], [], [], []
     for sid in layout.sensor_ids:
         if sid not in taken:
             continue
@@ -312,8 +318,9 @@ def tick_likelihoods(layout: Layout, taken: dict[str, Packet]) -> SensorLikeliho
         rows.append(res[0])
         qual.append(res[1])
         mods.append(geo[sid].kind)
+        ids.append(sid)
     return SensorLikelihoods(
-        np.array(rows).reshape(-1, layout.grid.size), np.array(qual), tuple(mods)
+        np.array(rows).reshape(-1, layout.grid.size), np.array(qual), tuple(mods), tuple(ids)
     )
 
 
@@ -341,11 +348,35 @@ def simulate_recording(
     """Simulate every node from ``t_start - preroll`` to ``t_end`` and return what the fusion node
     takes at each 4 Hz tick in [t_start, t_end]."""
     t_sim0 = t_start - config.preroll
-    array = MicrophoneArray.rectangle()
-    noise_std = 0.1 / 10 ** (config.snr_db / 20)
-    sources = []
     emit_t0 = t_sim0 - 0.5
-    duration = t_end - emit_t0 + 0.1
+    sources = _sound_sources(vehicles, config, emit_t0, t_end - emit_t0 + 0.1, rng)
+    net = _Network(layout, t_sim0, t_end, rng)
+    _audio_packets(layout, config, sources, emit_t0, t_sim0, t_end, net, rng)
+    _video_packets(layout, vehicles, config, t_sim0, t_end, net, rng)
+    net.packets.sort(key=lambda p: p.arrival)
+    return Recording(
+        net.packets,
+        list(vehicles),
+        t_start,
+        t_end,
+        np.array(net.residuals),
+        _audio_threshold(layout, config, rng),
+    )
+
+
+Source = tuple[NDArray[np.float64], Callable[[Any], NDArray[np.float64]]]
+
+
+def _sound_sources(
+    vehicles: list[VehiclePass],
+    config: SceneConfig,
+    emit_t0: float,
+    duration: float,
+    rng: np.random.Generator,
+) -> list[Source]:
+    """Each vehicle's engine (emitted from ``emit_t0`` on) and the optional stationary source:
+    (emitted signal, position at emission time since ``emit_t0``)."""
+    sources: list[Source] = []
     for v in vehicles:
         em = harmonic_engine(duration, rng, FS, f0=v.f0)
         sources.append((em, (lambda vv: lambda t: vv.engine(t + emit_t0))(v)))
@@ -353,48 +384,69 @@ def simulate_recording(
         pos = np.array([*config.second_source, 1.0])
         em = harmonic_engine(duration, rng, FS, f0=float(rng.uniform(90, 140)))
         sources.append((em, (lambda p: lambda t: np.broadcast_to(p, (np.size(t), 3)))(pos)))
+    return sources
 
-    # Clocks and time translation.
-    ids = layout.sensor_ids
-    clocks = {k: NodeClock.random(rng) for k in ids}
-    clocks["gateway_mote"] = NodeClock.random(rng)
-    clocks["gateway_pc"] = NodeClock.random(rng)
-    clocks["fusion"] = NodeClock.random(rng)
-    relay = NodeClock.random(rng)
-    pcs = {k: clocks[k] for k in [v[0] for v in layout.video] + ["gateway_pc", "fusion"]}
-    rbs = RbsDomain(pcs, "fusion", rng)
-    rbs.broadcast_until(t_end + 2.0, t_sim0 - 10.0)
-    # gateway: mote clock -> PC clock from paired readings (serial link, 20 µs jitter)
-    pair_t = np.linspace(t_sim0 - 10, t_end + 2, 16)
-    gw_a, gw_b = fit_clock_map(
-        clocks["gateway_mote"].local(pair_t) + rng.normal(0, 20e-6, pair_t.size),
-        clocks["gateway_pc"].local(pair_t) + rng.normal(0, 20e-6, pair_t.size),
-    )
-    hop = HopTranslation()
 
-    def to_fusion_time(value: float) -> float:
-        return float(clocks["fusion"].true_time(value))
+class _Network:
+    """The nodes' clocks and time translation, and the packets delivered to the fusion node:
+    audio by hop-by-hop translation to the gateway mote, the gateway's mote → PC map, then RBS;
+    video by RBS; all to the fusion node's clock."""
 
-    packets: list[Packet] = []
-    residuals = []
+    def __init__(self, layout: Layout, t_sim0: float, t_end: float, rng: np.random.Generator):
+        self.rng = rng
+        clocks = {k: NodeClock.random(rng) for k in layout.sensor_ids}
+        clocks["gateway_mote"] = NodeClock.random(rng)
+        clocks["gateway_pc"] = NodeClock.random(rng)
+        clocks["fusion"] = NodeClock.random(rng)
+        self.clocks = clocks
+        self.relay = NodeClock.random(rng)
+        pcs = {k: clocks[k] for k in [v[0] for v in layout.video] + ["gateway_pc", "fusion"]}
+        self.rbs = RbsDomain(pcs, "fusion", rng)
+        self.rbs.broadcast_until(t_end + 2.0, t_sim0 - 10.0)
+        # gateway: mote clock -> PC clock from paired readings (serial link, 20 µs jitter)
+        pair_t = np.linspace(t_sim0 - 10, t_end + 2, 16)
+        self.gw_a, self.gw_b = fit_clock_map(
+            clocks["gateway_mote"].local(pair_t) + rng.normal(0, 20e-6, pair_t.size),
+            clocks["gateway_pc"].local(pair_t) + rng.normal(0, 20e-6, pair_t.size),
+        )
+        self.hop = HopTranslation()
+        self.packets: list[Packet] = []
+        self.residuals: list[float] = []
 
-    def deliver(sid: str, seq: int, t_event: float, values: NDArray[np.float64], hops: int) -> None:
+    def deliver(
+        self, sid: str, seq: int, t_event: float, values: NDArray[np.float64], hops: int
+    ) -> None:
+        """Stamp an event of node ``sid`` in the fusion node's time and queue its packet."""
+        rng, clocks = self.rng, self.clocks
         if sid.startswith("A"):
-            route = [clocks[sid]] + [relay] * (hops - 1) + [clocks["gateway_mote"]]
+            route = [clocks[sid]] + [self.relay] * (hops - 1) + [clocks["gateway_mote"]]
             stays = list(rng.uniform(0.005, 0.02, hops))
             delays = list(rng.uniform(0.004, 0.006, hops))
-            local_gw, arrive = hop.translate(t_event, route, stays, delays, rng)
-            pc_local = gw_a + gw_b * local_gw
-            ref = rbs.to_reference("gateway_pc", pc_local)
+            local_gw, arrive = self.hop.translate(t_event, route, stays, delays, rng)
+            pc_local = self.gw_a + self.gw_b * local_gw
+            ref = self.rbs.to_reference("gateway_pc", pc_local)
             arrive += rng.uniform(0.01, 0.05)
         else:
-            ref = rbs.to_reference(sid, float(clocks[sid].local(t_event)))
+            ref = self.rbs.to_reference(sid, float(clocks[sid].local(t_event)))
             arrive = t_event + rng.uniform(0.01, 0.05)
-        stamp = to_fusion_time(ref)
-        residuals.append(stamp - t_event)
-        packets.append(Packet(sid, seq, stamp, values, arrive))
+        stamp = float(clocks["fusion"].true_time(ref))
+        self.residuals.append(stamp - t_event)
+        self.packets.append(Packet(sid, seq, stamp, values, arrive))
 
-    # Audio nodes: every 250 ms of the node's own clock.
+
+def _audio_packets(
+    layout: Layout,
+    config: SceneConfig,
+    sources: list[Source],
+    emit_t0: float,
+    t_sim0: float,
+    t_end: float,
+    net: _Network,
+    rng: np.random.Generator,
+) -> None:
+    """Acoustic nodes: beam energies every 250 ms of the node's own clock."""
+    array = MicrophoneArray.rectangle()
+    noise_std = 0.1 / 10 ** (config.snr_db / 20)
     for n_idx, (sid, x, y, heading) in enumerate(layout.audio):
         mics = np.column_stack([array.world_positions((x, y), heading), np.full(4, MIC_HEIGHT)])
         bf = Beamformer(array, alpha=config.beam_alpha)
@@ -410,12 +462,22 @@ def simulate_recording(
             if config.quantise_audio:
                 lam = audio_on_the_wire(lam, bf.window)
             # the energy describes the window: stamp it at the window's centre ([C])
-            deliver(sid, seq, float(t) - bf.window / (2 * FS), lam, hops=1 + n_idx % 3)
+            net.deliver(sid, seq, float(t) - bf.window / (2 * FS), lam, hops=1 + n_idx % 3)
 
-    # Video nodes: frames at 4 fps.
+
+def _video_packets(
+    layout: Layout,
+    vehicles: list[VehiclePass],
+    config: SceneConfig,
+    t_sim0: float,
+    t_end: float,
+    net: _Network,
+    rng: np.random.Generator,
+) -> None:
+    """Video nodes: column scores of rendered frames at 4 fps, with the optional false peak."""
     for c_idx, (sid, x, y, yaw) in enumerate(layout.video):
         true_yaw = yaw + config.camera_yaw_error[c_idx]
-        cam = PinholeCamera((x, y, CAMERA_HEIGHT), true_yaw, hfov=CAMERA_FOV)
+        cam = PinholeCamera.from_pose((x, y, CAMERA_HEIGHT), true_yaw, hfov=CAMERA_FOV)
         renderer = RoadRenderer(cam, rng, clutter=config.clutter)
         det = VideoDetector(cam.column_angles(), cam.hfov)
         for _ in range(25):
@@ -432,17 +494,7 @@ def simulate_recording(
                     k = int(np.argmin(np.abs(VIDEO_ANGLES - ghost)))
                     lam = lam.copy()  # a blob as wide as a car at 15 m, 1.5 times as high
                     lam[max(0, k - 7) : k + 8] += max(lam.max(), 50.0) * 1.5
-            deliver(sid, seq, float(t), lam, hops=1)
-
-    packets.sort(key=lambda p: p.arrival)
-    return Recording(
-        packets,
-        list(vehicles),
-        t_start,
-        t_end,
-        np.array(residuals),
-        _audio_threshold(layout, config, rng),
-    )
+            net.deliver(sid, seq, float(t), lam, hops=1)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -538,27 +590,44 @@ def run_sbe(
     to leave the field, i.e. mean + the tracker's velocity lies outside it -- spec 003 §2.5
     step 6's "posterior mean leaves the field", read for a grid, whose mean always lies inside;
     checked from the 5th tick of the track on, once the velocity has settled."""
-    from ...filters.grid import DirectionalMotion, GridTracker
-
     modalities, fusion, arch = VARIANTS[variant]
-    tracker = GridTracker(layout.grid, fusion, arch, DirectionalMotion(delta))  # type: ignore[arg-type]
+    filt = sbe_filter(layout, fusion, arch, delta)
     means = np.full((len(liks), 2), np.nan)
     dets = np.full(len(liks), np.nan)
+    belief = filt.initial()
     for k in range(start, len(liks)):
         lik = liks[k]
         if sensors is not None and fin is not None:
             lik = tick_likelihoods(layout.subset(*_split(sensors)), fin.taken[k])
-        if k == start and prior is not None:
+        measurements = lik.measurements(k * DT, modalities)
+        if k > start or prior is not None:
             # Kushwaha 2010: the prior is initialised from the audio detection at track start;
-            # the first step then only predicts (δ = 3 m) and updates.
-            tracker.initialize(prior)
-        m, c = tracker.step(lik.select(modalities))
-        means[k] = m
-        dets[k] = np.linalg.det(c)
+            # the first step then predicts (δ = 3 m) and updates. Without a prior the first
+            # step updates the uniform density.
+            belief = filt.step(filt.initial(prior) if k == start else belief, DT, measurements)
+        else:
+            belief = filt.update(belief, measurements)
+        means[k] = belief.mean
+        dets[k] = np.linalg.det(belief.cov)
         settled = k - start >= 4  # 1 s: the velocity estimate needs a few steps
-        if end_at_exit and settled and not layout.grid.contains(m + tracker.velocity):
+        ahead = belief.mean + belief.velocity * DT
+        if end_at_exit and settled and not layout.grid.contains(ahead):
             break
     return means, dets
+
+
+def sbe_filter(layout: Layout, fusion: str, architecture: str, delta: float = 1.5) -> GridFilter:
+    """The grid SBE filter over the layout's sensors (A*: audio, V*: video likelihood maps)."""
+    sensors = map_sensors(
+        layout.grid, layout.sensor_ids, lambda sid: "audio" if sid.startswith("A") else "video"
+    )
+    return GridFilter(
+        layout.grid,
+        sensors,
+        fusion,  # type: ignore[arg-type]
+        architecture,  # type: ignore[arg-type]
+        DirectionalMotion(delta),
+    )
 
 
 def audio_prior(
@@ -582,28 +651,40 @@ def _split(sensors: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
     )
 
 
+def detection_sensors(layout: Layout) -> dict[str, Any]:
+    """Every node as a detection-function sensor model, for the grid-free particle back end."""
+    from ...sensors.bearing_detection import DetectionFunctionSensor
+
+    beams = AngularSampling.beams(36)
+    out: dict[str, Any] = {}
+    for sid, x, y, h in layout.audio:
+        out[sid] = DetectionFunctionSensor(sid, (x, y), h, sampling=beams)
+    for sid, x, y, h in layout.video:
+        out[sid] = DetectionFunctionSensor(sid, (x, y), h, fov=CAMERA_FOV)
+    return out
+
+
 def bearing_detections(
-    layout: Layout, taken: dict[str, Packet], modalities: tuple[str, ...]
+    layout: Layout, taken: dict[str, Packet], modalities: tuple[str, ...], time: float = 0.0
 ) -> list[Any]:
-    """The same reports as :func:`tick_likelihoods`, for the grid-free particle back end."""
-    from ...filters.detection_pf import BearingDetection
+    """The same reports as :func:`tick_likelihoods` as measurements for :func:`detection_sensors`."""
+    from ...core.measurement import Measurement
+    from ...sensors.bearing_detection import DetectionFunctionSensor
 
     out = []
-    beams = AngularSampling.beams(36)
     if "audio" in modalities:
-        for sid, x, y, h in layout.audio:
+        for sid, _, _, _ in layout.audio:
             if sid in taken:
-                out.append(BearingDetection((x, y), h, sampling=beams, values=taken[sid].values))
+                out.append(Measurement(time, sid, taken[sid].values))
     if "video" in modalities:
-        for sid, x, y, h in layout.video:
+        for sid, _, _, _ in layout.video:
             if sid in taken:
                 mix = fit_angle_mixture(taken[sid].values, VIDEO_ANGLES, min_mass=20.0)
                 if not mix.empty:
-                    out.append(
-                        BearingDetection(
-                            (x, y), h, mixture=(mix.weights, mix.means, mix.sigmas), fov=CAMERA_FOV
-                        )
+                    value = DetectionFunctionSensor.mixture_value(
+                        mix.weights, mix.means, mix.sigmas
                     )
+                    out.append(Measurement(time, sid, value))
     return out
 
 
@@ -617,18 +698,22 @@ def run_particle_backend(
     n_particles: int = 2000,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Posterior means ``(T, 2)`` and det Σ of the particle back end (product fusion)."""
-    from ...filters.detection_pf import DetectionParticleFilter
+    from ...filters.detection_pf import DetectionParticleFilter, position_estimate
     from ...motion import ConstantVelocity
 
     modalities = VARIANTS[variant][0]
-    pf = DetectionParticleFilter(ConstantVelocity(ndim=2, q=4.0), n_particles)
+    pf = DetectionParticleFilter(
+        ConstantVelocity(ndim=2, q=4.0), detection_sensors(layout), n_particles
+    )
     cells = rng.choice(layout.grid.size, n_particles, p=prior / prior.sum())
     jitter = rng.uniform(-0.5, 0.5, (n_particles, 2)) * layout.grid.cell
-    pf.initialize(layout.grid.centres[cells] + jitter, 8.0, rng)
+    belief = pf.initial_belief(layout.grid.centres[cells] + jitter, 8.0, rng)
     means = np.full((len(fin.taken), 2), np.nan)
     dets = np.full(len(fin.taken), np.nan)
     for k in range(start, len(fin.taken)):
-        m, c = pf.step(DT, bearing_detections(layout, fin.taken[k], modalities), rng)
+        zs = bearing_detections(layout, fin.taken[k], modalities, k * DT)
+        belief = pf.update(pf.predict(belief, DT, rng), zs, rng)
+        m, c = position_estimate(belief)
         means[k] = m
         dets[k] = np.linalg.det(c)
     return means, dets

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import matplotlib
@@ -22,8 +24,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from pydantic import Field, field_validator
 
-from ...core.errors import ConfigError, invalid
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.plots import save
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.multi_model_pf import turn_models
@@ -44,6 +47,28 @@ PAPER_T31 = {"none": (7.54, 3.70, 5.54, 5.59), "trig": (1.38, 0.24, 0.32, 0.64)}
 PAPER_TV_EQUIV = (4.16, 4.28, 4.19, 4.21)
 PAPER_TV_TRIG = 4.55
 SWEEP_PERIODS = [1, 3, 10, 30, 100]  # E3.2 camera periods (T_s) run at 1,000 trials
+
+
+class SweepOptions(ExperimentOptions):
+    """``fusetrack run lee2009-periodic-sweep`` options."""
+
+    periods: tuple[int, ...] | None = Field(
+        None,
+        description="camera periods T_v to sweep, e.g. 1,10,100 "
+        f"(default: 1,10,100 with --quick, else {','.join(map(str, SWEEP_PERIODS))})",
+    )
+
+    @field_validator("periods", mode="before")
+    @classmethod
+    def _split(cls, v: Any) -> Any:
+        return [p.strip() for p in v.split(",")] if isinstance(v, str) else v
+
+    @field_validator("periods")
+    @classmethod
+    def _two_or_more(cls, v: tuple[int, ...] | None) -> tuple[int, ...] | None:
+        if v is not None and (len(set(v)) < 2 or min(v) < 1):
+            raise ValueError("two or more integers >= 1, e.g. 1,10,100")
+        return None if v is None else tuple(sorted(set(v)))
 
 
 def piecewise_truth(
@@ -336,15 +361,7 @@ def run_sweep(ctx: RunContext) -> Outcome:
     """``lee2009-periodic-sweep``: E3.2 alone at the paper's 1,000 trials (Fig. 3-6)."""
     trials = ctx.n_runs(full=1000, quick=6)
     tv_sweep = [1, 10, 100] if ctx.quick else SWEEP_PERIODS
-    if "periods" in ctx.extra:  # --set periods=1,10,100
-        try:
-            tv_sweep = sorted({int(v) for v in str(ctx.extra["periods"]).split(",")})
-        except ValueError:
-            tv_sweep = []
-        if len(tv_sweep) < 2 or tv_sweep[0] < 1:
-            raise ConfigError(
-                invalid("periods", ctx.extra["periods"], "two or more integers >= 1, e.g. 1,10,100")
-            )
+    tv_sweep = list(SweepOptions.of(ctx).periods or tv_sweep)  # --set periods=1,10,100
     n_part = 100 if ctx.quick else 500
     batches = _batch_configs("E3.2", 5.0, tv_sweep, trials, 10, n_part)
     df = ctx.monte_carlo(run_batch, batches, 1, desc="E3.2 batches")
@@ -352,7 +369,76 @@ def run_sweep(ctx: RunContext) -> Outcome:
     return Outcome(df, [claim], body, trials)
 
 
+@dataclass(frozen=True)
+class _Plan:
+    """The run's sizes and configurations (E3.1/E3.2 batches, E3.4 policies, E3.5 room)."""
+
+    n_part: int
+    runs: int
+    tv_grid: list[int]
+    tv_sweep: list[int]
+    ablations: list[str]
+    n35: int
+    runs35: int
+    batches: list[dict[str, Any]]
+    configs: list[dict[str, Any]]
+    room: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class _Table31:
+    """E3.4 (Table 3.1): RMS per policy and object, the periodic curve, triggered periods."""
+
+    tab: pd.DataFrame
+    per: pd.DataFrame
+    tvs: np.ndarray
+    tv_trig: float
+    tv_trig_obj: dict[str, float]
+    equiv: dict[str, float]
+
+
+@dataclass(frozen=True)
+class _Room:
+    """E3.5: trigger probability per step, the events and the two comparisons of C11."""
+
+    prob: dict[tuple[str, bool], np.ndarray]
+    events: dict[str, list[int]]
+    near_ratio: dict[str, tuple[float, float]]
+    coop_less: dict[str, tuple[float, float]]
+
+
 def run(ctx: RunContext) -> Outcome:
+    """E3.1-E3.5: plan, Monte Carlo, claims C7-C11, figures, report text."""
+    plan = _plan(ctx)
+    df = pd.concat(
+        [
+            ctx.monte_carlo(run_batch, plan.batches, 1, desc="E3.1/E3.2 batches"),
+            ctx.monte_carlo(run_once, plan.configs, plan.runs),
+            ctx.monte_carlo(run_once, plan.room, plan.runs35, desc="room"),
+        ],
+        ignore_index=True,
+    )
+    claims: list[Claim] = []
+    obj = df[df["object"].isin(["O1", "O2", "O3"]) & df["rms"].notna()]
+    c7, e31 = _noise_claim(obj)
+    claims.append(c7)
+    c8, e32_body = _sweep_section(ctx, obj[obj.part == "E3.2"], plan.tv_sweep)
+    claims.append(c8)
+    t31_claims, t31 = _table31_claims(obj, plan.tv_grid, plan.ablations)
+    claims += t31_claims
+    fired = (
+        df[(df.part == "E3.4") & (df.object == "fired")]
+        .groupby("policy")[["fired_count", "fired_gate", "fired_ellipse"]]
+        .mean()
+    )
+    room_claims, room = _room_claims(df)
+    claims += room_claims
+    figs = _figures(ctx, e31, t31, room)
+    body = _report_text(plan, e31, e32_body, t31, fired, room, figs)
+    return Outcome(df, claims, body, plan.runs)
+
+
+def _plan(ctx: RunContext) -> _Plan:
     quick = ctx.quick
     n_part = 100 if quick else 500
     runs = ctx.n_runs(full=100, quick=2)
@@ -378,24 +464,17 @@ def run(ctx: RunContext) -> Outcome:
         for s in SENSORS_35
         for c in (True, False)
     ]
-    df = pd.concat(
-        [
-            ctx.monte_carlo(run_batch, batches, 1, desc="E3.1/E3.2 batches"),
-            ctx.monte_carlo(run_once, configs, runs),
-            ctx.monte_carlo(run_once, room, runs35, desc="room"),
-        ],
-        ignore_index=True,
-    )
-    claims: list[Claim] = []
-    obj = df[df["object"].isin(["O1", "O2", "O3"]) & df["rms"].notna()]
+    return _Plan(n_part, runs, tv_grid, tv_sweep, ablations, n35, runs35, batches, configs, room)
 
-    # ---- C7
+
+def _noise_claim(obj: pd.DataFrame) -> tuple[Claim, pd.DataFrame]:
+    """C7 (E3.1): acoustic-only RMS rises with the bearing noise."""
     e31 = (
         obj[obj.part == "E3.1"].groupby(["variance_deg2", "object"])["rms"].mean().unstack("object")
     )
     e31["average"] = e31.mean(axis=1)
     rising = bool(e31["average"].iloc[-1] > e31["average"].iloc[0])
-    claims.append(
+    return (
         Claim(
             "C7_rises_with_noise",
             "acoustic-only average RMS at sigma^2 = 5 exceeds that at sigma^2 = 0 (O1, O2, O3 at 5 beside the paper)",
@@ -406,12 +485,16 @@ def run(ctx: RunContext) -> Outcome:
             },
             "avg(5) > avg(0)",
             rising,
-        )
+        ),
+        e31,
     )
-    # ---- C8
-    c8, e32_body = _sweep_section(ctx, obj[obj.part == "E3.2"], tv_sweep)
-    claims.append(c8)
-    # ---- C9/C10 (Table 3.1)
+
+
+def _table31_claims(
+    obj: pd.DataFrame, tv_grid: list[int], ablations: list[str]
+) -> tuple[list[Claim], _Table31]:
+    """C9, C10 (E3.4, Table 3.1): triggering against none, periodic, and without each condition."""
+    claims: list[Claim] = []
     e34 = obj[obj.part == "E3.4"]
     tab = e34.groupby(["policy", "object"])["rms"].mean().unstack("object")
     tab["average"] = tab.mean(axis=1)
@@ -469,12 +552,12 @@ def run(ctx: RunContext) -> Outcome:
             all(v > base for v in abl.values()),
         )
     )
-    fired = (
-        df[(df.part == "E3.4") & (df.object == "fired")]
-        .groupby("policy")[["fired_count", "fired_gate", "fired_ellipse"]]
-        .mean()
-    )
-    # ---- C11 (E3.5)
+    return claims, _Table31(tab, per, tvs, tv_trig, tv_trig_obj, equiv)
+
+
+def _room_claims(df: pd.DataFrame) -> tuple[list[Claim], _Room]:
+    """C11 (E3.5): triggers cluster at events and persist less with cooperation."""
+    claims: list[Claim] = []
     e35 = df[(df.part == "E3.5") & (df.object == "trigger_series")]
     prob: dict[tuple[str, bool], np.ndarray] = {}
     for (s, c), g in e35.groupby(["sensor", "cooperation"]):
@@ -510,7 +593,13 @@ def run(ctx: RunContext) -> Outcome:
         )
     )
 
-    # ---- figures
+    return claims, _Room(prob, events, near_ratio, coop_less)
+
+
+def _figures(ctx: RunContext, e31: pd.DataFrame, t31: _Table31, room: _Room) -> dict[str, Path]:
+    """Figs. 3-4, 3-14, 3-16 and 3-18 ... 3-20."""
+    tab, per, tvs, tv_trig_obj = t31.tab, t31.per, t31.tvs, t31.tv_trig_obj
+    prob, events = room.prob, room.events
     figs = {}
     fig, ax = plt.subplots(figsize=(6, 4))
     for c in ("O1", "O2", "O3", "average"):
@@ -537,9 +626,9 @@ def run(ctx: RunContext) -> Outcome:
     fig, axs = plt.subplots(2, 2, figsize=(13, 6), sharex=True)
     t35 = np.arange(T_35)
     for i, s in enumerate(SENSORS_35):
-        for j, c in enumerate((True, False)):
-            axs[j, i].plot(t35, prob[(s, c)], lw=0.8)
-            axs[j, i].set_title(f"{s}, {'with' if c else 'without'} cooperation")
+        for j, coop in enumerate((True, False)):
+            axs[j, i].plot(t35, prob[(s, coop)], lw=0.8)
+            axs[j, i].set_title(f"{s}, {'with' if coop else 'without'} cooperation")
             for e in events[s]:
                 axs[j, i].axvline(e, color="r", lw=0.6, ls=":")
             axs[j, i].set_ylabel("P(trigger)")
@@ -560,6 +649,22 @@ def run(ctx: RunContext) -> Outcome:
     ax.set_title("Figs. 3-15/3-16: the room, trajectories, sensors")
     figs["room"] = save(fig, ctx.figure_path("fig3_16_room"))
 
+    return figs
+
+
+def _report_text(
+    plan: _Plan,
+    e31: pd.DataFrame,
+    e32_body: str,
+    t31_: _Table31,
+    fired: pd.DataFrame,
+    room: _Room,
+    figs: Mapping[str, Path],
+) -> str:
+    """The report body."""
+    n_part, runs, n35, runs35 = plan.n_part, plan.runs, plan.n35, plan.runs35
+    tab, tv_trig, tv_trig_obj, equiv = t31_.tab, t31_.tv_trig, t31_.tv_trig_obj, t31_.equiv
+    near_ratio, coop_less = room.near_ratio, room.coop_less
     t31 = [
         "| | paper none | ours none | paper triggering | ours triggering | paper periodic-equivalent T_v | ours | ours triggered T_v |",
         "|---|---|---|---|---|---|---|---|",
@@ -569,7 +674,7 @@ def run(ctx: RunContext) -> Outcome:
         t31.append(
             f"| {c} | {PAPER_T31['none'][i]} | {tab.loc['none', c]:.3f} | {PAPER_T31['trig'][i]} | {tab.loc['trigger', c]:.3f} | {PAPER_TV_EQUIV[i]} | {equiv[c]:.2f} | {trig_tv:.2f} |"
         )
-    body = f"""
+    return f"""
 Filters: one multi-model particle filter per object (CV, CT, ACT with alpha = {ALPHA_33} m/s^2 in
 Sec. 3.3, 0.3 m/s^2 in the room), {n_part} particles per model per object ({n35} in the room),
 {runs} runs ({runs35} in the room); consistent JPDA estimator (the printed chain (3.7)-(3.11) is not convex). Bearings
@@ -628,4 +733,3 @@ with vs without cooperation: { ({s: [round(a, 4), round(b, 4)] for s, (a, b) in 
 
 ![room]({figs["room"].name})
 """
-    return Outcome(df, claims, body, runs)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import matplotlib
@@ -92,6 +93,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E5 (C16): Monte Carlo identification and walking direction, claims, figure, text."""
     runs = ctx.n_runs(full=50, quick=3)
     queries = 30 if ctx.quick else 100
     configs = [
@@ -107,7 +109,15 @@ def run(ctx: RunContext) -> Outcome:
         .unstack("method")
     )
     direc = df[df.part == "direction"].groupby("flip_prob")["accuracy"].mean()
-    rng = np.random.default_rng(ctx.seed)
+    claims = _claims(ctx.seed, ident, direc)
+    figp = _figure(ctx)
+    body = _report_text(runs, queries, ident, direc, figp)
+    return Outcome(df, claims, body, runs)
+
+
+def _claims(seed: int, ident: pd.DataFrame, direc: pd.Series) -> list[Claim]:
+    """C16: rho bounds, multi-view references, across/within race, walking direction."""
+    rng = np.random.default_rng(seed)
     p = colour_histogram(synthetic_face(0.0, (0.85, 0.65, 0.5), (0.1, 0.1, 0.1), rng))
     disjoint = np.zeros_like(p)
     disjoint[np.argmin(p)] = 1.0
@@ -115,7 +125,7 @@ def run(ctx: RunContext) -> Outcome:
         bhattacharyya(p, p),
         bhattacharyya(p, disjoint) if p[np.argmin(p)] == 0 else 0.0,
     )
-    claims = [
+    return [
         Claim(
             "C16_rho_bounds",
             "rho = 1 for identical histograms and 0 for disjoint ones (the paper's 0.8039/0.8040/0.9989 need its images)",
@@ -154,6 +164,10 @@ def run(ctx: RunContext) -> Outcome:
             direc.loc[0.0] == 1.0 and direc.loc[0.1] >= 0.8,
         ),
     ]
+
+
+def _figure(ctx: RunContext) -> Path:
+    """Synthetic multi-view face patches (Fig. 5-22/5-23 analogue)."""
     rng = np.random.default_rng(ctx.seed)
     fig, axs = plt.subplots(2, 5, figsize=(10, 4.4))
     for row, (s, h) in enumerate(population("across", rng)[:2]):
@@ -162,14 +176,18 @@ def run(ctx: RunContext) -> Outcome:
             axs[row, i].set_title(f"{math.degrees(v):.0f} deg", fontsize=8)
             axs[row, i].axis("off")
     fig.suptitle("Synthetic multi-view face patches (Fig. 5-22/5-23 analogue)")
-    figp = save(fig, ctx.figure_path("faces"))
+    return save(fig, ctx.figure_path("faces"))
+
+
+def _report_text(runs: int, queries: int, ident: pd.DataFrame, direc: pd.Series, figp: Path) -> str:
+    """The report body."""
     pattern = pd.DataFrame(
         {
             d: {c: apparent_motion(v, COMPASS[d]) for c, v in CAMERA_VIEWS.items()}
             for d in ("N", "NE", "E", "S")
         }
     )
-    body = f"""
+    return f"""
 The dissertation's frames (#1, #26, #35, #46) and face crops are not available, so its Bhattacharyya
 values (0.8039, 0.8040, 0.9989) cannot be recomputed; the method is checked on synthetic head
 patches (skin ellipse, a hair cap that grows towards the back of the head, 8 bins per RGB channel).
@@ -202,4 +220,3 @@ Eq. 5.3 (the movement state M = r cos theta) is incomplete in the text and is no
 
 ![faces]({figp.name})
 """
-    return Outcome(df, claims, body, runs)

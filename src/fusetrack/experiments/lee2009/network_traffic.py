@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import pandas as pd
 
 from ...evaluation.plots import save
 from ...evaluation.report import Claim, Outcome, RunContext
@@ -46,9 +48,25 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E5 (C18): delays over alpha, image size and scenario; claims, hop table, figure, text."""
     rounds = 5 if ctx.quick else 60
     alphas = [0.1, 0.2, 0.3, 0.4, 0.5]
     sizes = [10, 40, 100, 400, 1000] if not ctx.quick else [10, 40, 400]
+    df = ctx.monte_carlo(run_once, _configs(rounds, alphas, sizes), 1)
+    e2e = df[df.kind == "end_to_end"].set_index(["scenario", "protocol", "alpha", "image_kb"])[
+        "delay"
+    ]
+    s1a = e2e.xs(("S1", 40), level=("scenario", "image_kb")).unstack("protocol")
+    s1s = e2e.xs(("S1", 0.1), level=("scenario", "alpha")).unstack("protocol")
+    claims, base = _claims(e2e, s1a, s1s, alphas)
+    lines = _hop_table(df)
+    figp = _figure(ctx, s1a, s1s)
+    body = _report_text(rounds, s1a, s1s, base, lines, figp)
+    return Outcome(df, claims, body, 1)
+
+
+def _configs(rounds: int, alphas: list[float], sizes: list[int]) -> list[dict[str, Any]]:
+    """Scenario 1 over alpha and image size; Scenarios 2 and 3 at alpha 0.1, 40 KB."""
     configs = [
         {"scenario": "S1", "protocol": p, "alpha": a, "image_kb": 40, "rounds": rounds}
         for p in PROTOCOLS
@@ -65,16 +83,17 @@ def run(ctx: RunContext) -> Outcome:
         for s in ("S2", "S3")
         for p in PROTOCOLS
     ]
-    df = ctx.monte_carlo(run_once, configs, 1)
-    e2e = df[df.kind == "end_to_end"].set_index(["scenario", "protocol", "alpha", "image_kb"])[
-        "delay"
-    ]
-    s1a = e2e.xs(("S1", 40), level=("scenario", "image_kb")).unstack("protocol")
-    s1s = e2e.xs(("S1", 0.1), level=("scenario", "alpha")).unstack("protocol")
+    return configs
+
+
+def _claims(
+    e2e: pd.Series, s1a: pd.DataFrame, s1s: pd.DataFrame, alphas: list[float]
+) -> tuple[list[Claim], dict[str, dict[str, float]]]:
+    """C18: which protocol is faster where, and what the delay grows with."""
     base = {s: {p: float(e2e.loc[(s, p, 0.1, 40)]) for p in PROTOCOLS} for s in SCENARIOS}
     grow_alpha = float(s1a["RBVC"].iloc[-1] / s1a["RBVC"].iloc[0])
     grow_size = float(s1s["RBVC"].loc[400] / s1s["RBVC"].loc[40])
-    claims = [
+    claims: list[Claim] = [
         Claim(
             "C18_s1_rbvc_faster",
             "Scenario 1 (objects in R1 only): RBVC end-to-end delay below SBVC at every alpha",
@@ -111,6 +130,11 @@ def run(ctx: RunContext) -> Outcome:
             grow_alpha >= 1.0 and grow_size > 2 * grow_alpha,
         ),
     ]
+    return claims, base
+
+
+def _hop_table(df: pd.DataFrame) -> list[str]:
+    """Mean delay per message hop, the paper's table beside ours (markdown lines)."""
     hop = df[(df.alpha == 0.1) & (df.image_kb == 40) & df.scenario.isin(["S2", "S3"])].pivot_table(
         index="kind", columns=["scenario", "protocol"], values="delay"
     )
@@ -130,6 +154,11 @@ def run(ctx: RunContext) -> Outcome:
                 else f"{paper[i] if paper[i] is not None else '-'} | -"
             )
         lines.append(f"| {kind} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def _figure(ctx: RunContext, s1a: pd.DataFrame, s1s: pd.DataFrame) -> Path:
+    """Fig. 5-44."""
     fig, axs = plt.subplots(1, 2, figsize=(11, 4))
     for p in PROTOCOLS:
         axs[0].plot(s1a.index, s1a[p], "o-", label=p)
@@ -142,8 +171,19 @@ def run(ctx: RunContext) -> Outcome:
         ax.legend()
     axs[0].set_title("Fig. 5-44(a): Scenario 1, 40 KB images")
     axs[1].set_title("Fig. 5-44(b): Scenario 1, alpha = 0.1")
-    figp = save(fig, ctx.figure_path("fig5_44_delay"))
-    body = f"""
+    return save(fig, ctx.figure_path("fig5_44_delay"))
+
+
+def _report_text(
+    rounds: int,
+    s1a: pd.DataFrame,
+    s1s: pd.DataFrame,
+    base: Mapping[str, Mapping[str, float]],
+    lines: list[str],
+    figp: Path,
+) -> str:
+    """The report body."""
+    return f"""
 Discrete-event packet model (the dissertation used NS-2 and gives no link-layer settings):
 11 Mb/s channels, 0.5 ms per-packet overhead, 1000-byte packets, one 40-byte ACK per image packet
 (stop-and-wait), one image per camera per round, 16 bytes per object record, {rounds} one-second
@@ -168,4 +208,3 @@ Only the orderings are comparable: the absolute delays depend on link settings t
 give. The paper's "sum of visual sensing" (seconds) is much larger than ours, which suggests larger
 images, more images per round or a slower MAC than assumed here.
 """
-    return Outcome(df, claims, body, 1)

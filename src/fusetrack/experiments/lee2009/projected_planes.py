@@ -14,9 +14,10 @@ Parts (spec 000, Sec. 4.9):
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from pathlib import Path
+from typing import Any, Literal
 
 import matplotlib
 
@@ -24,8 +25,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from pydantic import Field
 
-from ...core.errors import ConfigError, invalid
+from ...evaluation.options import ExperimentOptions
 from ...evaluation.plots import save
 from ...evaluation.projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from ...evaluation.report import Claim, Outcome, RunContext
@@ -37,6 +39,17 @@ from ...sensors.doa_projection import (
     monte_carlo_projected_variance,
     projected_variance,
 )
+
+
+class Options(ExperimentOptions):
+    """``fusetrack run lee2009-projected-planes`` options."""
+
+    measurements: Literal["gaussian", "audio"] = Field(
+        "gaussian",
+        description="where the angles come from: gaussian (the dissertation's Ch. 2 noise) or "
+        "audio (estimated from simulated sound by MUSIC)",
+    )
+
 
 DEG = math.pi / 180.0
 SIGMA = math.sqrt(3.0) * DEG  # variance 3 deg^2 on both angles
@@ -395,18 +408,9 @@ kept as "literal" and the minimum-variance rule is run beside it.
     return claims, body, df
 
 
-MEASUREMENT_SOURCES = ("gaussian", "audio")
-
-
 def run(ctx: RunContext) -> Outcome:
     """``--measurements gaussian`` (default): the dissertation's Ch. 2; ``audio``: angles from sound."""
-    unknown = sorted(set(ctx.extra) - {"measurements", "config"})
-    if unknown:
-        raise ConfigError(invalid("option", unknown[0], "measurements=gaussian|audio"))
-    source = str(ctx.extra.get("measurements", "gaussian"))
-    if source not in MEASUREMENT_SOURCES:
-        raise ConfigError(invalid("measurements", source, f"one of {MEASUREMENT_SOURCES}"))
-    if source == "audio":
+    if Options.of(ctx).measurements == "audio":
         from .projected_planes_audio import run as run_audio
 
         return run_audio(ctx)
@@ -414,14 +418,41 @@ def run(ctx: RunContext) -> Outcome:
 
 
 def run_gaussian(ctx: RunContext) -> Outcome:
+    """The dissertation's Ch. 2 with Gaussian angle noise: scenario, estimation, claims, figures, text."""
     s = Settings()
     runs = ctx.n_runs(full=100, quick=5)
     n_part = 500 if ctx.quick else s.n_particles
+    df = ctx.monte_carlo(run_once, _gaussian_configs(ctx.quick, s, n_part), runs)
+    claims, var_body, var_df = _variance_part(ctx)
+    tab = df[df["part"].isin(["table21", "table22"])]
+    rm = _rmse(tab, ["part", "method"])
+    claims += _table_claims(rm, ctx.quick)
+    ws = df[df["part"] == "E2.2"].groupby(["variance_deg2", "method"])["mean_log_w"].mean()
+    ws = ws.unstack("method")
+    claims.append(_weight_sum_claim(ws))
+    sc_all = df[df["part"].isin(list(SCENARIOS))]
+    sc = sc_all[sc_all["init"] == "given"]
+    sc_prior = sc_all[sc_all["init"] == "prior"]
+    srm = _rmse(sc, ["part", "method"])
+    srm_prior = _rmse(sc_prior, ["part", "method"])
+    bounds = {name: scenario_bounds(name) for name in SCENARIOS}  # S4: both sensors
+    scenario_claims, avg_bound = _scenario_claims(srm, srm_prior, bounds, ctx.quick)
+    claims += scenario_claims
+    figs = _gaussian_figures(ctx, tab, ws, sc, bounds, runs)
+    body = _gaussian_text(
+        var_body, s, n_part, runs, rm, ws, sc, srm, srm_prior, bounds, avg_bound, figs
+    )
+    results = pd.concat([df, var_df], ignore_index=True)
+    return Outcome(results, claims, body, runs)
+
+
+def _gaussian_configs(quick: bool, s: Settings, n_part: int) -> list[dict[str, Any]]:
+    """E2.1 tables, E2.2 weight sums and Scenarios 1-4, from a given and from a prior start."""
     configs: list[dict[str, Any]] = [
         {"part": "table", "mismatch": False, "sigma_a": s.sigma_a_table, "n_particles": n_part},
         {"part": "table", "mismatch": True, "sigma_a": s.sigma_a_table, "n_particles": n_part},
     ]
-    variances = [0.5, 1.0, 3.0, 10.0] if ctx.quick else [0.5, 1.0, 2.0, 3.0, 5.0, 7.0, 10.0]
+    variances = [0.5, 1.0, 3.0, 10.0] if quick else [0.5, 1.0, 2.0, 3.0, 5.0, 7.0, 10.0]
     configs += [{"part": "weights", "variance_deg2": v, "n_particles": 100} for v in variances]
     configs += [
         {
@@ -434,13 +465,13 @@ def run_gaussian(ctx: RunContext) -> Outcome:
         for init in ("given", "prior")
         for name in SCENARIOS
     ]
-    df = ctx.monte_carlo(run_once, configs, runs)
-    claims, var_body, var_df = _variance_part(ctx)
+    return configs
 
-    # ---- E2.1 tables
-    tab = df[df["part"].isin(["table21", "table22"])]
-    rm = _rmse(tab, ["part", "method"])
-    tol = 0.5 if ctx.quick else 0.2
+
+def _table_claims(rm: pd.DataFrame, quick: bool) -> list[Claim]:
+    """C2, C3: Tables 2.1 and 2.2."""
+    claims: list[Claim] = []
+    tol = 0.5 if quick else 0.2
     t21 = rm.loc["table21"].loc[["equal", "weighted"]]
     t22 = rm.loc["table22"].loc[["equal", "weighted"]]
     within = [
@@ -491,31 +522,30 @@ def run_gaussian(ctx: RunContext) -> Outcome:
         )
     )
 
-    # ---- E2.2 weight sums
-    ws = df[df["part"] == "E2.2"].groupby(["variance_deg2", "method"])["mean_log_w"].mean()
-    ws = ws.unstack("method")
+    return claims
+
+
+def _weight_sum_claim(ws: pd.DataFrame) -> Claim:
+    """C4: Fig. 2-7."""
     larger = bool((ws["yz plane (PPS)"] > ws["direct 3-D"]).all())
-    claims.append(
-        Claim(
-            "C4_weight_sums",
-            "selected-plane (yz) weight sums exceed the direct 3-D filter's at every noise level (Fig. 2-7)",
-            "PPS > 3-D at every variance",
-            {
-                str(k): round(float(v), 3)
-                for k, v in (ws["yz plane (PPS)"] - ws["direct 3-D"]).items()
-            },
-            "log W difference > 0 everywhere",
-            larger,
-        )
+    return Claim(
+        "C4_weight_sums",
+        "selected-plane (yz) weight sums exceed the direct 3-D filter's at every noise level (Fig. 2-7)",
+        "PPS > 3-D at every variance",
+        {str(k): round(float(v), 3) for k, v in (ws["yz plane (PPS)"] - ws["direct 3-D"]).items()},
+        "log W difference > 0 everywhere",
+        larger,
     )
 
-    # ---- Scenarios 1-4
-    sc_all = df[df["part"].isin(list(SCENARIOS))]
-    sc = sc_all[sc_all["init"] == "given"]
-    sc_prior = sc_all[sc_all["init"] == "prior"]
-    srm = _rmse(sc, ["part", "method"])
-    srm_prior = _rmse(sc_prior, ["part", "method"])
-    bounds = {name: scenario_bounds(name) for name in SCENARIOS}  # S4: both sensors
+
+def _scenario_claims(
+    srm: pd.DataFrame,
+    srm_prior: pd.DataFrame,
+    bounds: Mapping[str, Mapping[str, np.ndarray]],
+    quick: bool,
+) -> tuple[list[Claim], dict[str, float]]:
+    """C5, C6: Scenarios 1-4 against each other and their CRLBs."""
+    claims: list[Claim] = []
     pps_better, bound_better, above = [], [], []
     for name in ("S1", "S2", "S3"):
         pps_avg = float(srm.loc[(name, "PPS literal"), "average"])
@@ -547,7 +577,7 @@ def run_gaussian(ctx: RunContext) -> Outcome:
             all(p <= d for _, p, d in bound_better),
         )
     )
-    slack = 0.7 if ctx.quick else 0.9
+    slack = 0.7 if quick else 0.9
     claims.append(
         Claim(
             "C5_3d_filter_above_bound",
@@ -608,7 +638,18 @@ def run_gaussian(ctx: RunContext) -> Outcome:
         )
     )
 
-    # ---- Figures
+    return claims, avg_bound
+
+
+def _gaussian_figures(
+    ctx: RunContext,
+    tab: pd.DataFrame,
+    ws: pd.DataFrame,
+    sc: pd.DataFrame,
+    bounds: Mapping[str, Mapping[str, np.ndarray]],
+    runs: int,
+) -> list[Path]:
+    """Figs. 2-5/2-6 (combining), 2-7 (weight sums), 2-10 ... 2-13 (scenarios)."""
     figs = []
     steps = np.arange(TABLE_STEPS)
     for case, label in (
@@ -656,35 +697,57 @@ def run_gaussian(ctx: RunContext) -> Outcome:
         fig.suptitle(f"{name}: per-axis RMSE ({runs} runs) and CRLBs (prior std {PRIOR_STD})")
         figs.append(save(fig, ctx.figure_path(f"scenario_{name}")))
 
-    # ---- Report body
-    def table_md(ours: pd.DataFrame, paper: Mapping[str, tuple[float, ...]]) -> str:
-        lines = [
-            "| RMSE (m) | paper equal | ours equal | paper weighted | ours weighted |",
-            "|---|---|---|---|---|",
-        ]
-        for i, c in enumerate(["x", "y", "z", "average"]):
-            lines.append(
-                f"| {c} | {paper['equal'][i]:.4f} | {ours.loc['equal', c]:.4f} | "
-                f"{paper['weighted'][i]:.4f} | {ours.loc['weighted', c]:.4f} |"
-            )
-        return "\n".join(lines)
+    return figs
 
-    yz_alone = rm.loc["table22"].loc["yz filter alone"]
-    sc_table = srm.reset_index().rename(columns={"part": "scenario"})
-    bound_rows = []
-    for name in bounds:
-        b = bounds[name]
-        row: dict[str, Any] = {"scenario": name}
-        for c in AXES:
-            for key in (f"{c}|PPS", f"{c}|3-D"):
-                row[key] = float(b[key].mean())
-        bound_rows.append(row)
-    selections = (
-        sc[sc.step.isin([0, 12, 13, 49])]
-        .drop_duplicates(["part", "method", "step"])
-        .query("run == 0")[["part", "method", "step", "planes"]]
+
+def _gaussian_text(
+    var_body: str,
+    s: Settings,
+    n_part: int,
+    runs: int,
+    rm: pd.DataFrame,
+    ws: pd.DataFrame,
+    sc: pd.DataFrame,
+    srm: pd.DataFrame,
+    srm_prior: pd.DataFrame,
+    bounds: Mapping[str, Mapping[str, np.ndarray]],
+    avg_bound: Mapping[str, float],
+    figs: Sequence[Path],
+) -> str:
+    """The report body: E2.1, E2.2, then the scenarios."""
+    return _tables_text(var_body, s, n_part, runs, rm, ws, figs) + _scenarios_text(
+        s, n_part, runs, sc, srm, srm_prior, bounds, avg_bound, figs
     )
-    body = f"""
+
+
+def _table_md(ours: pd.DataFrame, paper: Mapping[str, tuple[float, ...]]) -> str:
+    lines = [
+        "| RMSE (m) | paper equal | ours equal | paper weighted | ours weighted |",
+        "|---|---|---|---|---|",
+    ]
+    for i, c in enumerate(["x", "y", "z", "average"]):
+        lines.append(
+            f"| {c} | {paper['equal'][i]:.4f} | {ours.loc['equal', c]:.4f} | "
+            f"{paper['weighted'][i]:.4f} | {ours.loc['weighted', c]:.4f} |"
+        )
+    return "\n".join(lines)
+
+
+def _tables_text(
+    var_body: str,
+    s: Settings,
+    n_part: int,
+    runs: int,
+    rm: pd.DataFrame,
+    ws: pd.DataFrame,
+    figs: Sequence[Path],
+) -> str:
+    """E2.1 combining and E2.2 weight sums."""
+    t21 = rm.loc["table21"].loc[["equal", "weighted"]]
+    t22 = rm.loc["table22"].loc[["equal", "weighted"]]
+    ratio22 = float(t22.loc["equal", "y"] / t22.loc["weighted", "y"])
+    yz_alone = rm.loc["table22"].loc["yz filter alone"]
+    return f"""
 {var_body}
 
 ### E2.1 Combining (Tables 2.1, 2.2; C2, C3)
@@ -700,11 +763,11 @@ Table 2.2: the yz filter runs constant velocity over steps {MISMATCH[0]}-{MISMAT
 
 Table 2.1 (correct models):
 
-{table_md(t21, PAPER_T21)}
+{_table_md(t21, PAPER_T21)}
 
 Table 2.2 (yz filter mismatched):
 
-{table_md(t22, PAPER_T22)}
+{_table_md(t22, PAPER_T22)}
 
 The yz filter's own y, z RMSE in the mismatched case (Fig. 2-5): y {yz_alone["y"]:.3f}, z {yz_alone["z"]:.3f} m.
 
@@ -733,7 +796,37 @@ exp(-r^2/2 s_P^2) against a product of two kernels, each at most 1.
 
 ![weight sums]({figs[2].name})
 
-### Scenarios 1-4 (Figs. 2-10 ... 2-13; C5, C6)
+"""
+
+
+def _scenarios_text(
+    s: Settings,
+    n_part: int,
+    runs: int,
+    sc: pd.DataFrame,
+    srm: pd.DataFrame,
+    srm_prior: pd.DataFrame,
+    bounds: Mapping[str, Mapping[str, np.ndarray]],
+    avg_bound: Mapping[str, float],
+    figs: Sequence[Path],
+) -> str:
+    """Scenarios 1-4 against the CRLBs."""
+    s4b = bounds["S4"]
+    sc_table = srm.reset_index().rename(columns={"part": "scenario"})
+    bound_rows = []
+    for name in bounds:
+        b = bounds[name]
+        row: dict[str, Any] = {"scenario": name}
+        for c in AXES:
+            for key in (f"{c}|PPS", f"{c}|3-D"):
+                row[key] = float(b[key].mean())
+        bound_rows.append(row)
+    selections = (
+        sc[sc.step.isin([0, 12, 13, 49])]
+        .drop_duplicates(["part", "method", "step"])
+        .query("run == 0")[["part", "method", "step", "planes"]]
+    )
+    return f"""### Scenarios 1-4 (Figs. 2-10 ... 2-13; C5, C6)
 
 Ts = 0.1 s, 50 instants, x constant velocity, A_y = 0.1, A_z = 0.5 m/s^2, variance 3 deg^2,
 {n_part} particles, {runs} runs, filter process noise sigma_a = {s.sigma_a_scn} m/s^2. The filters'
@@ -795,5 +888,3 @@ than a single plane's, and the claim C5_pps_bound_vs_3d reports what the fused P
 
 ![S4]({figs[6].name})
 """
-    results = pd.concat([df, var_df], ignore_index=True)
-    return Outcome(results, claims, body, runs)

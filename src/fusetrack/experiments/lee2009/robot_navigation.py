@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import matplotlib
@@ -14,29 +16,40 @@ import pandas as pd
 
 from ...evaluation.plots import save
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...world.potential_field import PotentialField, navigate
+from ...world.potential_field import NavigationResult, PotentialField, navigate
 
 PAPER_FORCES = {(12.0, 12.0): -8.46, (10.0, 10.0): -5.34, (9.0, 9.0): -1.21}
 
 
+VARIANTS: dict[str, dict[str, Any]] = {
+    "standard field": {},
+    "modified (Eq. 5.24)": {"modified": True},
+    "modified + escape": {"modified": True, "escape": True},
+    "modified + escape, r_r = r_o = 0.3": {
+        "modified": True,
+        "escape": True,
+        "r_robot": 0.3,
+        "r_obstacle": 0.3,
+    },
+    "standard, r_r = r_o = 0.3": {"r_robot": 0.3, "r_obstacle": 0.3},
+}
+
+
 def run(ctx: RunContext) -> Outcome:
+    """E5 (C15): the field's forces, the paths of every variant, claims, figures, text."""
     fld = PotentialField()
     u = np.array([1.0, 1.0]) / math.sqrt(2.0)
     forces = {p: float(fld.total(np.array(p)) @ u) for p in PAPER_FORCES}
     delta = fld.zero_force_distance()
-    variants: dict[str, dict[str, Any]] = {
-        "standard field": {},
-        "modified (Eq. 5.24)": {"modified": True},
-        "modified + escape": {"modified": True, "escape": True},
-        "modified + escape, r_r = r_o = 0.3": {
-            "modified": True,
-            "escape": True,
-            "r_robot": 0.3,
-            "r_obstacle": 0.3,
-        },
-        "standard, r_r = r_o = 0.3": {"r_robot": 0.3, "r_obstacle": 0.3},
-    }
-    results = {name: navigate(fld, **kw) for name, kw in variants.items()}
+    results = {name: navigate(fld, **kw) for name, kw in VARIANTS.items()}
+    claims = _claims(forces, delta, results)
+    fig526, figpath = _figures(ctx, fld, u, results)
+    body = _report_text(forces, delta, results, fig526, figpath)
+    return Outcome(pd.DataFrame(_path_rows(results)), claims, body, 1)
+
+
+def _path_rows(results: Mapping[str, NavigationResult]) -> list[dict[str, Any]]:
+    """One row per variant and step."""
     rows = []
     for name, res in results.items():
         for k, p in enumerate(res.path):
@@ -51,8 +64,17 @@ def run(ctx: RunContext) -> Outcome:
                     "reached_goal_at": res.reached_goal_at,
                 }
             )
-    std, mod, esc, esc3 = (results[k] for k in list(variants)[:4])
-    claims = [
+    return rows
+
+
+def _claims(
+    forces: Mapping[tuple[float, float], float],
+    delta: float,
+    results: Mapping[str, NavigationResult],
+) -> list[Claim]:
+    """C15: forces, zero-force distance, collision, oscillation, escape."""
+    std, mod, esc, esc3 = (results[k] for k in list(VARIANTS)[:4])
+    return [
         Claim(
             "C15_forces",
             "signed total force along the diagonal at (12,12), (10,10), (9,9)",
@@ -101,6 +123,12 @@ def run(ctx: RunContext) -> Outcome:
             and esc3.collided_at is None,
         ),
     ]
+
+
+def _figures(
+    ctx: RunContext, fld: PotentialField, u: np.ndarray, results: Mapping[str, NavigationResult]
+) -> tuple[Path, Path]:
+    """Fig. 5-26 (force profile on the diagonal) and the robot paths."""
     # Fig 5-26: force profile on the diagonal
     t = np.linspace(2, 14, 481)
     prof = np.array(
@@ -124,8 +152,19 @@ def run(ctx: RunContext) -> Outcome:
     ax.legend(fontsize=7)
     ax.set_title("Robot paths (Figs. 5-25, 5-28, 5-29)")
     figpath = save(fig, ctx.figure_path("robot_paths"))
+    return fig526, figpath
+
+
+def _report_text(
+    forces: Mapping[tuple[float, float], float],
+    delta: float,
+    results: Mapping[str, NavigationResult],
+    fig526: Path,
+    figpath: Path,
+) -> str:
+    """The report body."""
     ev = "\n".join(f"* **{name}**: " + "; ".join(res.events) for name, res in results.items())
-    body = f"""
+    return f"""
 ## The example (p_r = (12, 12), p_o = (8, 8), p_g = (6, 6), s_r T_s = sqrt 2, rho_0 = 10, c_att = 0.5, c_rep = 5, m = n = 2)
 
 Signed total force along the diagonal (negative = towards the origin): paper {list(PAPER_FORCES.values())},
@@ -144,4 +183,3 @@ anticlockwise by theta_osc = the top of the applicable range (pi/2 when the robo
 s_r T_s + r_r + r_o of the obstacle, Eq. 5.30 with arcsin for the printed csc) for one step and then
 follow the field again.
 """
-    return Outcome(pd.DataFrame(rows), claims, body, 1)

@@ -55,9 +55,10 @@ from ...sensors.camera_geometry import (
     plane_homography,
 )
 from ...tools.video_tracker import TrackerConfig, VideoRadioTracker
-from ...world.rendered_room import Person, RoomRenderer
-from ...world.walks import (
+from ...world.rendered_room import (
     WALL,
+    Person,
+    RoomRenderer,
     behind_wall_walk,
     crossing_walks,
     diverse_training_walk,

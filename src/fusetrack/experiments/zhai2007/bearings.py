@@ -20,25 +20,23 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import plots
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters import ExtendedKalmanFilter, UnscentedKalmanFilter
 from ...filters.sis import ProposalParticleFilter
 from ...filters.sp_pekf import SPPEKFProposal
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
-from .common import timed_gaussian, timed_sis
+from .common import timed_gaussian, timed_sis, track_rows
 from .comparators import (
     COMPARATORS,
     UPF_NOTE,
+    Comparison,
     Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
     per_run_scores,
     run_comparators,
-    sis_reference,
 )
+from .equal_time import EqualTime
+from .reporting import order_claim, origin_sensor, plot_rmse, plot_run_tracks, rmse_by_step
 
 METHODS = (
     "EKF",
@@ -54,6 +52,7 @@ IMM_TRANSITION = np.array([[0.9, 0.05, 0.05], [0.1, 0.9, 0.0], [0.1, 0.0, 0.9]])
 
 
 def scenario(name: str) -> dict[str, Any]:
+    """The E2 (thesis) or E3 (simulated aircraft) settings."""
     if name == "E2":
         return {
             "x0": np.array([1.0, 1.0, 1.0, 1.0]),
@@ -81,6 +80,7 @@ def scenario(name: str) -> dict[str, Any]:
 def simulate(
     scn: Mapping[str, Any], rng: np.random.Generator
 ) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    """Truth and bearings from the radar at the origin (E3's turn is noise-free)."""
     cv = ConstantVelocity(q=scn["q"], noise="discrete")
     sensor = Bearing("radar", position=[0.0, 0.0], sigma=scn["sigma"])
     x, xs, zs = scn["x0"].copy(), [], []
@@ -145,117 +145,116 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     for name, (est, secs) in estimates.items():
         err = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])  # Eq. 36
         err = np.where(np.isfinite(err), err, 1e9)
-        for t in range(len(err)):
-            rows.append(
-                {
-                    "method": name,
-                    "step": t + 1,
-                    "sq_err": float(err[t] ** 2),
-                    "seconds": secs,
-                    "x": est[t, 0],
-                    "y": est[t, 1],
-                    "true_x": truth[t, 0],
-                    "true_y": truth[t, 1],
-                }
-            )
+        rows += track_rows(name, est, truth, sq_err=err**2, seconds=secs)
     return rows
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E2-E3: comparators calibrated to PF-SP-PEKF(200), the runs, claims, figures, report."""
     runs = ctx.n_runs(full=100, quick=8)
-    n_equal, target = {}, {}
+    eq = EqualTime.for_run(ctx)
     for s in ("E2", "E3"):  # particles at PF-SP-PEKF(200)'s time, on run 0's scenario
         cs = comparator_scenario(s, ctx.seed)
-        n_equal[s], target[s] = equal_time_particles(
-            cs,
-            sis_reference(cs, partial(sp_pekf, cs, 200)),
-            ("UPF", "bootstrap equal time"),
-            repeats=2 if ctx.quick else 3,
-        )
+        eq.calibrate_sis(s, cs, partial(sp_pekf, cs, 200))
     df = ctx.monte_carlo(
         run_once,
-        [{"scenario": s, "n_particles": 200, "n_equal": n_equal[s]} for s in ("E2", "E3")],
+        [{"scenario": s, "n_particles": 200, "n_equal": eq.n_particles[s]} for s in ("E2", "E3")],
         runs,
     )
     claims: list[Claim] = []
-    figs = {}
+    figs: dict[str, str] = {}
     tables = {}
     for s in ("E2", "E3"):
         d = df[df["scenario"] == s]
-        rm = (
-            d.groupby(["method", "step"])["sq_err"].mean().pow(0.5).unstack("method")[list(METHODS)]
+        rm = rmse_by_step(d, "sq_err")[list(METHODS)]
+        tables[s] = scenario_table(d, rm)
+        claims += scenario_claims(s, rm)
+        figs.update(scenario_figures(ctx, s, d, rm, runs))
+    cmp = comparison(ctx, df, eq)
+    body = report_text(tables, figs) + cmp.section
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+
+
+def scenario_table(d: pd.DataFrame, rm: pd.DataFrame) -> pd.DataFrame:
+    """Per method: position RMSE(t) averaged over t > 30 and over all t, seconds per run."""
+    secs = d.groupby("method")["seconds"].mean()
+    late = rm.loc[rm.index > 30].mean()
+    return pd.DataFrame({"RMSE t>30": late, "RMSE all t": rm.mean(), "seconds/run": secs})
+
+
+def scenario_claims(s: str, rm: pd.DataFrame) -> list[Claim]:
+    """C4: the ordering of Figs 10/12 after t = 30, and (E2) the EKF's divergence."""
+    late = rm.loc[rm.index > 30].mean()
+    claims = [
+        order_claim(
+            f"C4_order_{s}",
+            f"{s}: position RMSE(t) averaged over t > 30: PF-SP-PEKF < bootstrap < EKF (Fig {10 if s == 'E2' else 12})",
+            "PF-SP-PEKF < bootstrap < EKF",
+            late,
+            ["PF-SP-PEKF", "bootstrap", "EKF"],
         )
-        late = rm.loc[rm.index > 30].mean()
-        secs = d.groupby("method")["seconds"].mean()
-        tables[s] = pd.DataFrame({"RMSE t>30": late, "RMSE all t": rm.mean(), "seconds/run": secs})
-        order = ["PF-SP-PEKF", "bootstrap", "EKF"]
-        ok = bool(late["PF-SP-PEKF"] < late["bootstrap"] < late["EKF"])
+    ]
+    if s == "E2":
+        grow = float(rm["EKF"].iloc[-1] / rm["EKF"].loc[30])
         claims.append(
             Claim(
-                f"C4_order_{s}",
-                f"{s}: position RMSE(t) averaged over t > 30: PF-SP-PEKF < bootstrap < EKF (Fig {10 if s == 'E2' else 12})",
-                "PF-SP-PEKF < bootstrap < EKF",
-                " < ".join(f"{m} {late[m]:.3g}" for m in order),
-                "strict",
-                ok,
+                "C4_ekf_diverges",
+                "E2: the EKF loses the target after t = 30 (its error grows)",
+                "error grows dramatically",
+                f"RMSE(100)/RMSE(30) = {grow:.2f}",
+                "> 2",
+                grow > 2,
             )
         )
-        if s == "E2":
-            grow = float(rm["EKF"].iloc[-1] / rm["EKF"].loc[30])
-            claims.append(
-                Claim(
-                    "C4_ekf_diverges",
-                    "E2: the EKF loses the target after t = 30 (its error grows)",
-                    "error grows dramatically",
-                    f"RMSE(100)/RMSE(30) = {grow:.2f}",
-                    "> 2",
-                    grow > 2,
-                )
-            )
-        figs[s] = plots.plot_series(
-            ctx.figure_path(f"rmse_{s}"),
-            rm.index.to_numpy(),
-            {m: rm[m].to_numpy() for m in METHODS},
-            xlabel="t (step)",
-            ylabel="position RMSE",
-            logy=True,
-            title=f"{s}: RMSE over {runs} runs"
-            + (" (Fig 10)" if s == "E2" else " (Fig 12 substitute)"),
-        ).name
-        r0 = d[d["run"] == 0]
-        figs[s + "_traj"] = plots.plot_trajectories(
-            ctx.figure_path(f"trajectory_{s}"),
-            r0[r0["method"] == "EKF"][["true_x", "true_y"]].to_numpy(),
-            {
-                m: r0[r0["method"] == m][["x", "y"]].to_numpy()
-                for m in ("EKF", "bootstrap", "PF-SP-PEKF")
-            },
-            sensors=[("sensor", np.zeros(2))],
-            title=f"{s}: run 0" + (" (Fig 11)" if s == "E2" else ""),
-        ).name
-    winner = {
-        s: tables[s]["RMSE all t"].drop(["UKF", "PF-SP-PEKF marginal", *COMPARATORS]).idxmin()
-        for s in tables
+    return claims
+
+
+def scenario_figures(
+    ctx: RunContext, s: str, d: pd.DataFrame, rm: pd.DataFrame, runs: int
+) -> dict[str, str]:
+    """RMSE(t) of every method (Fig 10 / 12) and run 0's tracks (Fig 11): file names."""
+    title = f"{s}: RMSE over {runs} runs" + (" (Fig 10)" if s == "E2" else " (Fig 12 substitute)")
+    return {
+        s: plot_rmse(ctx, f"rmse_{s}", rm, METHODS, title, "t (step)").name,
+        s + "_traj": plot_run_tracks(
+            ctx,
+            f"trajectory_{s}",
+            d[d["run"] == 0],
+            "EKF",
+            ("EKF", "bootstrap", "PF-SP-PEKF"),
+            origin_sensor(),
+            f"{s}: run 0" + (" (Fig 11)" if s == "E2" else ""),
+        ).name,
     }
-    cmp = compare(
+
+
+def comparison(ctx: RunContext, df: pd.DataFrame, eq: EqualTime) -> Comparison:
+    """Beyond the paper: UPF, bootstrap at PF-SP-PEKF's time and the IMM-EKF, per scenario."""
+    return eq.compare(
         per_run_scores(df, ["scenario"], "sq_err"),
         "PF-SP-PEKF",
         ctx.figure_path("error_vs_seconds"),
         by=["scenario"],
         ylabel="position RMSE per run (mean over runs)",
-        calibration=calibration_note(n_equal, target),
         notes=[
             "IMM-EKF: CV and left/right coordinated turns (E2 0.1 rad/s, E3 3 deg/s), regime "
             f"matrix {IMM_TRANSITION.tolist()}.",
             UPF_NOTE,
         ],
-        n_particles=n_equal,
     )
+
+
+def report_text(tables: Mapping[str, pd.DataFrame], figs: Mapping[str, str]) -> str:
+    """The report's set-up, E2 and E3 tables and figures, and the differences."""
+    winner = {
+        s: tables[s]["RMSE all t"].drop(["UKF", "PF-SP-PEKF marginal", *COMPARATORS]).idxmin()
+        for s in tables
+    }
     sp_vs_bs = {
         s: float(tables[s].loc["PF-SP-PEKF", "RMSE t>30"] / tables[s].loc["bootstrap", "RMSE t>30"])
         for s in tables
     }
-    body = f"""
+    return f"""
 ## Set-up
 
 E2 exactly as the thesis prints it (Sec. 3.2; T = 1, sensor at the origin, 200 particles, 20
@@ -302,5 +301,4 @@ UPF, IMM-EKF and "bootstrap equal time" are beyond the paper (last section).
 * E3 uses a simulated aircraft instead of the NWRT recordings, which are not public; only the
   qualitative claim (the new method stays closest) can be compared.
 
-{cmp.section}"""
-    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+"""

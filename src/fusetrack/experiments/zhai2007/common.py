@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import itertools
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -12,24 +12,59 @@ import pandas as pd
 
 from ...core import Gaussian, Measurement
 from ...core.resampling import systematic
-from ...filters.sis import Array, ProposalParticleFilter, run_sis
+from ...filters.sis import Array, sensor_measurements
 
 # compile the resampling kernel once per process, so that no filter's timing includes it
 systematic(np.full((1, 2), 0.5), np.random.default_rng(0))
 
+Steps = Sequence[Sequence[Array | None]]
+"""One sensor-aligned list per step: a value or None for each of the filter's sensors."""
+
+
+def run_steps(
+    filt: Any,
+    prior: Gaussian,
+    zs: Steps,
+    dt: float,
+    rng: np.random.Generator,
+    *,
+    keep: Callable[[Any], Any] = lambda belief: belief.estimate,
+    side: Mapping[str, Sequence[Array | None]] | None = None,
+    batch_shape: tuple[int, ...] = (),
+) -> list[Any]:
+    """Run a stepping particle filter (:class:`~fusetrack.filters.ProposalParticleFilter`,
+    :class:`~fusetrack.filters.MultipleModelParticleFilter`) from ``prior`` over ``zs``, step
+    ``k`` at time ``(k + 1) dt``; ``side`` adds per-step side inputs by id (e.g. CPF-SP's sensor
+    weights; a None entry is left out). Returns ``keep(belief)`` after every step."""
+    belief = filt.initialize(prior, rng, batch_shape)
+    out = []
+    for k, step in enumerate(zs):
+        t = (k + 1) * dt
+        ms = sensor_measurements(filt.sensors, step, t)
+        for sid, values in (side or {}).items():
+            if values[k] is not None:
+                ms.append(Measurement(t, sid, np.asarray(values[k], dtype=float)))
+        belief = filt.step(belief, dt, ms, rng)
+        out.append(keep(belief))
+    return out
+
 
 def timed_sis(
-    filt: ProposalParticleFilter,
+    filt: Any,
     prior: Gaussian,
-    zs: Sequence[Sequence[Array | None]],
+    zs: Steps,
     dt: float,
     rng: np.random.Generator,
     keep: Callable[[Any], Any] | None = None,
+    side: Mapping[str, Sequence[Array | None]] | None = None,
 ) -> tuple[Array, float, list[Any]]:
-    """Estimates ``(T, d)``, seconds, and ``keep(state)`` per step."""
+    """Estimates ``(T, d)``, seconds, and ``keep(belief)`` per step (:func:`run_steps`)."""
     t0 = time.perf_counter()
-    est, kept = run_sis(filt, prior, zs, dt, rng, keep=keep)
-    return est, time.perf_counter() - t0, kept
+    kept = run_steps(
+        filt, prior, zs, dt, rng, side=side, keep=lambda b: (b.estimate, keep(b) if keep else None)
+    )
+    secs = time.perf_counter() - t0
+    return np.array([e for e, _ in kept]), secs, [k for _, k in kept] if keep else []
 
 
 def timed_gaussian(
@@ -96,14 +131,13 @@ def fmt_order(values: pd.Series, order: Sequence[str]) -> str:
 def timed_mm(
     filt: Any,
     prior: Gaussian,
-    zs: Sequence[Sequence[Array | None]],
+    zs: Steps,
     dt: float,
     rng: np.random.Generator,
 ) -> tuple[Array, Array, float]:
-    """A multiple-model particle filter run (:func:`~fusetrack.filters.multiple_model.run_mm`):
-    estimates ``(T, d)``, model probabilities ``(T, M)`` and seconds."""
-    from ...filters.multiple_model import run_mm
-
+    """A multiple-model particle filter run (:func:`run_steps`): estimates ``(T, d)``, model
+    probabilities ``(T, M)`` and seconds."""
     t0 = time.perf_counter()
-    est, probs = run_mm(filt, prior, zs, dt, rng)
-    return est, probs, time.perf_counter() - t0
+    kept = run_steps(filt, prior, zs, dt, rng, keep=lambda b: (b.estimate, b.proposal.model_probs))
+    secs = time.perf_counter() - t0
+    return np.array([e for e, _ in kept]), np.array([p for _, p in kept]), secs

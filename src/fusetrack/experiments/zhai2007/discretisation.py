@@ -25,7 +25,7 @@ from ...filters import ExtendedKalmanFilter
 from ...filters.grid_proposals import DiscretisationProposal
 from ...filters.imm import InteractingMultipleModel
 from ...filters.multiple_model import MultipleModelParticleFilter, PaddedModel
-from ...filters.sis import ProposalParticleFilter
+from ...filters.sis import ProposalParticleFilter, sensor_measurements
 from ...motion import ConstantAcceleration, ConstantVelocity, CoordinatedTurn
 from ...motion.maneuver import ManeuverTurn
 from ...sensors import Bearing, RangeBearing
@@ -36,13 +36,11 @@ from .comparators import (
     UPF_NOTE,
     Comparison,
     Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
     per_run_scores,
     run_comparators,
-    sis_reference,
 )
+from .equal_time import EqualTime
+from .reporting import order_claim, plot_rmse, rmse_by_method, rmse_by_step
 
 PI_B = np.array(
     [[0.7, 0.1, 0.1, 0.1], [0.4, 0.2, 0.2, 0.2], [0.4, 0.2, 0.2, 0.2], [0.4, 0.2, 0.2, 0.2]]
@@ -129,6 +127,7 @@ def e17_truth(scenario: str, rng: np.random.Generator) -> np.ndarray:
 
 
 def e17_models(q: float, a_m: float = 3.0) -> list[Any]:
+    """E17's models on the 6-D state: CV, CCW, CW (padded) and CA."""
     return [
         PaddedModel(ConstantVelocity(q=q)),
         PaddedModel(ManeuverTurn(a_m, 1, q)),
@@ -202,6 +201,7 @@ def run_e17(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def e15_demo(rng: np.random.Generator, n: int = 2000) -> dict[str, Any]:
+    """E15: one bearing update of a discretised prior (particles, cells, weights)."""
     motion = ConstantVelocity(q=0.05)
     sensor = Bearing("s", position=[-20.0, -40.0], sigma=0.01)
     prior = Gaussian(np.array([0.0, 0.0, 10.0, 5.0]), np.diag([4.0, 4.0, 1e-4, 1e-4]))
@@ -210,14 +210,14 @@ def e15_demo(rng: np.random.Generator, n: int = 2000) -> dict[str, Any]:
     prop = DiscretisationProposal(cell_scale=0.25)
     pf = ProposalParticleFilter(motion, [sensor], prop, n)
     s0 = pf.initialize(prior, rng)
-    centre, w, delta = prop.cells(s0.particles, [z], 1.0, pf)
-    s1 = pf.step(s0, [z], 1.0, rng)
+    centre, w, delta = prop.cells(s0.states, [z], 1.0, pf.context())
+    s1 = pf.step(s0, 1.0, sensor_measurements([sensor], [z], 1.0), rng)
     return {
-        "prior": s0.particles,
+        "prior": s0.states,
         "centre": centre,
         "w": w,
         "delta": delta,
-        "post": s1.particles,
+        "post": s1.states,
         "z": z,
         "truth": truth,
         "sensor": sensor,
@@ -237,23 +237,19 @@ def comparators(
     """Beyond the paper: UPF and bootstrap calibrated to the discretisation PF (E16) and the
     discretisation MMPF (E17, per scenario and case), on the first ``CMP_RUNS`` runs; the
     IMM-EKF (E17: four models, Pi_B; E16: one model, i.e. the EKF) comes from every run."""
-    reps, seed0 = 2, run_seed(ctx.seed, 0)
+    eq, seed0 = EqualTime(repeats=2), run_seed(ctx.seed, 0)
     k16, k17 = min(runs[0], CMP_RUNS["E16"]), min(runs[1], CMP_RUNS["E17"])
-    n_equal, target, parts, ref = {}, {}, [], {}
+    parts, ref = [], {}
     cs = e16_scenario(seed0)
-    n_equal["E16"], target["E16"] = equal_time_particles(
+    n16 = eq.calibrate_sis(
+        "E16",
         cs,
-        sis_reference(
-            cs,
-            lambda: ProposalParticleFilter(cs.motion, cs.sensors, DiscretisationProposal(), 200),
-        ),
-        ("UPF", "bootstrap equal time"),
-        repeats=reps,
+        lambda: ProposalParticleFilter(cs.motion, cs.sensors, DiscretisationProposal(), 200),
     )
     ref["E16"] = "discretisation PF 200"
     parts.append(
         ctx.monte_carlo(
-            run_e16, [{"experiment": "E16", "n_equal": n_equal["E16"]}], k16, desc="comparators"
+            run_e16, [{"experiment": "E16", "n_equal": n16}], k16, desc="comparators"
         ).assign(label="E16")
     )
     for c in cfgs17:
@@ -264,27 +260,34 @@ def comparators(
             f = discretisation_mmpf(cs17, n)
             return timed_mm(f, cs17.prior, cs17.zs, 1.0, np.random.default_rng(0))
 
-        n_equal[key], target[key] = equal_time_particles(
-            cs17, mm_ref, ("UPF", "bootstrap equal time"), repeats=reps
-        )
+        n17 = eq.calibrate(key, cs17, mm_ref)
         ref[key] = "discretisation MMPF"
         parts.append(
-            ctx.monte_carlo(run_e17, [{**c, "n_equal": n_equal[key]}], k17, desc=key).assign(
-                label=key
-            )
+            ctx.monte_carlo(run_e17, [{**c, "n_equal": n17}], k17, desc=key).assign(label=key)
         )
     d16 = df16[df16["run"] < k16].assign(label="E16")
     d17 = df17[df17["run"] < k17]
     d17 = d17.assign(label="E17 " + d17["scenario"] + d17["case"])
     rows = pd.concat([d16, d17, *parts], ignore_index=True)
-    return compare(
+    return comparison(ctx, rows, ref, eq, (k16, k17))
+
+
+def comparison(
+    ctx: RunContext,
+    rows: pd.DataFrame,
+    ref: dict[str, str],
+    eq: EqualTime,
+    runs: tuple[int, int],
+) -> Comparison:
+    """The comparators' table and figure on the first ``runs`` (E16, E17) runs of each label."""
+    k16, k17 = runs
+    return eq.compare(
         per_run_scores(rows, ["label"], "sq_pos_err"),
         ref,
         ctx.figure_path("error_vs_seconds"),
         by=["label"],
         ylabel="position RMSE per run (mean)",
-        calibration=calibration_note(n_equal, target)
-        + f" UPF and the equal-time bootstrap ran on the first {k16} (E16) and {k17} (E17) runs "
+        calibration=f" UPF and the equal-time bootstrap ran on the first {k16} (E16) and {k17} (E17) runs "
         "(same truths as the paper's filters' runs; E17's are few because each equal-time "
         "comparator costs as much as the discretisation MMPF); the table compares every method "
         "on those runs.",
@@ -304,20 +307,50 @@ def comparators(
             "MM-bootstrap",
             *COMPARATORS,
         ],
-        n_particles=n_equal,
         runs={"E16": k16, "E17": k17},
     )
 
 
 def run(ctx: RunContext) -> Outcome:
-    import matplotlib.pyplot as plt
-
+    """E15-E17: the one-bearing demo, the E16 and E17 runs, comparators, claims, report."""
     runs16 = ctx.n_runs(full=100, quick=3)
     runs17 = ctx.n_runs(full=100, quick=1)
     n17 = 200 if ctx.quick else 1000
-    claims: list[Claim] = []
 
     demo = e15_demo(np.random.default_rng(ctx.seed))
+    claims = [claim_e15(demo)]
+    fig52 = figure_e15(ctx, demo)
+
+    df16 = ctx.monte_carlo(run_e16, [{"experiment": "E16"}], runs16, desc="E16")
+    avg16 = rmse_by_method(df16, "sq_pos_err")
+    claims.append(
+        order_claim(
+            "E16_order",
+            "discretisation PF < bootstrap(200) < EKF in position RMSE (Figs 53-54)",
+            "new PF < bootstrap < EKF",
+            avg16,
+            ["discretisation PF 200", "bootstrap 200", "EKF"],
+        )
+    )
+
+    cfgs = [
+        {"experiment": "E17", "scenario": s, "case": c, "n_particles": n17}
+        for s in ("S1", "S2", "S3")
+        for c in CASES
+    ]
+    df17 = ctx.monte_carlo(run_e17, cfgs, runs17, desc="E17")
+    tab = e17_tables(df17)
+    claims += claims_e17(df17, tab)
+    figs17 = figures_e17(ctx, df17, runs17)
+    df = pd.concat([df16, df17], ignore_index=True)
+    cmp = comparators(ctx, df16, df17, cfgs, (runs16, runs17))
+    body = report_text(fig52, avg16, tab, figs17, (runs16, runs17), n17) + cmp.section
+    return Outcome(df, claims, body, runs16, beyond_the_paper=cmp.summary)
+
+
+def claim_e15(demo: Mapping[str, Any]) -> Claim:
+    """E15: after one bearing the particles' bearing residuals spread about one sigma, less than
+    the (one-step-ahead) prior's (Fig 52)."""
     sens = demo["sensor"]
     resid = sens.residual(demo["z"], sens.predict(demo["post"]))[:, 0]
     prior_resid = sens.residual(demo["z"], sens.predict(demo["prior"] + np.r_[10.0, 5.0, 0, 0]))[
@@ -325,16 +358,20 @@ def run(ctx: RunContext) -> Outcome:
     ]
     spread = float(np.std(resid) / 0.01)
     prior_spread = float(np.std(prior_resid) / 0.01)
-    claims.append(
-        Claim(
-            "E15_along_bearing",
-            "after one bearing the particles lie along the measured bearing (Fig 52)",
-            "concentrated along the bearing",
-            f"bearing spread {spread:.2f} sigma (prior {prior_spread:.2f} sigma)",
-            "0.5-1.5 sigma and below the prior's",
-            0.5 <= spread <= 1.5 and spread < prior_spread,
-        )
+    return Claim(
+        "E15_along_bearing",
+        "after one bearing the particles lie along the measured bearing (Fig 52)",
+        "concentrated along the bearing",
+        f"bearing spread {spread:.2f} sigma (prior {prior_spread:.2f} sigma)",
+        "0.5-1.5 sigma and below the prior's",
+        0.5 <= spread <= 1.5 and spread < prior_spread,
     )
+
+
+def figure_e15(ctx: RunContext, demo: Mapping[str, Any]) -> str:
+    """Figs 50-52: predicted particles, weighted cells, particles after the bearing."""
+    import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(1, 3, figsize=(13, 4))
     axes[0].plot(demo["prior"][:, 0] + 10, demo["prior"][:, 1] + 5, ".", ms=2)
     axes[0].set(title="predicted particles (Fig 50)")
@@ -349,37 +386,26 @@ def run(ctx: RunContext) -> Outcome:
         ax.plot(-20 + t * np.cos(b), -40 + t * np.sin(b), "k--", lw=0.8)
         ax.set(aspect="equal", xlim=(3, 18), ylim=(-3, 12))
     axes[2].set(title="particles (Fig 52)")
-    fig52 = plots.save(fig, ctx.figure_path("e15_cells")).name
+    return plots.save(fig, ctx.figure_path("e15_cells")).name
 
-    df16 = ctx.monte_carlo(run_e16, [{"experiment": "E16"}], runs16, desc="E16")
-    avg16 = df16.groupby("method")["sq_pos_err"].mean().pow(0.5)
-    claims.append(
-        Claim(
-            "E16_order",
-            "discretisation PF < bootstrap(200) < EKF in position RMSE (Figs 53-54)",
-            "new PF < bootstrap < EKF",
-            " < ".join(
-                f"{m} {avg16[m]:.3g}" for m in ["discretisation PF 200", "bootstrap 200", "EKF"]
-            ),
-            "strict",
-            bool(avg16["discretisation PF 200"] < avg16["bootstrap 200"] < avg16["EKF"]),
-        )
-    )
 
-    cfgs = [
-        {"experiment": "E17", "scenario": s, "case": c, "n_particles": n17}
-        for s in ("S1", "S2", "S3")
-        for c in CASES
-    ]
-    df17 = ctx.monte_carlo(run_e17, cfgs, runs17, desc="E17")
+def e17_tables(df17: pd.DataFrame) -> dict[tuple[str, str], pd.DataFrame]:
+    """Per (scenario, case): position, velocity and acceleration RMSE of every method."""
     tab = {}
     for (s, c), d in df17.groupby(["scenario", "case"]):
         g = d.groupby("method")
         tab[(s, c)] = pd.DataFrame(
             {k: g[f"sq_{k}_err"].mean().pow(0.5) for k in ("pos", "vel", "acc")}
         )
+    return tab
+
+
+def claims_e17(df17: pd.DataFrame, tab: Mapping[tuple[str, str], pd.DataFrame]) -> list[Claim]:
+    """C14: the discretisation MMPF beats the CA bootstrap in every configuration, and (S2)
+    during the turn."""
+    claims = []
+    for (s, c), d in df17.groupby(["scenario", "case"]):
         pos = tab[(s, c)]["pos"]
-        ok = bool(pos["discretisation MMPF"] < pos["bootstrap CA"])
         claims.append(
             Claim(
                 f"C14_{s}{c}",
@@ -387,11 +413,11 @@ def run(ctx: RunContext) -> Outcome:
                 "MMPF < bootstrap",
                 f"{pos['discretisation MMPF']:.3g} vs {pos['bootstrap CA']:.3g}",
                 "strict",
-                ok,
+                bool(pos["discretisation MMPF"] < pos["bootstrap CA"]),
             )
         )
         if s == "S2":
-            win = d[d["step"].between(20, 25)].groupby("method")["sq_pos_err"].mean().pow(0.5)
+            win = rmse_by_method(d[d["step"].between(20, 25)], "sq_pos_err")
             claims.append(
                 Claim(
                     f"C14_{s}{c}_turn",
@@ -402,25 +428,32 @@ def run(ctx: RunContext) -> Outcome:
                     bool(win["discretisation MMPF"] < win["bootstrap CA"]),
                 )
             )
-    t17 = pd.concat(tab, names=["scenario", "case"])
-    figs17 = []
+    return claims
+
+
+def figures_e17(ctx: RunContext, df17: pd.DataFrame, runs17: int) -> list[str]:
+    """Position RMSE(t) of every method per scenario, case B (Figs 58-72): file names."""
+    figs = []
     for s in ("S1", "S2", "S3"):
         d = df17[(df17["scenario"] == s) & (df17["case"] == "B")]
-        rm = d.groupby(["method", "step"])["sq_pos_err"].mean().pow(0.5).unstack("method")
-        figs17.append(
-            plots.plot_series(
-                ctx.figure_path(f"e17_{s}_B"),
-                rm.index.to_numpy(),
-                {m: rm[m].to_numpy() for m in rm.columns},
-                xlabel="t",
-                ylabel="position RMSE",
-                title=f"E17 {s}, case B ({runs17} runs)",
-                logy=True,
-            ).name
-        )
-    df = pd.concat([df16, df17], ignore_index=True)
-    cmp = comparators(ctx, df16, df17, cfgs, (runs16, runs17))
-    body = f"""
+        rm = rmse_by_step(d, "sq_pos_err")
+        title = f"E17 {s}, case B ({runs17} runs)"
+        figs.append(plot_rmse(ctx, f"e17_{s}_B", rm, rm.columns, title).name)
+    return figs
+
+
+def report_text(
+    fig52: str,
+    avg16: pd.Series,
+    tab: Mapping[tuple[str, str], pd.DataFrame],
+    figs17: list[str],
+    runs: tuple[int, int],
+    n17: int,
+) -> str:
+    """The report's E15, E16 and E17 sections and the differences (comparators follow)."""
+    runs16, runs17 = runs
+    t17 = pd.concat(tab, names=["scenario", "case"])
+    return f"""
 ## E15: discretised prior and one bearing (Figs 50-52)
 
 Prior at the origin with covariance 4 I and velocity (10, 5) (one step ahead), sensor at (-20, -40),
@@ -455,5 +488,4 @@ The IMM-EKF (beyond the paper) runs one EKF per model with the same four models 
   weights them with the exact marginal weight over ancestors and regime transitions, so cells only
   shape the proposal. The single-model bootstrap uses the CA model (it must estimate acceleration).
 
-{cmp.section}"""
-    return Outcome(df, claims, body, runs16, beyond_the_paper=cmp.summary)
+"""

@@ -25,16 +25,10 @@ from ...filters.mcmc_moves import IndependenceMove, MHPriorMove, RandomWalkMove
 from ...filters.sis import ProposalParticleFilter
 from ...motion.benchmark import ScalarBenchmark
 from ...sensors.power import Power
+from . import scalar
 from .common import timed_sis
-from .comparators import (
-    UPF_NOTE,
-    Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    run_comparators,
-    sis_reference,
-)
+from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators
+from .equal_time import EqualTime
 
 STEPS = 25
 NS = (100, 200, 500, 1000)
@@ -52,6 +46,7 @@ PAPER_ORDER = ["PF-RWM", "PF-MIS", "PF-MH", "PF"]  # ascending MSE in every row 
 
 
 def model() -> tuple[ScalarBenchmark, Power, Gaussian]:
+    """Motion (Eq. 93), sensor (Eq. 94) and prior of E19."""
     return (
         ScalarBenchmark(a=1.7, b=5.0, trig="cos", q=8.0),
         Power("y", exponent=2, sigma=float(np.sqrt(0.5))),
@@ -60,14 +55,9 @@ def model() -> tuple[ScalarBenchmark, Power, Gaussian]:
 
 
 def simulate(rng: np.random.Generator) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    """``x_0`` from the prior, then ``STEPS`` transitions and measurements."""
     motion, sensor, prior = model()
-    x = prior.sample(rng)
-    xs, zs = [], []
-    for _ in range(STEPS):
-        x = motion.sample(x, 1.0, rng)
-        xs.append(x.copy())
-        zs.append([sensor.simulate(x, rng)])
-    return np.array(xs), zs
+    return scalar.simulate(motion, sensor, rng, STEPS, x0=prior.sample(rng))
 
 
 def make_filter(method: str, n: int) -> ProposalParticleFilter:
@@ -117,27 +107,32 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E19: comparators calibrated to PF-RWM(N), the runs per N, claims, figures, report."""
     runs = ctx.n_runs(full=1000, quick=40)
     cs = comparator_scenario(run_seed(ctx.seed, 0))
-    n_equal, target = {}, {}
+    eq = EqualTime.for_run(ctx)
     for n in NS:  # UPF and bootstrap at PF-RWM(N)'s time
-        n_equal[n], target[n] = equal_time_particles(
-            cs,
-            sis_reference(cs, partial(make_filter, "PF-RWM", n)),
-            ("UPF", "bootstrap equal time"),
-            repeats=2 if ctx.quick else 3,
-        )
+        eq.calibrate_sis(n, cs, partial(make_filter, "PF-RWM", n))
     df_all = ctx.monte_carlo(
-        run_once, [{"n_particles": n, "n_equal": n_equal[n]} for n in NS], runs
+        run_once, [{"n_particles": n, "n_equal": eq.n_particles[n]} for n in NS], runs
     )
     df = df_all[df_all["method"].isin(METHODS)]
-    cmp = compare(
+    cmp = comparison(ctx, df_all, eq)
+    tab = summarise(df)
+    claims = claims_table15(df, tab)
+    figs = figures(ctx, tab, runs)
+    body = report_text(tab, runs, figs, claims) + cmp.section
+    return Outcome(df_all, claims, body, runs, beyond_the_paper=cmp.summary)
+
+
+def comparison(ctx: RunContext, df_all: pd.DataFrame, eq: EqualTime) -> Comparison:
+    """Beyond the paper: UPF, bootstrap at PF-RWM's time and the EKF, per N."""
+    return eq.compare(
         df_all.assign(error=df_all["mse"]),
         "PF-RWM",
         ctx.figure_path("error_vs_seconds_comparators"),
         by=["n_particles"],
         ylabel="average MSE",
-        calibration=calibration_note(n_equal, target),
         notes=[
             "IMM-EKF: the model has one motion model and a one-model IMM is exactly the EKF; "
             "with y = x^2 and a prior centred on 0 the EKF's Jacobian 2x starts at 0, so it "
@@ -146,20 +141,27 @@ def run(ctx: RunContext) -> Outcome:
             "n_particles is the particle count of the paper's four filters; the comparators' "
             "counts are the calibrated ones above.",
         ],
-        n_particles=n_equal,
     )
+
+
+def summarise(df: pd.DataFrame) -> dict[str, pd.DataFrame]:
+    """Per N and method (columns in :data:`METHODS` order): mean MSE, its standard error, the
+    MH acceptance rate and the seconds per run."""
     g = df.groupby(["n_particles", "method"])
-    mse = g["mse"].mean().unstack("method")[list(METHODS)]
-    se = (g["mse"].std() / np.sqrt(g["mse"].count())).unstack("method")[list(METHODS)]
-    acc = g["acceptance"].mean().unstack("method")[list(METHODS)]
-    secs = g["seconds"].mean().unstack("method")[list(METHODS)]
-    # paired differences (common random numbers: same truth per run across methods)
-    wide = df.pivot_table(index=["n_particles", "run"], columns="method", values="mse")
+    return {
+        "mse": g["mse"].mean().unstack("method")[list(METHODS)],
+        "se": (g["mse"].std() / np.sqrt(g["mse"].count())).unstack("method")[list(METHODS)],
+        "acc": g["acceptance"].mean().unstack("method")[list(METHODS)],
+        "secs": g["seconds"].mean().unstack("method")[list(METHODS)],
+    }
+
+
+def claims_table15(df: pd.DataFrame, tab: Mapping[str, pd.DataFrame]) -> list[Claim]:
+    """C15: Table 15's ordering per N, the moves' paired gain over the PF, the PF's MSE falling
+    with N, and the MIS acceptance rate."""
+    mse = tab["mse"]
     claims: list[Claim] = []
-    rows_order = 0
     for n in NS:
-        ok = all(mse.loc[n, a] < mse.loc[n, b] for a, b in itertools.pairwise(PAPER_ORDER))
-        rows_order += ok
         claims.append(
             Claim(
                 f"C15_order_N{n}",
@@ -167,9 +169,40 @@ def run(ctx: RunContext) -> Outcome:
                 " > ".join(f"{m} {PAPER.loc[n, m]:.3f}" for m in reversed(PAPER_ORDER)),
                 " > ".join(f"{m} {mse.loc[n, m]:.3f}" for m in reversed(PAPER_ORDER)),
                 "strict ordering of means",
-                ok,
+                all(mse.loc[n, a] < mse.loc[n, b] for a, b in itertools.pairwise(PAPER_ORDER)),
             )
         )
+    claims += claims_paired_gain(df)
+    falls = all(mse.loc[a, "PF"] > mse.loc[b, "PF"] for a, b in itertools.pairwise(NS))
+    claims.append(
+        Claim(
+            "C15_pf_falls_with_n",
+            "the PF's MSE falls as N grows (Table 15, column PF)",
+            ", ".join(f"{v:.3f}" for v in PAPER["PF"]),
+            ", ".join(f"{v:.3f}" for v in mse["PF"]),
+            "strictly decreasing",
+            falls,
+        )
+    )
+    mis_acc = float(tab["acc"]["PF-MIS"].mean())
+    claims.append(
+        Claim(
+            "mis_acceptance_reported",
+            "the MIS with N(0, 0.15) proposals has a low acceptance rate (spec Sec. 3, Alg. 10)",
+            "not reported",
+            mis_acc,
+            "< 0.2",
+            mis_acc < 0.2,
+        )
+    )
+    return claims
+
+
+def claims_paired_gain(df: pd.DataFrame) -> list[Claim]:
+    """PF-MH and PF-RWM reduce the PF's MSE at every N (paired differences: common random
+    numbers give every method the same truth per run)."""
+    wide = df.pivot_table(index=["n_particles", "run"], columns="method", values="mse")
+    claims = []
     for m in ("PF-MH", "PF-RWM"):
         diff = wide["PF"] - wide[m]
         d = diff.groupby(level=0)
@@ -186,29 +219,12 @@ def run(ctx: RunContext) -> Outcome:
                 bool(z > 2),
             )
         )
-    falls = all(mse.loc[a, "PF"] > mse.loc[b, "PF"] for a, b in itertools.pairwise(NS))
-    claims.append(
-        Claim(
-            "C15_pf_falls_with_n",
-            "the PF's MSE falls as N grows (Table 15, column PF)",
-            ", ".join(f"{v:.3f}" for v in PAPER["PF"]),
-            ", ".join(f"{v:.3f}" for v in mse["PF"]),
-            "strictly decreasing",
-            falls,
-        )
-    )
-    mis_acc = float(acc["PF-MIS"].mean())
-    claims.append(
-        Claim(
-            "mis_acceptance_reported",
-            "the MIS with N(0, 0.15) proposals has a low acceptance rate (spec Sec. 3, Alg. 10)",
-            "not reported",
-            mis_acc,
-            "< 0.2",
-            mis_acc < 0.2,
-        )
-    )
+    return claims
 
+
+def figures(ctx: RunContext, tab: Mapping[str, pd.DataFrame], runs: int) -> dict[str, str]:
+    """MSE against N beside Table 15, and MSE against computing time: file names."""
+    mse = tab["mse"]
     fig = plots.plot_series(
         ctx.figure_path("mse_vs_particles"),
         np.array(NS),
@@ -223,21 +239,36 @@ def run(ctx: RunContext) -> Outcome:
     )
     fig_t = plots.plot_series(
         ctx.figure_path("mse_vs_seconds"),
-        secs["PF"].to_numpy(),
+        tab["secs"]["PF"].to_numpy(),
         {m: mse[m].to_numpy() for m in METHODS},
         xlabel="seconds per run (PF's time at each N on the x-axis)",
         ylabel="average MSE",
         title="MSE against computing time",
     )
-    table = pd.concat({"paper": PAPER, "ours": mse, "± s.e.": se}, axis=1)
-    cost = pd.concat({"seconds/run": secs, "acceptance": acc}, axis=1)
+    return {"n": fig.name, "t": fig_t.name}
+
+
+def equal_time_winner(tab: Mapping[str, pd.DataFrame]) -> str:
+    """The method with the lowest MSE at PF-RWM's largest cost (interpolated in seconds)."""
+    secs, mse = tab["secs"], tab["mse"]
     best_time = {}
     for m in METHODS:
         best_time[m] = float(
             np.interp(float(secs["PF-RWM"].max()), secs[m].to_numpy(), mse[m].to_numpy())
         )
-    winner = min(best_time, key=best_time.get)  # type: ignore[arg-type]
-    body = f"""
+    return min(best_time, key=best_time.get)  # type: ignore[arg-type]
+
+
+def report_text(
+    tab: Mapping[str, pd.DataFrame], runs: int, figs: Mapping[str, str], claims: list[Claim]
+) -> str:
+    """The report's set-up, Table 15 beside ours, and the differences (comparators follow)."""
+    mse, se = tab["mse"], tab["se"]
+    table = pd.concat({"paper": PAPER, "ours": mse, "± s.e.": se}, axis=1)
+    cost = pd.concat({"seconds/run": tab["secs"], "acceptance": tab["acc"]}, axis=1)
+    rows_order = sum(c.holds for c in claims if c.id.startswith("C15_order_N"))
+    mis_acc = float(tab["acc"]["PF-MIS"].mean())
+    return f"""
 ## Set-up
 
 Zhai 2007, Eqs. 93-94 as printed; 25 steps; {runs} runs per N (the thesis: 50) with the same truths
@@ -253,9 +284,9 @@ Cost and acceptance (beyond the paper):
 
 {cost.to_markdown(floatfmt=".3f")}
 
-![MSE vs N]({fig.name})
+![MSE vs N]({figs["n"]})
 
-![MSE vs time]({fig_t.name})
+![MSE vs time]({figs["t"]})
 
 ## Differences and their causes
 
@@ -269,8 +300,7 @@ error of roughly {float(se.to_numpy().mean() * np.sqrt(runs / 50)):.2f} on each 
 most of its differences between columns, so Table 15's ordering is not evidence of an effect. The
 MIS proposal N(0, 0.15) hardly ever lands in the posterior (acceptance {mis_acc:.3f}), so PF-MIS
 is nearly the plain PF, as the spec predicted. At equal computing time (interpolated at the RWM's
-largest cost) the lowest MSE is **{winner}**: a move costs about as much as a second likelihood
+largest cost) the lowest MSE is **{equal_time_winner(tab)}**: a move costs about as much as a second likelihood
 evaluation per particle, which buys about as much as doubling N.
 
-{cmp.section}"""
-    return Outcome(df_all, claims, body, runs, beyond_the_paper=cmp.summary)
+"""

@@ -23,17 +23,10 @@ from ...filters.sis import ProposalParticleFilter
 from ...filters.sp_pekf import SPPEKFProposal
 from ...motion.benchmark import ScalarBenchmark
 from ...sensors.power import Power
-from .common import fmt_order, ordering_holds, timed_gaussian, timed_sis
-from .comparators import (
-    COMPARATORS,
-    UPF_NOTE,
-    Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    run_comparators,
-    sis_reference,
-)
+from .common import fmt_order, timed_gaussian, timed_sis
+from .comparators import COMPARATORS, UPF_NOTE, Comparison, Scenario, run_comparators
+from .equal_time import EqualTime
+from .reporting import order_claim, relative_claim, rmse_by_step
 
 T_STEPS = 50
 PAPER_TABLE = pd.DataFrame(
@@ -54,10 +47,15 @@ VARIANTS: dict[str, dict[str, Any]] = {
 
 
 def simulate(
-    motion: ScalarBenchmark, sensor: Power, rng: np.random.Generator, steps: int = T_STEPS
+    motion: ScalarBenchmark,
+    sensor: Power,
+    rng: np.random.Generator,
+    steps: int = T_STEPS,
+    x0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, list[list[np.ndarray]]]:
-    """``x(0) ~ N(0, 1)`` (spec choice), then ``steps`` transitions and measurements."""
-    x = rng.standard_normal(1)
+    """``x(0) = x0``, by default ``~ N(0, 1)`` (spec choice), then ``steps`` transitions and
+    measurements (Eqs. 93-94 use it too, with their prior's draw)."""
+    x = rng.standard_normal(1) if x0 is None else x0
     xs, zs = [], []
     for _ in range(steps):
         x = motion.sample(x, 1.0, rng)
@@ -134,17 +132,14 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
-def _equal_time_particles(seed: int, repeats: int) -> tuple[dict[str, int], float]:
+def equal_time(ctx: RunContext) -> EqualTime:
     """UPF and bootstrap particles that cost what PF-SP-PEKF(200) costs (a pilot on run 0's
-    truth under the printed model; rule in :mod:`.zhai2007_comparators`)."""
-    cs = comparator_scenario(VARIANTS["printed"], run_seed(seed, 0))
+    truth under the printed model; rule in :mod:`.comparators`), under the key ``printed``."""
+    cs = comparator_scenario(VARIANTS["printed"], run_seed(ctx.seed, 0))
     ref = filters_for(VARIANTS["printed"], cs.motion, cs.sensors[0])["PF-SP-PEKF"]  # type: ignore[arg-type]
-    return equal_time_particles(
-        cs,
-        sis_reference(cs, lambda: ref),
-        ("UPF", "bootstrap equal time"),
-        repeats=repeats,
-    )
+    eq = EqualTime.for_run(ctx)
+    eq.calibrate_sis("printed", cs, lambda: ref)
+    return eq
 
 
 def state_pdfs(
@@ -164,6 +159,7 @@ def state_pdfs(
 
 
 def _pdf_figure(ctx: RunContext, quick: bool) -> str:
+    """Figs 5-7: densities of x_20 and z_20 per sinusoid gain, and of x_t at gain 5."""
     import matplotlib.pyplot as plt
 
     samples = state_pdfs(
@@ -194,9 +190,11 @@ def _pdf_figure(ctx: RunContext, quick: bool) -> str:
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E1: the printed model's runs (comparators calibrated first) and each reading's runs."""
     runs = ctx.n_runs(full=1000, quick=40)
     var_runs = max(5, runs // 5) if ctx.runs is None else runs
-    n_eq, target = _equal_time_particles(ctx.seed, 2 if ctx.quick else 3)
+    eq = equal_time(ctx)
+    n_eq = eq.n_particles["printed"]
     printed = ctx.monte_carlo(
         run_once,
         [{"variant": "printed", **VARIANTS["printed"], "extras": True, "n_equal_time": n_eq}],
@@ -210,7 +208,7 @@ def run(ctx: RunContext) -> Outcome:
         desc="variants",
     )
     df = pd.concat([printed, others], ignore_index=True)
-    return analyse(ctx, df, runs, var_runs, n_eq, target)
+    return analyse(ctx, df, runs, var_runs, eq)
 
 
 def analyse(
@@ -218,11 +216,25 @@ def analyse(
     df: pd.DataFrame,
     runs: int,
     var_runs: int,
-    n_eq: Mapping[str, int],
-    target: float = float("nan"),
+    eq: EqualTime,
 ) -> Outcome:
     """Claims, tables and figures from the rows of :func:`run_once` (also usable on a saved
-    ``results.parquet``)."""
+    ``results.parquet``, with the calibration ``eq`` of :func:`equal_time`)."""
+    per_run, summary = summarise(df)
+    ours = summary.loc["printed"]
+    claims = claims_table3(ours, ctx.quick)
+    variant_claims, reproduces = claims_variants(summary)
+    claims += variant_claims
+    figs = figures(ctx, df, runs)
+    pr = per_run[per_run["variant"] == "printed"].rename(columns={"run_rmse": "error"})
+    cmp = comparison(ctx, pr, eq)
+    body = report_text(summary, runs, var_runs, reproduces, figs) + cmp.section
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+
+
+def summarise(df: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Per-run rows (one per variant, method and run) and their summary per variant and method:
+    mean, variance and median of the per-run RMSE, runs with RMSE > 100, mean seconds."""
     per_run = df[df["step"] == 1][["variant", "method", "run", "run_rmse", "seconds"]]
     summary = per_run.groupby(["variant", "method"]).agg(
         mean_rmse=("run_rmse", "mean"),
@@ -231,19 +243,22 @@ def analyse(
         diverged_runs=("run_rmse", lambda r: int((r > 100).sum())),
         seconds=("seconds", "mean"),
     )
-    ours = summary.loc["printed"]
+    return per_run, summary
 
-    claims: list[Claim] = []
-    claims.append(
-        Claim(
+
+def claims_table3(ours: pd.DataFrame, quick: bool) -> list[Claim]:
+    """C1-C3 on the model as printed: ordering, improvement and levels of Tables 2-3, the time
+    ratio and the smallest RMSE variance."""
+    claims = [
+        order_claim(
             "C1_order",
             "mean RMSE: PF-SP-PEKF < BS2000 < BS1000 < BS200 < EKF (Tables 2-3)",
             fmt_order(PAPER_TABLE["mean RMSE"], ORDER),
-            fmt_order(ours["mean_rmse"], ORDER),
+            ours["mean_rmse"],
+            ORDER,
             "strict ordering",
-            ordering_holds(ours["mean_rmse"], ORDER),
         )
-    )
+    ]
     improvement = 1.0 - ours.loc["PF-SP-PEKF", "mean_rmse"] / ours.loc["EKF", "mean_rmse"]
     claims.append(
         Claim(
@@ -255,22 +270,25 @@ def analyse(
             abs(improvement - 0.7796) <= 0.10,
         )
     )
-    rel = 0.35 if ctx.quick else 0.25
+    rel = 0.35 if quick else 0.25
     for m in ["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"]:
         paper, got = PAPER_TABLE.loc[m, "mean RMSE"], float(ours.loc[m, "mean_rmse"])
         claims.append(
-            Claim(
-                f"C1_level_{m}",
-                f"{m} mean RMSE equals Table 3's",
-                paper,
-                got,
-                f"relative ±{rel:.0%}",
-                abs(got - paper) <= rel * paper,
-            )
+            relative_claim(f"C1_level_{m}", f"{m} mean RMSE equals Table 3's", paper, got, rel)
         )
+    return claims + claims_cost(ours, quick)
+
+
+def claims_cost(ours: pd.DataFrame, quick: bool) -> list[Claim]:
+    """C2 (PF-SP-PEKF's cost against the bootstrap's) and C3 (smallest RMSE variance)."""
     t_ratio = ours.loc["PF-SP-PEKF", "seconds"] / ours.loc["BS200", "seconds"]
-    lo, hi = (1.0, 4.0) if ctx.quick else (1.5, 3.0)
-    claims.append(
+    lo, hi = (1.0, 4.0) if quick else (1.5, 3.0)
+    smallest = (
+        ours.loc[["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"], "var_rmse"]
+        .fillna(np.inf)
+        .idxmin()
+    )
+    return [
         Claim(
             "C2_time_ratio",
             "PF-SP-PEKF(200) costs about 2x bootstrap(200) (1.52 vs 0.80 s)",
@@ -278,9 +296,7 @@ def analyse(
             float(t_ratio),
             f"in [{lo}, {hi}]",
             lo <= t_ratio <= hi,
-        )
-    )
-    claims.append(
+        ),
         Claim(
             "C2_cheaper_than_bs2000",
             "PF-SP-PEKF(200) is cheaper than bootstrap(2000)",
@@ -288,14 +304,7 @@ def analyse(
             f"{ours.loc['PF-SP-PEKF', 'seconds']:.4f} < {ours.loc['BS2000', 'seconds']:.4f} s",
             "strict",
             ours.loc["PF-SP-PEKF", "seconds"] < ours.loc["BS2000", "seconds"],
-        )
-    )
-    smallest = (
-        ours.loc[["EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"], "var_rmse"]
-        .fillna(np.inf)
-        .idxmin()
-    )
-    claims.append(
+        ),
         Claim(
             "C3_smallest_variance",
             "PF-SP-PEKF has the smallest RMSE variance (Table 2)",
@@ -303,33 +312,32 @@ def analyse(
             f"{smallest} {ours.loc[smallest, 'var_rmse']:.4g}",
             "argmin",
             smallest == "PF-SP-PEKF",
-        )
-    )
-    reproduces = []
-    for v in VARIANTS:
-        s = summary.loc[v]
-        ok = ordering_holds(s["mean_rmse"], ORDER)
-        if ok:
-            reproduces.append(v)
-        claims.append(
-            Claim(
-                f"C1_order_variant_{v}",
-                f"Table 3 ordering under the reading '{v}'",
-                fmt_order(PAPER_TABLE["mean RMSE"], ORDER),
-                fmt_order(s["mean_rmse"], ORDER),
-                "strict ordering",
-                ok,
-            )
-        )
+        ),
+    ]
 
-    # Figures
-    rmse_t = (
-        df[df["variant"] == "printed"]
-        .groupby(["method", "step"])["sq_err"]
-        .mean()
-        .pow(0.5)
-        .unstack("method")
-    )
+
+def claims_variants(summary: pd.DataFrame) -> tuple[list[Claim], list[str]]:
+    """Table 3's ordering under each reading of the model, and the readings where it holds."""
+    claims, reproduces = [], []
+    for v in VARIANTS:
+        claim = order_claim(
+            f"C1_order_variant_{v}",
+            f"Table 3 ordering under the reading '{v}'",
+            fmt_order(PAPER_TABLE["mean RMSE"], ORDER),
+            summary.loc[v]["mean_rmse"],
+            ORDER,
+            "strict ordering",
+        )
+        if claim.holds:
+            reproduces.append(v)
+        claims.append(claim)
+    return claims, reproduces
+
+
+def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> dict[str, str]:
+    """Fig 8 (RMSE over time), Fig 9 (one realisation), Figs 5-7 (state densities): file names."""
+    printed = df[df["variant"] == "printed"]
+    rmse_t = rmse_by_step(printed, "sq_err")
     steps = rmse_t.index.to_numpy()
     fig8 = plots.plot_series(
         ctx.figure_path("rmse_vs_time"),
@@ -340,7 +348,7 @@ def analyse(
         title=f"Fig 8: RMSE over {runs} runs (model as printed)",
         logy=True,
     )
-    run0 = df[(df["variant"] == "printed") & (df["run"] == 0)]
+    run0 = printed[printed["run"] == 0]
     truth0 = run0[run0["method"] == "EKF"]["truth"].to_numpy()
     fig9 = plots.plot_series(
         ctx.figure_path("realisation"),
@@ -357,8 +365,31 @@ def analyse(
         title="Fig 9: one realisation",
         styles={"truth": "k-"},
     )
-    fig5 = _pdf_figure(ctx, ctx.quick)
+    return {"fig8": fig8.name, "fig9": fig9.name, "fig5": _pdf_figure(ctx, ctx.quick)}
 
+
+def comparison(ctx: RunContext, per_run: pd.DataFrame, eq: EqualTime) -> Comparison:
+    """Beyond the paper: the comparators at PF-SP-PEKF's time on the model as printed."""
+    return eq.compare(
+        per_run,
+        "PF-SP-PEKF",
+        ctx.figure_path("error_vs_seconds"),
+        ylabel="mean over runs of the per-run RMSE",
+        notes=[
+            "IMM-EKF: the scalar model has one motion model, and a one-model IMM is exactly the "
+            "EKF (its mixing step is the identity), so the IMM-EKF row equals the EKF row.",
+            UPF_NOTE,
+            "Dotted line: the bootstrap at 200, 1000, 2000 particles and at equal time.",
+        ],
+        families={"bootstrap": ["BS200", "BS1000", "BS2000", "bootstrap equal time"]},
+        methods=[*PAPER_TABLE.index, "UKF", *COMPARATORS],
+        n_particles=dict(eq.n_particles["printed"]),
+    )
+
+
+def tables(summary: pd.DataFrame) -> dict[str, pd.DataFrame]:
+    """Tables 2-3 beside ours, the ablation/comparator rows, and mean/median RMSE per reading."""
+    ours = summary.loc["printed"]
     table = pd.DataFrame(
         {
             "paper mean RMSE": PAPER_TABLE["mean RMSE"],
@@ -371,36 +402,27 @@ def analyse(
             "ours runs with RMSE > 100": ours["diverged_runs"],
         }
     ).loc[PAPER_TABLE.index]
-    extra = ours.drop(index=PAPER_TABLE.index)
-    var_table = (
-        summary["mean_rmse"]
-        .unstack("variant")[list(VARIANTS)]
-        .loc[["EKF", "UKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"]]
-    )
-    med_table = (
-        summary["median_rmse"]
-        .unstack("variant")[list(VARIANTS)]
-        .loc[["EKF", "UKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"]]
-    )
-    sp, b200, b2000 = (float(ours.loc[m, "mean_rmse"]) for m in ["PF-SP-PEKF", "BS200", "BS2000"])
-    pr = per_run[per_run["variant"] == "printed"].rename(columns={"run_rmse": "error"})
-    cmp = compare(
-        pr,
-        "PF-SP-PEKF",
-        ctx.figure_path("error_vs_seconds"),
-        ylabel="mean over runs of the per-run RMSE",
-        calibration=calibration_note({"printed": n_eq}, {"printed": target}),
-        notes=[
-            "IMM-EKF: the scalar model has one motion model, and a one-model IMM is exactly the "
-            "EKF (its mixing step is the identity), so the IMM-EKF row equals the EKF row.",
-            UPF_NOTE,
-            "Dotted line: the bootstrap at 200, 1000, 2000 particles and at equal time.",
-        ],
-        families={"bootstrap": ["BS200", "BS1000", "BS2000", "bootstrap equal time"]},
-        methods=[*PAPER_TABLE.index, "UKF", *COMPARATORS],
-        n_particles=dict(n_eq),
-    )
-    body = f"""
+    methods = ["EKF", "UKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF"]
+    return {
+        "table": table,
+        "extra": ours.drop(index=PAPER_TABLE.index),
+        "var": summary["mean_rmse"].unstack("variant")[list(VARIANTS)].loc[methods],
+        "med": summary["median_rmse"].unstack("variant")[list(VARIANTS)].loc[methods],
+    }
+
+
+def report_text(
+    summary: pd.DataFrame,
+    runs: int,
+    var_runs: int,
+    reproduces: list[str],
+    figs: Mapping[str, str],
+) -> str:
+    """The report's set-up, tables and differences (the comparators' section follows it)."""
+    ours = summary.loc["printed"]
+    tab = tables(summary)
+    extra = tab["extra"][["mean_rmse", "median_rmse", "diverged_runs", "var_rmse", "seconds"]]
+    return f"""
 ## Set-up
 
 Model exactly as printed (Zhai 2007, Eqs. 31-32): `x(t+1) = 1.7 exp(-2 x(t)^2) + 5 sin x(t) + w`,
@@ -414,28 +436,36 @@ particles as the estimate, for every particle filter. Times are seconds per run 
 
 ## Tables 2-3: paper beside ours (model as printed)
 
-{table.to_markdown(floatfmt=".4f")}
+{tab["table"].to_markdown(floatfmt=".4f")}
 
 Ablations and the comparators of the last section (same runs):
 
-{extra[["mean_rmse", "median_rmse", "diverged_runs", "var_rmse", "seconds"]].to_markdown(floatfmt=".4g")}
+{extra.to_markdown(floatfmt=".4g")}
 
 ## Readings of the model (mean RMSE; median in the second table)
 
-{var_table.to_markdown(floatfmt=".4g")}
+{tab["var"].to_markdown(floatfmt=".4g")}
 
-{med_table.to_markdown(floatfmt=".3f")}
+{tab["med"].to_markdown(floatfmt=".3f")}
 
 Readings under which the paper's ordering PF-SP-PEKF < BS2000 < BS1000 < BS200 < EKF holds:
 {", ".join(reproduces) if reproduces else "none"}.
 
-![Fig 8]({fig8.name})
+![Fig 8]({figs["fig8"]})
 
-![Fig 9]({fig9.name})
+![Fig 9]({figs["fig9"]})
 
-![Figs 5-7]({fig5})
+![Figs 5-7]({figs["fig5"]})
 
-## Differences and their causes
+{differences_text(ours, reproduces)}
+"""
+
+
+def differences_text(ours: pd.DataFrame, reproduces: list[str]) -> str:
+    """The report's "Differences and their causes" section for the model as printed."""
+    sp, b200, b2000 = (float(ours.loc[m, "mean_rmse"]) for m in ["PF-SP-PEKF", "BS200", "BS2000"])
+    t_ratio = ours.loc["PF-SP-PEKF", "seconds"] / ours.loc["BS200", "seconds"]
+    return f"""## Differences and their causes
 
 * **Levels.** As printed, `z = x^3` with unit noise is almost an exact observation of `x` (the cube
   is invertible and steep away from 0), so a plain bootstrap filter with 200 particles already
@@ -460,6 +490,4 @@ Readings under which the paper's ordering PF-SP-PEKF < BS2000 < BS1000 < BS200 <
   EKF channels of the bank blew up (the cubic's Jacobian 3x^2 makes a channel that overshoots
   overshoot more); they are counted in the tables and dominate any mean they enter, so the
   medians are given beside the means.
-
-{cmp.section}"""
-    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+"""

@@ -21,26 +21,27 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import plots
 from ...evaluation.montecarlo import run_seed
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.cpf_sp import CPFSPProposal
-from ...filters.sis import ProposalParticleFilter, run_sis
+from ...filters.sis import ProposalParticleFilter
 from ...management.intensity_activation import activation_radius, active_sensors, intensity_weights
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
 from ...sensors.acoustic_intensity import AcousticIntensity
+from .common import run_steps, track_rows
 from .comparators import (
     COMPARATORS,
     UPF_NOTE,
     Comparison,
     Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
     per_run_scores,
     run_comparators,
 )
+from .equal_time import EqualTime
+from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
+
+WEIGHTS = CPFSPProposal.weights_id  # the measurement id of CPF-SP's per-step sensor weights
 
 CMP_RUNS = 30  # runs with the comparators (beyond the paper) at full size
 SOURCE_DB = 70.0
@@ -143,7 +144,7 @@ def cpf_sp(cs: Scenario, ws: list[np.ndarray]) -> Callable[[], object]:
 
     def run() -> object:
         f = ProposalParticleFilter(cs.motion, cs.sensors, CPFSPProposal(10), 200)
-        return run_sis(f, cs.prior, cs.zs, 1.0, np.random.default_rng(0), aux=ws)
+        return run_steps(f, cs.prior, cs.zs, 1.0, np.random.default_rng(0), side={WEIGHTS: ws})
 
     return run
 
@@ -177,7 +178,8 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     rows = []
     for k, (name, (f, aux)) in enumerate(filters.items()):
         t0 = time.perf_counter()
-        est, _ = run_sis(f, prior, zs, 1.0, np.random.default_rng([seed, k]), aux=aux)
+        side = None if aux is None else {WEIGHTS: aux}
+        est = np.array(run_steps(f, prior, zs, 1.0, np.random.default_rng([seed, k]), side=side))
         rows += _rows(name, est, time.perf_counter() - t0, truth, counts)
     return rows
 
@@ -187,28 +189,20 @@ def _rows(
 ) -> list[dict[str, Any]]:
     """Per-step rows of one filter (``truth`` row 0 is t = 0)."""
     d = est - truth[1:]
-    rows = []
-    for t in range(STEPS):
-        rows.append(
-            {
-                "method": name,
-                "step": t + 1,
-                "sq_ex": float(d[t, 0] ** 2),
-                "sq_ey": float(d[t, 1] ** 2),
-                "sq_vel": float(np.sum(d[t, 2:] ** 2)),
-                "seconds": secs,
-                "active": int(counts[t]),
-                "x": est[t, 0],
-                "y": est[t, 1],
-                "vx": est[t, 2],
-                "vy": est[t, 3],
-                "true_x": truth[t + 1, 0],
-                "true_y": truth[t + 1, 1],
-                "true_vx": truth[t + 1, 2],
-                "true_vy": truth[t + 1, 3],
-            }
-        )
-    return rows
+    return track_rows(
+        name,
+        est,
+        truth[1:],
+        sq_ex=d[:, 0] ** 2,
+        sq_ey=d[:, 1] ** 2,
+        sq_vel=np.sum(d[:, 2:] ** 2, axis=1),
+        seconds=secs,
+        active=np.asarray(counts[:STEPS], dtype=int),
+        vx=est[:, 2],
+        vy=est[:, 3],
+        true_vx=truth[1:, 2],
+        true_vy=truth[1:, 3],
+    )
 
 
 def active_counts(
@@ -230,25 +224,21 @@ def comparators(
     """Beyond the paper: UPF and bootstrap calibrated to CPF-SP (200)'s time per configuration,
     IMM-EKF; on the first ``CMP_RUNS`` runs (same truths as the paper's filters' runs)."""
     k = min(runs, CMP_RUNS)
-    n_equal, target, ccfgs = {}, {}, []
+    eq, ccfgs = EqualTime.for_run(ctx), []
     for c in cfgs:
-        key = f"{c['scenario']} {c['threshold']:.0%}"
         cs, ws, _ = comparator_scenario(c, run_seed(ctx.seed, 0))
-        n_equal[key], target[key] = equal_time_particles(
-            cs, cpf_sp(cs, ws), ("UPF", "bootstrap equal time"), repeats=2 if ctx.quick else 3
-        )
-        ccfgs.append({**c, "n_equal": n_equal[key]})
+        n_equal = eq.calibrate(f"{c['scenario']} {c['threshold']:.0%}", cs, cpf_sp(cs, ws))
+        ccfgs.append({**c, "n_equal": n_equal})
     dc = ctx.monte_carlo(run_once, ccfgs, k, desc="comparators")
     rows = pd.concat([df[df["run"] < k], dc], ignore_index=True)
     rows["sq_pos"] = rows["sq_ex"] + rows["sq_ey"]
-    return compare(
+    return eq.compare(
         per_run_scores(rows, ["scenario", "threshold"], "sq_pos"),
         "CPF-SP (200)",
         ctx.figure_path("error_vs_seconds"),
         by=["scenario", "threshold"],
         ylabel="position RMSE per run (m, mean)",
-        calibration=calibration_note(n_equal, target)
-        + f" Comparators ran on the first {k} of the {runs} runs (same truths); the table "
+        calibration=f" Comparators ran on the first {k} of the {runs} runs (same truths); the table "
         "compares every method on those runs only.",
         notes=[
             "IMM-EKF: CV and left/right coordinated turns at pi/10 rad/s (the S2 truth's rate), "
@@ -257,23 +247,34 @@ def comparators(
             UPF_NOTE,
         ],
         methods=["CPF-SP (200)", "bootstrap (2000)", "bootstrap (200)", *COMPARATORS],
-        n_particles=n_equal,
         runs=k,
     )
 
 
 def run(ctx: RunContext) -> Outcome:
+    """E4: every configuration's runs, the comparators, claims, figures and report."""
     runs = ctx.n_runs(full=100, quick=2)
     cfgs = [{"scenario": "S1", "threshold": t} for t in (0.75, 0.78)]
     cfgs += [{"scenario": s, "threshold": 0.75} for s in ("S2", "S3")]
     df = ctx.monte_carlo(run_once, cfgs, runs)
     cmp = comparators(ctx, cfgs, df, runs)
+    summ = summarise(df)
+    claims = [*claims_table5(summ), *claims_scenarios(df)]
+    figs = figures(ctx, df, runs)
+    active = active_counts(np.random.default_rng(ctx.seed), runs=5 if ctx.quick else 50)
+    body = report_text(summ, active, figs, runs) + cmp.section
+    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+
+
+def summarise(df: pd.DataFrame) -> pd.DataFrame:
+    """Table 5's columns (mean and variance over runs of the per-run RMSE in x and y, seconds)
+    per scenario, threshold and method."""
     per_run = df.groupby(["scenario", "threshold", "method", "run"]).agg(
         ex=("sq_ex", "mean"), ey=("sq_ey", "mean"), seconds=("seconds", "first")
     )
     per_run[["ex", "ey"]] = per_run[["ex", "ey"]].pow(0.5)
     g = per_run.groupby(["scenario", "threshold", "method"])
-    summ = pd.DataFrame(
+    return pd.DataFrame(
         {
             "RMSE x mean": g["ex"].mean(),
             "RMSE x var": g["ex"].var(),
@@ -282,37 +283,49 @@ def run(ctx: RunContext) -> Outcome:
             "time (s)": g["seconds"].mean(),
         }
     )
+
+
+def quarter_claim(
+    claim_id: str, statement: str, paper: str, cp: pd.Series, bs: pd.Series, stat: str
+) -> Claim:
+    """CPF-SP's RMSE ``stat`` (``mean`` or ``var`` over runs) below a quarter of the
+    bootstrap's in x and in y (Table 5)."""
+    x, y = f"RMSE x {stat}", f"RMSE y {stat}"
+    return Claim(
+        claim_id,
+        statement,
+        paper,
+        f"{cp[x]:.3g}/{cp[y]:.3g} vs {bs[x]:.3g}/{bs[y]:.3g}",
+        "< 0.25x both axes",
+        bool(cp[x] < 0.25 * bs[x] and cp[y] < 0.25 * bs[y]),
+    )
+
+
+def claims_table5(summ: pd.DataFrame) -> list[Claim]:
+    """C5 (CPF-SP against the bootstrap on S1 at 75%, Table 5) and C6 (78% is similar)."""
     s1 = summ.loc[("S1", 0.75)]
     cp, bs = s1.loc["CPF-SP (200)"], s1.loc["bootstrap (2000)"]
-    claims = [
-        Claim(
-            "C5_cpfsp_vs_bootstrap",
-            "S1, 75%: CPF-SP mean RMSE < 25% of the bootstrap's in x and y (Table 5)",
-            "1.909/4.004 vs 23.180/30.060",
-            f"{cp['RMSE x mean']:.3g}/{cp['RMSE y mean']:.3g} vs {bs['RMSE x mean']:.3g}/{bs['RMSE y mean']:.3g}",
-            "< 0.25x both axes",
-            bool(
-                cp["RMSE x mean"] < 0.25 * bs["RMSE x mean"]
-                and cp["RMSE y mean"] < 0.25 * bs["RMSE y mean"]
-            ),
-        ),
-        Claim(
-            "C5_variance",
-            "S1, 75%: CPF-SP's RMSE variance is much smaller than the bootstrap's (Table 5)",
-            "1.693/6.978 vs 154.63/223.291",
-            f"{cp['RMSE x var']:.3g}/{cp['RMSE y var']:.3g} vs {bs['RMSE x var']:.3g}/{bs['RMSE y var']:.3g}",
-            "< 0.25x both axes",
-            bool(
-                cp["RMSE x var"] < 0.25 * bs["RMSE x var"]
-                and cp["RMSE y var"] < 0.25 * bs["RMSE y var"]
-            ),
-        ),
-    ]
     c78 = summ.loc[("S1", 0.78, "CPF-SP (200)")]
     ratio = float(
         max(c78["RMSE x mean"] / cp["RMSE x mean"], c78["RMSE y mean"] / cp["RMSE y mean"])
     )
-    claims.append(
+    return [
+        quarter_claim(
+            "C5_cpfsp_vs_bootstrap",
+            "S1, 75%: CPF-SP mean RMSE < 25% of the bootstrap's in x and y (Table 5)",
+            "1.909/4.004 vs 23.180/30.060",
+            cp,
+            bs,
+            "mean",
+        ),
+        quarter_claim(
+            "C5_variance",
+            "S1, 75%: CPF-SP's RMSE variance is much smaller than the bootstrap's (Table 5)",
+            "1.693/6.978 vs 154.63/223.291",
+            cp,
+            bs,
+            "var",
+        ),
         Claim(
             "C6_threshold_78",
             "CPF-SP at the 78% threshold is similar to 75%",
@@ -320,15 +333,21 @@ def run(ctx: RunContext) -> Outcome:
             ratio,
             "RMSE ratio <= 1.5",
             ratio <= 1.5,
-        )
-    )
+        ),
+    ]
+
+
+def claims_scenarios(df: pd.DataFrame) -> list[Claim]:
+    """C7 (S2: the bootstrap loses the target, CPF-SP does not) and C8 (S3: CPF-SP follows the
+    change of acceleration)."""
     final = df[df["step"] == STEPS].assign(err=lambda d: np.sqrt(d["sq_ex"] + d["sq_ey"]))
     loss = (
         final[final["scenario"] == "S2"]
         .groupby("method")["err"]
         .apply(lambda e: float((e > 3 * SPACING).mean()))
     )
-    claims.append(
+    s3 = rmse_by_method(df[(df["scenario"] == "S3") & (df["step"] > 30)], "sq_vel")
+    return [
         Claim(
             "C7_loss",
             "S2: the bootstrap loses the target in > 80% of runs, CPF-SP never (loss: final error > 150 m)",
@@ -336,12 +355,7 @@ def run(ctx: RunContext) -> Outcome:
             f"bootstrap {loss['bootstrap (2000)']:.2f}, CPF-SP {loss['CPF-SP (200)']:.2f}",
             "bootstrap > 0.8 and CPF-SP <= 0.05",
             bool(loss["bootstrap (2000)"] > 0.8 and loss["CPF-SP (200)"] <= 0.05),
-        )
-    )
-    s3 = (
-        df[(df["scenario"] == "S3") & (df["step"] > 30)].groupby("method")["sq_vel"].mean().pow(0.5)
-    )
-    claims.append(
+        ),
         Claim(
             "C8_acceleration_change",
             "S3: after the switch CPF-SP's velocity RMSE is far below the bootstrap's",
@@ -349,46 +363,39 @@ def run(ctx: RunContext) -> Outcome:
             f"CPF-SP {s3['CPF-SP (200)']:.3g} vs bootstrap {s3['bootstrap (2000)']:.3g} m/s",
             "< 0.5x",
             bool(s3["CPF-SP (200)"] < 0.5 * s3["bootstrap (2000)"]),
-        )
-    )
+        ),
+    ]
+
+
+def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> list[str]:
+    """Per scenario at 75%: position RMSE(t) and run 0's tracks over the grid: file names."""
     figs = []
-    for s, thr in (("S1", 0.75), ("S2", 0.75), ("S3", 0.75)):
-        d = df[(df["scenario"] == s) & (df["threshold"] == thr)]
-        rm = (
-            d.assign(sq=d["sq_ex"] + d["sq_ey"])
-            .groupby(["method", "step"])["sq"]
-            .mean()
-            .pow(0.5)
-            .unstack("method")
+    for s in ("S1", "S2", "S3"):
+        d = df[(df["scenario"] == s) & (df["threshold"] == 0.75)]
+        rm = rmse_by_step(d.assign(sq=d["sq_ex"] + d["sq_ey"]), "sq")
+        title = f"{s}, 75%: {runs} runs"
+        figs.append(
+            plot_rmse(ctx, f"rmse_{s}", rm, rm.columns, title, "t (s)", "position RMSE (m)").name
         )
         figs.append(
-            plots.plot_series(
-                ctx.figure_path(f"rmse_{s}"),
-                rm.index.to_numpy(),
-                {m: rm[m].to_numpy() for m in rm.columns},
-                xlabel="t (s)",
-                ylabel="position RMSE (m)",
-                title=f"{s}, 75%: {runs} runs",
-                logy=True,
-            ).name
-        )
-        r0 = d[d["run"] == 0]
-        figs.append(
-            plots.plot_trajectories(
-                ctx.figure_path(f"run0_{s}"),
-                r0[r0["method"] == "CPF-SP (200)"][["true_x", "true_y"]].to_numpy(),
-                {
-                    m: r0[r0["method"] == m][["x", "y"]].to_numpy()
-                    for m in ("CPF-SP (200)", "bootstrap (2000)")
-                },
-                sensors=[("", np.array(p)) for p in GRID],
+            plot_run_tracks(
+                ctx,
+                f"run0_{s}",
+                d[d["run"] == 0],
+                "CPF-SP (200)",
+                ("CPF-SP (200)", "bootstrap (2000)"),
+                [("", np.array(p)) for p in GRID],
+                f"{s}: run 0",
                 area=(-20, 520, -20, 520),
-                title=f"{s}: run 0",
             ).name
         )
-    active = active_counts(np.random.default_rng(ctx.seed), runs=5 if ctx.quick else 50)
-    table = pd.concat({"paper": PAPER, "ours": s1.loc[PAPER.index]}, axis=1)
-    body = f"""
+    return figs
+
+
+def report_text(summ: pd.DataFrame, active: pd.Series, figs: list[str], runs: int) -> str:
+    """The report's set-up, Table 5 beside ours, every configuration and the differences."""
+    table = pd.concat({"paper": PAPER, "ours": summ.loc[("S1", 0.75)].loc[PAPER.index]}, axis=1)
+    return f"""
 ## Set-up
 
 {__doc__.split("Spec design")[1].split(chr(10) + chr(10))[0] if __doc__ else ""}
@@ -430,5 +437,4 @@ All configurations:
   bootstrap, which with 2-6 DOAs per step needs no help.
 * Times are seconds per 60-step run here (the thesis: MATLAB); compare ratios only.
 
-{cmp.section}"""
-    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+"""

@@ -27,14 +27,14 @@ Trackers (all ordinary fusetrack filters; the frame enters through a sensor or a
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import replace
-from typing import Any, Literal
+from typing import Any, Literal, NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from ...core import Gaussian
+from ...core import Gaussian, Track
 from ...evaluation import plots
 from ...evaluation.montecarlo import run_seed
 from ...evaluation.report import Claim, Outcome, RunContext
@@ -49,12 +49,7 @@ from ...motion.langevin import Langevin
 from ...motion.maneuver import ManeuverTurn
 from ...perception.visual_cues import CUES, MultiCueFrontEnd
 from ...perception.visual_edges import EllipseEdgeSensor, edge_map
-from ...perception.visual_tracking import (
-    GaussianFrameFilter,
-    PrecomputedMeasurements,
-    lost_frames,
-    track_frames,
-)
+from ...perception.visual_tracking import PrecomputedMeasurements, lost_frames, track_frames
 from ...sensors import PositionFix
 from .comparators import (
     beyond_section,
@@ -191,8 +186,34 @@ def edge_maps(seq: Any) -> list[np.ndarray]:
     return cached
 
 
-def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> tuple[Any, Gaussian, Any]:
-    """``(filter, prior, front end)`` for one method on one rendered sequence."""
+class TrackerSetup(NamedTuple):
+    """A method ready to run on a sequence: its filter, prior belief, front end and (for a
+    :class:`~fusetrack.core.Filter`) the sensor ids of the front end's values."""
+
+    filt: Any
+    prior: Any
+    front_end: Any
+    sensor_ids: tuple[str, ...] = ()
+
+    def track(
+        self,
+        frames: Any,
+        rng: np.random.Generator,
+        after_step: Callable[[Any, int], Any] | None = None,
+    ) -> Track:
+        return track_frames(
+            self.filt,
+            self.prior,
+            frames,
+            self.front_end,
+            rng,
+            sensor_ids=self.sensor_ids,
+            after_step=after_step,
+        )
+
+
+def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> TrackerSetup:
+    """The filter, prior and front end of one method on one rendered sequence."""
     truth = seq.truth
     prior = Gaussian(truth[0].copy(), P0)
     H, W = seq.frames.shape[1:3]
@@ -206,43 +227,47 @@ def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> tuple[Any,
         zs: list[list[np.ndarray | None]] = [[sensor.measurement(e)] for e in edge_maps(seq)]
         fe = PrecomputedMeasurements(zs)
         if method == "condensation":
-            return ProposalParticleFilter(lang, [sensor], None, n), prior, fe
+            return TrackerSetup(ProposalParticleFilter(lang, [sensor], None, n), prior, fe)
         if method.startswith("condensation "):
-            return ProposalParticleFilter(lang, [sensor], None, int(method.split()[1])), prior, fe
+            return TrackerSetup(
+                ProposalParticleFilter(lang, [sensor], None, int(method.split()[1])), prior, fe
+            )
         if method.startswith("PF-SP-PEKF"):
             tr: Literal["paired", "marginal"] = "marginal" if "marginal" in method else "paired"
             prop = SPPEKFProposal(n_channels=10)
-            return ProposalParticleFilter(lang, [sensor], prop, n, transition=tr), prior, fe
+            return TrackerSetup(
+                ProposalParticleFilter(lang, [sensor], prop, n, transition=tr), prior, fe
+            )
         if method == "MMPF-SP":
             mm = MultipleModelParticleFilter(
                 mm_models(), PI_B, [sensor], n, proposal="sp-pekf", n_channels=10
             )
-            return mm, _prior6(prior), fe
+            return TrackerSetup(mm, _prior6(prior), fe)
         grid = int(config.get("grid", 100))
         prop_g = GalerkinProposal(n_grid=grid)
-        return ProposalParticleFilter(lang, [sensor], prop_g, int(method.split()[-1])), prior, fe
+        return TrackerSetup(
+            ProposalParticleFilter(lang, [sensor], prop_g, int(method.split()[-1])), prior, fe
+        )
     box = _box(seq.sprite.axes, float(seq.scale[0]))
     cues = [PositionFix(c, cov=CUE_SIGMA**2 * np.eye(2)) for c in CUES]
     if method.startswith("bootstrap grey cue"):
         corr: Literal["plain", "normalised"] = "plain" if "plain" in method else "normalised"
         fe_g = MultiCueFrontEnd(box, cues=("grey",), correlation=corr)
-        return ProposalParticleFilter(lang, [cues[1]], None, n), prior, fe_g
+        return TrackerSetup(ProposalParticleFilter(lang, [cues[1]], None, n), prior, fe_g)
     if method == "multi-cue MMPF":
         mm = MultipleModelParticleFilter(mm_models(), PI_B, cues, n, proposal="cells")
-        return mm, _prior6(prior), MultiCueFrontEnd(box, correlation="normalised")
+        return TrackerSetup(mm, _prior6(prior), MultiCueFrontEnd(box, correlation="normalised"))
     if method.startswith("App. B"):
         corr_b: Literal["plain", "normalised"] = "normalised" if "normalised" in method else "plain"
         fe_b = MultiCueFrontEnd((7, 7), 20, ("grey",), half_life=None, correlation=corr_b)
         motion = Langevin(beta=0.0, v_mean=0.0, position_var=5.0)  # x += v + sqrt(5) N(0, 1)
         like = PositionFix("grey", cov=np.eye(2))  # var_o = 1
         at_start = Gaussian(truth[0].copy(), 1e-9 * np.eye(4))  # all particles at ctr_1, v_ini
-        return ProposalParticleFilter(motion, [like], None, n), at_start, fe_b
+        return TrackerSetup(ProposalParticleFilter(motion, [like], None, n), at_start, fe_b)
     raise KeyError(method)
 
 
-def comparator(
-    method: str, seq: Any, exp: str, config: Mapping[str, Any]
-) -> tuple[Any, Gaussian, Any]:
+def comparator(method: str, seq: Any, exp: str, config: Mapping[str, Any]) -> TrackerSetup:
     """Beyond the paper: ``method`` in :data:`BEYOND` on the measurements of ``exp``'s trackers.
 
     Edge experiments (E9-E14): the ellipse-edge sensor, whose centre pseudo-measurement
@@ -276,9 +301,10 @@ def comparator(
         motion = Langevin(beta=0.0, v_mean=0.0, position_var=5.0)
     if method == "IMM-EKF":
         imm = InteractingMultipleModel(mm_models(), PI_B, sensors)
-        return GaussianFrameFilter(imm, [s.sensor_id for s in sensors]), _prior6(prior), fe
+        ids = tuple(s.sensor_id for s in sensors)
+        return TrackerSetup(imm, imm.initialize(_prior6(prior)), fe, ids)
     prop = UnscentedProposal() if method == "UPF" else None
-    return ProposalParticleFilter(motion, sensors, prop, n), prior, fe
+    return TrackerSetup(ProposalParticleFilter(motion, sensors, prop, n), prior, fe)
 
 
 def shared_velocity(history: list[np.ndarray]) -> Any:
@@ -288,12 +314,12 @@ def shared_velocity(history: list[np.ndarray]) -> Any:
         est = np.asarray(state.estimate, float)
         prev = history[-1]
         v = est[:2] - prev[:2]
-        x = state.particles.copy()
+        x = state.states.copy()
         x[..., 2:4] = v
         est = est.copy()
         est[2:4] = v
         history.append(est)
-        return replace(state, particles=x, estimate=est)
+        return replace(state, states=x, estimate=est)
 
     return hook
 
@@ -307,13 +333,11 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     truth = seq.truth
     rows: list[dict[str, Any]] = []
     for k, method in enumerate(methods):
-        filt, prior, fe = make_tracker(method, seq, config)
         hook = shared_velocity([truth[0].copy()]) if method.startswith("App. B") else None
         stream = 1 + k + (len(EXPERIMENTS[exp][2]) if config.get("beyond", False) else 0)
-        tk = track_frames(
-            filt, prior, seq.frames, fe, np.random.default_rng([seed, stream]), after_step=hook
-        )
-        est = tk.estimates
+        setup = make_tracker(method, seq, config)
+        tk = setup.track(seq.frames, np.random.default_rng([seed, stream]), after_step=hook)
+        est = tk.means
         err = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])
         err = np.where(np.isfinite(err), err, 1e6)
         verr = np.hypot(est[:, 2] - truth[:, 2], est[:, 3] - truth[:, 3])
@@ -338,7 +362,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                     "first_loss": int(first),
                     "rmse": float(np.sqrt(np.mean(err**2))),
                     "velocity_rmse": float(np.sqrt(np.mean(verr[1:] ** 2))),
-                    "seconds": tk.seconds,
+                    "seconds": tk.info["seconds"],
                     "degenerate_steps": int(tk.info.get("degenerate_steps", 0)),
                 }
             )
@@ -526,9 +550,8 @@ def equal_time_particles(exp: str, config: Mapping[str, Any], seed: int) -> tupl
     seq = build(EXPERIMENTS[exp][0], np.random.default_rng([run_seed(seed, 0), 0]))
 
     def track(method: str, cfg: Mapping[str, Any]) -> object:
-        filt, prior, fe = make_tracker(method, seq, cfg)
         hook = shared_velocity([seq.truth[0].copy()]) if method.startswith("App. B") else None
-        return track_frames(filt, prior, seq.frames, fe, np.random.default_rng(0), after_step=hook)
+        return make_tracker(method, seq, cfg).track(seq.frames, np.random.default_rng(0), hook)
 
     # the fastest of two timings: the first call of a filter in a process pays for warm-up
     target = pilot_seconds(lambda: track(NEW_METHOD[exp], config), repeats=2)
@@ -620,14 +643,41 @@ def analyse(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     return Outcome(df, claims, body + beyond_md, runs_e10, beyond_the_paper=beyond_json)
 
 
+_EQUAL_TIME_TEXT = (
+    "Equal time: before the runs, the proposed tracker and the bootstrap at 100 and 1000 "
+    "particles are timed on run 0's sequence (the faster of two runs each); the "
+    "bootstrap's particle count is solved from the affine cost through the two pilots "
+    "(`calibrate_particles`), and when it is above 1000 solved again through pilots at 1000 "
+    "and that count (the small pilots misjudge the cost at large N); at most "
+    f"{N_EQUAL_MAX} particles. The bootstrap uses the same "
+    "measurements as the comparators; 'time / reference' shows how well equal time held."
+)
+
+
 def beyond_the_paper(
     ctx: RunContext, df: pd.DataFrame, is_beyond: pd.Series
 ) -> tuple[str, dict[str, Any]]:
     """Comparators against each experiment's proposed tracker, on the runs where both ran: loss
     rate, per-run RMSE, seconds; the winner at equal time; error against seconds per experiment."""
-    import matplotlib.pyplot as plt
-
     first = df[df["frame"] == 0]
+    table, win = _beyond_tables(first, is_beyond)
+    path = _beyond_figure(ctx, table)
+    n_runs = first[is_beyond.loc[first.index]].groupby("exp")["run"].nunique()
+    section = "\n" + beyond_section(
+        table,
+        win,
+        reference="each experiment's proposed tracker (column `reference`)",
+        figure=path.name,
+        calibration=_EQUAL_TIME_TEXT,
+        notes=_beyond_notes(n_runs),
+        floatfmt=".3g",
+    )
+    return section, beyond_summary(table, win, runs=n_runs.to_dict())
+
+
+def _beyond_tables(first: pd.DataFrame, is_beyond: pd.Series) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Per experiment with comparators: every method's loss rate and RMSE on the shared runs,
+    and the winner (:func:`beyond_table`)."""
     tables, winners = [], []
     for exp in EXPERIMENTS:
         b = first[(first["exp"] == exp) & is_beyond.loc[first.index]]
@@ -643,7 +693,12 @@ def beyond_the_paper(
         w.index = [exp]
         tables.append(pd.concat({exp: t}, names=["exp", "method"]))
         winners.append(w)
-    table, win = pd.concat(tables), pd.concat(winners)
+    return pd.concat(tables), pd.concat(winners)
+
+
+def _beyond_figure(ctx: RunContext, table: pd.DataFrame) -> Any:
+    """Mean per-run RMSE against seconds per run, one panel per experiment."""
+    import matplotlib.pyplot as plt
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     colour = {"UPF": "tab:red", "IMM-EKF": "tab:purple", "bootstrap equal time": "tab:brown"}
@@ -670,15 +725,18 @@ def beyond_the_paper(
         ax.set_title(f"{exp} ({EXPERIMENTS[exp][0]})", fontsize=9)
         ax.legend(fontsize=6)
         ax.grid(alpha=0.3, which="both")
-    for ax in axes.ravel()[len(tables) :]:
+    for ax in axes.ravel()[table.index.get_level_values("exp").nunique() :]:
         ax.axis("off")
     fig.suptitle(
         "Mean per-run RMSE against seconds per run (legend: loss rate; orange: the thesis's "
         "tracker, blue: its baseline, squares: comparators)"
     )
-    path = plots.save(fig, ctx.figure_path("beyond_error_vs_seconds"))
-    n_runs = first[is_beyond.loc[first.index]].groupby("exp")["run"].nunique()
-    notes = [f"{exp}, {m}: not run ({why})." for (exp, m), why in NOT_RUN.items()] + [
+    return plots.save(fig, ctx.figure_path("beyond_error_vs_seconds"))
+
+
+def _beyond_notes(n_runs: pd.Series) -> list[str]:
+    """What the comparators ran on, their measurement function and the score."""
+    return [f"{exp}, {m}: not run ({why})." for (exp, m), why in NOT_RUN.items()] + [
         "Runs: the comparators ran on the first "
         + ", ".join(f"{e} {k}" for e, k in n_runs.items())
         + " runs of each experiment; the table compares every method on those runs only.",
@@ -690,25 +748,14 @@ def beyond_the_paper(
         "Score: `mean`/`median` of the per-run centre RMSE (px); winners are by the mean, which "
         "a lost run dominates, so the loss rate is beside it.",
     ]
-    cal = (
-        "Equal time: before the runs, the proposed tracker and the bootstrap at 100 and 1000 "
-        "particles are timed on run 0's sequence (the faster of two runs each); the "
-        "bootstrap's particle count is solved from the affine cost through the two pilots "
-        "(`calibrate_particles`), and when it is above 1000 solved again through pilots at 1000 "
-        "and that count (the small pilots misjudge the cost at large N); at most "
-        f"{N_EQUAL_MAX} particles. The bootstrap uses the same "
-        "measurements as the comparators; 'time / reference' shows how well equal time held."
-    )
-    section = "\n" + beyond_section(
-        table,
-        win,
-        reference="each experiment's proposed tracker (column `reference`)",
-        figure=path.name,
-        calibration=cal,
-        notes=notes,
-        floatfmt=".3g",
-    )
-    return section, beyond_summary(table, win, runs=n_runs.to_dict())
+
+
+def _rate(s: pd.DataFrame, exp: str, m: str) -> str:
+    return f"{s.loc[(exp, m), 'loss rate']:.0%}"
+
+
+def _rmse(s: pd.DataFrame, exp: str, m: str) -> str:
+    return f"{s.loc[(exp, m), 'mean RMSE (px)']:.3g} px"
 
 
 def report_body(
@@ -720,17 +767,19 @@ def report_body(
     grid: int,
     figs: list[Any],
 ) -> str:
-    fig37, fig38, strips, curves = figs
-    s = summary
+    """The report: what is reproduced, the thesis beside ours, the differences and their causes."""
+    return (
+        "\n"
+        + _setup_text(runs_e10, runs, grid)
+        + _results_text(summary, paper, cues, figs)
+        + _edge_differences(summary, runs_e10, grid)
+        + _cue_differences(summary)
+    )
 
-    def rate(exp: str, m: str) -> str:
-        return f"{s.loc[(exp, m), 'loss rate']:.0%}"
 
-    def rmse(exp: str, m: str) -> str:
-        return f"{s.loc[(exp, m), 'mean RMSE (px)']:.3g} px"
-
-    return f"""
-## What is reproduced, and on what
+def _setup_text(runs_e10: int, runs: int, grid: int) -> str:
+    """What is reproduced, on what video, and the choices the thesis leaves open."""
+    return f"""## What is reproduced, and on what
 
 The thesis's visual results are on private video (a lab, an office, two people crossing, a
 football clip from a university website, three multi-cue sequences, `NoisyFrameData.mat`); none
@@ -754,7 +803,13 @@ edge points would halve every correction: each ray only measures the motion alon
 Galerkin PF uses a {grid} x {grid} position grid over +-6 std of the predicted cloud (spec and
 thesis: 100 x 100; quick runs use 30 x 30).
 
-## The thesis's statements beside ours
+"""
+
+
+def _results_text(s: pd.DataFrame, paper: pd.DataFrame, cues: pd.DataFrame, figs: list[Any]) -> str:
+    """The thesis's statements beside ours, the figures, the cue accuracy."""
+    fig37, fig38, strips, curves = figs
+    return f"""## The thesis's statements beside ours
 
 {paper.to_markdown()}
 
@@ -773,7 +828,19 @@ median error of each cue's location and the share of frames where it is more tha
 
 {cues.to_markdown(floatfmt=".2f")}
 
-## Differences and their causes
+"""
+
+
+def _edge_differences(s: pd.DataFrame, runs_e10: int, grid: int) -> str:
+    """Differences and their causes: the video, and the edge-contour experiments E9-E14."""
+
+    def rate(exp: str, m: str) -> str:
+        return _rate(s, exp, m)
+
+    def rmse(exp: str, m: str) -> str:
+        return _rmse(s, exp, m)
+
+    return f"""## Differences and their causes
 
 * **Synthetic video, not the thesis's.** Our sequences reproduce the described conditions, not
   the pixels; absolute errors (px) and frame numbers are not comparable with the thesis's
@@ -823,7 +890,19 @@ median error of each cue's location and the share of frames where it is more tha
   run against {s.loc[("E14", "condensation 100"), "seconds/run"]:.2g} s ({grid} x {grid} grid
   states per frame). The previous full run, with a 50 x 50 grid, gave lost 10 %, RMSE 4.99 px,
   7.0 s per run at load 9-15 (10 runs).
-* **E18, multi-cue.** Eq. 85 as printed (plain correlation) makes the grey template prefer the
+"""
+
+
+def _cue_differences(s: pd.DataFrame) -> str:
+    """Differences and their causes: the multi-cue experiments E18, App. B (E21); not done."""
+
+    def rate(exp: str, m: str) -> str:
+        return _rate(s, exp, m)
+
+    def rmse(exp: str, m: str) -> str:
+        return _rmse(s, exp, m)
+
+    return f"""* **E18, multi-cue.** Eq. 85 as printed (plain correlation) makes the grey template prefer the
   brightest patch in the window: the bootstrap with that cue is lost in
   {rate("E18-1", "bootstrap grey cue (plain Eq. 85)")} of the case-1 runs, almost at once. Both
   E18 trackers therefore use zero-mean normalised correlation. Case 1 reproduces the thesis's

@@ -60,7 +60,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core.errors import ConfigError, ShapeError, invalid
-from ..sensors.perspective_camera import CameraArray
 from ..world.geometry import Array
 from ..world.occlusion import (
     OccluderPriors,
@@ -70,6 +69,7 @@ from ..world.occlusion import (
 )
 from ..world.occlusion_kernels import camera_likelihood_kernel
 from ..world.room import Room
+from .perspective_camera import CameraArray
 
 PriorMode = Literal["gaussian", "perfect", "none"]
 PRIOR_MODES = ("gaussian", "perfect", "none")

@@ -8,7 +8,7 @@ import pytest
 
 from fusetrack.experiments.ercan2013.scenes import get_scene
 from fusetrack.experiments.ercan2013.simulation import world_and_readings
-from fusetrack.filters.occlusion_likelihood import OcclusionAwareLikelihood
+from fusetrack.sensors.occlusion_aware_camera import OcclusionAwareLikelihood
 from fusetrack.sensors.perspective_camera import ring_of_cameras
 from fusetrack.world.geometry import points_in_polygon
 from fusetrack.world.occlusion import OccluderPriors, occlusion_probability_reference

@@ -3,19 +3,7 @@
 import numpy as np
 import pytest
 
-from fusetrack.filters.energy_localisation import energy_localise
-from fusetrack.filters.harmonic_localisation import (
-    AcousticNetwork,
-    BeamformModel,
-    SourceBeamform,
-    estimate_frequencies,
-    fit_gain_offset,
-    localise,
-    match_error,
-    psd_neg_log_likelihood,
-    source_beamform,
-)
-from fusetrack.filters.slice_sampling import slice_sample
+from fusetrack.core.slice_sampling import slice_sample
 from fusetrack.perception.harmonic_features import (
     CompressedPsd,
     NodeFeatures,
@@ -24,6 +12,18 @@ from fusetrack.perception.harmonic_features import (
     harmonicity,
     node_features,
     psd,
+)
+from fusetrack.perception.source_localisation.energy import energy_localise
+from fusetrack.perception.source_localisation.harmonic import BeamformModel, localise, match_error
+from fusetrack.perception.source_localisation.harmonic_beamform import (
+    AcousticNetwork,
+    SourceBeamform,
+    fit_gain_offset,
+    source_beamform,
+)
+from fusetrack.perception.source_localisation.harmonic_frequencies import (
+    estimate_frequencies,
+    psd_neg_log_likelihood,
 )
 from fusetrack.world.harmonic_sources import (
     HarmonicSource,
@@ -192,7 +192,7 @@ def test_harmonic_source_checks_and_directivity():
 
 
 def test_factorised_powers_fill_a_harmonic_a_node_did_not_send():
-    from fusetrack.filters.harmonic_localisation import factorised_powers
+    from fusetrack.perception.source_localisation.harmonic_frequencies import factorised_powers
 
     f0 = np.array([50.0])
     lam2 = np.array([1.0, 0.25, 4.0])
