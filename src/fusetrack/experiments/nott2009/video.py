@@ -94,55 +94,65 @@ def _radio(
 # -- scene: training walks and homographies --------------------------------------------------
 
 
-def _training_rows(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    rng = np.random.default_rng(seed)
-    n_bg = int(config["n_bg"])
-    renderer = RoomRenderer()
-    bgs = HorprasertModel.train(renderer.empty_frames(n_bg, rng))
+def _walk_blobs(
+    renderer: RoomRenderer, bgs: HorprasertModel, walk: Any, rng: np.random.Generator
+) -> tuple[list[Any], list[Any], list[int]]:
+    """Render ``walk``; the largest blob's foot and head points and the frames that had one."""
+    feet, heads, keep = [], [], []
+    for f in renderer.frames([Person(walk)], rng):
+        blob = largest_blob(find_blobs(bgs.foreground(f.image)))
+        if blob is not None:
+            feet.append(blob.foot)
+            heads.append(blob.head)
+            keep.append(f.index)
+    return feet, heads, keep
+
+
+def _homography_rows(
+    name: str,
+    walk: Any,
+    feet: list[Any],
+    heads: list[Any],
+    keep: list[int],
+    rng: np.random.Generator,
+) -> list[dict[str, Any]]:
+    """Foot and head homographies fitted from one training walk (tag or near-true world points),
+    judged on the floor grid; whether the degeneracy check refuses the walk."""
     Hf_true, Hh_true = _true_homographies()
     rows: list[dict[str, Any]] = []
-    fps = float(config["train_fps"])
-    diverse_pairs: tuple[list[Any], list[int]] = ([], [])
-    for name, walk in (
-        ("straight", straight_training_walk(fps)),
-        ("diverse", diverse_training_walk(fps)),
-    ):
-        person = Person(walk)
-        feet, heads, keep = [], [], []
-        for f in renderer.frames([person], rng):
-            blob = largest_blob(find_blobs(bgs.foreground(f.image)))
-            if blob is not None:
-                feet.append(blob.foot)
-                heads.append(blob.head)
-                keep.append(f.index)
-        if name == "diverse":
-            diverse_pairs = (list(feet), list(keep))
-        world_tag = walk.xy[keep] + np.array([0.6, 0.4]) * rng.standard_normal((len(keep), 2))
-        world_true = walk.xy[keep] + 0.05 * rng.standard_normal((len(keep), 2))
-        for source, world in (("tag", world_tag), ("true+5cm", world_true)):
-            try:
-                fit_homography(world, np.array(feet))
-                refused = False
-            except DegenerateGeometryError:
-                refused = True
-            for plane, pix, H_true in (("foot", feet, Hf_true), ("head", heads, Hh_true)):
-                fit = fit_homography(world, np.array(pix), check=False)
-                err = reprojection_errors(fit.H, GRID, apply_homography(H_true, GRID))
-                rows.append(
-                    {
-                        "part": "homography",
-                        "walk": name,
-                        "source": source,
-                        "plane": plane,
-                        "median_px": float(np.median(err)),
-                        "max_px": float(err.max()),
-                        "spread": fit.spread,
-                        "refused": refused,
-                        "n_pairs": len(keep),
-                    }
-                )
-    # "manual" homography (Nott 2009 Sec. 5.2: calibration points clicked in the image) vs the
-    # training-sequence one, both judged on held-out calibration points
+    world_tag = walk.xy[keep] + np.array([0.6, 0.4]) * rng.standard_normal((len(keep), 2))
+    world_true = walk.xy[keep] + 0.05 * rng.standard_normal((len(keep), 2))
+    for source, world in (("tag", world_tag), ("true+5cm", world_true)):
+        try:
+            fit_homography(world, np.array(feet))
+            refused = False
+        except DegenerateGeometryError:
+            refused = True
+        for plane, pix, H_true in (("foot", feet, Hf_true), ("head", heads, Hh_true)):
+            fit = fit_homography(world, np.array(pix), check=False)
+            err = reprojection_errors(fit.H, GRID, apply_homography(H_true, GRID))
+            rows.append(
+                {
+                    "part": "homography",
+                    "walk": name,
+                    "source": source,
+                    "plane": plane,
+                    "median_px": float(np.median(err)),
+                    "max_px": float(err.max()),
+                    "spread": fit.spread,
+                    "refused": refused,
+                    "n_pairs": len(keep),
+                }
+            )
+    return rows
+
+
+def _manual_vs_training_rows(
+    diverse_pairs: tuple[list[Any], list[int]], fps: float, seed: int, rng: np.random.Generator
+) -> list[dict[str, Any]]:
+    """The "manual" homography (Nott 2009 Sec. 5.2: calibration points clicked in the image) vs the
+    training-sequence one, both judged on held-out calibration points."""
+    Hf_true, _ = _true_homographies()
     cal = np.array([[x, y] for x in (1.5, 3.5, 5.5, 7.5) for y in np.linspace(1.5, 13.5, 8)])
     clicked = apply_homography(Hf_true, cal) + rng.standard_normal(cal.shape)
     fit_idx, held = np.arange(0, 32, 2), np.arange(1, 32, 2)
@@ -152,6 +162,7 @@ def _training_rows(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]
     tag = _tag(seed)
     trained = fit_homography(tag.simulate(walk.xy[keep], rng), np.array(feet), method="ransac").H
     truth_px = apply_homography(Hf_true, cal[held])
+    rows: list[dict[str, Any]] = []
     for name, H in (("manual", manual), ("training (diverse, realistic tag, RANSAC)", trained)):
         err = reprojection_errors(H, cal[held], truth_px)
         rows.append(
@@ -162,19 +173,44 @@ def _training_rows(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]
                 "max_px": float(err.max()),
             }
         )
-    # checkerboard on the floor (the thesis's simulation camera: "a chequered board")
+    return rows
+
+
+def _checkerboard_row(renderer: RoomRenderer, rng: np.random.Generator) -> dict[str, Any]:
+    """Checkerboard on the floor (the thesis's simulation camera: "a chequered board")."""
+    Hf_true, _ = _true_homographies()
     board = _render_checkerboard(renderer, rng)
     calib = calibrate_from_checkerboard(board, (9, 7), 0.5, origin=(2.5, 1.5))
     err = reprojection_errors(calib.H_floor, GRID, apply_homography(Hf_true, GRID))
-    rows.append(
-        {
-            "part": "checkerboard",
-            "walk": "board",
-            "median_px": float(np.median(err)),
-            "max_px": float(err.max()),
-            "f_px": float(calib.K[0, 0]),
-        }
-    )
+    return {
+        "part": "checkerboard",
+        "walk": "board",
+        "median_px": float(np.median(err)),
+        "max_px": float(err.max()),
+        "f_px": float(calib.K[0, 0]),
+    }
+
+
+def _training_rows(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    """The training scene: homographies from walks, by hand, from a checkerboard; false
+    foreground of the background model on empty frames (draws in the original order)."""
+    rng = np.random.default_rng(seed)
+    n_bg = int(config["n_bg"])
+    renderer = RoomRenderer()
+    bgs = HorprasertModel.train(renderer.empty_frames(n_bg, rng))
+    rows: list[dict[str, Any]] = []
+    fps = float(config["train_fps"])
+    diverse_pairs: tuple[list[Any], list[int]] = ([], [])
+    for name, walk in (
+        ("straight", straight_training_walk(fps)),
+        ("diverse", diverse_training_walk(fps)),
+    ):
+        feet, heads, keep = _walk_blobs(renderer, bgs, walk, rng)
+        if name == "diverse":
+            diverse_pairs = (list(feet), list(keep))
+        rows += _homography_rows(name, walk, feet, heads, keep, rng)
+    rows += _manual_vs_training_rows(diverse_pairs, fps, seed, rng)
+    rows.append(_checkerboard_row(renderer, rng))
     # background subtraction on the empty scene: false foreground before morphology
     fresh = renderer.empty_frames(5, rng)
     rows.append(
