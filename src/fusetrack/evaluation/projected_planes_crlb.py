@@ -30,7 +30,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 from ..motion.accel_turn import AccelTurn
 from ..sensors.doa_projection import PLANE_AXES, PLANES, DoaSensor3D, projected_variance
 

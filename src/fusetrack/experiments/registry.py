@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from ..core.errors import ConfigError, UnknownExperimentError
+from ..core import ConfigError, UnknownExperimentError
 from ..evaluation.options import ExperimentOptions, parse_options
 from ..evaluation.report import Outcome, RunContext, peak_memory_mb, write_outputs
 

@@ -41,7 +41,7 @@ from typing import Literal, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 from ..sensors.perspective_camera import MIN_DEPTH, CameraArray
 from ..world.geometry import Array
 from ..world.occlusion import OccluderPriors, disks_block, occlusion_probability

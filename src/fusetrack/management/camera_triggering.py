@@ -27,8 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.angles import wrap_angle_inplace
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid, wrap_angle_inplace
 from ..filters.multi_model_kernel import fused_step, kernel_bank, predict_weigh_kernel
 from ..filters.multi_model_pf import MultiModelBearingPF, MultiModelStep, resample_l
 from ..sensors.unlabelled_bearings import merge_close, simulate_bearings, true_bearings

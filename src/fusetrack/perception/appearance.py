@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from skimage.feature import local_binary_pattern
 
-from ..core.errors import ShapeError, invalid
+from ..core import ShapeError, invalid
 from ..sensors.appearance import (
     N_HS,
     N_LBP,

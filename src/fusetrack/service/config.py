@@ -22,8 +22,7 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, Gaussian, invalid
 from ..motion import ConstantVelocity, CoordinatedTurnRate
 from ..sensors import AzimuthPolar, Bearing, HomographyCamera, PositionFix, Range, RangeBearing
 from ..sensors.detection_function import AngularSampling

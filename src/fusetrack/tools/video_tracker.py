@@ -27,8 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import Gaussian, Measurement
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, Gaussian, Measurement, invalid
 from ..filters import ExtendedKalmanFilter
 from ..motion import WalkingPerson
 from ..perception.video import HorprasertModel, Mog2Subtractor, detect_occlusion, find_blobs

@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from ..sensors.camera_geometry import PinholeCamera
 from ..sensors.ellipsoid_camera import (
     EllipsoidCamera,

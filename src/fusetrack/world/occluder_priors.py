@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from ..motion.linear import ConstantVelocity
 from .geometry import Array
 from .occlusion import OccluderPriors

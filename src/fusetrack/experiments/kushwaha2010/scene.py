@@ -668,7 +668,7 @@ def bearing_detections(
     layout: Layout, taken: dict[str, Packet], modalities: tuple[str, ...], time: float = 0.0
 ) -> list[Any]:
     """The same reports as :func:`tick_likelihoods` as measurements for :func:`detection_sensors`."""
-    from ...core.measurement import Measurement
+    from ...core import Measurement
     from ...sensors.bearing_detection import DetectionFunctionSensor
 
     out = []

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ...core.errors import ConfigError, invalid
+from ...core import ConfigError, invalid
 from ...world.head_video import Actor, RenderedSequence, Scene, Sprite, keyframe_trajectory, render
 
 HEAD = Sprite()  # 14 x 18 px semi-axes, skin with a dark hair cap
