@@ -31,8 +31,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..core import ConfigError, ShapeError, invalid
-from ..motion.accel_turn import AccelTurn
-from ..sensors.doa_projection import PLANE_AXES, PLANES, DoaSensor3D, projected_variance
+from ..motion import AccelTurn
+from ..sensors import PLANE_AXES, PLANES, DoaSensor3D, projected_variance
 
 Array = np.ndarray
 

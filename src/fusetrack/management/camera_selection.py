@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core import ConfigError, ShapeError, invalid
-from ..sensors.perspective_camera import MIN_DEPTH, CameraArray
+from ..sensors import MIN_DEPTH, CameraArray
 from ..world.geometry import Array
 from ..world.occlusion import OccluderPriors, disks_block, occlusion_probability
 from ..world.occlusion_kernels import pair_visibility_kernel

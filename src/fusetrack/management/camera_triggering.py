@@ -30,7 +30,7 @@ import numpy as np
 from ..core import ConfigError, invalid, wrap_angle_inplace
 from ..filters.multi_model_kernel import fused_step, kernel_bank, predict_weigh_kernel
 from ..filters.multi_model_pf import MultiModelBearingPF, MultiModelStep, resample_l
-from ..sensors.unlabelled_bearings import merge_close, simulate_bearings, true_bearings
+from ..sensors import merge_close, simulate_bearings, true_bearings
 
 Array = np.ndarray
 

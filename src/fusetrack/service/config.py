@@ -24,8 +24,15 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from ..core import ConfigError, Gaussian, invalid
 from ..motion import ConstantVelocity, CoordinatedTurnRate
-from ..sensors import AzimuthPolar, Bearing, HomographyCamera, PositionFix, Range, RangeBearing
-from ..sensors.detection_function import AngularSampling
+from ..sensors import (
+    AngularSampling,
+    AzimuthPolar,
+    Bearing,
+    HomographyCamera,
+    PositionFix,
+    Range,
+    RangeBearing,
+)
 from .auth import MIN_KEY_BYTES, bearer_token
 from .schema import _NAME, READING_KINDS
 

@@ -37,8 +37,7 @@ from ..filters.grid import (
     fuse,
     map_sensors,
 )
-from ..sensors.detection_function import arc_mean_matrix, cell_arcs, normalize_likelihood
-from ..sensors.likelihood_map import detection_quality
+from ..sensors import arc_mean_matrix, cell_arcs, detection_quality, normalize_likelihood
 from .alignment import Reading
 from .config import DetectionFunctionSensor, NetworkConfig
 

@@ -32,8 +32,13 @@ from ..filters import ExtendedKalmanFilter
 from ..motion import WalkingPerson
 from ..perception.video import HorprasertModel, Mog2Subtractor, detect_occlusion, find_blobs
 from ..perception.video.blobs import Blob
-from ..sensors import HomographyCamera, PositionFix
-from ..sensors.camera_geometry import apply_homography, back_project, invert_homography
+from ..sensors import (
+    HomographyCamera,
+    PositionFix,
+    apply_homography,
+    back_project,
+    invert_homography,
+)
 
 
 @dataclass

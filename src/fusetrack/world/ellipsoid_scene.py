@@ -23,9 +23,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import ConfigError, invalid
-from ..sensors.camera_geometry import PinholeCamera
-from ..sensors.ellipsoid_camera import (
+from ..sensors import (
     EllipsoidCamera,
+    PinholeCamera,
     axis_angle_quaternion,
     ellipsoid_matrix,
     look_at,

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core import ConfigError, invalid
-from ..motion.linear import ConstantVelocity
+from ..motion import ConstantVelocity
 from .geometry import Array
 from .occlusion import OccluderPriors
 

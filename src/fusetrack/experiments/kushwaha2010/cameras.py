@@ -35,8 +35,7 @@ from ...filters.smart_camera_trackers import (
     TrackerSettings,
 )
 from ...perception.appearance import appearance_model_from_views, features_from_rgb
-from ...sensors.appearance import AppearanceModel
-from ...sensors.ellipsoid_camera import EllipsoidCamera
+from ...sensors import AppearanceModel, EllipsoidCamera
 from ...world.ellipsoid_scene import (
     EllipsoidTarget,
     Frames,

@@ -44,15 +44,15 @@ from ...perception.audio_beamforming import (
     unpack_audio_message,
 )
 from ...perception.video_detection import VideoDetector, fit_angle_mixture
-from ...sensors.camera_geometry import PinholeCamera
-from ...sensors.detection_function import (
+from ...sensors import (
     AngularSampling,
+    PinholeCamera,
     arc_mean_matrix,
     cell_arcs,
+    detection_quality,
     mixture_arc_mean,
     normalize_likelihood,
 )
-from ...sensors.likelihood_map import detection_quality
 from ...world.acoustics import harmonic_engine, pink_noise, propagate
 from ...world.clocks import HopTranslation, NodeClock, RbsDomain, fit_clock_map
 from ...world.road_video import RoadRenderer, Vehicle
@@ -653,7 +653,7 @@ def _split(sensors: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
 
 def detection_sensors(layout: Layout) -> dict[str, Any]:
     """Every node as a detection-function sensor model, for the grid-free particle back end."""
-    from ...sensors.bearing_detection import DetectionFunctionSensor
+    from ...sensors import DetectionFunctionSensor
 
     beams = AngularSampling.beams(36)
     out: dict[str, Any] = {}
@@ -669,7 +669,7 @@ def bearing_detections(
 ) -> list[Any]:
     """The same reports as :func:`tick_likelihoods` as measurements for :func:`detection_sensors`."""
     from ...core import Measurement
-    from ...sensors.bearing_detection import DetectionFunctionSensor
+    from ...sensors import DetectionFunctionSensor
 
     out = []
     if "audio" in modalities:

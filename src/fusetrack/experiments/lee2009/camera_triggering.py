@@ -36,7 +36,7 @@ from ...management.camera_triggering import (
     run_cooperation,
     run_periodic_batch,
 )
-from ...motion.accel_turn import AccelTurn
+from ...motion import AccelTurn
 
 DEG = math.pi / 180.0
 T_33 = 200

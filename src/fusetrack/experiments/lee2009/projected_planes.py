@@ -32,13 +32,8 @@ from ...evaluation.plots import save
 from ...evaluation.projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters.projected_planes import Direct3DFilter, ProjectedPlanesTracker, select_pairs
-from ...motion.accel_turn import AccelTurn
-from ...sensors.doa_projection import (
-    PLANE_AXES,
-    DoaSensor3D,
-    monte_carlo_projected_variance,
-    projected_variance,
-)
+from ...motion import AccelTurn
+from ...sensors import PLANE_AXES, DoaSensor3D, monte_carlo_projected_variance, projected_variance
 
 
 class Options(ExperimentOptions):

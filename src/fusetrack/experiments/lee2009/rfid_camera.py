@@ -16,7 +16,7 @@ import pandas as pd
 
 from ...evaluation.plots import save
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...sensors.rfid_coverage import (
+from ...sensors import (
     RfidReader,
     WallCameraPair,
     coarse_position,

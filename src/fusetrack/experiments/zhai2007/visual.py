@@ -44,9 +44,7 @@ from ...filters.multiple_model import MultipleModelParticleFilter, PaddedModel
 from ...filters.sis import ProposalParticleFilter
 from ...filters.sp_pekf import SPPEKFProposal
 from ...filters.unscented_proposal import UnscentedProposal
-from ...motion import ConstantAcceleration
-from ...motion.langevin import Langevin
-from ...motion.maneuver import ManeuverTurn
+from ...motion import ConstantAcceleration, Langevin, ManeuverTurn
 from ...perception.visual_cues import CUES, MultiCueFrontEnd
 from ...perception.visual_edges import EllipseEdgeSensor, edge_map
 from ...perception.visual_tracking import PrecomputedMeasurements, lost_frames, track_frames

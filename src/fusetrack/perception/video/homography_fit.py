@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...core import ConfigError, ShapeError, invalid
-from ...sensors.camera_geometry import apply_homography
+from ...sensors import apply_homography
 
 Array = NDArray[np.float64]
 
