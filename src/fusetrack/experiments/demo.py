@@ -25,7 +25,7 @@ from ..evaluation import plots, position_rmse_bound, posterior_crlb
 from ..evaluation.report import Claim, Outcome, RunContext
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
 from ..filters.particle import BootstrapFilter
-from ..world.demo_scene import AREA, DemoScene, simulate_demo
+from ..world import AREA, DemoScene, simulate_demo
 
 logger = logging.getLogger(__name__)
 

@@ -27,7 +27,7 @@ import httpx
 import numpy as np
 
 from ..core import ConfigError, invalid
-from ..world.demo_scene import AREA, DemoScene, simulate_demo
+from ..world import AREA, DemoScene, simulate_demo
 from .auth import bearer_token, seal
 from .config import NetworkConfig, parse_config
 from .log import DurableLog

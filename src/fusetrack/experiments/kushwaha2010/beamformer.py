@@ -21,7 +21,7 @@ import pandas as pd
 from ...evaluation import plots
 from ...evaluation.report import Claim, Outcome, RunContext
 from ...perception.audio_beamforming import Beamformer, MicrophoneArray, beam_angles
-from ...world.acoustics import pink_noise, propagate, speech_like
+from ...world import pink_noise, propagate, speech_like
 
 FEET = 0.3048
 DISTANCES_FT = (3, 5, 10, 25, 50, 75, 100, 150)

@@ -36,7 +36,7 @@ from ...filters.smart_camera_trackers import (
 )
 from ...perception.appearance import appearance_model_from_views, features_from_rgb
 from ...sensors import AppearanceModel, EllipsoidCamera
-from ...world.ellipsoid_scene import (
+from ...world import (
     EllipsoidTarget,
     Frames,
     Trajectory,

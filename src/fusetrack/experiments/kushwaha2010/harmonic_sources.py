@@ -45,7 +45,7 @@ from ...perception.source_localisation import (
     localise,
     match_error,
 )
-from ...world.harmonic_sources import HarmonicSource, noise_sigma, random_sources, received_signals
+from ...world import HarmonicSource, noise_sigma, random_sources, received_signals
 
 
 class Options(ExperimentOptions):

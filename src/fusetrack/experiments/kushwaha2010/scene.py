@@ -53,9 +53,17 @@ from ...sensors import (
     mixture_arc_mean,
     normalize_likelihood,
 )
-from ...world.acoustics import harmonic_engine, pink_noise, propagate
-from ...world.clocks import HopTranslation, NodeClock, RbsDomain, fit_clock_map
-from ...world.road_video import RoadRenderer, Vehicle
+from ...world import (
+    HopTranslation,
+    NodeClock,
+    RbsDomain,
+    RoadRenderer,
+    Vehicle,
+    fit_clock_map,
+    harmonic_engine,
+    pink_noise,
+    propagate,
+)
 
 FS = 100e3
 DT = 0.25
