@@ -23,8 +23,7 @@ import pandas as pd
 from ..core import Filter, Measurement
 from ..evaluation import plots, position_rmse_bound, posterior_crlb
 from ..evaluation.report import Claim, Outcome, RunContext
-from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
-from ..filters.particle import BootstrapFilter
+from ..filters import BootstrapFilter, ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
 from ..world import AREA, DemoScene, simulate_demo
 
 logger = logging.getLogger(__name__)

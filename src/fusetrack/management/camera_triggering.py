@@ -28,8 +28,14 @@ from typing import Any
 import numpy as np
 
 from ..core import ConfigError, invalid, wrap_angle_inplace
-from ..filters.multi_model_kernel import fused_step, kernel_bank, predict_weigh_kernel
-from ..filters.multi_model_pf import MultiModelBearingPF, MultiModelStep, resample_l
+from ..filters import (
+    MultiModelBearingPF,
+    MultiModelStep,
+    fused_step,
+    kernel_bank,
+    predict_weigh_kernel,
+    resample_l,
+)
 from ..sensors import merge_close, simulate_bearings, true_bearings
 
 Array = np.ndarray

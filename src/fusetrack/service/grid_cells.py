@@ -29,14 +29,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..filters.grid import (
-    DirectionalMotion,
-    GridFilter,
-    GridSpec,
-    SensorLikelihoods,
-    fuse,
-    map_sensors,
-)
+from ..filters import DirectionalMotion, GridFilter, GridSpec, SensorLikelihoods, fuse, map_sensors
 from ..sensors import arc_mean_matrix, cell_arcs, detection_quality, normalize_likelihood
 from .alignment import Reading
 from .config import DetectionFunctionSensor, NetworkConfig

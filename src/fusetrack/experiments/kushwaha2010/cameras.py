@@ -22,7 +22,7 @@ import pandas as pd
 from ...core import Measurement, filter_step
 from ...evaluation import plots
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.smart_camera_trackers import (
+from ...filters import (
     GMM3_BYTES,
     STATE_BYTES,
     WEIGHT_BYTES,

@@ -22,7 +22,7 @@ from ...association.mcmcda import MCMCDA, MCMCDAConfig
 from ...association.peaks import likelihood_peaks
 from ...evaluation import plots
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.grid import SensorLikelihoods, fuse
+from ...filters import SensorLikelihoods, fuse
 from .scene import (
     DT,
     Layout,

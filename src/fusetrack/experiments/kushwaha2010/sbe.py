@@ -27,7 +27,7 @@ import pandas as pd
 
 from ...evaluation import plots
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.grid import SensorLikelihoods
+from ...filters import SensorLikelihoods
 from .scene import (
     VARIANTS,
     FusionInput,

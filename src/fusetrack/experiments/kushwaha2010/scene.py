@@ -29,13 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...filters.grid import (
-    DirectionalMotion,
-    GridFilter,
-    GridSpec,
-    SensorLikelihoods,
-    map_sensors,
-)
+from ...filters import DirectionalMotion, GridFilter, GridSpec, SensorLikelihoods, map_sensors
 from ...management.fusion_scheduler import FusionScheduler, IntakeStats, Packet
 from ...perception.audio_beamforming import (
     Beamformer,
@@ -643,7 +637,7 @@ def audio_prior(
 ) -> NDArray[np.float64]:
     """Normalised product of the audio likelihoods of the nodes above the threshold (uniform if
     fewer than two; spec 003 §2.5 step 5)."""
-    from ...filters.grid import fuse_product
+    from ...filters import fuse_product
 
     audio = [sid for sid, *_ in layout.audio if sid in taken]
     rows = [i for i, m in enumerate(lik.modality) if m == "audio"]
@@ -706,7 +700,7 @@ def run_particle_backend(
     n_particles: int = 2000,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Posterior means ``(T, 2)`` and det Σ of the particle back end (product fusion)."""
-    from ...filters.detection_pf import DetectionParticleFilter, position_estimate
+    from ...filters import DetectionParticleFilter, position_estimate
     from ...motion import ConstantVelocity
 
     modalities = VARIANTS[variant][0]

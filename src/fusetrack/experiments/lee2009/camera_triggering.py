@@ -29,7 +29,7 @@ from pydantic import Field, field_validator
 from ...evaluation.options import ExperimentOptions
 from ...evaluation.plots import save
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.multi_model_pf import turn_models
+from ...filters import turn_models
 from ...management.camera_triggering import (
     AcousticTracker,
     CooperationPolicy,

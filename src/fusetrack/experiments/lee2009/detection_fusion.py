@@ -24,7 +24,7 @@ import pandas as pd
 
 from ...evaluation.plots import save
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.detection_fusion import (
+from ...filters import (
     DetectionFusion,
     chair_varshney,
     frame_measurements,

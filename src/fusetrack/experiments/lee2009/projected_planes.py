@@ -31,7 +31,7 @@ from ...evaluation.options import ExperimentOptions
 from ...evaluation.plots import save
 from ...evaluation.projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.projected_planes import Direct3DFilter, ProjectedPlanesTracker, select_pairs
+from ...filters import Direct3DFilter, ProjectedPlanesTracker, select_pairs
 from ...motion import AccelTurn
 from ...sensors import PLANE_AXES, DoaSensor3D, monte_carlo_projected_variance, projected_variance
 

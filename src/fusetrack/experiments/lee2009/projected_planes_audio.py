@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.projected_planes import Direct3DFilter, ProjectedPlanesTracker
+from ...filters import Direct3DFilter, ProjectedPlanesTracker
 from ...motion import AccelTurn
 from ...perception.audio_doa import AudioDoaArray
 from ...sensors import DoaSensor3D

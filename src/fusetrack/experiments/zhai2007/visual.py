@@ -38,12 +38,15 @@ from ...core import Gaussian, Track
 from ...evaluation import plots
 from ...evaluation.montecarlo import run_seed
 from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.grid_proposals import GalerkinProposal
-from ...filters.imm import InteractingMultipleModel
-from ...filters.multiple_model import MultipleModelParticleFilter, PaddedModel
-from ...filters.sis import ProposalParticleFilter
-from ...filters.sp_pekf import SPPEKFProposal
-from ...filters.unscented_proposal import UnscentedProposal
+from ...filters import (
+    GalerkinProposal,
+    InteractingMultipleModel,
+    MultipleModelParticleFilter,
+    PaddedModel,
+    ProposalParticleFilter,
+    SPPEKFProposal,
+    UnscentedProposal,
+)
 from ...motion import ConstantAcceleration, Langevin, ManeuverTurn
 from ...perception.visual_cues import CUES, MultiCueFrontEnd
 from ...perception.visual_edges import EllipseEdgeSensor, edge_map
