@@ -15,8 +15,14 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..core import ConfigError, UnknownExperimentError
-from ..evaluation.options import ExperimentOptions, parse_options
-from ..evaluation.report import Outcome, RunContext, peak_memory_mb, write_outputs
+from ..evaluation import (
+    ExperimentOptions,
+    Outcome,
+    RunContext,
+    parse_options,
+    peak_memory_mb,
+    write_outputs,
+)
 
 
 @dataclass(frozen=True)

@@ -30,8 +30,7 @@ from numpy.typing import NDArray
 from ..core import ConfigError, Gaussian, Measurement, invalid
 from ..filters import ExtendedKalmanFilter
 from ..motion import WalkingPerson
-from ..perception.video import HorprasertModel, Mog2Subtractor, detect_occlusion, find_blobs
-from ..perception.video.blobs import Blob
+from ..perception import Blob, HorprasertModel, Mog2Subtractor, detect_occlusion, find_blobs
 from ..sensors import (
     HomographyCamera,
     PositionFix,

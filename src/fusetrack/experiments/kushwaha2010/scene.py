@@ -30,14 +30,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ...filters import DirectionalMotion, GridFilter, GridSpec, SensorLikelihoods, map_sensors
-from ...management.fusion_scheduler import FusionScheduler, IntakeStats, Packet
-from ...perception.audio_beamforming import (
+from ...management import FusionScheduler, IntakeStats, Packet
+from ...perception import (
     Beamformer,
     MicrophoneArray,
+    VideoDetector,
+    fit_angle_mixture,
     pack_audio_message,
     unpack_audio_message,
 )
-from ...perception.video_detection import VideoDetector, fit_angle_mixture
 from ...sensors import (
     AngularSampling,
     PinholeCamera,

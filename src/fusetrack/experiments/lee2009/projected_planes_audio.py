@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext
 from ...filters import Direct3DFilter, ProjectedPlanesTracker
 from ...motion import AccelTurn
-from ...perception.audio_doa import AudioDoaArray
+from ...perception import AudioDoaArray
 from ...sensors import DoaSensor3D
 from .projected_planes import PRIOR_STD, SCN_ACCEL, SCN_DT, SIGMA, scenario_truth
 

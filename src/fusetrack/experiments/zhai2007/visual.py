@@ -35,9 +35,7 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian, Track
-from ...evaluation import plots
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
 from ...filters import (
     GalerkinProposal,
     InteractingMultipleModel,
@@ -48,9 +46,15 @@ from ...filters import (
     UnscentedProposal,
 )
 from ...motion import ConstantAcceleration, Langevin, ManeuverTurn
-from ...perception.visual_cues import CUES, MultiCueFrontEnd
-from ...perception.visual_edges import EllipseEdgeSensor, edge_map
-from ...perception.visual_tracking import PrecomputedMeasurements, lost_frames, track_frames
+from ...perception import (
+    CUES,
+    EllipseEdgeSensor,
+    MultiCueFrontEnd,
+    PrecomputedMeasurements,
+    edge_map,
+    lost_frames,
+    track_frames,
+)
 from ...sensors import PositionFix
 from .comparators import (
     beyond_section,
