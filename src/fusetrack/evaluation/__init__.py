@@ -26,7 +26,7 @@ from .metrics import (
     velocity_rmse,
 )
 from .montecarlo import ENGINES, run_monte_carlo, run_seed
-from .options import ExperimentOptions, load_yaml, parse_options
+from .options import ExperimentOptions, describe_options, load_yaml, parse_options
 from .projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from .report import Claim, Outcome, RunContext, peak_memory_mb, write_outputs
 
@@ -39,6 +39,7 @@ __all__ = [
     "average",
     "axis_bounds",
     "chi2_interval",
+    "describe_options",
     "deterministic_crlb",
     "direct3d_crlb",
     "fused_bound",
