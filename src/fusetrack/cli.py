@@ -12,7 +12,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-from .core.errors import ConfigError, FusetrackError, invalid
+from .core import ConfigError, FusetrackError, invalid
 
 
 def _version() -> str:
@@ -35,8 +35,8 @@ class _RunHelp(argparse.Action):
         parser.print_help()
         name = getattr(namespace, "name", None)
         if name:
-            from .core.errors import UnknownExperimentError
-            from .evaluation.options import describe_options
+            from .core import UnknownExperimentError
+            from .evaluation import describe_options
             from .experiments import options_model
 
             try:
@@ -192,7 +192,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _dispatch(args: argparse.Namespace) -> int:
     """Run the parsed command; a :class:`FusetrackError` becomes exit status 2 in :func:`main`."""
-    from .evaluation.report import RunContext
+    from .evaluation import RunContext
     from .experiments import REGISTRY, run_experiment
 
     if args.command in ("serve", "replay") or getattr(args, "live", False):

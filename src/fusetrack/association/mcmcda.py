@@ -43,7 +43,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 Obs = tuple[int, int]  # (time step, index of the observation at that step)
 TrackKey = tuple[Obs, ...]

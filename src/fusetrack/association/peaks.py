@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import maximum_filter, uniform_filter
 
-from ..core.errors import ShapeError, invalid
+from ..core import ShapeError, invalid
 
 
 def likelihood_peaks(

@@ -1,6 +1,6 @@
 """Core values: beliefs, measurements, tracks, model interfaces, errors, angles, resampling, slice sampling."""
 
-from .angles import angle_diff, circular_mean, wrap_angle
+from .angles import TWO_PI, angle_diff, circular_mean, wrap_angle, wrap_angle_inplace
 from .beliefs import Gaussian, GaussianMixture, GridBelief, Particles
 from .errors import (
     ConfigError,
@@ -26,12 +26,24 @@ from .models import (
     filter_step,
     step_with_likelihood,
 )
-from .resampling import RESAMPLERS, get_resampler, multinomial, residual, stratified, systematic
+from .resampling import (
+    RESAMPLERS,
+    Resampler,
+    get_resampler,
+    inverse_cdf,
+    multinomial,
+    residual,
+    stratified,
+    systematic,
+    systematic_from_uniforms,
+    systematic_row,
+)
 from .slice_sampling import SliceDraw, slice_sample
 from .track import Estimate, Track
 
 __all__ = [
     "RESAMPLERS",
+    "TWO_PI",
     "Belief",
     "ConfigError",
     "DegenerateWeightsWarning",
@@ -46,6 +58,7 @@ __all__ = [
     "MeasurementError",
     "MotionModel",
     "Particles",
+    "Resampler",
     "SensorMap",
     "SensorModel",
     "ShapeError",
@@ -63,6 +76,7 @@ __all__ = [
     "get_resampler",
     "group_by_time",
     "invalid",
+    "inverse_cdf",
     "multinomial",
     "order_by_time",
     "residual",
@@ -71,5 +85,8 @@ __all__ = [
     "step_with_likelihood",
     "stratified",
     "systematic",
+    "systematic_from_uniforms",
+    "systematic_row",
     "wrap_angle",
+    "wrap_angle_inplace",
 ]

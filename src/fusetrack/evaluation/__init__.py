@@ -23,22 +23,32 @@ from .metrics import (
     track_loss_rate,
 )
 from .montecarlo import ENGINES, run_monte_carlo, run_seed
-from .report import Claim, Outcome, RunContext, write_outputs
+from .options import ExperimentOptions, describe_options, load_yaml, parse_options
+from .projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
+from .report import Claim, Outcome, RunContext, peak_memory_mb, write_outputs
 
 __all__ = [
     "ENGINES",
     "Claim",
+    "ExperimentOptions",
     "Outcome",
     "RunContext",
     "average",
     "axis_bounds",
     "chi2_interval",
+    "describe_options",
     "deterministic_crlb",
+    "direct3d_crlb",
+    "fused_bound",
+    "load_yaml",
     "nees",
     "nis",
     "ospa",
     "ospa_components",
     "ospa_over_time",
+    "parse_options",
+    "peak_memory_mb",
+    "plane_crlb",
     "position_error",
     "position_rmse_bound",
     "posterior_crlb",

@@ -19,7 +19,7 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 from tqdm.auto import tqdm
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 RunFunction = Callable[[Mapping[str, Any], int], list[dict[str, Any]]]
 Engine = Literal["local", "dask"]

@@ -21,7 +21,7 @@ from typing import Any, Literal, TypeVar, get_args, get_origin
 from pydantic import BaseModel, ConfigDict, ValidationError
 from pydantic_core import PydanticUndefined
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 M = TypeVar("M", bound=BaseModel)
 OptionsT = TypeVar("OptionsT", bound="ExperimentOptions")

@@ -30,9 +30,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..motion.accel_turn import AccelTurn
-from ..sensors.doa_projection import PLANE_AXES, PLANES, DoaSensor3D, projected_variance
+from ..core import ConfigError, ShapeError, invalid
+from ..motion import AccelTurn
+from ..sensors import PLANE_AXES, PLANES, DoaSensor3D, projected_variance
 
 Array = np.ndarray
 

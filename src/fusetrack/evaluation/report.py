@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from .montecarlo import ENGINES, RunFunction, run_monte_carlo
 from .options import ExperimentOptions
 

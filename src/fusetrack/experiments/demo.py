@@ -21,11 +21,9 @@ import numpy as np
 import pandas as pd
 
 from ..core import Filter, Measurement
-from ..evaluation import plots, position_rmse_bound, posterior_crlb
-from ..evaluation.report import Claim, Outcome, RunContext
-from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
-from ..filters.particle import BootstrapFilter
-from ..world.demo_scene import AREA, DemoScene, simulate_demo
+from ..evaluation import Claim, Outcome, RunContext, plots, position_rmse_bound, posterior_crlb
+from ..filters import BootstrapFilter, ExtendedKalmanFilter, UnscentedKalmanFilter, run_filter
+from ..world import AREA, DemoScene, simulate_demo
 
 logger = logging.getLogger(__name__)
 
@@ -89,7 +87,7 @@ def bounds(scn: DemoScene, runs: int, seed: int) -> tuple[np.ndarray, np.ndarray
     RMSE) and, for reference, the RMS over runs of each trajectory's own recursion (Jensen puts
     it above the PCRB; it is not a bound, but shows what one trajectory's geometry allows).
     """
-    from ..evaluation.montecarlo import run_seed
+    from ..evaluation import run_seed
 
     truths, masks = [], []
     for r in range(runs):

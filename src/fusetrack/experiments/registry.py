@@ -14,9 +14,15 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from ..core.errors import ConfigError, UnknownExperimentError
-from ..evaluation.options import ExperimentOptions, parse_options
-from ..evaluation.report import Outcome, RunContext, peak_memory_mb, write_outputs
+from ..core import ConfigError, UnknownExperimentError
+from ..evaluation import (
+    ExperimentOptions,
+    Outcome,
+    RunContext,
+    parse_options,
+    peak_memory_mb,
+    write_outputs,
+)
 
 
 @dataclass(frozen=True)

@@ -39,15 +39,13 @@ from dataclasses import dataclass
 from typing import Literal, cast
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..sensors.perspective_camera import MIN_DEPTH, CameraArray
-from ..world.geometry import Array
-from ..world.occlusion import OccluderPriors, disks_block, occlusion_probability
-from ..world.occlusion_kernels import pair_visibility_kernel
-from ..world.room import Room
+from ..core import ConfigError, ShapeError, invalid
+from ..sensors import MIN_DEPTH, CameraArray
+from ..world import OccluderPriors, Room, disks_block, occlusion_probability, pair_visibility_kernel
 
+Array = NDArray[np.float64]
 CameraModel = Literal["perspective", "weak"]
 SELECTION_METHODS = ("greedy", "brute", "fixed", "random", "closest", "all")
 

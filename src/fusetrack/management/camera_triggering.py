@@ -27,11 +27,16 @@ from typing import Any
 
 import numpy as np
 
-from ..core.angles import wrap_angle_inplace
-from ..core.errors import ConfigError, invalid
-from ..filters.multi_model_kernel import fused_step, kernel_bank, predict_weigh_kernel
-from ..filters.multi_model_pf import MultiModelBearingPF, MultiModelStep, resample_l
-from ..sensors.unlabelled_bearings import merge_close, simulate_bearings, true_bearings
+from ..core import ConfigError, invalid, wrap_angle_inplace
+from ..filters import (
+    MultiModelBearingPF,
+    MultiModelStep,
+    fused_step,
+    kernel_bank,
+    predict_weigh_kernel,
+    resample_l,
+)
+from ..sensors import merge_close, simulate_bearings, true_bearings
 
 Array = np.ndarray
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 
 def active_sensors(levels_db: ArrayLike, threshold: float, source_db: float) -> NDArray[np.bool_]:

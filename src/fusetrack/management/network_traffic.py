@@ -33,7 +33,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 PROTOCOLS = ("RBVC", "SBVC")
 

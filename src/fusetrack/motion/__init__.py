@@ -5,6 +5,8 @@ See ``linear`` (random walk, constant velocity / acceleration), ``turn`` (coordi
 ``switching`` (Markov-switching sets of models).
 """
 
+from .accel_turn import AccelTurn
+from .langevin import Langevin
 from .linear import (
     ConstantAcceleration,
     ConstantVelocity,
@@ -17,13 +19,18 @@ from .switching import MarkovSwitching
 from .turn import CoordinatedTurn, CoordinatedTurnRate
 
 __all__ = [
+    "AccelTurn",
     "ConstantAcceleration",
     "ConstantVelocity",
     "CoordinatedTurn",
     "CoordinatedTurnRate",
+    "Langevin",
     "LinearGaussianMotion",
+    "ManeuverTurn",
     "MarkovSwitching",
     "RandomWalk",
+    "ScalarBenchmark",
+    "WaypointRegimeDynamics",
     "kinematic_noise",
     "kinematic_transition",
 ]

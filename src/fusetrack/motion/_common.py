@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, ShapeError, check_positive, invalid
+from ..core import ConfigError, ShapeError, check_positive, invalid
 
 Array = NDArray[np.float64]
 

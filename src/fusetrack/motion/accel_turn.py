@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.errors import ConfigError, ShapeError, check_positive, invalid
+from ..core import ConfigError, ShapeError, check_positive, invalid
 from .turn import turn_factors
 
 Array = np.ndarray

@@ -13,7 +13,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from ._common import Array, GaussianTransition, check_q
 
 

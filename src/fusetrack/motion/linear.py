@@ -32,7 +32,7 @@ from typing import ClassVar, Literal
 
 import numpy as np
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from ._common import Array, LinearGaussian, check_dt, check_int_range, check_q
 
 NoiseKind = Literal["continuous", "discrete"]

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from ._common import Array, LinearGaussian, check_dt
 
 MatrixOfDt = ArrayLike | Callable[[float], ArrayLike]

@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from ._common import Array, GaussianTransition, check_q
 from .linear import kinematic_noise
 from .turn import turn_factor_derivatives, turn_factors

@@ -24,8 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..core.models import MotionModel
+from ..core import ConfigError, MotionModel, ShapeError, invalid
 from ._common import _SUPPORT_RTOL, Array, as_state, check_dt, check_rng
 
 IntArray = NDArray[np.intp]

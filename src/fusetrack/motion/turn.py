@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from ._common import Array, GaussianTransition, LinearGaussian, as_state, check_dt, check_q
 from .linear import kinematic_noise
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.errors import check_positive
+from ..core import check_positive
 from ._common import Array, LinearGaussian, check_dt, check_q
 
 STATE_NAMES = ("x", "y", "h", "w", "vx", "vy")

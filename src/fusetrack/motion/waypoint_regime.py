@@ -25,7 +25,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import ConfigError, check_positive, check_probability, invalid
+from ..core import ConfigError, check_positive, check_probability, invalid
 
 Array = NDArray[np.float64]
 

@@ -20,15 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from skimage.feature import local_binary_pattern
 
-from ..core.errors import ShapeError, invalid
-from ..sensors.appearance import (
-    N_HS,
-    N_LBP,
-    AppearanceModel,
-    BinMap,
-    FeatureImage,
-    region_histograms,
-)
+from ..core import ShapeError, invalid
+from ..sensors import N_HS, N_LBP, AppearanceModel, BinMap, FeatureImage, region_histograms
 
 S_MIN, V_MIN = 0.1, 0.2  # Perez et al.'s thresholds on [0, 1]
 

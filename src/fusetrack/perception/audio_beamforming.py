@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import butter, sosfilt
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 
 SPEED_OF_SOUND = 343.0  # m/s at 20 °C (spec 003 §7.2: 343 m/s for Ch. III)
 AUDIO_MESSAGE_BYTES = 83  # Kushwaha 2010, Ch. III: node ID, sequence number, timestamps + 72 bytes

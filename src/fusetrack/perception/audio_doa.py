@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 Array = np.ndarray
 

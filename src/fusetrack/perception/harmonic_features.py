@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.signal import resample_poly
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 from .audio_beamforming import MicrophoneArray, beam_delays, delay_and_sum_energy
 
 

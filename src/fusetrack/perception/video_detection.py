@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ShapeError, invalid
+from ..core import ShapeError, invalid
 
 
 def column_bins(column_angles: ArrayLike, fov: float, n_bins: int = 160) -> NDArray[np.int64]:

@@ -23,8 +23,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import Filter, Gaussian, Measurement, Track, filter_step
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, Filter, Gaussian, Measurement, Track, filter_step, invalid
 
 Array = NDArray[np.float64]
 

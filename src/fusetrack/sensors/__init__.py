@@ -11,21 +11,124 @@ only ``predict``, ``jacobian`` and ``noise_cov``:
 * :class:`PositionFix` -- radio tag / localiser: position + bias with a full covariance.
 """
 
+from .acoustic_intensity import AcousticIntensity
 from .angles import AzimuthPolar, Bearing
+from .appearance import N_HS, N_LBP, BinMap, region_histograms
+from .appearance_camera import RHO_FLOOR, colour_log_likelihood, reference_histogram
 from .base import MIN_RANGE_SQ, SensorBase, wrap
+from .camera_geometry import (
+    PinholeCamera,
+    apply_homography,
+    back_project,
+    default_camera,
+    ground_homography,
+    invert_homography,
+    plane_homography,
+)
+from .detection_function import mixture_arc_mean, normalize_likelihood
+from .doa_projection import (
+    PLANE_AXES,
+    PLANES,
+    DoaSensor3D,
+    check_angles,
+    literal_second_plane,
+    monte_carlo_projected_variance,
+    projected_variance,
+)
+from .ellipsoid_camera import (
+    EllipsoidCamera,
+    axis_angle_quaternion,
+    ellipsoid_matrix,
+    intersect_rays,
+    look_at,
+    project_ellipsoid,
+    quaternion_multiply,
+    quaternion_to_rotation,
+    rotation_to_quaternion,
+)
+from .likelihood_map import LikelihoodMapSensor, detection_quality
 from .linear_gaussian import LinearGaussianSensor
+from .perspective_camera import MIN_DEPTH, ring_of_cameras
 from .position_fix import PositionFix
+from .power import Power
 from .range import Range, RangeBearing
+from .rfid_coverage import (
+    RfidReader,
+    WallCameraPair,
+    coarse_position,
+    max_virtual_sensors,
+    virtual_sensors,
+)
+from .unlabelled_bearings import merge_close, simulate_bearings, true_bearings
 
 __all__ = [
+    "MIN_DEPTH",
     "MIN_RANGE_SQ",
+    "N_HS",
+    "N_LBP",
+    "PLANES",
+    "PLANE_AXES",
+    "RHO_FLOOR",
+    "AcousticIntensity",
+    "AngularSampling",
+    "AppearanceCamera",
+    "AppearanceModel",
     "AzimuthPolar",
     "Bearing",
+    "BinMap",
+    "CameraArray",
+    "DetectionFunctionSensor",
+    "DoaCone",
+    "DoaSensor3D",
+    "EllipsoidCamera",
+    "FeatureImage",
+    "GroundPlaneDetection",
+    "LikelihoodMapSensor",
     "LinearGaussianSensor",
+    "OcclusionAwareLikelihood",
+    "PinholeCamera",
     "PositionFix",
+    "Power",
+    "ProjectedPlaneBearing",
     "Range",
     "RangeBearing",
+    "RfidReader",
     "SensorBase",
+    "StackedSensor",
+    "WallCameraPair",
+    "apply_homography",
+    "arc_mean_matrix",
+    "axis_angle_quaternion",
+    "back_project",
+    "cell_arcs",
+    "check_angles",
+    "coarse_position",
+    "colour_log_likelihood",
+    "default_camera",
+    "detection_quality",
+    "ellipsoid_matrix",
+    "ground_homography",
+    "intersect_rays",
+    "invert_homography",
+    "literal_second_plane",
+    "look_at",
+    "max_virtual_sensors",
+    "merge_close",
+    "mixture_arc_mean",
+    "monte_carlo_projected_variance",
+    "normalize_likelihood",
+    "plane_homography",
+    "project_ellipsoid",
+    "projected_variance",
+    "quaternion_multiply",
+    "quaternion_to_rotation",
+    "reference_histogram",
+    "region_histograms",
+    "ring_of_cameras",
+    "rotation_to_quaternion",
+    "simulate_bearings",
+    "true_bearings",
+    "virtual_sensors",
     "wrap",
 ]
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from .scalar_gaussian import ScalarGaussianSensor
 
 Array = np.ndarray

@@ -21,7 +21,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ShapeError, invalid
+from ..core import ShapeError, invalid
 
 Array = NDArray[np.float64]
 BinMap = NDArray[np.int32]

@@ -34,8 +34,16 @@ from typing import Any, ClassVar, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.angles import TWO_PI, wrap_angle, wrap_angle_inplace
-from ..core.errors import ConfigError, ShapeError, check_positive, check_probability, invalid
+from ..core import (
+    TWO_PI,
+    ConfigError,
+    ShapeError,
+    check_positive,
+    check_probability,
+    invalid,
+    wrap_angle,
+    wrap_angle_inplace,
+)
 
 Array = NDArray[np.float64]
 

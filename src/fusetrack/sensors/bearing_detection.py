@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import MeasurementError, invalid
+from ..core import MeasurementError, invalid
 from .detection_function import AngularSampling, interpolate
 
 Array = NDArray[np.float64]

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.angles import wrap_angle_inplace
+from ..core import wrap_angle_inplace
 from .doa_projection import PLANES, DoaSensor3D, check_plane, projected_angles, projected_variance
 
 Array = NDArray[np.float64]

@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 
 Array = NDArray[np.float64]
 
@@ -194,7 +194,7 @@ class DoaSensor3D:
 
 def check_angles(z: ArrayLike) -> Array:
     """Validate one ``(theta, phi)`` measurement (radians); raises on non-finite or polar outside [0, pi]."""
-    from ..core.errors import MeasurementError
+    from ..core import MeasurementError
 
     v = np.asarray(z, dtype=float)
     if v.shape != (2,):

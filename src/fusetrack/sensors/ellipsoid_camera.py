@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ShapeError, invalid
+from ..core import ShapeError, invalid
 from .camera_geometry import PinholeCamera
 
 Array = NDArray[np.float64]

@@ -34,7 +34,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, ShapeError, check_positive, invalid
+from ..core import ConfigError, ShapeError, check_positive, invalid
 from .camera_geometry import Array
 
 Variant = Literal["corners", "head_foot", "foot"]

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import MeasurementError, ShapeError, invalid
+from ..core import MeasurementError, ShapeError, invalid
 
 
 @dataclass(frozen=True, eq=False)

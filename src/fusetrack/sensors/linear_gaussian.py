@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, ShapeError, check_probability, invalid
+from ..core import ConfigError, ShapeError, check_probability, invalid
 from .base import Array
 
 

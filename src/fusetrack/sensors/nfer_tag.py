@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, ShapeError, check_positive, check_probability, invalid
+from ..core import ConfigError, ShapeError, check_positive, check_probability, invalid
 from .camera_geometry import Array
 from .position_fix import PositionFix
 

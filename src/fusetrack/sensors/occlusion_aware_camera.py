@@ -59,7 +59,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 from ..world.geometry import Array
 from ..world.occlusion import (
     OccluderPriors,

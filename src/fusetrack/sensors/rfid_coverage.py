@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 Array = np.ndarray
 

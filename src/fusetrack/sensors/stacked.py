@@ -22,9 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import block_diag
 
-from ..core.angles import wrap_angle_inplace
-from ..core.errors import ConfigError, invalid
-from ..core.models import SensorModel
+from ..core import ConfigError, SensorModel, invalid, wrap_angle_inplace
 from .angles import Bearing
 from .base import MIN_RANGE_SQ, SensorBase
 from .camera_geometry import Array

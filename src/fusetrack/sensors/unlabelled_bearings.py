@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 
 Array = np.ndarray
 

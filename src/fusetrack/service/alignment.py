@@ -24,7 +24,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 
 @dataclass(frozen=True, eq=False)

@@ -22,11 +22,17 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, Gaussian, invalid
 from ..motion import ConstantVelocity, CoordinatedTurnRate
-from ..sensors import AzimuthPolar, Bearing, HomographyCamera, PositionFix, Range, RangeBearing
-from ..sensors.detection_function import AngularSampling
+from ..sensors import (
+    AngularSampling,
+    AzimuthPolar,
+    Bearing,
+    HomographyCamera,
+    PositionFix,
+    Range,
+    RangeBearing,
+)
 from .auth import MIN_KEY_BYTES, bearer_token
 from .schema import _NAME, READING_KINDS
 

@@ -24,9 +24,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ..core import Filter, Measurement, filter_step, group_by_time
-from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter
-from ..filters.grid import GridFilter
-from ..filters.particle import BootstrapFilter
+from ..filters import BootstrapFilter, ExtendedKalmanFilter, GridFilter, UnscentedKalmanFilter
 from .alignment import Reading
 from .config import NetworkConfig
 from .grid_cells import CellLikelihoods, grid_filter, grid_of, grid_prior

@@ -29,16 +29,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ..filters.grid import (
-    DirectionalMotion,
-    GridFilter,
-    GridSpec,
-    SensorLikelihoods,
-    fuse,
-    map_sensors,
-)
-from ..sensors.detection_function import arc_mean_matrix, cell_arcs, normalize_likelihood
-from ..sensors.likelihood_map import detection_quality
+from ..filters import DirectionalMotion, GridFilter, GridSpec, SensorLikelihoods, fuse, map_sensors
+from ..sensors import arc_mean_matrix, cell_arcs, detection_quality, normalize_likelihood
 from .alignment import Reading
 from .config import DetectionFunctionSensor, NetworkConfig
 

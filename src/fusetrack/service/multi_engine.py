@@ -26,8 +26,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..association.mcmcda import MCMCDA, AssociationState, MCMCDAConfig
-from ..association.peaks import likelihood_peaks
+from ..association import MCMCDA, AssociationState, MCMCDAConfig, likelihood_peaks
 from .alignment import Reading
 from .config import NetworkConfig
 from .engine import track_state

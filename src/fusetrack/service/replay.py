@@ -26,8 +26,8 @@ from urllib.parse import urlsplit
 import httpx
 import numpy as np
 
-from ..core.errors import ConfigError, invalid
-from ..world.demo_scene import AREA, DemoScene, simulate_demo
+from ..core import ConfigError, invalid
+from ..world import AREA, DemoScene, simulate_demo
 from .auth import bearer_token, seal
 from .config import NetworkConfig, parse_config
 from .log import DurableLog

@@ -27,7 +27,7 @@ import msgpack
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
 
-from ..core.errors import MeasurementError, invalid
+from ..core import MeasurementError, invalid
 
 SCHEMA_VERSION = 1
 Encoding = Literal["json", "msgpack"]

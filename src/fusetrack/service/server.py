@@ -10,7 +10,7 @@ from pathlib import Path
 
 import uvicorn
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 from .app import create_app
 from .config import NetworkConfig
 from .log import DurableLog

@@ -10,10 +10,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..sensors import NferTagSimulator
-from ..sensors.camera_geometry import ground_homography, plane_homography
-from ..world.rendered_room import Person, RoomRenderer, single_person_walk, write_video
-from ..world.walkers import Walk
+from ..sensors import NferTagSimulator, ground_homography, plane_homography
+from ..world import Person, RoomRenderer, Walk, single_person_walk, write_video
 
 
 def write_recording(

@@ -27,14 +27,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import Gaussian, Measurement
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, Gaussian, Measurement, invalid
 from ..filters import ExtendedKalmanFilter
 from ..motion import WalkingPerson
-from ..perception.video import HorprasertModel, Mog2Subtractor, detect_occlusion, find_blobs
-from ..perception.video.blobs import Blob
-from ..sensors import HomographyCamera, PositionFix
-from ..sensors.camera_geometry import apply_homography, back_project, invert_homography
+from ..perception import Blob, HorprasertModel, Mog2Subtractor, detect_occlusion, find_blobs
+from ..sensors import (
+    HomographyCamera,
+    PositionFix,
+    apply_homography,
+    back_project,
+    invert_homography,
+)
 
 
 @dataclass

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 
 @dataclass(frozen=True)

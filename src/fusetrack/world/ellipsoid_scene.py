@@ -22,10 +22,10 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, invalid
-from ..sensors.camera_geometry import PinholeCamera
-from ..sensors.ellipsoid_camera import (
+from ..core import ConfigError, invalid
+from ..sensors import (
     EllipsoidCamera,
+    PinholeCamera,
     axis_angle_quaternion,
     ellipsoid_matrix,
     look_at,

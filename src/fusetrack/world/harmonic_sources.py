@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 
 SPEED_OF_SOUND_CH4 = 350.0  # m/s, Kushwaha 2010 Table 10
 NOISE_BAND = (20.0, 1000.0)  # Hz: a source's non-harmonic part lies in the band of its harmonics

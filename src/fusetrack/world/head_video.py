@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 Array = NDArray[np.float64]
 _PAD = 32  # noise-bank margin (px)

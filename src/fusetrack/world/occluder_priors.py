@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.errors import ConfigError, invalid
-from ..motion.linear import ConstantVelocity
+from ..core import ConfigError, invalid
+from ..motion import ConstantVelocity
 from .geometry import Array
 from .occlusion import OccluderPriors
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, invalid
 
 Array = np.ndarray
 

@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from ..sensors.camera_geometry import PinholeCamera, default_camera
+from ..sensors import PinholeCamera, default_camera
 from .walkers import Walk, polyline_walk
 
 Array = NDArray[np.float64]

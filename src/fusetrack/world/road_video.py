@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from ..sensors.camera_geometry import PinholeCamera
+from ..sensors import PinholeCamera
 
 
 @dataclass(frozen=True)

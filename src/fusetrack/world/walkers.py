@@ -28,7 +28,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, check_positive, invalid
+from ..core import ConfigError, check_positive, invalid
 from .geometry import Array
 from .room import Room
 

@@ -18,10 +18,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import plots
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...perception.audio_beamforming import Beamformer, MicrophoneArray, beam_angles
-from ...world.acoustics import pink_noise, propagate, speech_like
+from ...evaluation import Claim, Outcome, RunContext, plots
+from ...perception import Beamformer, MicrophoneArray, beam_angles
+from ...world import pink_noise, propagate, speech_like
 
 FEET = 0.3048
 DISTANCES_FT = (3, 5, 10, 25, 50, 75, 100, 150)

@@ -20,9 +20,8 @@ import numpy as np
 import pandas as pd
 
 from ...core import Measurement, filter_step
-from ...evaluation import plots
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.smart_camera_trackers import (
+from ...evaluation import Claim, Outcome, RunContext, plots
+from ...filters import (
     GMM3_BYTES,
     STATE_BYTES,
     WEIGHT_BYTES,
@@ -34,10 +33,9 @@ from ...filters.smart_camera_trackers import (
     SmartCameraTracker,
     TrackerSettings,
 )
-from ...perception.appearance import appearance_model_from_views, features_from_rgb
-from ...sensors.appearance import AppearanceModel
-from ...sensors.ellipsoid_camera import EllipsoidCamera
-from ...world.ellipsoid_scene import (
+from ...perception import appearance_model_from_views, features_from_rgb
+from ...sensors import AppearanceModel, EllipsoidCamera
+from ...world import (
     EllipsoidTarget,
     Frames,
     Trajectory,
@@ -849,7 +847,7 @@ def rewrite_report(out_dir: str, setup: str) -> None:
     import json
     from pathlib import Path
 
-    from ...evaluation.report import write_outputs
+    from ...evaluation import write_outputs
 
     out = Path(out_dir)
     summary = json.loads((out / "summary.json").read_text())

@@ -18,8 +18,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import linear_sum_assignment
 
-from ...evaluation import plots
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext, plots
 from .mcmcda import observations, run_mcmcda
 from .scene import (
     SceneConfig,

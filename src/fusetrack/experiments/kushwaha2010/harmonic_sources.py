@@ -30,22 +30,22 @@ from pydantic import Field
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import spearmanr
 
-from ...evaluation import plots
-from ...evaluation.options import ExperimentOptions
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...perception.harmonic_features import NodeFeatures, compress_psd, psd
-from ...perception.harmonic_features import beamform as beamform_energies
-from ...perception.source_localisation import (
+from ...evaluation import Claim, ExperimentOptions, Outcome, RunContext, plots
+from ...perception import (
     AcousticNetwork,
     BeamformModel,
     FrequencyModel,
+    NodeFeatures,
+    compress_psd,
     energy_localise,
     estimate_frequencies,
     harmonic_powers,
     localise,
     match_error,
+    psd,
 )
-from ...world.harmonic_sources import HarmonicSource, noise_sigma, random_sources, received_signals
+from ...perception import beamform as beamform_energies
+from ...world import HarmonicSource, noise_sigma, random_sources, received_signals
 
 
 class Options(ExperimentOptions):

@@ -18,11 +18,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...association.mcmcda import MCMCDA, MCMCDAConfig
-from ...association.peaks import likelihood_peaks
-from ...evaluation import plots
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.grid import SensorLikelihoods, fuse
+from ...association import MCMCDA, MCMCDAConfig, likelihood_peaks
+from ...evaluation import Claim, Outcome, RunContext, plots
+from ...filters import SensorLikelihoods, fuse
 from .scene import (
     DT,
     Layout,

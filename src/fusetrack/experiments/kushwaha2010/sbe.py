@@ -25,9 +25,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import plots
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.grid import SensorLikelihoods
+from ...evaluation import Claim, Outcome, RunContext, plots
+from ...filters import SensorLikelihoods
 from .scene import (
     VARIANTS,
     FusionInput,

@@ -29,33 +29,36 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ...filters.grid import (
-    DirectionalMotion,
-    GridFilter,
-    GridSpec,
-    SensorLikelihoods,
-    map_sensors,
-)
-from ...management.fusion_scheduler import FusionScheduler, IntakeStats, Packet
-from ...perception.audio_beamforming import (
+from ...filters import DirectionalMotion, GridFilter, GridSpec, SensorLikelihoods, map_sensors
+from ...management import FusionScheduler, IntakeStats, Packet
+from ...perception import (
     Beamformer,
     MicrophoneArray,
+    VideoDetector,
+    fit_angle_mixture,
     pack_audio_message,
     unpack_audio_message,
 )
-from ...perception.video_detection import VideoDetector, fit_angle_mixture
-from ...sensors.camera_geometry import PinholeCamera
-from ...sensors.detection_function import (
+from ...sensors import (
     AngularSampling,
+    PinholeCamera,
     arc_mean_matrix,
     cell_arcs,
+    detection_quality,
     mixture_arc_mean,
     normalize_likelihood,
 )
-from ...sensors.likelihood_map import detection_quality
-from ...world.acoustics import harmonic_engine, pink_noise, propagate
-from ...world.clocks import HopTranslation, NodeClock, RbsDomain, fit_clock_map
-from ...world.road_video import RoadRenderer, Vehicle
+from ...world import (
+    HopTranslation,
+    NodeClock,
+    RbsDomain,
+    RoadRenderer,
+    Vehicle,
+    fit_clock_map,
+    harmonic_engine,
+    pink_noise,
+    propagate,
+)
 
 FS = 100e3
 DT = 0.25
@@ -635,7 +638,7 @@ def audio_prior(
 ) -> NDArray[np.float64]:
     """Normalised product of the audio likelihoods of the nodes above the threshold (uniform if
     fewer than two; spec 003 §2.5 step 5)."""
-    from ...filters.grid import fuse_product
+    from ...filters import fuse_product
 
     audio = [sid for sid, *_ in layout.audio if sid in taken]
     rows = [i for i, m in enumerate(lik.modality) if m == "audio"]
@@ -653,7 +656,7 @@ def _split(sensors: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
 
 def detection_sensors(layout: Layout) -> dict[str, Any]:
     """Every node as a detection-function sensor model, for the grid-free particle back end."""
-    from ...sensors.bearing_detection import DetectionFunctionSensor
+    from ...sensors import DetectionFunctionSensor
 
     beams = AngularSampling.beams(36)
     out: dict[str, Any] = {}
@@ -668,8 +671,8 @@ def bearing_detections(
     layout: Layout, taken: dict[str, Packet], modalities: tuple[str, ...], time: float = 0.0
 ) -> list[Any]:
     """The same reports as :func:`tick_likelihoods` as measurements for :func:`detection_sensors`."""
-    from ...core.measurement import Measurement
-    from ...sensors.bearing_detection import DetectionFunctionSensor
+    from ...core import Measurement
+    from ...sensors import DetectionFunctionSensor
 
     out = []
     if "audio" in modalities:
@@ -698,7 +701,7 @@ def run_particle_backend(
     n_particles: int = 2000,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Posterior means ``(T, 2)`` and det Σ of the particle back end (product fusion)."""
-    from ...filters.detection_pf import DetectionParticleFilter, position_estimate
+    from ...filters import DetectionParticleFilter, position_estimate
     from ...motion import ConstantVelocity
 
     modalities = VARIANTS[variant][0]

@@ -17,8 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ...evaluation import plots
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext, plots
 from .scene import (
     all_likelihoods,
     audio_prior,

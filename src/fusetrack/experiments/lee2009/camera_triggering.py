@@ -26,17 +26,11 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, field_validator
 
-from ...evaluation.options import ExperimentOptions
+from ...evaluation import Claim, ExperimentOptions, Outcome, RunContext
 from ...evaluation.plots import save
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.multi_model_pf import turn_models
-from ...management.camera_triggering import (
-    AcousticTracker,
-    CooperationPolicy,
-    run_cooperation,
-    run_periodic_batch,
-)
-from ...motion.accel_turn import AccelTurn
+from ...filters import turn_models
+from ...management import AcousticTracker, CooperationPolicy, run_cooperation, run_periodic_batch
+from ...motion import AccelTurn
 
 DEG = math.pi / 180.0
 T_33 = 200

@@ -22,9 +22,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from ...evaluation import Claim, Outcome, RunContext
 from ...evaluation.plots import save
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.detection_fusion import (
+from ...filters import (
     DetectionFusion,
     chair_varshney,
     frame_measurements,

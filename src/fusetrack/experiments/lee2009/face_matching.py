@@ -14,9 +14,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from ...evaluation import Claim, Outcome, RunContext
 from ...evaluation.plots import save
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...perception.face_histograms import (
+from ...perception import (
     CAMERA_VIEWS,
     COMPASS,
     apparent_motion,

@@ -12,9 +12,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import pandas as pd
 
+from ...evaluation import Claim, Outcome, RunContext
 from ...evaluation.plots import save
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...management.network_traffic import PROTOCOLS, NetworkConfig, simulate_traffic
+from ...management import PROTOCOLS, NetworkConfig, simulate_traffic
 
 SCENARIOS: dict[str, dict[str, Any]] = {
     "S1": {"routers_with_objects": (1,), "camera_routers": (2, 4)},

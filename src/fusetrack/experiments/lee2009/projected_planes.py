@@ -27,18 +27,19 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
-from ...evaluation.options import ExperimentOptions
-from ...evaluation.plots import save
-from ...evaluation.projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.projected_planes import Direct3DFilter, ProjectedPlanesTracker, select_pairs
-from ...motion.accel_turn import AccelTurn
-from ...sensors.doa_projection import (
-    PLANE_AXES,
-    DoaSensor3D,
-    monte_carlo_projected_variance,
-    projected_variance,
+from ...evaluation import (
+    Claim,
+    ExperimentOptions,
+    Outcome,
+    RunContext,
+    direct3d_crlb,
+    fused_bound,
+    plane_crlb,
 )
+from ...evaluation.plots import save
+from ...filters import Direct3DFilter, ProjectedPlanesTracker, select_pairs
+from ...motion import AccelTurn
+from ...sensors import PLANE_AXES, DoaSensor3D, monte_carlo_projected_variance, projected_variance
 
 
 class Options(ExperimentOptions):

@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.projected_planes import Direct3DFilter, ProjectedPlanesTracker
-from ...motion.accel_turn import AccelTurn
-from ...perception.audio_doa import AudioDoaArray
-from ...sensors.doa_projection import DoaSensor3D
+from ...evaluation import Claim, Outcome, RunContext
+from ...filters import Direct3DFilter, ProjectedPlanesTracker
+from ...motion import AccelTurn
+from ...perception import AudioDoaArray
+from ...sensors import DoaSensor3D
 from .projected_planes import PRIOR_STD, SCN_ACCEL, SCN_DT, SIGMA, scenario_truth
 
 HALL = (10.0, 11.0, 14.0)

@@ -14,9 +14,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from ...evaluation import Claim, Outcome, RunContext
 from ...evaluation.plots import save
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...world.potential_field import NavigationResult, PotentialField, navigate
+from ...world import NavigationResult, PotentialField, navigate
 
 PAPER_FORCES = {(12.0, 12.0): -8.46, (10.0, 10.0): -5.34, (9.0, 9.0): -1.21}
 

@@ -35,21 +35,26 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian, Track
-from ...evaluation import plots
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.grid_proposals import GalerkinProposal
-from ...filters.imm import InteractingMultipleModel
-from ...filters.multiple_model import MultipleModelParticleFilter, PaddedModel
-from ...filters.sis import ProposalParticleFilter
-from ...filters.sp_pekf import SPPEKFProposal
-from ...filters.unscented_proposal import UnscentedProposal
-from ...motion import ConstantAcceleration
-from ...motion.langevin import Langevin
-from ...motion.maneuver import ManeuverTurn
-from ...perception.visual_cues import CUES, MultiCueFrontEnd
-from ...perception.visual_edges import EllipseEdgeSensor, edge_map
-from ...perception.visual_tracking import PrecomputedMeasurements, lost_frames, track_frames
+from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...filters import (
+    GalerkinProposal,
+    InteractingMultipleModel,
+    MultipleModelParticleFilter,
+    PaddedModel,
+    ProposalParticleFilter,
+    SPPEKFProposal,
+    UnscentedProposal,
+)
+from ...motion import ConstantAcceleration, Langevin, ManeuverTurn
+from ...perception import (
+    CUES,
+    EllipseEdgeSensor,
+    MultiCueFrontEnd,
+    PrecomputedMeasurements,
+    edge_map,
+    lost_frames,
+    track_frames,
+)
 from ...sensors import PositionFix
 from .comparators import (
     beyond_section,

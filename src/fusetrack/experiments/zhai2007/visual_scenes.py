@@ -12,8 +12,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ...core.errors import ConfigError, invalid
-from ...world.head_video import Actor, RenderedSequence, Scene, Sprite, keyframe_trajectory, render
+from ...core import ConfigError, invalid
+from ...world import Actor, RenderedSequence, Scene, Sprite, keyframe_trajectory, render
 
 HEAD = Sprite()  # 14 x 18 px semi-axes, skin with a dark hair cap
 JITTER = 0.03  # px/frame^2 random acceleration on every scripted path

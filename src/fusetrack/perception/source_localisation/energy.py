@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...core.errors import ConfigError, ShapeError, invalid
+from ...core import ConfigError, ShapeError, invalid
 
 Array = np.ndarray
 

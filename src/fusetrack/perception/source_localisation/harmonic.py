@@ -46,8 +46,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...core.errors import ConfigError, ShapeError, invalid
-from ...core.slice_sampling import slice_sample
+from ...core import ConfigError, ShapeError, invalid, slice_sample
 from ..harmonic_features import CompressedPsd, NodeFeatures, harmonicity
 from .harmonic_beamform import AcousticNetwork, SourceBeamform
 from .harmonic_frequencies import (

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...core.errors import ShapeError, invalid
+from ...core import ShapeError, invalid
 from ..audio_beamforming import MicrophoneArray, beam_delays
 
 Array = np.ndarray

@@ -16,8 +16,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...core.errors import ConfigError, ShapeError, invalid
-from ...core.slice_sampling import slice_sample
+from ...core import ConfigError, ShapeError, invalid, slice_sample
 from ..harmonic_features import CompressedPsd
 
 Array = np.ndarray

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ...core.errors import ConfigError, ShapeError, invalid
-from ...sensors.camera_geometry import apply_homography
+from ...core import ConfigError, ShapeError, invalid
+from ...sensors import apply_homography
 
 Array = NDArray[np.float64]
 

@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from ...core.errors import ConfigError, ShapeError, invalid
+from ...core import ConfigError, ShapeError, invalid
 
 BACKGROUND, FOREGROUND, SHADOW, HIGHLIGHT = 0, 1, 2, 3
 _MAX_THRESHOLD_SAMPLES = 4_000_000
