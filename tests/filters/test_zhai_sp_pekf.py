@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian, Measurement
+from fusetrack.core import Filter, Gaussian, Measurement
+from fusetrack.core.errors import UnknownSensorError
 from fusetrack.filters import KalmanFilter, run_filter
 from fusetrack.filters.sis import ProposalParticleFilter
 from fusetrack.filters.sp_pekf import BankState, SPPEKFBank, SPPEKFProposal, repair_covariance
@@ -35,7 +36,7 @@ def test_every_channel_is_the_kalman_filter_on_a_linear_model():
     kf = KalmanFilter(motion, [sensor])
     belief = prior
     for k, z in enumerate([1.3, 0.2, -0.8, 2.5]):
-        state = bank.step(state, [np.array([z])], 1.0, rng)
+        state = bank.update(bank.predict(state, 1.0, rng), [Measurement(float(k), "p", [z])])
         belief = kf.update(kf.predict(belief, 1.0), [Measurement(float(k), "p", [z])])
         np.testing.assert_allclose(
             state.nominal + state.resid, np.tile(belief.mean, (5, 1)), atol=1e-9
@@ -82,7 +83,7 @@ def test_a_channel_with_nan_is_dropped_not_propagated():
     resid = state.resid.copy()
     resid[1] = np.nan
     state = BankState(state.nominal, resid, state.cov, state.log_psi, state.mean, state.total_cov)
-    out = bank.step(state, [np.array([0.5])], 1.0, rng)
+    out = bank.update(bank.predict(state, 1.0, rng), [Measurement(1.0, "p", [0.5])])
     assert bank.stats.dropped_channels == 1
     assert np.all(np.isfinite(out.mean)) and np.all(np.isfinite(out.total_cov))
     assert np.exp(out.log_psi[1]) < 1e-200
@@ -93,3 +94,21 @@ def test_bank_refuses_bad_channel_counts(n_channels):
     motion, sensor, _ = _linear()
     with pytest.raises(ValueError, match="n_channels"):
         SPPEKFBank(motion, [sensor], n_channels=n_channels)
+
+
+def test_the_bank_is_a_filter_and_predict_carries_the_channel_weights():
+    """predict draws the nominal noise (the only draw), update weights the channels; a sensor the
+    bank does not have is refused; silence leaves the memoryless weights equal."""
+    motion, sensor, prior = _linear()
+    bank = SPPEKFBank(motion, [sensor], n_channels=4)
+    assert isinstance(bank, Filter)
+    state = bank.initialize(prior, np.random.default_rng(0))
+    pred = bank.predict(state, 1.0, np.random.default_rng(1))
+    again = bank.predict(state, 1.0, np.random.default_rng(1))
+    np.testing.assert_array_equal(pred.nominal, again.nominal)
+    np.testing.assert_allclose(np.exp(pred.log_psi), 0.25, atol=1e-12)
+    np.testing.assert_allclose(pred.mean, (pred.nominal + pred.resid).mean(axis=0), atol=1e-12)
+    silent = bank.update(pred, [])
+    np.testing.assert_allclose(silent.mean, pred.mean, atol=1e-12)
+    with pytest.raises(UnknownSensorError, match="sensor_id"):
+        bank.update(pred, [Measurement(1.0, "nobody", [0.0])])

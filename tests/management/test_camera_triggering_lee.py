@@ -5,8 +5,14 @@ import math
 import numpy as np
 import pytest
 
+from fusetrack.core import Filter, Measurement
 from fusetrack.core.errors import ConfigError, MeasurementError
-from fusetrack.filters.multi_model_pf import MultiModelBearingPF, turn_models
+from fusetrack.filters.multi_model_pf import (
+    MultiModelBearingPF,
+    MultiModelBelief,
+    reset_to_fix,
+    turn_models,
+)
 from fusetrack.management.camera_triggering import (
     AcousticTracker,
     CooperationPolicy,
@@ -62,13 +68,13 @@ def test_merge_and_unlabelled_bearings():
 def test_filter_bad_input_and_no_bearing():
     f = MultiModelBearingPF(turn_models(1.0, 0.01), S, 0.03, 50)
     rng = np.random.default_rng(0)
-    p = f.initialize(np.array([10, 10, 0.1, 0]), np.array([0.1, 0.1, 0.01, 0.01]), rng)
-    p2, st = f.step(p, np.array([]), 1.0, rng)  # silence: prediction only
-    assert np.all(np.isfinite(st.estimate)) and p2.shape == p.shape
-    _, st = f.step(p, np.array([math.pi]), 1.0, rng)  # bearing far away: weights tiny, not NaN
-    assert np.all(np.isfinite(st.estimate))
+    p = f.initial_belief(np.array([10, 10, 0.1, 0]), np.array([0.1, 0.1, 0.01, 0.01]), rng)
+    p2 = f.step(p, 1.0, [], rng)  # silence: prediction only
+    assert np.all(np.isfinite(p2.mean)) and p2.states.shape == p.states.shape
+    far = f.step(p, 1.0, [Measurement(1.0, "mic", math.pi)], rng)  # weights tiny, not NaN
+    assert np.all(np.isfinite(far.mean))
     with pytest.raises(MeasurementError):
-        f.step(p, np.array([np.nan]), 1.0, rng)
+        f.step(p, 1.0, [Measurement(1.0, "mic", np.nan)], rng)
     with pytest.raises(ConfigError):
         MultiModelBearingPF(turn_models(1.0, 0.01), S, 0.0)
     with pytest.raises(ConfigError):
@@ -129,7 +135,7 @@ def test_fast_bank_propagation_equals_each_models_map():
     f = MultiModelBearingPF(models, S, 0.03, 64)
     p = np.random.default_rng(0).standard_normal((64, 4))
     p[0, 2:] = 0.0  # a particle at rest: every model is constant velocity there
-    fast = f._propagate(p, 0.5, np.random.default_rng(1))
+    fast = f.propagate_every_model(p, 0.5, np.random.default_rng(1))
     slow = np.stack([m.mean(p, 0.5) for m in models])
     assert np.allclose(fast, slow, atol=1e-12)
 
@@ -144,9 +150,34 @@ def test_literal_jpda_chain_shrinks_towards_origin():
     out = {}
     for est in ("consistent", "literal"):
         f = MultiModelBearingPF(turn_models(1.0, 0.0), S, 2 * D, 200, estimator=est)
-        _, st = f.step(p, z, 1.0, np.random.default_rng(1))
-        out[est] = st.estimate
+        bearings = [Measurement(1.0, "mic", z_i) for z_i in z]
+        out[est] = f.step(MultiModelBelief.uniform(p), 1.0, bearings, np.random.default_rng(1)).mean
     assert np.linalg.norm(out["consistent"][:2]) == pytest.approx(
         np.linalg.norm(p[:, :2].mean(0)), rel=0.05
     )
     assert np.linalg.norm(out["literal"][:2]) < 0.9 * np.linalg.norm(out["consistent"][:2])
+
+
+def test_step_is_predict_then_update_with_the_same_draws():
+    """The fused Numba step equals ``update(predict(...))`` draw for draw; the model index of
+    every resampled particle is the model that moved its ancestor; a camera fix is a new belief."""
+    f = MultiModelBearingPF(turn_models(1.0, 0.01), S, 2 * D, 80)
+    assert isinstance(f, Filter)
+    b0 = f.initial_belief(
+        np.array([20, 20, 0.1, 0]), np.array([0.2, 0.2, 0.02, 0.02]), np.random.default_rng(3)
+    )
+    zs = [Measurement(1.0, "mic", 45.2 * D), Measurement(1.0, "mic", 10 * D)]
+    fused = f.step(b0, 1.0, zs, np.random.default_rng(4))
+    rng = np.random.default_rng(4)
+    pred = f.predict(b0, 1.0, rng)
+    assert pred.states.shape == (240, 4) and np.array_equal(pred.model, np.repeat([0, 1, 2], 80))
+    ref = f.update(pred, zs, rng)
+    np.testing.assert_allclose(fused.states, ref.states, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fused.mean, ref.mean, rtol=0, atol=1e-12)
+    assert np.array_equal(fused.model, ref.model) and fused.predictions.shape == (3, 80, 4)
+    idx = [np.flatnonzero(np.all(pred.states == s, axis=1))[0] for s in ref.states[:5]]
+    assert np.array_equal(pred.model[idx], ref.model[:5])
+    fixed = reset_to_fix(ref, np.array([1.0, 2.0]), 0.1, np.random.default_rng(0))
+    assert np.array_equal(fixed.states[:, 2:], ref.states[:, 2:]) and ref is not fixed
+    assert np.allclose(fixed.states[:, :2].mean(0), [1.0, 2.0], atol=0.05)
+    assert np.array_equal(fixed.mean[:2], [1.0, 2.0])

@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian
+from fusetrack.core import Gaussian, Measurement
 from fusetrack.core.errors import ShapeError
 from fusetrack.filters.sp_pekf import SPPEKFBank
 from fusetrack.motion import ConstantVelocity
@@ -67,7 +67,7 @@ def test_an_ekf_bank_follows_the_contour():
     st = bank.initialize(Gaussian(np.array([40.0, 40.0, 0, 0]), np.diag([4, 4, 1, 1.0])), rng)
     for k in range(1, 6):
         z = s.measurement(_outline(80, 100, (40 + 2 * k, 40), (14, 18)))
-        st = bank.step(st, [z], 1.0, rng)
+        st = bank.update(bank.predict(st, 1.0, rng), [Measurement(k, "e", z)])
     np.testing.assert_allclose(st.mean[:2], [50, 40], atol=1.5)
 
 

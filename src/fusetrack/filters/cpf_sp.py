@@ -90,7 +90,7 @@ def step_translated(
         np.stack([st.total_cov for st in states]),
     )
     z = np.stack([np.asarray(zk, float).reshape(np.shape(zk) or (1,)) for zk in zs])
-    out = bank.step(stacked, [z], dt, rng)
+    out = bank.update_aligned(bank.predict(stacked, dt, rng), [z])
     return [
         BankState(
             out.nominal[i] + sh[i],
@@ -162,12 +162,10 @@ class CPFSPProposal:
                 origin_bank, states, shifts[active], [np.asarray(zs[k]) for k in active], dt, rng
             )
         else:
-            stepped = [
-                SPPEKFBank(filt.motion, [filt.sensors[k]], self.n_channels, stats=filt.stats).step(
-                    bs, [zs[k]], dt, rng
-                )
-                for k, bs in zip(active, states)
-            ]
+            stepped = []
+            for k, bs in zip(active, states):
+                bank = SPPEKFBank(filt.motion, [filt.sensors[k]], self.n_channels, stats=filt.stats)
+                stepped.append(bank.update_aligned(bank.predict(bs, dt, rng), [zs[k]]))
         banks = dict(zip(active, stepped))
         means = [bs.mean for bs in stepped]
         covs = [bs.total_cov for bs in stepped]

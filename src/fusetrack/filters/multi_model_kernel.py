@@ -4,16 +4,15 @@
 :func:`predict_weigh_kernel` predicts every particle with every model, weights it against every
 (unlabelled) bearing and forms the estimate in one pass over a batch ``(B, O)`` of filters, with
 the same arithmetic and the same random draws as the NumPy reference
-(:meth:`MultiModelBearingPF.step`); :func:`fused_step` is that step for one filter, returning
-the new particles (pure: nothing is stored on the filter).
+(:meth:`MultiModelBearingPF.update` of :meth:`MultiModelBearingPF.predict`);
+:meth:`MultiModelBearingPF.step` runs it for one filter, the periodic batch of Lee 2009's camera
+cooperation for many.
 """
 
 from __future__ import annotations
 
 import numba
 import numpy as np
-
-from .multi_model_pf import MultiModelBearingPF, MultiModelStep, resample_l
 
 Array = np.ndarray
 
@@ -31,7 +30,7 @@ def predict_weigh_kernel(
     w_ml: Array,
     est: Array,
 ) -> int:  # pragma: no cover - jit
-    """Fused :meth:`MultiModelBearingPF._propagate` + weights + consistent estimate for a batch.
+    """Fused :meth:`MultiModelBearingPF.propagate_every_model` + weights + consistent estimate for a batch.
 
     ``parts (B, O, L, 4)``, ``eta (J, B, O, L, 2)`` (scaled noise), ``z (B, N)``; writes
     ``pred (B, O, J, L, 4)``, normalised ``w_ml (B, O, J, L)`` and ``est (B, O, 4)``; returns the
@@ -122,34 +121,3 @@ def kernel_bank(models: tuple) -> Array | None:
         for m in models
     )  # fmt: skip
     return np.array([m.turn_alpha if m.turn_axes else 0.0 for m in models]) if fast else None
-
-
-def fused_step(
-    filt: MultiModelBearingPF,
-    parts: Array,
-    z: Array,
-    dt: float,
-    rng: np.random.Generator,
-    engine: str,
-) -> tuple[Array, MultiModelStep]:
-    """:meth:`MultiModelBearingPF.step` (consistent estimator) through the fused kernel."""
-    alphas = kernel_bank(filt.models)
-    if engine == "numpy" or alphas is None or z.size == 0 or filt.estimator != "consistent":
-        return filt.step(parts, z, dt, rng)
-    J, L = len(alphas), len(parts)
-    sigma_a = float(filt.models[0].sigma_a)
-    shape = (J, 1, 1, L, 2)  # the draw of MultiModelBearingPF._propagate
-    eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
-    pred = np.empty((1, 1, J, L, 4))
-    w_ml = np.empty((1, 1, J, L))
-    est = np.empty((1, 1, 4))
-    zz = np.asarray(z, float).reshape(1, -1)
-    deg = predict_weigh_kernel(
-        parts[None, None], eta, alphas, dt, np.asarray(filt.sensor_position, float), zz,
-        1.0 / filt.sigma**2, pred, w_ml, est,
-    )  # fmt: skip
-    w = w_ml[0, 0]
-    p_m = w.sum(axis=1)
-    means = np.einsum("jl,jld->jd", w, pred[0, 0]) / np.where(p_m > 0, p_m, 1.0)[:, None]
-    new = pred[0, 0].reshape(J * L, 4)[resample_l(w, filt.n_particles, rng)]
-    return new, MultiModelStep(est[0, 0], pred[0, 0], means, p_m, bool(deg))

@@ -1,14 +1,15 @@
 """Multi-model, multi-measurement particle filter for one object among several (Lee 2009, Sec. 3.2.1).
 
-One filter per tracked object, ``L`` particles ``[x, y, vx, vy]``. Each step (Lee 2009,
-Eqs. 3.3-3.11, Fig. 3-1):
+One filter per tracked object, ``L`` particles ``[x, y, vx, vy]`` in a :class:`MultiModelBelief`.
+A step (Lee 2009, Eqs. 3.3-3.11, Fig. 3-1) is :meth:`MultiModelBearingPF.predict` then
+:meth:`MultiModelBearingPF.update`:
 
 1. every particle is propagated through each of the ``J`` models (constant velocity, clockwise
    and anticlockwise turns driven by a centripetal acceleration ``alpha``), giving ``J L``
    predicted particles;
 2. every predicted particle is weighted against every one of the ``N`` *unlabelled* bearings of
-   the step, ``w = exp(-wrap(z_i - h(x))^2 / (2 sigma^2))``, and the ``J L N`` weights are
-   normalised jointly;
+   the step (one :class:`~fusetrack.core.Measurement` each),
+   ``w = exp(-wrap(z_i - h(x))^2 / (2 sigma^2))``, and the ``J L N`` weights are normalised jointly;
 3. ``L`` particles are resampled (systematic) from the ``J L N`` weighted copies -- the same as
    resampling the ``J L`` predictions with weights summed over the bearings;
 4. the estimate is the JPDA-style average. The printed chain (3.7)-(3.11) is not a convex
@@ -18,25 +19,30 @@ Eqs. 3.3-3.11, Fig. 3-1):
    ``estimator="literal"`` keeps the printed chain.
 
 With no bearing at a step the filter only predicts (equal weights over the ``J L`` predictions).
-If every weight underflows the step is counted as degenerate and also only predicts; weights
-are handled as logarithms, never NaN.
+If every weight underflows the step is marked degenerate and also only predicts; weights are
+handled as logarithms, never NaN. :meth:`MultiModelBearingPF.step` fuses the two halves in one
+Numba kernel (:mod:`.multi_model_kernel`) for the usual bank, with the same random draws.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..core.angles import wrap_angle_inplace
 from ..core.errors import ConfigError, MeasurementError, invalid
+from ..core.measurement import Measurement
 from ..core.resampling import inverse_cdf
 from ..motion.accel_turn import AccelTurn
+from .multi_model_kernel import kernel_bank, predict_weigh_kernel
 
 Array = np.ndarray
 
 ESTIMATORS = ("consistent", "literal")
+ENGINES = ("numba", "numpy")
 
 
 def resample_l(w: Array, n: int, rng: np.random.Generator) -> Array:
@@ -60,27 +66,86 @@ def turn_models(alpha: float, sigma_a: float) -> tuple[AccelTurn, AccelTurn, Acc
     )
 
 
-@dataclass
-class MultiModelStep:
-    """A step's output: the estimate, the per-model predictions and diagnostics."""
+@dataclass(frozen=True)
+class MultiModelBelief:
+    """Particles ``states (M, 4)`` with the index of the model that last moved each one
+    (``model (M,)``, -1 before the first prediction) and ``log_weights (M,)``.
 
-    estimate: Array  # (4,)
-    predictions: Array  # (J, L, 4) predicted particles per model (for the ellipse trigger)
-    model_means: Array  # (J, 4) x_m
-    model_probs: Array  # (J,) mu_m
-    degenerate: bool
+    After :meth:`~MultiModelBearingPF.predict` ``M = J L`` (model-major); after an update
+    ``M = L``, equally weighted, and the step's outputs ride along: ``estimate (4,)`` (Eq. 3.10),
+    ``predictions (J, L, 4)`` (for the ellipse trigger, Eq. 3.16), ``model_means (J, 4)``,
+    ``model_probs (J,)`` and whether the weights were ``degenerate``.
+    """
+
+    states: Array
+    model: Array
+    log_weights: Array
+    estimate: Array | None = None
+    predictions: Array | None = None
+    model_means: Array | None = None
+    model_probs: Array | None = None
+    degenerate: bool = False
+
+    @classmethod
+    def uniform(cls, states: Array) -> MultiModelBelief:
+        """Equally weighted particles not yet moved by any model."""
+        n = len(states)
+        return cls(states, np.full(n, -1), np.full(n, -math.log(n)))
+
+    @property
+    def uniform_weights(self) -> bool:
+        return bool(np.ptp(self.log_weights) == 0)
+
+    def weights(self) -> Array:
+        w = np.exp(self.log_weights - self.log_weights.max())
+        return w / w.sum()
+
+    @property
+    def mean(self) -> Array:
+        """The step's estimate, or the particles' weighted mean before any update."""
+        return self.estimate if self.estimate is not None else self.weights() @ self.states
+
+    @property
+    def cov(self) -> Array:
+        d = self.states - self.weights() @ self.states
+        return np.einsum("n,ni,nj->ij", self.weights(), d, d)
 
 
-@dataclass
+def reset_to_fix(
+    belief: MultiModelBelief, position: Array, sigma_r: float, rng: np.random.Generator
+) -> MultiModelBelief:
+    """A camera fix: particles' positions redrawn around it, velocities kept (spec Sec. 5.3
+    choice); the fix (with the old velocity estimate) becomes the estimate."""
+    states = belief.states.copy()
+    states[:, :2] = np.asarray(position, float) + sigma_r * rng.standard_normal((len(states), 2))
+    estimate = np.concatenate([np.asarray(position, float), belief.mean[2:]])
+    return MultiModelBelief(states, belief.model, belief.log_weights, estimate)
+
+
+def bearings_of(measurements: Sequence[Measurement]) -> Array:
+    """The step's unlabelled bearings (rad), in order; each measurement carries one or more."""
+    if not measurements:
+        return np.empty(0)
+    z = np.concatenate([np.ravel(np.asarray(m.value, dtype=float)) for m in measurements])
+    if not np.all(np.isfinite(z)):
+        raise MeasurementError(invalid("bearings", z.tolist(), "finite angles (rad)"))
+    return z
+
+
+@dataclass(frozen=True)
 class MultiModelBearingPF:
-    """Lee 2009's IMM-PF for one object, bearings from a sensor at ``sensor_position``."""
+    """Lee 2009's IMM-PF for one object, bearings from a sensor at ``sensor_position``.
+
+    ``engine`` "numba": :meth:`step` runs the fused kernel when it implements the bank, "numpy":
+    always ``update(predict(...))`` (same draws, results equal to rounding).
+    """
 
     models: tuple[AccelTurn, ...]
     sensor_position: tuple[float, float]
     sigma: float  # bearing noise std (rad)
     n_particles: int = 500
     estimator: str = "consistent"
-    degenerate_steps: int = field(default=0, init=False)
+    engine: str = "numba"
 
     def __post_init__(self) -> None:
         if not self.models:
@@ -91,26 +156,118 @@ class MultiModelBearingPF:
             raise ConfigError(invalid("estimator", self.estimator, f"one of {ESTIMATORS}"))
         if self.n_particles < 1:
             raise ConfigError(invalid("n_particles", self.n_particles, "an integer >= 1"))
+        if self.engine not in ENGINES:
+            raise ConfigError(invalid("engine", self.engine, f"one of {ENGINES}"))
 
-    def initialize(self, mean: Array, std: Array, rng: np.random.Generator) -> Array:
-        return np.asarray(mean, float) + np.asarray(std, float) * rng.standard_normal(
+    def initial_belief(self, mean: Array, std: Array, rng: np.random.Generator) -> MultiModelBelief:
+        """``n_particles`` draws from ``N(mean, diag(std^2))``."""
+        draws = np.asarray(mean, float) + np.asarray(std, float) * rng.standard_normal(
             (self.n_particles, 4)
         )
+        return MultiModelBelief.uniform(draws)
 
     def bearing(self, x: Array) -> Array:
         s = self.sensor_position
         return np.arctan2(x[..., 1] - s[1], x[..., 0] - s[0])
 
+    def predict(
+        self, belief: MultiModelBelief, dt: float, rng: np.random.Generator | None = None
+    ) -> MultiModelBelief:
+        """Every particle through every model (Eq. 3.3): ``M`` particles become ``J M``."""
+        rng = rng if rng is not None else np.random.default_rng()
+        pred = self.propagate_every_model(belief.states, dt, rng)  # (J, M, 4)
+        J, M = pred.shape[:2]
+        return MultiModelBelief(
+            pred.reshape(J * M, 4), np.repeat(np.arange(J), M), np.tile(belief.log_weights, J)
+        )
+
+    def update(
+        self,
+        belief: MultiModelBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> MultiModelBelief:
+        """Weight every prediction against every bearing (Eqs. 3.4-3.6), estimate (Eqs.
+        3.7-3.11) and resample ``L`` (Fig. 3-1)."""
+        rng = rng if rng is not None else np.random.default_rng()
+        z = bearings_of(measurements)
+        J = len(self.models)
+        pred = belief.states.reshape(J, -1, 4)
+        w, degenerate = self._joint_weights(pred, z)
+        if not belief.uniform_weights:  # prior weights of a belief predicted twice
+            w = w * belief.weights().reshape(1, *pred.shape[:2])
+            w = w / w.sum()
+        w_ml = w.sum(axis=0)  # (J, L): weight of each prediction summed over bearings
+        est, means, probs = self._estimate(pred, w, w_ml)
+        idx = resample_l(w_ml, self.n_particles, rng)
+        return self._resampled(belief, pred, idx, est, means, probs, degenerate)
+
     def step(
-        self, particles: Array, bearings: Array, dt: float, rng: np.random.Generator
-    ) -> tuple[Array, MultiModelStep]:
-        """Predict with every model, weight against every bearing, resample ``L``; return the new particles."""
-        z = np.asarray(bearings, dtype=float).reshape(-1)
-        if not np.all(np.isfinite(z)):
-            raise MeasurementError(invalid("bearings", z.tolist(), "finite angles (rad)"))
-        pred = self._propagate(particles, dt, rng)  # (J, L, 4)  Eq. 3.3
+        self,
+        belief: MultiModelBelief,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> MultiModelBelief:
+        """``update(predict(...))``, through the fused kernel when it implements the bank."""
+        rng = rng if rng is not None else np.random.default_rng()
+        z = bearings_of(measurements)
+        alphas = kernel_bank(self.models)
+        if (
+            self.engine == "numpy"
+            or alphas is None
+            or z.size == 0
+            or self.estimator != "consistent"
+            or not belief.uniform_weights
+        ):
+            return self.update(self.predict(belief, dt, rng), measurements, rng)
+        J, L = len(alphas), len(belief.states)
+        sigma_a = float(self.models[0].sigma_a)
+        shape = (J, 1, 1, L, 2)  # the draw of propagate_every_model
+        eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
+        pred = np.empty((1, 1, J, L, 4))
+        w_ml = np.empty((1, 1, J, L))
+        est = np.empty((1, 1, 4))
+        deg = predict_weigh_kernel(
+            belief.states[None, None], eta, alphas, dt, np.asarray(self.sensor_position, float),
+            z.reshape(1, -1), 1.0 / self.sigma**2, pred, w_ml, est,
+        )  # fmt: skip
+        w, p = w_ml[0, 0], pred[0, 0]
+        p_m = w.sum(axis=1)
+        means = np.einsum("jl,jld->jd", w, p) / np.where(p_m > 0, p_m, 1.0)[:, None]
+        idx = resample_l(w, self.n_particles, rng)
+        predicted = MultiModelBelief(
+            p.reshape(J * L, 4), np.repeat(np.arange(J), L), belief.log_weights
+        )
+        return self._resampled(predicted, p, idx, est[0, 0], means, p_m, bool(deg))
+
+    def _resampled(
+        self,
+        predicted: MultiModelBelief,
+        pred: Array,
+        idx: Array,
+        est: Array,
+        means: Array,
+        probs: Array,
+        degenerate: bool,
+    ) -> MultiModelBelief:
         J, L = pred.shape[:2]
-        degenerate = False
+        n = self.n_particles
+        return MultiModelBelief(
+            pred.reshape(J * L, 4)[idx],
+            predicted.model[idx],
+            np.full(n, -math.log(n)),
+            est,
+            pred,
+            means,
+            probs,
+            degenerate,
+        )
+
+    def _joint_weights(self, pred: Array, z: Array) -> tuple[Array, bool]:
+        """Jointly normalised weights ``(N, J, L)`` (Eq. 3.6); equal ``(1, J, L)`` weights when
+        there is no bearing or every weight underflows (degenerate)."""
+        J, L = pred.shape[:2]
         if z.size:
             r = self.bearing(pred)[None] - z[:, None, None]  # (N, J, L)  Eqs. 3.4-3.5
             wrap_angle_inplace(r)
@@ -118,35 +275,20 @@ class MultiModelBearingPF:
             top = float(logw.max())
             total = top + math.log(float(np.exp(logw - top).sum())) if np.isfinite(top) else -np.inf
             if np.isfinite(total):
-                w = np.exp(logw - total)  # Eq. 3.6: joint normalisation over (i, m, l)
-            else:
-                degenerate = True
-        if not z.size or degenerate:
-            w = np.full((1, J, L), 1.0 / (J * L))
-        self.degenerate_steps += degenerate
-        w_ml = w.sum(axis=0)  # (J, L): weight of each prediction summed over bearings
-        est, means, probs = self._estimate(pred, w, w_ml)
-        new = pred.reshape(J * L, 4)[resample_l(w_ml, self.n_particles, rng)]
-        return new, MultiModelStep(est, pred, means, probs, degenerate)
+                return np.exp(logw - total), False
+        return np.full((1, J, L), 1.0 / (J * L)), bool(z.size)
 
-    def _propagate(self, particles: Array, dt: float, rng: np.random.Generator) -> Array:
+    def propagate_every_model(self, particles: Array, dt: float, rng: np.random.Generator) -> Array:
         """Every particle through every model: ``(..., L, 4)`` -> ``(J, ..., L, 4)``.
 
         Fast path for the usual bank (2-D, no known acceleration, turns on axes (0, 1) or none):
         one vectorised coordinated-turn map with ``omega_j = alpha_j / speed`` (0 for CV),
         identical in law to calling each model's ``sample``.
         """
-        fast = all(
-            m.ndim == 2
-            and not np.any(m.accel)
-            and m.turn_axes in (None, (0, 1))
-            and m.sigma_a == self.models[0].sigma_a
-            for m in self.models
-        )
-        if not fast:
+        alphas = kernel_bank(self.models)
+        if alphas is None:
             return np.stack([m.sample(particles, dt, rng) for m in self.models])
         lead = particles.shape[:-1]
-        alphas = np.array([m.turn_alpha if m.turn_axes else 0.0 for m in self.models])
         alphas = alphas.reshape(-1, *([1] * len(lead)))
         x, y, vx, vy = (particles[..., i] for i in range(4))
         speed = np.hypot(vx, vy)
@@ -181,11 +323,3 @@ class MultiModelBearingPF:
         xbar_m = np.einsum("ijd,ij->jd", xbar_mi, mu_mi)  # Eq. 3.8
         mu_m = mu_mi.sum(axis=0) / max(mu_mi.sum(), 1e-300)  # Eq. 3.11
         return mu_m @ xbar_m, xbar_m, mu_m  # Eq. 3.10
-
-    def reset_to_fix(
-        self, particles: Array, position: Array, sigma_r: float, rng: np.random.Generator
-    ) -> Array:
-        """A camera fix: particles' positions redrawn around it, velocities kept (spec Sec. 5.3 choice)."""
-        out = particles.copy()
-        out[:, :2] = np.asarray(position, float) + sigma_r * rng.standard_normal((len(out), 2))
-        return out

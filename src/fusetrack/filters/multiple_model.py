@@ -232,7 +232,8 @@ class RegimeSwitchingProposal:
                         r, prev, state.modes, int(sel.sum()), zs, dt, rng, filt
                     )
                 continue
-            bs = steppers[r].step(banks[r], zs, dt, rng)  # type: ignore[arg-type]  # Eq. 54
+            predicted = steppers[r].predict(banks[r], dt, rng)  # type: ignore[arg-type]
+            bs = steppers[r].update_aligned(predicted, zs)  # Eq. 54
             banks[r] = bs
             draw, log_q = gaussian_draw(bs.mean, bs.total_cov, prev.shape[-2], rng)
             x = np.where(sel[..., None], draw, x)

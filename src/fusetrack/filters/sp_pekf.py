@@ -24,7 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, invalid
+from ..core.errors import ConfigError, UnknownSensorError, invalid
+from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from .sis import Array, SISStats, Zs
 
@@ -33,7 +34,9 @@ _LOG_2PI = float(np.log(2 * np.pi))
 
 @dataclass(frozen=True)
 class BankState:
-    """``nominal``, ``resid`` ``(..., C, d)``, ``cov`` ``(..., C, d, d)``; moment-matched output."""
+    """The belief of an :class:`SPPEKFBank`: ``nominal``, ``resid`` ``(..., C, d)``, the
+    channels' residual covariances ``cov`` ``(..., C, d, d)``, their weights, and the
+    moment-matched Gaussian ``N(mean, total_cov)`` of the bank."""
 
     nominal: Array
     resid: Array
@@ -41,6 +44,9 @@ class BankState:
     log_psi: Array  # (..., C) normalised channel log-weights
     mean: Array  # (..., d)   x_total (Eq. 28)
     total_cov: Array  # (..., d, d) R_total (Eq. 30)
+    # After predict: the noise-free nominals and Q(dt), where a dropped channel restarts.
+    drift: Array | None = None
+    process_cov: Array | None = None
 
 
 def _chol_factor(cov: Array) -> Array:
@@ -67,8 +73,25 @@ def repair_covariance(cov: Array, floor: float = 1e-12) -> tuple[Array, NDArray[
     return np.where(bad[..., None, None], fixed, c), bad
 
 
+def _moment_match(log_psi: Array, est: Array, P: Array) -> tuple[Array, Array, Array]:
+    """Normalised channel log-weights and the mixture's ``x_total``, ``R_total`` (Eqs. 28-30)
+    of channel estimates ``est (..., C, d)`` with covariances ``P (..., C, d, d)``."""
+    top = np.max(log_psi, axis=-1, keepdims=True)
+    top = np.where(np.isfinite(top), top, 0.0)
+    psi = np.exp(log_psi - top)
+    total = psi.sum(axis=-1, keepdims=True)
+    psi = np.where(total > 0, psi / np.where(total > 0, total, 1.0), 1.0 / psi.shape[-1])
+    mean = np.einsum("...c,...cd->...d", psi, est)  # Eq. 28
+    dev = est - mean[..., None, :]
+    cov = np.einsum("...c,...cij->...ij", psi, P) + np.einsum(
+        "...c,...ci,...cj->...ij", psi, dev, dev
+    )  # Eq. 30
+    return np.log(np.maximum(psi, 1e-300)), mean, cov
+
+
 class SPPEKFBank:
-    """N parallel EKF channels on a random state partition (Zhai 2007, Sec. 3.1.1).
+    """N parallel EKF channels on a random state partition (Zhai 2007, Sec. 3.1.1), a
+    :class:`~fusetrack.core.Filter` over :class:`BankState`.
 
     ``memoryless=True`` (the thesis's experiments) weights channels by their current likelihood
     only (Eq. 29 with equal previous weights).
@@ -111,17 +134,47 @@ class SPPEKFBank:
             np.broadcast_to(cov, (*batch_shape, d, d)).copy(),
         )
 
-    def step(self, state: BankState, zs: Zs, dt: float, rng: np.random.Generator) -> BankState:
-        """Propagate and update every channel with the step's measurements (Eqs. 18-30)."""
+    def predict(
+        self, state: BankState, dt: float, rng: np.random.Generator | None = None
+    ) -> BankState:
+        """Propagate every channel: a noisy nominal (Eq. 18), the residual and its covariance
+        through the Jacobian at the old nominal (Eqs. 19, 23, 26)."""
+        rng = rng if rng is not None else np.random.default_rng()
         m = self.motion
         q = np.asarray(m.noise_cov(dt), float)
         g = _chol_factor(q)
         x_prev = state.nominal
         w = rng.standard_normal(x_prev.shape) @ g.T
-        nominal = np.asarray(m.mean(x_prev, dt)) + w  # Eq. 18
+        drift = np.asarray(m.mean(x_prev, dt))
+        nominal = drift + w  # Eq. 18
         F = np.asarray(m.jacobian(x_prev, dt))  # Eq. 19
         resid = np.einsum("...ij,...j->...i", F, state.resid) - w  # Eq. 23
         P = F @ state.cov @ np.swapaxes(F, -1, -2) + q  # Eq. 26
+        uniform = np.full_like(state.log_psi, -np.log(state.log_psi.shape[-1]))
+        log_psi, mean, cov = _moment_match(
+            uniform if self.memoryless else state.log_psi, nominal + resid, P
+        )
+        return BankState(nominal, resid, P, log_psi, mean, cov, drift, q)
+
+    def update(
+        self,
+        state: BankState,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> BankState:
+        """Update every channel with the measurements of the bank's sensors (Eqs. 20-30)."""
+        ids = [s.sensor_id for s in self.sensors]
+        zs: list[Array | None] = [None] * len(ids)
+        for meas in measurements:
+            if meas.sensor_id not in ids:
+                raise UnknownSensorError(invalid("sensor_id", meas.sensor_id, f"one of {ids}"))
+            zs[ids.index(meas.sensor_id)] = meas.value
+        return self.update_aligned(state, zs)
+
+    def update_aligned(self, state: BankState, zs: Zs) -> BankState:
+        """:meth:`update` with the step's measurements aligned with ``sensors`` (None or
+        non-finite: the sensor is silent); the form the PF-SP-PEKF proposals hold."""
+        nominal, resid, P = state.nominal, state.resid, state.cov
         loglik = np.zeros(nominal.shape[:-1])
         d = nominal.shape[-1]
         eye = np.eye(d)
@@ -155,27 +208,23 @@ class SPPEKFBank:
             loglik = loglik - 0.5 * (maha + logdet + za.shape[-1] * _LOG_2PI)
         finite = np.all(np.isfinite(P), axis=(-2, -1)) & np.all(np.isfinite(resid), axis=-1)
         finite &= np.isfinite(loglik)
-        if not np.all(finite):
+        if not np.all(finite):  # dropped channels restart at the noise-free prediction
             self.stats.dropped_channels += int(np.sum(~finite))
+            restart = state.drift if state.drift is not None else nominal
+            q = (
+                state.process_cov
+                if state.process_cov is not None
+                else state.total_cov[..., None, :, :]
+            )
             P = np.where(finite[..., None, None], P, q)
             resid = np.where(finite[..., None], resid, 0.0)
-            nominal = np.where(finite[..., None], nominal, np.asarray(m.mean(x_prev, dt)))
+            nominal = np.where(finite[..., None], nominal, restart)
             loglik = np.where(finite, loglik, -np.inf)
         P, fixed = repair_covariance(P)
         self.stats.repaired_channels += int(np.sum(fixed))
         log_psi = loglik if self.memoryless else loglik + state.log_psi  # Eq. 29
-        top = np.max(log_psi, axis=-1, keepdims=True)
-        top = np.where(np.isfinite(top), top, 0.0)
-        psi = np.exp(log_psi - top)
-        total = psi.sum(axis=-1, keepdims=True)
-        psi = np.where(total > 0, psi / np.where(total > 0, total, 1.0), 1.0 / psi.shape[-1])
-        est = nominal + resid  # channel estimates
-        mean = np.einsum("...c,...cd->...d", psi, est)  # Eq. 28
-        dev = est - mean[..., None, :]
-        cov = np.einsum("...c,...cij->...ij", psi, P) + np.einsum(
-            "...c,...ci,...cj->...ij", psi, dev, dev
-        )  # Eq. 30
-        return BankState(nominal, resid, P, np.log(np.maximum(psi, 1e-300)), mean, cov)
+        log_psi, mean, cov = _moment_match(log_psi, nominal + resid, P)
+        return BankState(nominal, resid, P, log_psi, mean, cov)
 
     def feedback(
         self, state: BankState, estimate: Array, mode: str = "residual", cov: Array | None = None
@@ -274,7 +323,7 @@ class SPPEKFProposal:
         bank = self._bank(filt)
         if isinstance(state, Gaussian):  # the first step: nominals from the prior
             state = bank.initialize(state, rng, prev.shape[:-2])
-        state = bank.step(state, zs, dt, rng)
+        state = bank.update_aligned(bank.predict(state, dt, rng), zs)
         x, log_q = gaussian_draw(state.mean, self.inflation * state.total_cov, prev.shape[-2], rng)
         return x, log_q, state
 

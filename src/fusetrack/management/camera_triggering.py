@@ -27,14 +27,14 @@ from typing import Any
 
 import numpy as np
 
-from ..core import ConfigError, invalid, wrap_angle_inplace
+from ..core import ConfigError, Measurement, invalid, wrap_angle_inplace
 from ..filters import (
     MultiModelBearingPF,
-    MultiModelStep,
-    fused_step,
+    MultiModelBelief,
     kernel_bank,
     predict_weigh_kernel,
     resample_l,
+    reset_to_fix,
 )
 from ..sensors import merge_close, simulate_bearings, true_bearings
 
@@ -131,7 +131,7 @@ class AcousticTracker:
     def build(self, sensor: tuple[float, float], sigma: float) -> MultiModelBearingPF:
         """The filter for a sensor at ``sensor`` whose bearings have std ``sigma``."""
         return MultiModelBearingPF(
-            self.models, sensor, self.sigma_filter or sigma, self.n_particles
+            self.models, sensor, self.sigma_filter or sigma, self.n_particles, engine=self.engine
         )
 
     @property
@@ -197,7 +197,7 @@ def run_cooperation(
         np.zeros(T, bool),
         np.zeros(T, int),
     )
-    parts: dict[int, Array] = {}
+    parts: dict[int, MultiModelBelief] = {}
     for o in range(O):  # step 0: the cameras find every present object
         if present[0, o]:
             parts[o], _ = _start(filt, tracker, truth[0, o], rng, tracker.known_initial_velocity)
@@ -205,16 +205,17 @@ def run_cooperation(
     for k in range(T):
         z = simulate_bearings(truth[k, :, :2], audible[k], sensor, sigma, rng, tracker.dz_critical)
         res.n_bearings[k] = len(z)
+        bearings = [Measurement(k * tracker.dt, "acoustic", z_i) for z_i in z]
         est: dict[int, Array] = {}
         steps = {}
         if k > 0:
-            for o, p in list(parts.items()):
-                parts[o], st = fused_step(filt, p, z, tracker.dt, rng, tracker.engine)
-                est[o], steps[o] = st.estimate, st
-                res.degenerate_steps += st.degenerate
+            for o, b in list(parts.items()):
+                parts[o] = steps[o] = filt.step(b, tracker.dt, bearings, rng)
+                est[o] = steps[o].mean
+                res.degenerate_steps += steps[o].degenerate
         else:
-            for o, p in parts.items():
-                est[o] = p.mean(axis=0)
+            for o, b in parts.items():
+                est[o] = b.states.mean(axis=0)
         fire_count = policy.count and count_trigger(len(z), n_tracked_prev)
         fire_obj, gate_any, ell_any = _object_triggers(policy, est, steps, z, sensor, sigma, k)
         periodic = policy.period is not None and k > 0 and k % policy.period == 0
@@ -240,19 +241,19 @@ def _start(
     truth: Array,
     rng: np.random.Generator,
     known: bool = False,
-) -> tuple[Array, Array]:
+) -> tuple[MultiModelBelief, Array]:
     """A new object's particles around a camera fix of its true state ``truth (4,)``; the
-    velocity is the true one when ``known``, else zero. Returns (particles, fix)."""
+    velocity is the true one when ``known``, else zero. Returns (belief, fix)."""
     fix = truth[:2] + tracker.sigma_r * rng.standard_normal(2)
     v0 = truth[2:] if known else np.zeros(2)
     mean = np.array([fix[0], fix[1], v0[0], v0[1]])
-    return filt.initialize(mean, tracker.start_std, rng), fix
+    return filt.initial_belief(mean, tracker.start_std, rng), fix
 
 
 def _object_triggers(
     policy: CooperationPolicy,
     est: Mapping[int, Array],
-    steps: Mapping[int, MultiModelStep],
+    steps: Mapping[int, MultiModelBelief],
     z: Array,
     sensor: tuple[float, float],
     sigma: float,
@@ -265,7 +266,8 @@ def _object_triggers(
     if k > 0:
         for o in est:
             g = policy.gate and bearing_gate_trigger(est[o], sensor, z, sigma, policy.gate_k)
-            e = policy.ellipse and ellipse_trigger(est[o], steps[o].predictions, policy.chi2)
+            pred = steps[o].predictions
+            e = policy.ellipse and pred is not None and ellipse_trigger(est[o], pred, policy.chi2)
             gate_any |= g
             ell_any |= e
             if g or e:
@@ -279,7 +281,7 @@ def _camera_fixes(
     truth: Array,
     present: Array,
     targets: Iterable[int],
-    parts: dict[int, Array],
+    parts: dict[int, MultiModelBelief],
     est: dict[int, Array],
     rng: np.random.Generator,
 ) -> None:
@@ -290,8 +292,8 @@ def _camera_fixes(
         if present[o]:
             if o in parts:
                 fix = truth[o, :2] + tracker.sigma_r * rng.standard_normal(2)
-                parts[o] = filt.reset_to_fix(parts[o], fix, tracker.sigma_r, rng)
-                vel = est[o][2:] if o in est else parts[o][:, 2:].mean(0)
+                parts[o] = reset_to_fix(parts[o], fix, tracker.sigma_r, rng)
+                vel = est[o][2:] if o in est else parts[o].states[:, 2:].mean(0)
             else:
                 parts[o], fix = _start(filt, tracker, truth[o], rng)
                 vel = np.zeros(2)
@@ -306,7 +308,7 @@ def _oracle_births(
     tracker: AcousticTracker,
     truth: Array,
     present: Array,
-    parts: dict[int, Array],
+    parts: dict[int, MultiModelBelief],
     est: dict[int, Array],
     rng: np.random.Generator,
 ) -> None:
@@ -315,7 +317,7 @@ def _oracle_births(
     for o in range(len(present)):
         if present[o] and o not in parts:
             parts[o], fix = _start(filt, tracker, truth[o], rng, tracker.known_initial_velocity)
-            est[o] = parts[o].mean(axis=0)
+            est[o] = parts[o].states.mean(axis=0)
             est[o][:2] = fix
         elif not present[o] and o in parts:
             del parts[o]
@@ -384,7 +386,7 @@ def run_periodic_batch(
             )
         else:
             pred = np.moveaxis(
-                filt._propagate(parts, tracker.dt, rng), 0, 2
+                filt.propagate_every_model(parts, tracker.dt, rng), 0, 2
             )  # (B, O, J, L, 4)  Eq. 3.3
             r = filt.bearing(pred)[..., None] - z[:, None, None, None, :]  # Eqs. 3.4-3.5
             wrap_angle_inplace(r)
