@@ -44,7 +44,6 @@ NOT_FILTERS = {
 NOT_YET: set[str] = {
     "fusetrack.filters.multi_model_pf.MultiModelBearingPF",
     "fusetrack.filters.sp_pekf.SPPEKFBank",
-    "fusetrack.filters.waypoint_asir.WaypointASIR",
 }
 
 
