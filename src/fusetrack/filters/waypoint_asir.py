@@ -29,7 +29,7 @@ selected cameras and occluder priors
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -63,6 +63,10 @@ class ASIRStats:
     ignored_steps: int = 0
     reinitialisations: int = 0
 
+    def as_dict(self) -> dict[str, int]:
+        """The counters as a plain dict (a snapshot, as :func:`~fusetrack.filters.run_filter` reads)."""
+        return asdict(self)
+
 
 @dataclass(frozen=True, eq=False)
 class ASIRBelief:
@@ -76,6 +80,11 @@ class ASIRBelief:
     @property
     def mean(self) -> Array:
         return np.asarray(self.weights @ self.particles)
+
+    @property
+    def position(self) -> Array:
+        """The position estimate ``x_hat = sum_l w_l x_l`` (Algorithm 3)."""
+        return np.asarray(self.weights @ self.particles[:, :2])
 
     @property
     def cov(self) -> Array:
@@ -212,11 +221,6 @@ class WaypointASIR:
             return self.initialize(_require(rng))
         u = self.propagate(belief.particles, _require(rng)) if predicted is None else predicted
         return ASIRBelief(u, belief.weights, belief.ignored + 1)
-
-    @staticmethod
-    def estimate(u: Array, w: Array) -> Array:
-        """``x_hat = sum_l w_l x_l`` (Algorithm 3)."""
-        return np.asarray(w @ u[:, :2])
 
 
 def _require(rng: np.random.Generator | None) -> np.random.Generator:

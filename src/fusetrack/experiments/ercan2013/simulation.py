@@ -315,7 +315,6 @@ def _track(
     rng_f = np.random.default_rng([seed, 3])
     rng_s = np.random.default_rng([seed, 4])
     belief = asir.initialize(rng_f)
-    u, w = belief.particles, belief.weights
     n_cams = len(scene.cameras)
     method, k, period = cfg["method"], int(cfg["k"]), int(cfg["period"])
     selected = (
@@ -330,8 +329,10 @@ def _track(
         occluders = pri.at(prior, occ, t)
         if method in ("greedy", "brute", "random", "closest") and (t - 1) % period == 0:
             t0 = time.perf_counter()
-            predicted = asir.propagate(u, rng_f)
-            selected, mom = _select(cfg, scene, predicted, w, occluders, exclusion, rng_s, clock)
+            predicted = asir.propagate(belief.particles, rng_f)
+            selected, mom = _select(
+                cfg, scene, predicted, belief.weights, occluders, exclusion, rng_s, clock
+            )
             clock.selection += time.perf_counter() - t0
             if cfg.get("metric_gap") and method == "greedy":  # not timed: a check, not the method
                 gaps.append(_metric_gap(cfg, mom, selected))
@@ -339,8 +340,7 @@ def _track(
         n_seen += int(np.isfinite(z).sum())
         report = CameraNetworkReport(z, selected, occluders)
         belief = asir.step(belief, 1.0, [Measurement(float(t), "cameras", report)], rng_f)
-        u, w = belief.particles, belief.weights
-        est[t - 1] = asir.estimate(u, w)
+        est[t - 1] = belief.position
     return _Track(est, n_seen, clock, gaps)
 
 
