@@ -41,9 +41,7 @@ NOT_FILTERS = {
     "fusetrack.world.occluder_priors.RandomWalkPriorFilter": "simulates occluder priors",
 }
 
-NOT_YET: set[str] = {
-    "fusetrack.filters.waypoint_asir.WaypointASIR",
-}
+NOT_YET: set[str] = {}
 
 
 def _filter_like_classes() -> dict[str, type]:

@@ -7,10 +7,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fusetrack.core import Measurement
 from fusetrack.core.errors import ConfigError
 from fusetrack.experiments.ercan2013.scenes import scene_from_mapping, square_scene
 from fusetrack.filters.waypoint_asir import WaypointASIR
-from fusetrack.sensors.occlusion_aware_camera import OcclusionAwareLikelihood
+from fusetrack.sensors.occlusion_aware_camera import (
+    CameraNetworkReport,
+    OcclusionAwareCameraSensor,
+    OcclusionAwareLikelihood,
+)
 from fusetrack.sensors.perspective_camera import ring_of_cameras
 from fusetrack.world.occlusion import OccluderPriors
 from fusetrack.world.room import Room
@@ -68,11 +73,10 @@ def test_camera_seeing_nothing_is_harmless_when_silent_and_ignored_when_it_repor
     impossible = lik.log_likelihood([z1, 3.0], [0, 1], x, occ)
     assert np.all(impossible == -np.inf)
 
-    asir = WaypointASIR(_room(), n_particles=200)
+    asir = WaypointASIR(_room(), n_particles=200, sensors=(OcclusionAwareCameraSensor(lik),))
     b0 = asir.initialize(rng)
-    b1 = asir.step(
-        b0, lambda p: lik.log_likelihood([z1, 3.0], [0, 1], p, occ), np.random.default_rng(2)
-    )
+    report = CameraNetworkReport(np.array([z1, 3.0]), np.array([0, 1]), occ)
+    b1 = asir.step(b0, 1.0, [Measurement(1.0, "cameras", report)], np.random.default_rng(2))
     assert np.all(np.isfinite(b1.weights)) and b1.weights.sum() == pytest.approx(1.0)
     assert np.all(np.isfinite(b1.particles)) and b1.ignored == 1 and b0.ignored == 0
     assert asir.stats.ignored_steps == 1 and asir.stats.first_stage_fallbacks == 1

@@ -17,26 +17,41 @@ the cloud is drawn afresh only after ``patience`` such steps in a row. All three
 counted in :class:`ASIRStats`; weights never become NaN.
 
 The filter is pure: everything carried between steps (particles, weights, the count of
-consecutive ignored steps) is an :class:`ASIRBelief`. The likelihood is passed to each step as a
-function of positions, since the Ercan et al. camera likelihood also depends on the step's
-occluder priors (:class:`~fusetrack.sensors.OcclusionAwareLikelihood`).
+consecutive ignored steps) is an :class:`ASIRBelief`. It is a
+:class:`~fusetrack.core.SteppingFilter`: the first stage looks at ``Z(t)``, so :meth:`WaypointASIR.step`
+is Algorithm 1, and ``update(predict(...))`` is the plain SIR step with the same target. The
+likelihood ``f(Z | u)`` is a sensor component (``log_likelihood(value, positions)``) that reads each
+:class:`~fusetrack.core.Measurement` value; for Ercan et al. the value carries the step's readings,
+selected cameras and occluder priors
+(:class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareCameraSensor`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import check_positive
+from ..core.errors import ConfigError, UnknownSensorError, check_positive, invalid
+from ..core.measurement import Measurement
 from ..core.resampling import systematic
 from ..motion.waypoint_regime import WaypointRegimeDynamics
 from ..world.room import Room
 
 Array = NDArray[np.float64]
 LogLikelihood = Callable[[Array], Array]
+
+
+class PositionLikelihood(Protocol):
+    """A sensor model that scores particle positions ``(L, 2)`` against one report's value."""
+
+    @property
+    def sensor_id(self) -> str: ...
+
+    def log_likelihood(self, z: Any, x: Array) -> Array: ...
 
 
 @dataclass
@@ -47,6 +62,10 @@ class ASIRStats:
     first_stage_fallbacks: int = 0
     ignored_steps: int = 0
     reinitialisations: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        """The counters as a plain dict (a snapshot, as :func:`~fusetrack.filters.run_filter` reads)."""
+        return asdict(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +82,11 @@ class ASIRBelief:
         return np.asarray(self.weights @ self.particles)
 
     @property
+    def position(self) -> Array:
+        """The position estimate ``x_hat = sum_l w_l x_l`` (Algorithm 3)."""
+        return np.asarray(self.weights @ self.particles[:, :2])
+
+    @property
     def cov(self) -> Array:
         r = self.particles - self.mean
         return np.asarray((r * self.weights[:, None]).T @ r)
@@ -76,13 +100,20 @@ def _normalise(log_w: Array) -> Array:
 
 @dataclass
 class WaypointASIR:
-    """ASIR on the waypoint-regime state ``[x, y, tau_x, tau_y, s]`` in a room."""
+    """ASIR on the waypoint-regime state ``[x, y, tau_x, tau_y, s]`` in a room: a
+    :class:`~fusetrack.core.SteppingFilter` over :class:`ASIRBelief`.
+
+    ``sensors`` score positions against the values of the measurements naming them; a step's
+    ``f(Z | u)`` is the product over its measurements. The dynamics advance one step of the
+    paper's fixed period per call, so ``dt`` only says whether to predict (``dt > 0``).
+    """
 
     room: Room
     dynamics: WaypointRegimeDynamics = field(default_factory=WaypointRegimeDynamics)
     n_particles: int = 1000
     initial_speed: float = 1.0
     patience: int = 5
+    sensors: Sequence[PositionLikelihood] = ()
     stats: ASIRStats = field(default_factory=ASIRStats)
 
     def __post_init__(self) -> None:
@@ -101,10 +132,64 @@ class WaypointASIR:
         """``u(t) ~ f(u | u(t-1))``: also the predicted cloud the camera selection uses (Alg. 3)."""
         return self.dynamics.sample(u, rng, self._sample_free, self.room.free)
 
-    def step(
-        self, belief: ASIRBelief, log_likelihood: LogLikelihood, rng: np.random.Generator
+    def likelihood_of(self, measurements: Sequence[Measurement]) -> LogLikelihood:
+        """``log f(Z | u)`` of the step's measurements as a function of positions ``(L, 2)``."""
+        by_id = {s.sensor_id: s for s in self.sensors}
+        pairs = []
+        for m in measurements:
+            if m.sensor_id not in by_id:
+                raise UnknownSensorError(
+                    invalid("sensor_id", m.sensor_id, f"one of {sorted(by_id)}")
+                )
+            pairs.append((by_id[m.sensor_id], m.value))
+
+        def log_f(x: Array) -> Array:
+            total = pairs[0][0].log_likelihood(pairs[0][1], x)
+            for sensor, value in pairs[1:]:
+                total = total + sensor.log_likelihood(value, x)
+            return total
+
+        return log_f
+
+    def predict(
+        self, belief: ASIRBelief, dt: float, rng: np.random.Generator | None = None
     ) -> ASIRBelief:
-        """One ASIR step (Algorithm 1); ``log_likelihood`` maps positions ``(L, 2)`` to ``(L,)``."""
+        """Every particle moved by the waypoint-regime dynamics (Sec. 4.1); weights kept."""
+        if dt <= 0:
+            return belief
+        u = self.propagate(belief.particles, _require(rng))
+        return ASIRBelief(u, belief.weights, belief.ignored)
+
+    def update(
+        self,
+        belief: ASIRBelief,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> ASIRBelief:
+        """Weights times ``f(Z | u)`` (Eq. 6), normalised; readings ignored if all vanish."""
+        if not measurements:
+            return belief
+        self.stats.steps += 1
+        with np.errstate(divide="ignore"):
+            log_w = np.log(belief.weights) + self.likelihood_of(measurements)(
+                belief.particles[:, :2]
+            )
+        if not np.any(np.isfinite(log_w)):
+            return self._ignore(belief, rng, belief.particles)
+        return ASIRBelief(belief.particles, _normalise(log_w))
+
+    def step(
+        self,
+        belief: ASIRBelief,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> ASIRBelief:
+        """One ASIR step (Algorithm 1) with ``f(Z | u)`` from the step's measurements."""
+        rng = _require(rng)
+        if not measurements:
+            return self.predict(belief, dt, rng)
+        log_likelihood = self.likelihood_of(measurements)
         u, w = belief.particles, belief.weights
         self.stats.steps += 1
         kappa = self.dynamics.mean(u)
@@ -121,14 +206,24 @@ class WaypointASIR:
         denom = log_l1[parents]
         log_w2 = log_l2 - np.where(np.isfinite(denom), denom, 0.0)
         if not np.any(np.isfinite(log_w2)):
-            self.stats.ignored_steps += 1
-            if belief.ignored + 1 >= self.patience:
-                self.stats.reinitialisations += 1
-                return self.initialize(rng)
-            return ASIRBelief(self.propagate(u, rng), w, belief.ignored + 1)
+            return self._ignore(belief, rng)
         return ASIRBelief(new, _normalise(log_w2))
 
-    @staticmethod
-    def estimate(u: Array, w: Array) -> Array:
-        """``x_hat = sum_l w_l x_l`` (Algorithm 3)."""
-        return np.asarray(w @ u[:, :2])
+    def _ignore(
+        self, belief: ASIRBelief, rng: np.random.Generator | None, predicted: Array | None = None
+    ) -> ASIRBelief:
+        """Every weight vanished: the step's readings are ignored (the ``predicted`` particles,
+        drawn here when not given, with the old weights), or after ``patience`` such steps in a
+        row the cloud starts over uniform over the room."""
+        self.stats.ignored_steps += 1
+        if belief.ignored + 1 >= self.patience:
+            self.stats.reinitialisations += 1
+            return self.initialize(_require(rng))
+        u = self.propagate(belief.particles, _require(rng)) if predicted is None else predicted
+        return ASIRBelief(u, belief.weights, belief.ignored + 1)
+
+
+def _require(rng: np.random.Generator | None) -> np.random.Generator:
+    if rng is None:
+        raise ConfigError(invalid("rng", rng, "a numpy Generator (the ASIR draws particles)"))
+    return rng

@@ -45,6 +45,10 @@ priors, but a real occluder that hides the object usually does so for many steps
 priors coarser than ``D`` the same event is then counted again every step. ``gamma < 1`` counts it
 as fewer independent looks (a diagnosis of ``ercan2013-prior-calibration``, not the paper's model).
 
+A filter reads the network through :class:`OcclusionAwareCameraSensor`: each step's readings,
+selected cameras and occluder knowledge travel as one :class:`CameraNetworkReport` (a
+:class:`~fusetrack.core.Measurement` value) and ``log_likelihood(report, x)`` scores positions.
+
 :meth:`OcclusionAwareLikelihood.log_likelihood` is one Numba pass over the particles
 (:func:`fusetrack.world.occlusion_kernels.camera_likelihood_kernel`);
 :meth:`OcclusionAwareLikelihood.log_likelihood_reference` is the NumPy composition of the
@@ -59,7 +63,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import ConfigError, ShapeError, invalid
+from ..core import ConfigError, MeasurementError, ShapeError, invalid
 from ..world.geometry import Array
 from ..world.occlusion import (
     OccluderPriors,
@@ -279,3 +283,31 @@ class OcclusionAwareLikelihood:
         p = np.where(possible, np.maximum(p, self.floor), 0.0)
         with np.errstate(divide="ignore"):
             return np.asarray(np.where(possible, self.occlusion_power * np.log(p), -np.inf))
+
+
+@dataclass(frozen=True, eq=False)
+class CameraNetworkReport:
+    """One step's :class:`~fusetrack.core.Measurement` value for the camera network (Alg. 3):
+    ``readings (K,)`` of the queried cameras ``selected (K,)`` (indices), NaN where a camera did
+    not see the object, and what is known of the moving occluders at that step (the priors for
+    ``"gaussian"``, the centres ``(M, 2)`` for ``"perfect"``, None for ``"none"``)."""
+
+    readings: Array
+    selected: NDArray[np.intp]
+    occluders: OccluderPriors | Array | None = None
+
+
+@dataclass(frozen=True)
+class OcclusionAwareCameraSensor:
+    """The sensor model a filter uses: ``log f(Z | u)`` (Eq. 6) of a :class:`CameraNetworkReport`
+    for particle positions ``x (L, 2)``, read by ``likelihood``."""
+
+    likelihood: OcclusionAwareLikelihood
+    sensor_id: str = "cameras"
+
+    def log_likelihood(self, z: CameraNetworkReport, x: Array) -> Array:
+        if not isinstance(z, CameraNetworkReport):
+            raise MeasurementError(
+                invalid(f"value of {self.sensor_id!r}", type(z).__name__, "a CameraNetworkReport")
+            )
+        return self.likelihood.log_likelihood(z.readings, z.selected, x, z.occluders)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from ...core.errors import ConfigError, invalid
+from ...core.measurement import Measurement
 from ...filters.waypoint_asir import WaypointASIR
 from ...management.camera_selection import (
     SELECTION_METHODS,
@@ -43,7 +44,11 @@ from ...management.camera_selection import (
     subset_mse,
 )
 from ...motion.waypoint_regime import WaypointRegimeDynamics
-from ...sensors.occlusion_aware_camera import OcclusionAwareLikelihood
+from ...sensors.occlusion_aware_camera import (
+    CameraNetworkReport,
+    OcclusionAwareCameraSensor,
+    OcclusionAwareLikelihood,
+)
 from ...world.geometry import Array
 from ...world.occluder_priors import (
     PRIOR_FILTERS,
@@ -211,13 +216,33 @@ def _likelihood(cfg: dict[str, Any], scene: Scene) -> OcclusionAwareLikelihood:
     )
 
 
-def _filter(cfg: dict[str, Any], scene: Scene) -> WaypointASIR:
-    """Algorithm 1's ASIR with the tracker's motion noise sigma_v (Eq. 5)."""
+@dataclass(frozen=True)
+class _TimedSensor:
+    """The camera-network sensor, adding its wall time to ``clock.likelihood``."""
+
+    sensor: OcclusionAwareCameraSensor
+    clock: _Clock
+
+    @property
+    def sensor_id(self) -> str:
+        return self.sensor.sensor_id
+
+    def log_likelihood(self, z: CameraNetworkReport, x: Array) -> Array:
+        t0 = time.perf_counter()
+        out = self.sensor.log_likelihood(z, x)
+        self.clock.likelihood += time.perf_counter() - t0
+        return out
+
+
+def _filter(cfg: dict[str, Any], scene: Scene, clock: _Clock) -> WaypointASIR:
+    """Algorithm 1's ASIR with the tracker's motion noise sigma_v (Eq. 5) reading the camera
+    network through the occlusion-aware likelihood (timed into ``clock``)."""
     sigma_v = (
         scene.motion_noise if cfg["tracker_sigma_v"] is None else float(cfg["tracker_sigma_v"])
     )
     dynamics = WaypointRegimeDynamics(sigma_v=sigma_v)
-    return WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed)
+    sensor = _TimedSensor(OcclusionAwareCameraSensor(_likelihood(cfg, scene)), clock)
+    return WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed, sensors=(sensor,))
 
 
 def _select(
@@ -281,15 +306,15 @@ def _track(
     z_all: Array,
     pri: _Priors,
     asir: WaypointASIR,
+    clock: _Clock,
     seed: int,
 ) -> _Track:
     """Algorithm 3's loop: (every T steps) select cameras, read them, one ASIR step."""
-    likelihood = _likelihood(cfg, scene)
+    exclusion = float(cfg["exclusion"]) * scene.diameter
     steps, prior = int(cfg["steps"]), cfg["prior"]
     rng_f = np.random.default_rng([seed, 3])
     rng_s = np.random.default_rng([seed, 4])
     belief = asir.initialize(rng_f)
-    u, w = belief.particles, belief.weights
     n_cams = len(scene.cameras)
     method, k, period = cfg["method"], int(cfg["k"]), int(cfg["period"])
     selected = (
@@ -298,32 +323,24 @@ def _track(
         else np.array(fixed_selection(scene.fixed_order, k) if method == "fixed" else [])
     )
     est = np.empty((steps, 2))
-    clock = _Clock()
     n_seen = 0
     gaps: list[float] = []
     for t in range(1, steps + 1):
         occluders = pri.at(prior, occ, t)
         if method in ("greedy", "brute", "random", "closest") and (t - 1) % period == 0:
             t0 = time.perf_counter()
-            predicted = asir.propagate(u, rng_f)
+            predicted = asir.propagate(belief.particles, rng_f)
             selected, mom = _select(
-                cfg, scene, predicted, w, occluders, likelihood.exclusion, rng_s, clock
+                cfg, scene, predicted, belief.weights, occluders, exclusion, rng_s, clock
             )
             clock.selection += time.perf_counter() - t0
             if cfg.get("metric_gap") and method == "greedy":  # not timed: a check, not the method
                 gaps.append(_metric_gap(cfg, mom, selected))
         z = z_all[t, selected]
         n_seen += int(np.isfinite(z).sum())
-
-        def loglik(x: Array, z: Array = z, sel: Any = selected, occl: Any = occluders) -> Array:
-            t1 = time.perf_counter()
-            out = likelihood.log_likelihood(z, sel, x, occl)
-            clock.likelihood += time.perf_counter() - t1
-            return out
-
-        belief = asir.step(belief, loglik, rng_f)
-        u, w = belief.particles, belief.weights
-        est[t - 1] = asir.estimate(u, w)
+        report = CameraNetworkReport(z, selected, occluders)
+        belief = asir.step(belief, 1.0, [Measurement(float(t), "cameras", report)], rng_f)
+        est[t - 1] = belief.position
     return _Track(est, n_seen, clock, gaps)
 
 
@@ -375,6 +392,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     steps, m = int(cfg["steps"]), int(cfg["n_occluders"])
     obj, occ, z_all = world_and_readings(scene, m, steps, seed)
     pri = _occluder_priors(cfg, scene, occ, seed)
-    asir = _filter(cfg, scene)
-    tr = _track(cfg, scene, occ, z_all, pri, asir, seed)
+    clock = _Clock()
+    asir = _filter(cfg, scene, clock)
+    tr = _track(cfg, scene, occ, z_all, pri, asir, clock, seed)
     return [_row(cfg, scene, obj, pri, tr, asir, cpu0)]
