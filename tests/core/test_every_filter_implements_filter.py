@@ -27,6 +27,8 @@ NOT_FILTERS = {
     "fusetrack.core.models.SteppingFilter": "a protocol",
     "fusetrack.filters.projected_planes.PlanesBelief": "a belief (its step field is the PPS step)",
     "fusetrack.association.mcmcda.MCMCDA": "an associator: step(state, observations) -> state",
+    "fusetrack.management.camera_triggering.AcousticTracker": "the configuration that builds "
+    "the per-object MultiModelBearingPF (models, dt, particles), not a filter",
     "fusetrack.motion.walking_person.WalkingPerson": "a motion model (step = one simulated stride)",
     "fusetrack.motion.walking_person.WalkingPersonCA": "a motion model",
     "fusetrack.world.walkers.WaypointWalkers": "a simulator of people walking",
@@ -43,7 +45,6 @@ NOT_YET: set[str] = {
     "fusetrack.filters.multi_model_pf.MultiModelBearingPF",
     "fusetrack.filters.sp_pekf.SPPEKFBank",
     "fusetrack.filters.waypoint_asir.WaypointASIR",
-    "fusetrack.management.camera_triggering.AcousticTracker",
 }
 
 

@@ -101,3 +101,15 @@ def test_sequence_recovers_miss_and_rejects_far_false_alarm():
         frame([None])
     with pytest.raises(ShapeError, match="sensor_id"):
         f.update(belief, [Measurement(0.0, "elsewhere", [1.0, 1.0])])
+
+
+def test_ground_plane_detection_is_the_quality_kernel():
+    from fusetrack.sensors.ground_plane_detection import GroundPlaneDetection
+
+    h = np.array([[2.0, 0, 1], [0, 2, 0], [0, 0, 1]])
+    cam = GroundPlaneDetection("c", h, sigma2=0.5)
+    z = to_image(h, np.array([3.0, 4.0]))
+    assert cam.ground(z) == pytest.approx([3.0, 4.0])
+    x = np.array([[3.0, 4.0, 9.9], [4.0, 4.0, 0.0]])  # particles: only (x, y) count
+    assert cam.log_likelihood(z, x) == pytest.approx([0.0, -1.0])
+    assert cam.quality(z, x[1]) == pytest.approx(quality([[3.0, 4.0]], [4.0, 4.0], 0.5)[0])

@@ -150,3 +150,11 @@ def test_likelihood_map_sensor_reads_the_cell_of_each_state():
     x = np.array([[0.4, 0.6], [2.6, 1.4], [1.5, 0.5], [9.0, -3.0]])  # the last is off the grid
     np.testing.assert_allclose(s.log_likelihood(z, x), np.log([1.0, 6.0, 3.0, 5.0]))
     assert s.log_likelihood(z, np.zeros((5, 7, 2))).shape == (5, 7)
+
+
+def test_detection_quality_is_the_share_of_the_peak():
+    from fusetrack.sensors.likelihood_map import detection_quality
+
+    assert detection_quality([1.0, 1.0, 3.0, 1.0]) == 1.0  # all the excess in one sample
+    assert detection_quality([0.0, 1.0, 2.0]) == pytest.approx(2 / 3)
+    assert detection_quality(np.full(5, 4.0)) is None  # flat: the sensor saw nothing

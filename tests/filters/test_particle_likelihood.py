@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian, LikelihoodFilter, Measurement
+from fusetrack.core import Gaussian, LikelihoodFilter, Measurement, Particles
 from fusetrack.filters import (
     AuxiliaryParticleFilter,
     BootstrapFilter,
@@ -91,6 +91,8 @@ def test_update_with_likelihood_is_update_plus_the_increment():
     lik = np.exp(_sensors()[0].log_likelihood(np.array([[1.3]]), p.states))
     assert float(ll) == pytest.approx(np.log(np.sum(w * lik)), rel=1e-12)
     assert float(pf.update_with_likelihood(p, [])[1]) == 0.0
+    shifted = Particles(p.states, p.log_weights + 5.0)  # unnormalised: normalised first
+    assert float(pf.update_with_likelihood(shifted, z)[1]) == pytest.approx(float(ll), rel=1e-12)
 
 
 def test_grid_search_over_q_peaks_at_the_true_value():

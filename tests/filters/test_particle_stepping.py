@@ -146,3 +146,25 @@ def test_log_likelihood_of_the_sis_filter_matches_the_kalman_filter():
         assert float(track.info["log_likelihood"]) == pytest.approx(
             float(exact.info["log_likelihood"]), abs=0.1
         )
+
+
+class _Nowhere:
+    """A sensor under which no state can have produced the report (log-likelihood -inf)."""
+
+    sensor_id, dim = "n", 1
+
+    def log_likelihood(self, z, x):
+        return np.full(x.shape[:-1], -np.inf)
+
+
+def test_vanished_weights_are_counted_and_warned_once():
+    from fusetrack.core import DegenerateWeightsWarning
+
+    pf = ProposalParticleFilter(CV, [FIX, _Nowhere()], n_particles=50)
+    rng = np.random.default_rng(0)
+    b = pf.initialize(PRIOR, rng)
+    with pytest.warns(DegenerateWeightsWarning, match="ProposalParticleFilter") as caught:
+        for k in range(3):
+            b = pf.step(b, 1.0, [Measurement(k + 1.0, "n", [0.0])], rng)
+    assert len(caught) == 1 and pf.stats.degenerate_steps == 3
+    assert np.all(np.isfinite(b.mean))  # equal weights kept, never NaN

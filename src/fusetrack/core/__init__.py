@@ -24,6 +24,7 @@ from .models import (
     SensorModel,
     SteppingFilter,
     filter_step,
+    step_with_likelihood,
 )
 from .resampling import RESAMPLERS, get_resampler, multinomial, residual, stratified, systematic
 from .slice_sampling import SliceDraw, slice_sample
@@ -67,6 +68,7 @@ __all__ = [
     "residual",
     "slice_sample",
     "stack_values",
+    "step_with_likelihood",
     "stratified",
     "systematic",
     "wrap_angle",

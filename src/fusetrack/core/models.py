@@ -155,6 +155,27 @@ class LikelihoodFilter(Filter[B], Protocol[B]):
     ) -> tuple[B, Array]: ...
 
 
+def step_with_likelihood(
+    filt: LikelihoodFilter[B],
+    belief: B,
+    dt: float,
+    measurements: Sequence[Measurement],
+    rng: np.random.Generator | None = None,
+) -> tuple[B, Array | float]:
+    """:func:`filter_step` and its log-likelihood increment: a stepping filter's own
+    ``step_with_likelihood`` (its proposal's estimate, the same draws as ``step``) when it has
+    one, else predict (when ``dt > 0``) then ``update_with_likelihood``."""
+    own = getattr(filt, "step_with_likelihood", None)
+    if own is not None and isinstance(filt, SteppingFilter):
+        result: tuple[B, Array] = own(belief, dt, measurements, rng)
+        return result
+    if dt > 0:
+        belief = filt.predict(belief, dt, rng)
+    if not measurements:
+        return belief, 0.0
+    return filt.update_with_likelihood(belief, measurements, rng)
+
+
 def filter_step(
     filt: Filter[B],
     belief: B,

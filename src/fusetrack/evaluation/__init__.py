@@ -18,12 +18,9 @@ from .metrics import (
     ospa_components,
     ospa_over_time,
     position_error,
-    position_rmse,
     rmse,
-    rmse_per_axis,
     track_loss_onset,
     track_loss_rate,
-    velocity_rmse,
 )
 from .montecarlo import ENGINES, run_monte_carlo, run_seed
 from .report import Claim, Outcome, RunContext, write_outputs
@@ -43,18 +40,15 @@ __all__ = [
     "ospa_components",
     "ospa_over_time",
     "position_error",
-    "position_rmse",
     "position_rmse_bound",
     "posterior_crlb",
     "posterior_information",
     "rmse",
     "rmse_bound",
-    "rmse_per_axis",
     "run_monte_carlo",
     "run_seed",
     "track_loss_onset",
     "track_loss_rate",
-    "velocity_rmse",
     "velocity_rmse_bound",
     "write_outputs",
 ]

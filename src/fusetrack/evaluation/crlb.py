@@ -36,7 +36,8 @@ Models are used only through the :class:`~fusetrack.core.MotionModel` and
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -168,6 +169,57 @@ def _symmetrise(a: NDArray[np.floating[Any]]) -> Array:
     return np.asarray(0.5 * (a + np.swapaxes(a, -1, -2)), dtype=float)
 
 
+class BoundOptions(TypedDict, total=False):
+    """Keyword options every bound takes (see :func:`posterior_information`)."""
+
+    mask: ArrayLike | None
+    use_detection_probability: bool
+
+
+class PosteriorOptions(BoundOptions, total=False):
+    """Keyword options of the posterior bound: :class:`BoundOptions` and ``average``."""
+
+    average: bool
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """Checked inputs of a bound: true states ``x`` ``(R, T, d)``, ``steps`` ``(T - 1,)``,
+    sensors, their factors ``weights`` ``(R, T, S)`` and the prior information ``P_0^-1``."""
+
+    x: Array
+    single: bool
+    sensors: list[SensorModel]
+    steps: Array
+    weights: Array
+    use_detection_probability: bool
+    prior: Array
+
+    def information(self, k: int) -> Array:
+        """``sum_s q_{s,k} H_s^T R_s^-1 H_s`` at step ``k`` per trajectory: ``(R, d, d)``."""
+        return _measurement_information(
+            self.sensors, self.x[:, k], self.weights[:, k], self.use_detection_probability
+        )
+
+
+def _problem(
+    motion: MotionModel,
+    sensors: Sensors,
+    trajectories: ArrayLike,
+    dt: float | ArrayLike,
+    prior_cov: ArrayLike,
+    options: BoundOptions,
+) -> _Problem:
+    """Check the inputs shared by every bound (in the order the errors are reported)."""
+    x, single = _trajectories(trajectories, motion)
+    R, T, d = x.shape
+    sl = _sensor_list(sensors)
+    steps = _steps(dt, T)
+    w = _weights(options.get("mask"), R, T, len(sl))
+    use_pd = bool(options.get("use_detection_probability", False))
+    return _Problem(x, single, sl, steps, w, use_pd, _prior_information(prior_cov, d))
+
+
 # --------------------------------------------------------------------------------------------
 # public
 
@@ -178,10 +230,7 @@ def posterior_information(
     trajectories: ArrayLike,
     dt: float | ArrayLike,
     prior_cov: ArrayLike,
-    *,
-    mask: ArrayLike | None = None,
-    use_detection_probability: bool = False,
-    average: bool = True,
+    **options: Unpack[PosteriorOptions],
 ) -> Array:
     """Fisher information matrices ``J_k`` of the Tichavský et al. (1998) recursion.
 
@@ -197,35 +246,30 @@ def posterior_information(
     detection probability, field of view and range), the expected-information (information
     reduction factor) bound. Both may be used together.
 
-    ``average=True`` takes the expectations over the ``R`` trajectories and returns ``(T, d, d)``;
-    ``average=False`` runs the recursion along every trajectory separately (each its own
-    ``R = 1`` bound) and returns ``(R, T, d, d)``. Everything is vectorised over ``R``.
+    ``average=True`` (default) takes the expectations over the ``R`` trajectories and returns
+    ``(T, d, d)``; ``average=False`` runs the recursion along every trajectory separately (each
+    its own ``R = 1`` bound) and returns ``(R, T, d, d)``. Everything is vectorised over ``R``.
     """
-    x, _ = _trajectories(trajectories, motion)
-    R, T, d = x.shape
-    sl = _sensor_list(sensors)
-    steps = _steps(dt, T)
-    w = _weights(mask, R, T, len(sl))
+    pb = _problem(motion, sensors, trajectories, dt, prior_cov, options)
+    average = options.get("average", True)
+    R, T, d = pb.x.shape
 
     def expect(a: Array) -> Array:  # E[.] over trajectories, or per trajectory
         return a.mean(axis=0, keepdims=True) if average else a
 
-    J = np.empty((x.shape[0] if not average else 1, T, d, d))
-    J0 = _prior_information(prior_cov, d)
+    J = np.empty((R if not average else 1, T, d, d))
     # Tichavský et al. 1998: J_0 = P_0^-1, plus what the sensors report at step 0
-    J[:, 0] = J0 + expect(_measurement_information(sl, x[:, 0], w[:, 0], use_detection_probability))
+    J[:, 0] = pb.prior + expect(pb.information(0))
     Qinv_cache: dict[float, Array] = {}
     for k in range(T - 1):  # loop over steps; every step is vectorised over the R trajectories
-        h = float(steps[k])
+        h = float(pb.steps[k])
         if h not in Qinv_cache:
             Qinv_cache[h] = _inverse_noise(motion, h, d)
         Qi = Qinv_cache[h]
-        F = _jacobian(motion, x[:, k], h)
+        F = _jacobian(motion, pb.x[:, k], h)
         D11 = expect(np.swapaxes(F, -1, -2) @ (Qi @ F))  # E[F^T Q^-1 F]
         D12 = -np.swapaxes(expect(F), -1, -2) @ Qi  # -E[F]^T Q^-1
-        D22 = Qi + expect(
-            _measurement_information(sl, x[:, k + 1], w[:, k + 1], use_detection_probability)
-        )
+        D22 = Qi + expect(pb.information(k + 1))
         # Tichavský et al. 1998, Prop. 1: J_{k+1} = D22 - D21 (J_k + D11)^-1 D12
         Y = np.linalg.solve(J[:, k] + D11, D12)
         J[:, k + 1] = _symmetrise(D22 - np.swapaxes(D12, -1, -2) @ Y)
@@ -238,26 +282,14 @@ def posterior_crlb(
     trajectories: ArrayLike,
     dt: float | ArrayLike,
     prior_cov: ArrayLike,
-    *,
-    mask: ArrayLike | None = None,
-    use_detection_probability: bool = False,
-    average: bool = True,
+    **options: Unpack[PosteriorOptions],
 ) -> Array:
     """The posterior Cramér–Rao bound ``J_k^-1``: ``(T, d, d)`` (or ``(R, T, d, d)``).
 
     Arguments as :func:`posterior_information`. Use :func:`position_rmse_bound`,
     :func:`velocity_rmse_bound` or :func:`axis_bounds` to compare with an RMSE.
     """
-    J = posterior_information(
-        motion,
-        sensors,
-        trajectories,
-        dt,
-        prior_cov,
-        mask=mask,
-        use_detection_probability=use_detection_probability,
-        average=average,
-    )
+    J = posterior_information(motion, sensors, trajectories, dt, prior_cov, **options)
     return _symmetrise(np.linalg.inv(J))
 
 
@@ -267,9 +299,7 @@ def deterministic_crlb(
     trajectories: ArrayLike,
     dt: float | ArrayLike,
     prior_cov: ArrayLike,
-    *,
-    mask: ArrayLike | None = None,
-    use_detection_probability: bool = False,
+    **options: Unpack[BoundOptions],
 ) -> Array:
     """CRLB for a target with no process noise (``Q = 0``), along each trajectory.
 
@@ -280,20 +310,15 @@ def deterministic_crlb(
         J_0     = P_0^-1 + sum_s q_{s,0} H_s^T R_s^-1 H_s
 
     Evaluated per trajectory (the state is a fixed parameter): returns ``J_k^-1`` as
-    ``(R, T, d, d)``, or ``(T, d, d)`` for ``(T, d)`` input. Other arguments as
-    :func:`posterior_information`.
+    ``(R, T, d, d)``, or ``(T, d, d)`` for ``(T, d)`` input. Other arguments (``mask``,
+    ``use_detection_probability``) as :func:`posterior_information`.
     """
-    x, single = _trajectories(trajectories, motion)
-    R, T, d = x.shape
-    sl = _sensor_list(sensors)
-    steps = _steps(dt, T)
-    w = _weights(mask, R, T, len(sl))
+    pb = _problem(motion, sensors, trajectories, dt, prior_cov, options)
+    R, T, d = pb.x.shape
     J = np.empty((R, T, d, d))
-    J[:, 0] = _prior_information(prior_cov, d) + _measurement_information(
-        sl, x[:, 0], w[:, 0], use_detection_probability
-    )
+    J[:, 0] = pb.prior + pb.information(0)
     for k in range(T - 1):
-        F = _jacobian(motion, x[:, k], float(steps[k]))
+        F = _jacobian(motion, pb.x[:, k], float(pb.steps[k]))
         FT = np.swapaxes(F, -1, -2)
         try:
             Y = np.linalg.solve(FT, J[:, k])  # F^-T J
@@ -301,16 +326,14 @@ def deterministic_crlb(
         except np.linalg.LinAlgError:
             raise ConfigError(
                 invalid(
-                    f"motion.jacobian(x, dt={float(steps[k])!r})",
+                    f"motion.jacobian(x, dt={float(pb.steps[k])!r})",
                     "singular",
                     "an invertible transition Jacobian (deterministic_crlb needs F^-1)",
                 )
             ) from None
-        J[:, k + 1] = _symmetrise(
-            A + _measurement_information(sl, x[:, k + 1], w[:, k + 1], use_detection_probability)
-        )
+        J[:, k + 1] = _symmetrise(A + pb.information(k + 1))
     bounds = _symmetrise(np.linalg.inv(J))
-    return bounds[0] if single else bounds
+    return bounds[0] if pb.single else bounds
 
 
 def rmse_bound(bounds: ArrayLike, index: Sequence[int]) -> Array:

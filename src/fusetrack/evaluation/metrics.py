@@ -137,8 +137,8 @@ def _scalar_or_array(a: Array) -> Array:
 def rmse(
     estimates: ArrayLike,
     truth: ArrayLike,
-    *,
     index: Sequence[int] | None = None,
+    *,
     joint: bool = False,
     over: Over = "runs",
     nan_policy: NanPolicy = "propagate",
@@ -166,69 +166,6 @@ def rmse(
         sq = sq.sum(axis=-1)
     out = _reduce(sq, present, over, nan_policy, "estimates")
     return _scalar_or_array(np.sqrt(out))
-
-
-def rmse_per_axis(
-    estimates: ArrayLike,
-    truth: ArrayLike,
-    index: Sequence[int] | None = None,
-    *,
-    over: Over = "runs",
-    nan_policy: NanPolicy = "propagate",
-    time_axis: int = 0,
-) -> Array:
-    """RMSE of each selected component separately (:func:`rmse` with ``joint=False``)."""
-    return rmse(
-        estimates,
-        truth,
-        index=index,
-        joint=False,
-        over=over,
-        nan_policy=nan_policy,
-        time_axis=time_axis,
-    )
-
-
-def position_rmse(
-    estimates: ArrayLike,
-    truth: ArrayLike,
-    position_index: Sequence[int],
-    *,
-    over: Over = "runs",
-    nan_policy: NanPolicy = "propagate",
-    time_axis: int = 0,
-) -> Array:
-    """Position RMSE ``sqrt(E[|p_hat - p|^2])`` (:func:`rmse` with ``joint=True``)."""
-    return rmse(
-        estimates,
-        truth,
-        index=position_index,
-        joint=True,
-        over=over,
-        nan_policy=nan_policy,
-        time_axis=time_axis,
-    )
-
-
-def velocity_rmse(
-    estimates: ArrayLike,
-    truth: ArrayLike,
-    velocity_index: Sequence[int],
-    *,
-    over: Over = "runs",
-    nan_policy: NanPolicy = "propagate",
-    time_axis: int = 0,
-) -> Array:
-    """Velocity RMSE ``sqrt(E[|v_hat - v|^2])`` (:func:`rmse` with ``joint=True``)."""
-    return rmse(
-        estimates,
-        truth,
-        index=velocity_index,
-        joint=True,
-        over=over,
-        nan_policy=nan_policy,
-        time_axis=time_axis,
-    )
 
 
 # --------------------------------------------------------------------------------------------

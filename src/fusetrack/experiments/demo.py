@@ -7,7 +7,8 @@ view and not behind an occluder, and a radio tag reports a noisy position fix ev
 EKF, a UKF and a bootstrap particle filter fuse all of it; the posterior Cramér–Rao bound
 (Tichavský et al. 1998) over the same random trajectories and the same report pattern is the
 floor none of them can beat. The truth is drawn from the filters' own motion model and prior,
-so the bound is a real bound here, not an approximation.
+so the bound is a real bound here, not an approximation. The scene itself (world, sensors,
+reports) is :mod:`fusetrack.world.demo_scene`, which the live node's ``demo`` replay uses too.
 """
 
 from __future__ import annotations

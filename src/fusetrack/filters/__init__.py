@@ -4,6 +4,8 @@ One import per line, re-exported with ``as``: add new filters by adding lines.
 """
 
 from .cpf_sp import CPFSPProposal as CPFSPProposal
+from .detection_fusion import DetectionFusion as DetectionFusion
+from .detection_fusion import FusionBelief as FusionBelief
 from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
 from .grid import DirectionalGridBelief as DirectionalGridBelief
 from .grid import GridFilter as GridFilter
@@ -28,6 +30,10 @@ from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
 from .particle import RegularizedParticleFilter as RegularizedParticleFilter
+from .projected_planes import Direct3DFilter as Direct3DFilter
+from .projected_planes import PlanesBelief as PlanesBelief
+from .projected_planes import ProjectedPlanesTracker as ProjectedPlanesTracker
+from .projected_planes import SirBelief as SirBelief
 from .runner import run_filter as run_filter
 from .sis import PriorProposal as PriorProposal
 from .sis import ProposalParticleFilter as ProposalParticleFilter
@@ -38,4 +44,5 @@ from .stats import FilterStats as FilterStats
 from .stats import ValidatedMeasurement as ValidatedMeasurement
 from .stats import as_sensor_map as as_sensor_map
 from .stats import validate_measurement as validate_measurement
+from .waypoint_asir import ASIRBelief as ASIRBelief
 from .waypoint_asir import WaypointASIR as WaypointASIR

@@ -104,8 +104,11 @@ def step_translated(
     ]
 
 
-@dataclass
+@dataclass(frozen=True)
 class CPFSPState:
+    """The fusion centre's state, kept in the belief: each active sensor's bank, and the last
+    particle mean and covariance (where a newly active sensor's bank starts)."""
+
     banks: dict[int, BankState] = field(default_factory=dict)
     mean: Array | None = None
     cov: Array | None = None

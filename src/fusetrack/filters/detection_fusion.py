@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 from ..core.errors import ConfigError, ShapeError, check_probability, invalid
 from ..core.measurement import Measurement
 from ..sensors.camera_geometry import apply_homography
+from ..sensors.ground_plane_detection import GroundPlaneDetection
 
 Array = np.ndarray
 
@@ -222,6 +223,14 @@ class DetectionFusion:
                 invalid("camera_ids", self.camera_ids, f"{len(self.homographies)} ids")
             )
 
+    @property
+    def sensors(self) -> list[GroundPlaneDetection]:
+        """Each camera as a sensor model: its homography and the quality kernel (Eq. 4.20)."""
+        return [
+            GroundPlaneDetection(cid, np.asarray(h, float), self.sigma2)
+            for cid, h in zip(self.camera_ids, self.homographies)
+        ]
+
     def initial_belief(self) -> FusionBelief:
         return FusionBelief(sigma2=self.sigma2)
 
@@ -269,11 +278,9 @@ class DetectionFusion:
             return FrameDecision(
                 False, -math.inf, 0.0, np.full(2, np.nan), np.zeros(n_cam), coast, [None] * n_cam
             )
+        cams = self.sensors
         g_cams = np.array(
-            [
-                to_ground(h, d) if d is not None else (np.nan, np.nan)
-                for h, d in zip(self.homographies, detections)
-            ],
+            [c.ground(d) if d is not None else (np.nan, np.nan) for c, d in zip(cams, detections)],
             dtype=float,
         )
         if not np.all(np.isfinite(g_cams[det])):
@@ -285,7 +292,9 @@ class DetectionFusion:
             g = g_cams[det].mean(axis=0)
             p1 = 0.5
         else:
-            w = np.where(det, quality(np.nan_to_num(g_cams), g_pred, self.sigma2), 0.0)
+            w = np.array(
+                [c.quality(d, g_pred) if d is not None else 0.0 for c, d in zip(cams, detections)]
+            )
             g = fused_position(g_cams[det], w[det]) if self.use_quality else g_cams[det].mean(0)
             p1 = float(presence_prior(g, g_pred, self.sigma2)) if self.use_prior else 0.5
         p1 = min(max(p1, 1e-300), 1.0 - 1e-16)

@@ -186,7 +186,9 @@ class GalerkinProposal(_PositionGridProposal):
         log_post = np.log(np.maximum(pred.reshape(-1), 1e-300)) + log_l
         log_post = np.where(pred.reshape(-1) > 0, log_post, -np.inf)
         if not np.any(np.isfinite(log_post)):
-            filt.stats.degenerate_steps += 1
+            filt.stats.note_degenerate(
+                "GalerkinProposal", "on every grid cell; the prediction was used"
+            )
             log_post = np.log(np.maximum(pred.reshape(-1), 1e-300))
         prob = np.exp(log_post - np.max(log_post))
         prob /= prob.sum()
@@ -252,7 +254,9 @@ class DiscretisationProposal(_PositionGridProposal):
         ll = LogLikelihood(filt.sensors, zs)
         log_w = log_pred + (ll(centre) if ll else 0.0)  # Eq. 79
         if not np.any(np.isfinite(log_w)):
-            filt.stats.degenerate_steps += 1
+            filt.stats.note_degenerate(
+                "DiscretisationProposal", "in every cell; the prediction was used"
+            )
             log_w = log_pred
         w = np.exp(log_w - np.max(log_w))
         w /= w.sum()

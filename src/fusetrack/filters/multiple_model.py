@@ -31,6 +31,7 @@ from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, invalid
 from ..core.measurement import Measurement  # noqa: F401  (doctest)
 from ..core.models import MotionModel, SensorModel
+from ..motion.switching import MarkovSwitching
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
 from .sis import (
     Array,
@@ -161,13 +162,16 @@ class RegimeSwitchingProposal:
     ``"cells"``
         the regime's discretisation cells with the marginal weight (Algorithm 7).
 
+    ``motion`` is the switching motion (:class:`~fusetrack.motion.MarkovSwitching`: a state
+    draw given each particle's regime); ``transition`` the checked matrix the regimes are drawn
+    from (the switching motion's copy is renormalised, which could move a draw by a rounding).
     It returns the weight ratio (``returns_log_ratio``): the filter adds the likelihood (Eq. 48).
     Regimes follow their particles through resampling (:meth:`reindex`); after it bank ``r`` is
     re-partitioned at the mean of the particles in regime ``r`` (or the overall mean when there
     are none; MISSING in the thesis, spec choice).
     """
 
-    models: tuple[MotionModel, ...]
+    motion: MarkovSwitching
     transition: Array
     kind: Literal["prior", "sp-pekf", "cells"] = "prior"
     n_channels: int = 10
@@ -175,6 +179,10 @@ class RegimeSwitchingProposal:
     cell_proposal: DiscretisationProposal = field(default_factory=DiscretisationProposal)
 
     returns_log_ratio = True
+
+    @property
+    def models(self) -> tuple[MotionModel, ...]:
+        return self.motion.models
 
     def _banks(self, ctx: ProposalContext) -> list[SPPEKFBank]:
         return [SPPEKFBank(m, ctx.sensors, self.n_channels, stats=ctx.stats) for m in self.models]
@@ -206,10 +214,14 @@ class RegimeSwitchingProposal:
         filt: ProposalContext,
     ) -> tuple[Array, Array, RegimeState]:
         modes = sample_regimes(state.modes, self.transition, rng)  # Eq. 47
+        if self.kind == "prior":  # the switching motion (MM-bootstrap, Sec. 3.4.4)
+            x = self.motion.sample(prev, dt, rng, modes)
+            # 0 where the previous particle's likelihood is finite (NaN, i.e. no weight,
+            # elsewhere: as this filter always computed it)
+            log_r = LogLikelihood(filt.sensors, zs)(prev) * 0.0
+            return x, log_r, RegimeState(modes, len(self.models), state.banks)
         x = np.empty_like(prev)
-        # 0 where the previous particle's likelihood is finite (NaN, i.e. no weight, elsewhere:
-        # as the filter always computed it; every regime below overwrites it except "prior")
-        log_r = LogLikelihood(filt.sensors, zs)(prev) * 0.0
+        log_r = np.zeros(prev.shape[:-1])  # every particle's entry is set below
         banks = list(state.banks)
         steppers = self._banks(filt) if self.kind == "sp-pekf" else []
         for r, model in enumerate(self.models):
@@ -219,10 +231,6 @@ class RegimeSwitchingProposal:
                     x[sel], log_r[sel] = self._from_cells(
                         r, prev, state.modes, int(sel.sum()), zs, dt, rng, filt
                     )
-                continue
-            if self.kind == "prior":
-                if np.any(sel):
-                    x[sel] = model.sample(prev[sel], dt, rng)
                 continue
             bs = steppers[r].step(banks[r], zs, dt, rng)  # type: ignore[arg-type]  # Eq. 54
             banks[r] = bs
@@ -317,9 +325,10 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
             raise ConfigError(invalid("models", sorted(dims), "models sharing one state dimension"))
         if proposal not in ("prior", "sp-pekf", "cells"):
             raise ConfigError(invalid("proposal", proposal, "'prior', 'sp-pekf' or 'cells'"))
+        p = check_transition(transition, len(models))
         switching = RegimeSwitchingProposal(
-            tuple(models),
-            check_transition(transition, len(models)),
+            MarkovSwitching(tuple(models), p),
+            p,
             proposal,
             n_channels,
             check_initial_probs(initial_probs, len(models)),
@@ -338,11 +347,7 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
         state: RegimeState = belief.proposal
         prev = belief.states
         modes = sample_regimes(state.modes, self.switching.transition, gen)
-        x = np.empty_like(prev)
-        for r, model in enumerate(self.models):
-            sel = modes == r
-            if np.any(sel):
-                x[sel] = model.sample(prev[sel], dt, gen)
+        x = self.switching.motion.sample(prev, dt, gen, modes)
         regimes = RegimeState(modes, state.n_models, state.banks)
         return SISBelief(x, x.mean(axis=-2), regimes, prev, dt)
 

@@ -19,6 +19,10 @@ measurements of an update are summed and normalised once (the degeneracy rules b
 per measurement: a cheap bound vouches for each, and the exact one-at-a-time update runs when it
 cannot).
 
+:meth:`ParticleFilter.update_with_likelihood` also returns the log-likelihood increment
+``log p(z_k | z_1:k-1)`` per run, the log normaliser of the same pass (so the filters are
+:class:`~fusetrack.core.LikelihoodFilter` s: parameter estimation, model comparison).
+
 Resampling sits at the start of ``predict`` rather than the end of ``update`` so that the
 estimate after an update (:meth:`ParticleFilter.estimate`) is taken from the weighted particles,
 which has lower variance than taking it after resampling; the sequence of particle sets is the
@@ -90,7 +94,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from itertools import repeat
@@ -104,7 +107,6 @@ from ..core import resampling
 from ..core.beliefs import Gaussian, Particles
 from ..core.errors import (
     ConfigError,
-    DegenerateWeightsWarning,
     MeasurementError,
     ShapeError,
     check_positive,
@@ -272,7 +274,6 @@ class ParticleFilter:
         self.temper_factor = tf
         self.min_log_evidence = mle
         self.stats = FilterStats()
-        self._warned = False
         self._fused_dt: tuple[float, tuple[Array, Array] | None] | None = None
         self._fused_ll: dict[int, tuple[SensorModel, tuple[int, Array] | None]] = {}
         self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...], Any]] = {}
@@ -949,18 +950,12 @@ class ParticleFilter:
         return recovered
 
     def _note_degenerate(self, degenerate: bool) -> None:
-        if not degenerate:
-            return
-        self.stats.degenerate_steps += 1
-        if not self._warned:
-            self._warned = True
-            warnings.warn(
-                f"{type(self).__name__}: every particle's likelihood vanished for a measurement "
-                f"(log evidence not finite or below min_log_evidence={self.min_log_evidence:.1f}); "
-                f"recovered with degenerate={self.degenerate!r}. Counted in "
-                "stats.degenerate_steps; this warning is shown once per filter.",
-                DegenerateWeightsWarning,
-                stacklevel=3,
+        if degenerate:
+            self.stats.note_degenerate(
+                type(self).__name__,
+                "for a measurement: log evidence not finite or below min_log_evidence="
+                f"{self.min_log_evidence:.1f}; recovered with degenerate={self.degenerate!r}",
+                stacklevel=4,
             )
 
 

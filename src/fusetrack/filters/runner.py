@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike
 from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, MeasurementError, invalid
 from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
-from ..core.models import Filter, LikelihoodFilter, filter_step
+from ..core.models import Filter, LikelihoodFilter, filter_step, step_with_likelihood
 from ..core.track import Track
 from .stats import validate_measurement
 
@@ -77,6 +77,102 @@ def _batch_shape(measurements: list[Measurement]) -> tuple[int, ...]:
         raise MeasurementError(
             invalid("measurement value batch shapes", sorted(set(shapes)), "shapes that broadcast")
         ) from None
+
+
+def _check_options(filt: Filter[Any], order: str, log_likelihood: bool) -> None:
+    """``order`` is known; ``log_likelihood`` only for filters that report it."""
+    if order not in ("reject", "reorder"):
+        raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
+    if log_likelihood and not isinstance(filt, LikelihoodFilter):
+        raise ConfigError(
+            invalid(
+                "log_likelihood",
+                True,
+                f"False for {type(filt).__name__}, which does not report log p(z_k | z_1:k-1) "
+                "(no update_with_likelihood)",
+            )
+        )
+
+
+def _initial_belief(
+    filt: Filter[Any], prior: Any, rng: np.random.Generator | None, batch: tuple[int, ...]
+) -> Any:
+    """The belief to start from: a Gaussian prior becomes particles for a filter that samples
+    (``initialize``), or is broadcast to the measurements' batch axes; other beliefs as given."""
+    initialize = getattr(filt, "initialize", None)  # particle filters: a Gaussian prior -> samples
+    is_sampler = callable(initialize)
+    if is_sampler and rng is None:
+        raise ConfigError(
+            invalid(
+                "rng",
+                rng,
+                f"a numpy Generator: {type(filt).__name__} draws random numbers "
+                "(pass np.random.default_rng(seed))",
+            )
+        )
+    belief = prior
+    if isinstance(prior, Gaussian):
+        if is_sampler:
+            if batch and prior.mean.ndim == 1:
+                belief = initialize(prior, rng, batch_shape=batch)  # type: ignore[misc]
+            else:
+                belief = initialize(prior, rng)  # type: ignore[misc]
+        else:
+            full = np.broadcast_shapes(prior.mean.shape[:-1], prior.cov.shape[:-2], batch)
+            d = prior.dim
+            belief = Gaussian(
+                np.broadcast_to(prior.mean, (*full, d)).copy(),
+                np.broadcast_to(prior.cov, (*full, d, d)).copy(),
+            )
+    return belief
+
+
+def _start_time(t0: float | None, steps: list[tuple[float, list[Measurement]]]) -> float:
+    """The prior's time: ``t0`` (finite, not after the first step) or the first step's time."""
+    if t0 is not None:
+        t0 = float(t0)
+        if not math.isfinite(t0):
+            raise ConfigError(invalid("t0", t0, "a finite time (seconds) or None"))
+        if steps and steps[0][0] < t0 - _TIME_TOLERANCE:
+            raise MeasurementError(
+                invalid("t0", t0, f"a time <= the first step's time {steps[0][0]}")
+            )
+    return t0 if t0 is not None else (steps[0][0] if steps else 0.0)
+
+
+def _filter_loop(
+    filt: Filter[Any],
+    belief: Any,
+    steps: list[tuple[float, list[Measurement]]],
+    t_prev: float,
+    rng: np.random.Generator | None,
+    log_likelihood: bool,
+) -> tuple[Any, list[float], list[np.ndarray], list[np.ndarray], Any]:
+    """Predict and update at every step; the last belief, the estimates' times, means and
+    covariances, and the summed log-likelihood increments (0 unless asked for)."""
+    # a filter's own estimator (particle filters: one fused pass) beats the belief's generic one
+    estimate = getattr(filt, "estimate", None)
+    out_t: list[float] = []
+    out_mean: list[np.ndarray] = []
+    out_cov: list[np.ndarray] = []
+    loglik: Any = 0.0
+    for t, group in steps:
+        dt = t - t_prev
+        if dt > _TIME_TOLERANCE:
+            t_prev = t
+        else:
+            dt = 0.0
+        if log_likelihood and group:
+            assert isinstance(filt, LikelihoodFilter)
+            belief, increment = step_with_likelihood(filt, belief, dt, group, rng)
+            loglik = loglik + increment
+        else:
+            belief = filter_step(filt, belief, dt, group, rng)
+        out_t.append(t)
+        summary = estimate(belief) if estimate is not None else belief
+        out_mean.append(np.asarray(summary.mean))
+        out_cov.append(np.asarray(summary.cov))
+    return belief, out_t, out_mean, out_cov, loglik
 
 
 def run_filter(
@@ -131,88 +227,20 @@ def run_filter(
         belief after the update at each step. ``info["stats"]`` holds how much each of
         ``filt.stats``'s counters grew during this run.
     """
-    if order not in ("reject", "reorder"):
-        raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
-    if log_likelihood and not isinstance(filt, LikelihoodFilter):
-        raise ConfigError(
-            invalid(
-                "log_likelihood",
-                True,
-                f"False for {type(filt).__name__}, which does not report log p(z_k | z_1:k-1) "
-                "(no update_with_likelihood)",
-            )
-        )
+    _check_options(filt, order, log_likelihood)
     ms = order_by_time(as_measurements(measurements), order)
     sensors = getattr(filt, "sensors", None)
     if isinstance(sensors, Mapping):  # unknown sensors and wrong sizes fail before any work
         for m in ms:
             validate_measurement(m, sensors)
     steps = _steps(ms, times)
-    batch = _batch_shape(ms)
-
-    initialize = getattr(filt, "initialize", None)  # particle filters: a Gaussian prior -> samples
-    is_sampler = callable(initialize)
-    if is_sampler and rng is None:
-        raise ConfigError(
-            invalid(
-                "rng",
-                rng,
-                f"a numpy Generator: {type(filt).__name__} draws random numbers "
-                "(pass np.random.default_rng(seed))",
-            )
-        )
-    belief = prior
-    if isinstance(prior, Gaussian):
-        if is_sampler:
-            if batch and prior.mean.ndim == 1:
-                belief = initialize(prior, rng, batch_shape=batch)  # type: ignore[misc]
-            else:
-                belief = initialize(prior, rng)  # type: ignore[misc]
-        else:
-            full = np.broadcast_shapes(prior.mean.shape[:-1], prior.cov.shape[:-2], batch)
-            d = prior.dim
-            belief = Gaussian(
-                np.broadcast_to(prior.mean, (*full, d)).copy(),
-                np.broadcast_to(prior.cov, (*full, d, d)).copy(),
-            )
-
+    belief = _initial_belief(filt, prior, rng, _batch_shape(ms))
     stats = getattr(filt, "stats", None)
     before = stats.as_dict() if stats is not None else {}
-
-    if t0 is not None:
-        t0 = float(t0)
-        if not math.isfinite(t0):
-            raise ConfigError(invalid("t0", t0, "a finite time (seconds) or None"))
-        if steps and steps[0][0] < t0 - _TIME_TOLERANCE:
-            raise MeasurementError(
-                invalid("t0", t0, f"a time <= the first step's time {steps[0][0]}")
-            )
-    t_prev = t0 if t0 is not None else (steps[0][0] if steps else 0.0)
-
-    # a filter's own estimator (particle filters: one fused pass) beats the belief's generic one
-    estimate = getattr(filt, "estimate", None)
-    out_t: list[float] = []
-    out_mean: list[np.ndarray] = []
-    out_cov: list[np.ndarray] = []
-    loglik: Any = 0.0
-    for t, group in steps:
-        dt = t - t_prev
-        if dt > _TIME_TOLERANCE:
-            t_prev = t
-        else:
-            dt = 0.0
-        if log_likelihood and group:
-            if dt > 0.0:
-                belief = filt.predict(belief, dt, rng)
-            assert isinstance(filt, LikelihoodFilter)
-            belief, increment = filt.update_with_likelihood(belief, group, rng)
-            loglik = loglik + increment
-        else:
-            belief = filter_step(filt, belief, dt, group, rng)
-        out_t.append(t)
-        summary = estimate(belief) if estimate is not None else belief
-        out_mean.append(np.asarray(summary.mean))
-        out_cov.append(np.asarray(summary.cov))
+    t_prev = _start_time(t0, steps)
+    belief, out_t, out_mean, out_cov, loglik = _filter_loop(
+        filt, belief, steps, t_prev, rng, log_likelihood
+    )
 
     info: dict[str, Any] = {"filter": type(filt).__name__}
     if log_likelihood:

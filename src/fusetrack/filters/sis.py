@@ -11,6 +11,12 @@ dissertation (bootstrap, PF-SP-PEKF, Galerkin and grid proposals, MCMC moves):
    with an MCMC kernel that leaves ``p(z_t | x) p(x | x_{t-1}^{a_i})`` invariant (Algorithms 8-10);
 4. output the mean of the resampled particles and hand it back to the proposal ("feedback").
 
+Proposals: the transition prior (:class:`PriorProposal`), the EKF bank of PF-SP-PEKF
+(:mod:`.sp_pekf`), CPF-SP (:mod:`.cpf_sp`), unscented (:mod:`.unscented_proposal`), Galerkin and
+discretisation (:mod:`.grid_proposals`), and regime switching (:mod:`.multiple_model`: the
+multiple-model filters are this engine with a regime per particle); MCMC moves in
+:mod:`.mcmc_moves`.
+
 Pairing (spec Sec. 2.1): when the proposal ignores the particle's own past, Eq. 13 pairs new
 particle i with resampled ancestor i ("paired", the thesis's literal weight). ``transition=
 "marginal"`` uses ``(1/N) sum_j p(x_t^i | x_{t-1}^j)`` instead (O(N^2), the marginal-proposal weight).
@@ -43,6 +49,7 @@ from ..core.errors import (
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
+from . import kernels
 from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .stats import FilterStats
 
@@ -107,6 +114,9 @@ class Proposal(Protocol):
 
     ``filt`` is the step's :class:`ProposalContext`; everything a proposal carries from step to
     step is its ``state`` (returned by ``initialize``/``draw``/``feedback``, kept in the belief).
+    Optional members: ``returns_log_ratio`` (see :meth:`draw`), ``side_inputs`` (measurement ids
+    the proposal reads, see :class:`ProposalContext`) and ``reindex(state, ancestors)``, which
+    makes per-particle parts of the state (regimes, :mod:`.multiple_model`) follow resampling.
     """
 
     def initialize(self, prior: Gaussian, particles: Array, rng: np.random.Generator) -> Any: ...
@@ -163,22 +173,24 @@ def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
 
 
 def resample_log_weights(
-    log_w: Array, resample: Callable[..., Any], rng: np.random.Generator, stats: FilterStats
+    log_w: Array,
+    resample: Callable[..., Any],
+    rng: np.random.Generator,
+    stats: FilterStats,
+    owner: str = "particle filter",
 ) -> NDArray[np.intp]:
     """Normalise log-weights ``(..., N)`` per run and resample: ancestor indices ``(..., N)``.
 
-    NaN counts as ``-inf``; a run whose weights all vanished keeps them equal and the step is
-    counted in ``stats.degenerate_steps`` (never NaN).
+    The normalisation is the particle filters' shared kernel
+    (:func:`~fusetrack.filters.kernels.normalize_log_weights`). NaN counts as ``-inf``; a run
+    whose weights all vanished keeps them equal and the step is counted and warned
+    (:meth:`~fusetrack.filters.stats.FilterStats.note_degenerate`; never NaN).
     """
-    log_w = np.where(np.isnan(log_w), -np.inf, log_w)
-    top = np.max(log_w, axis=-1, keepdims=True)
-    bad = ~np.isfinite(top)
+    _, w, lse, _ = kernels.normalize_log_weights(log_w)
+    bad = ~np.isfinite(lse)
     if np.any(bad):
-        stats.degenerate_steps += 1
-        log_w = np.where(bad, 0.0, log_w)
-        top = np.where(bad, 0.0, top)
-    w = np.exp(log_w - top)
-    w /= w.sum(axis=-1, keepdims=True)
+        stats.note_degenerate(owner, "every weight of a run was zero; it kept them equal", 5)
+        w[bad] = 1.0 / w.shape[-1]
     stats.resample_count += 1
     return np.asarray(resample(w, rng), dtype=np.intp)
 
@@ -362,6 +374,18 @@ class ProposalParticleFilter:
         rng: np.random.Generator | None = None,
     ) -> SISBelief:
         """Draw ``x_t ~ q(x_t | x_{t-1}, z_t)``, weight (Eq. 13), resample, move, feed back."""
+        return self.step_with_likelihood(belief, dt, measurements, rng)[0]
+
+    def step_with_likelihood(
+        self,
+        belief: SISBelief,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+    ) -> tuple[SISBelief, Array]:
+        """:meth:`step`, and ``log p(z_t | z_1:t-1)`` estimated with this proposal: the log mean
+        of the incremental weights (the particles are equally weighted after every step), 0 where
+        no sensor reported."""
         check_positive("dt", dt)
         gen = check_generator(rng)
         zs, side = aligned_values(self.sensors, measurements, self._side_ids)
@@ -376,7 +400,11 @@ class ProposalParticleFilter:
             log_w = (loglik(x) if loglik else 0.0) + log_q
         else:
             log_w = loglik(x) + self.log_transition(x, prev, dt) - log_q
-        return self._select(x, prev, log_w, loglik, pstate, dt, gen, ctx)
+        if loglik:
+            increment = logsumexp(log_w, axis=-1) - np.log(log_w.shape[-1])
+        else:
+            increment = np.zeros(np.shape(log_w)[:-1])
+        return self._select(x, prev, log_w, loglik, pstate, dt, gen, ctx), increment
 
     def predict(
         self, belief: SISBelief, dt: float, rng: np.random.Generator | None = None
@@ -435,7 +463,7 @@ class ProposalParticleFilter:
         ctx: ProposalContext,
     ) -> SISBelief:
         """Resample by ``log_w``, move (with the likelihood in view), estimate, feed back."""
-        idx = resample_log_weights(log_w, self.resample, rng, self.stats)
+        idx = resample_log_weights(log_w, self.resample, rng, self.stats, type(self).__name__)
         x_res = np.take_along_axis(x, idx[..., None], axis=-2)
         reindex = getattr(self.proposal, "reindex", None)
         if reindex is not None:  # per-particle parts of the proposal state (regimes)

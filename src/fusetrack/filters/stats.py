@@ -22,6 +22,7 @@ input in two kinds:
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any, NamedTuple
@@ -29,7 +30,13 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import ConfigError, MeasurementError, UnknownSensorError, invalid
+from ..core.errors import (
+    ConfigError,
+    DegenerateWeightsWarning,
+    MeasurementError,
+    UnknownSensorError,
+    invalid,
+)
 from ..core.measurement import Measurement
 from ..core.models import SensorModel
 
@@ -62,6 +69,21 @@ class FilterStats:
     def as_dict(self) -> dict[str, int]:
         """The counters as a plain dict (a snapshot: later steps do not change it)."""
         return asdict(self)
+
+    def note_degenerate(self, owner: str, what: str, stacklevel: int = 3) -> None:
+        """Count a step whose particle weights vanished (``degenerate_steps``) and warn once
+        per stats object with :class:`~fusetrack.core.DegenerateWeightsWarning`; ``what`` says
+        what happened and how the filter recovered. The particle filters all report here."""
+        self.degenerate_steps += 1
+        if self.__dict__.get("_warned"):  # not a dataclass field: not a counter
+            return
+        self.__dict__["_warned"] = True
+        warnings.warn(
+            f"{owner}: every particle's likelihood vanished ({what}). Counted in "
+            "stats.degenerate_steps; this warning is shown once per filter.",
+            DegenerateWeightsWarning,
+            stacklevel=stacklevel + 1,
+        )
 
 
 def as_sensor_map(

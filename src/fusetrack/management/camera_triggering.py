@@ -25,11 +25,11 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-import numba
 import numpy as np
 
 from ..core.angles import wrap_angle_inplace
 from ..core.errors import ConfigError, invalid
+from ..filters.multi_model_kernel import fused_step, kernel_bank, predict_weigh_kernel
 from ..filters.multi_model_pf import MultiModelBearingPF, MultiModelStep, resample_l
 from ..sensors.unlabelled_bearings import merge_close, simulate_bearings, true_bearings
 
@@ -204,7 +204,7 @@ def run_cooperation(
         steps = {}
         if k > 0:
             for o, p in list(parts.items()):
-                parts[o], st = _filter_step(filt, p, z, tracker.dt, rng, tracker.engine)
+                parts[o], st = fused_step(filt, p, z, tracker.dt, rng, tracker.engine)
                 est[o], steps[o] = st.estimate, st
                 res.degenerate_steps += st.degenerate
         else:
@@ -317,143 +317,6 @@ def _oracle_births(
             est.pop(o, None)
 
 
-@numba.njit(cache=True, nogil=True)
-def _predict_weigh_kernel(
-    parts: Array,
-    eta: Array,
-    alphas: Array,
-    dt: float,
-    sensor: Array,
-    z: Array,
-    inv_var: float,
-    pred: Array,
-    w_ml: Array,
-    est: Array,
-) -> int:  # pragma: no cover - jit
-    """Fused :meth:`MultiModelBearingPF._propagate` + weights + consistent estimate for a batch.
-
-    ``parts (B, O, L, 4)``, ``eta (J, B, O, L, 2)`` (scaled noise), ``z (B, N)``; writes
-    ``pred (B, O, J, L, 4)``, normalised ``w_ml (B, O, J, L)`` and ``est (B, O, 4)``; returns the
-    number of degenerate filters (equal weights then). Same arithmetic as the NumPy reference.
-    """
-    B, O, L = parts.shape[0], parts.shape[1], parts.shape[2]
-    J, N = alphas.shape[0], z.shape[1]
-    two_pi = 2.0 * np.pi
-    r2 = np.empty((J, L, N))
-    twin = np.full(J, -1)  # a model with the opposite turn: sin flips, cos and a1 are shared
-    for j in range(J):
-        for i in range(j):
-            if alphas[i] == -alphas[j] and alphas[j] != 0.0:
-                twin[j] = i
-    sw, cw = np.empty(J), np.empty(J)
-    degenerate = 0
-    for b in range(B):
-        for o in range(O):
-            top = -np.inf
-            for l in range(L):
-                x, y = parts[b, o, l, 0], parts[b, o, l, 1]
-                vx, vy = parts[b, o, l, 2], parts[b, o, l, 3]
-                speed = np.hypot(vx, vy)
-                for j in range(J):
-                    omega = alphas[j] / max(speed, 1e-9) if speed > 1e-9 else 0.0
-                    wt = omega * dt
-                    if abs(wt) < 1e-9:
-                        s_, c_, a1, a2 = np.sin(wt), np.cos(wt), dt, 0.0
-                    else:
-                        if twin[j] >= 0:  # sin(-x) = -sin(x), cos(-x) = cos(x) exactly
-                            s_, c_ = -sw[twin[j]], cw[twin[j]]
-                        else:
-                            s_, c_ = np.sin(wt), np.cos(wt)
-                        a1, a2 = s_ / omega, (1.0 - c_) / omega
-                    sw[j], cw[j] = s_, c_
-                    e0, e1 = eta[j, b, o, l, 0], eta[j, b, o, l, 1]
-                    px = x + a1 * vx - a2 * vy + 0.5 * dt * dt * e0
-                    py = y + a2 * vx + a1 * vy + 0.5 * dt * dt * e1
-                    pred[b, o, j, l, 0] = px
-                    pred[b, o, j, l, 1] = py
-                    pred[b, o, j, l, 2] = c_ * vx - s_ * vy + dt * e0
-                    pred[b, o, j, l, 3] = s_ * vx + c_ * vy + dt * e1
-                    h = np.arctan2(py - sensor[1], px - sensor[0])
-                    for n in range(N):
-                        r = h - z[b, n]  # both in [-pi, pi]: one correction wraps it
-                        if r >= np.pi:
-                            r -= two_pi
-                        elif r < -np.pi:
-                            r += two_pi
-                        v = -0.5 * inv_var * r * r
-                        r2[j, l, n] = v
-                        if v > top:
-                            top = v
-            total = 0.0
-            for j in range(J):
-                for l in range(L):
-                    acc = 0.0
-                    for n in range(N):
-                        d = r2[j, l, n] - top
-                        if d > -60.0:  # e^-60 < 1e-26: below rounding of the sum
-                            acc += np.exp(d)
-                    w_ml[b, o, j, l] = acc
-                    total += acc
-            if not (np.isfinite(top) and total > 0.0):
-                degenerate += 1
-                for j in range(J):
-                    for l in range(L):
-                        w_ml[b, o, j, l] = 1.0 / (J * L)
-            else:
-                for j in range(J):
-                    for l in range(L):
-                        w_ml[b, o, j, l] /= total
-            for d in range(4):
-                acc = 0.0
-                for j in range(J):
-                    for l in range(L):
-                        acc += w_ml[b, o, j, l] * pred[b, o, j, l, d]
-                est[b, o, d] = acc
-    return degenerate
-
-
-def _kernel_bank(models: tuple) -> Array | None:
-    """The models' turn accelerations if the kernel implements the bank (2-D turns driven by
-    ``alpha``, one ``sigma_a``), else None."""
-    fast = all(
-        m.ndim == 2 and not np.any(m.accel) and m.turn_axes in (None, (0, 1))
-        and m.sigma_a == models[0].sigma_a
-        for m in models
-    )  # fmt: skip
-    return np.array([m.turn_alpha if m.turn_axes else 0.0 for m in models]) if fast else None
-
-
-def _filter_step(
-    filt: MultiModelBearingPF,
-    parts: Array,
-    z: Array,
-    dt: float,
-    rng: np.random.Generator,
-    engine: str,
-) -> tuple[Array, MultiModelStep]:
-    """:meth:`MultiModelBearingPF.step` (consistent estimator) through the fused kernel."""
-    alphas = _kernel_bank(filt.models)
-    if engine == "numpy" or alphas is None or z.size == 0 or filt.estimator != "consistent":
-        return filt.step(parts, z, dt, rng)
-    J, L = len(alphas), len(parts)
-    sigma_a = float(filt.models[0].sigma_a)
-    shape = (J, 1, 1, L, 2)  # the draw of MultiModelBearingPF._propagate
-    eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
-    pred = np.empty((1, 1, J, L, 4))
-    w_ml = np.empty((1, 1, J, L))
-    est = np.empty((1, 1, 4))
-    zz = np.asarray(z, float).reshape(1, -1)
-    deg = _predict_weigh_kernel(
-        parts[None, None], eta, alphas, dt, np.asarray(filt.sensor_position, float), zz,
-        1.0 / filt.sigma**2, pred, w_ml, est,
-    )  # fmt: skip
-    w = w_ml[0, 0]
-    p_m = w.sum(axis=1)
-    means = np.einsum("jl,jld->jd", w, pred[0, 0]) / np.where(p_m > 0, p_m, 1.0)[:, None]
-    new = pred[0, 0].reshape(J * L, 4)[resample_l(w, filt.n_particles, rng)]
-    return new, MultiModelStep(est[0, 0], pred[0, 0], means, p_m, bool(deg))
-
-
 @dataclass
 class PeriodicBatchResult:
     estimates: Array  # (T, B, O, 4)
@@ -491,7 +354,7 @@ def run_periodic_batch(
     filt = tracker.build(sensor, sigma)
     inv_var = 1.0 / filt.sigma**2
     J = len(tracker.models)
-    alphas = _kernel_bank(tracker.models)
+    alphas = kernel_bank(tracker.models)
     sigma_a = float(tracker.models[0].sigma_a)
     sensor_xy = np.asarray(sensor, float)
     v0 = truth[0, :, 2:] if tracker.known_initial_velocity else np.zeros((O, 2))
@@ -511,7 +374,7 @@ def run_periodic_batch(
             pred = np.empty((B, O, J, L, 4))
             w_ml = np.empty((B, O, J, L))
             est = np.empty((B, O, 4))
-            res.degenerate_steps += _predict_weigh_kernel(
+            res.degenerate_steps += predict_weigh_kernel(
                 parts, eta, alphas, tracker.dt, sensor_xy, z, inv_var, pred, w_ml, est
             )
         else:

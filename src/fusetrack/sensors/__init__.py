@@ -31,9 +31,18 @@ __all__ = [
 
 # Nott 2009 (issue 7): the camera that sees a person on the floor, a simulated NFER radio tag
 from . import camera_geometry as camera_geometry
+
+# Cameras and tags: Kushwaha 2010's appearance camera (issue 16), Nott 2009's (issue 7)
+from .appearance import AppearanceModel as AppearanceModel
+from .appearance import FeatureImage as FeatureImage
+from .appearance_camera import AppearanceCamera as AppearanceCamera
+from .bearing_detection import DetectionFunctionSensor as DetectionFunctionSensor
 from .detection_function import AngularSampling as AngularSampling
 from .detection_function import arc_mean_matrix as arc_mean_matrix
 from .detection_function import cell_arcs as cell_arcs
+from .doa_plane_likelihood import DoaCone as DoaCone
+from .doa_plane_likelihood import ProjectedPlaneBearing as ProjectedPlaneBearing
+from .ground_plane_detection import GroundPlaneDetection as GroundPlaneDetection
 from .homography_camera import HomographyCamera as HomographyCamera
 from .nfer_tag import NferTagSimulator as NferTagSimulator
 from .nfer_tag import fit_position_fix as fit_position_fix

@@ -73,3 +73,14 @@ class LikelihoodMapSensor:
         lik = self.cell_likelihood(z)
         with np.errstate(divide="ignore"):
             return np.asarray(np.log(lik)[self.cell_index(x)], dtype=np.float64)
+
+
+def detection_quality(values: ArrayLike) -> float | None:
+    """A report's quality q_k = max(λ - min λ) / Σ(λ - min λ) (Kushwaha 2010, Eq. 31 with the
+    reliability r_k = 1, spec 003 A-III-11); None when ``values`` are flat (nothing seen)."""
+    v = np.asarray(values, float)
+    shifted = v - v.min()
+    total = shifted.sum()
+    if not total > 0:
+        return None
+    return float(shifted.max() / total)

@@ -57,6 +57,30 @@ def as_measurements(readings: Sequence[Reading], at: float | None = None) -> lis
     ]
 
 
+def track_state(
+    track: int,
+    tick: int,
+    t: float,
+    mean: np.ndarray,
+    cov: np.ndarray,
+    position_index: Sequence[int],
+    readings: Sequence[Reading],
+) -> TrackState:
+    """What an engine publishes for one track at one tick."""
+    p = list(position_index)
+    return TrackState(
+        track=track,
+        tick=tick,
+        time=t,
+        state=mean.tolist(),
+        covariance=cov.tolist(),
+        position=mean[p].tolist(),
+        position_covariance=cov[np.ix_(p, p)].tolist(),
+        sensors=sorted({r.sensor for r in readings}),
+        readings=len(readings),
+    )
+
+
 class Engine(Protocol):
     """What the node needs of a tracker: one call per tick, the tracks it publishes."""
 
@@ -111,18 +135,7 @@ class FusionEngine:
             self.resets += 1
             self.belief = self._initial()
             mean, cov = self._summary()
-        p = self.position_index
-        return TrackState(
-            track=1,
-            tick=tick,
-            time=t,
-            state=mean.tolist(),
-            covariance=cov.tolist(),
-            position=mean[p].tolist(),
-            position_covariance=cov[np.ix_(p, p)].tolist(),
-            sensors=sorted({r.sensor for r in readings}),
-            readings=len(readings),
-        )
+        return track_state(1, tick, t, mean, cov, self.position_index, readings)
 
     def _advance(self, when: float, measurements: Sequence[Measurement]) -> None:
         """One :func:`filter_step` to ``when`` (a predict only when it is later than now)."""

@@ -38,6 +38,7 @@ from ..filters.grid import (
     map_sensors,
 )
 from ..sensors.detection_function import arc_mean_matrix, cell_arcs, normalize_likelihood
+from ..sensors.likelihood_map import detection_quality
 from .alignment import Reading
 from .config import DetectionFunctionSensor, NetworkConfig
 
@@ -70,11 +71,8 @@ class CellLikelihoods:
         w = self.arc_means.get(reading.sensor)
         if w is not None:
             v = np.asarray(reading.value, float)
-            shifted = v - v.min()
-            total = shifted.sum()
-            if not total > 0:
-                return None
-            return normalize_likelihood(w @ v), float(shifted.max() / total)
+            q = detection_quality(v)
+            return None if q is None else (normalize_likelihood(w @ v), q)
         model = self.models[reading.sensor]
         if reading.covariance is not None:  # a reading's own noise: the Gaussian it implies
             z_pred = model.predict(self.states)
@@ -85,8 +83,8 @@ class CellLikelihoods:
             ll = np.asarray(model.log_likelihood(reading.value, self.states), float)
         lik = np.exp(ll - ll.max())
         lik = normalize_likelihood(lik)
-        shifted = lik - lik.min()
-        return lik, float(shifted.max() / shifted.sum()) if shifted.sum() > 0 else 0.0
+        q = detection_quality(lik)
+        return lik, 0.0 if q is None else q
 
     def of(self, readings: Sequence[Reading]) -> SensorLikelihoods:
         """The tick's readings as the grid filter's input (one row per informative reading)."""

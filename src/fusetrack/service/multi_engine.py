@@ -30,6 +30,7 @@ from ..association.mcmcda import MCMCDA, AssociationState, MCMCDAConfig
 from ..association.peaks import likelihood_peaks
 from .alignment import Reading
 from .config import NetworkConfig
+from .engine import track_state
 from .grid_cells import CellLikelihoods, grid_of
 from .schema import TrackState
 
@@ -107,20 +108,8 @@ class MultiTargetEngine:
         self.association, tracks = associate(self.mcmcda, self.association, y, self.rng)
         self.last_detections = y
         self.time = t
-        sensors = sorted({r.sensor for r in readings})
-        out = []
-        for ident, (x, p) in tracks.items():
-            out.append(
-                TrackState(
-                    track=ident + 1,  # ids from 1, as the single-target trackers'
-                    tick=tick,
-                    time=t,
-                    state=x.tolist(),
-                    covariance=p.tolist(),
-                    position=x[:2].tolist(),
-                    position_covariance=p[:2, :2].tolist(),
-                    sensors=sensors,
-                    readings=len(readings),
-                )
-            )
-        return out
+        # ids from 1, as the single-target trackers'
+        return [
+            track_state(ident + 1, tick, t, x, p, (0, 1), readings)
+            for ident, (x, p) in tracks.items()
+        ]

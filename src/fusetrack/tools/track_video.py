@@ -210,30 +210,18 @@ def _annotate(
     return out
 
 
-def track_video(
-    video: Path,
-    radio: Path,
-    calibration: Path,
-    out: Path,
-    *,
-    clock_offset: float = 0.0,
-    progress: bool | None = None,
-    drop_frames: tuple[int, int] | None = None,
-) -> dict[str, Any]:
-    """Run the chain and write the outputs (see the module docstring); returns the summary."""
-    import cv2
-    from tqdm import tqdm
-
-    from ..sensors.camera_geometry import apply_homography
-
-    start = time.perf_counter()
-    info = open_video(Path(video))
-    cal = read_calibration(Path(calibration))
+def _frame_rate(cal: dict[str, Any], info: VideoInfo) -> float:
+    """The calibration's frame rate, else the video's; an error if neither is > 0."""
     fps = float(cal.get("fps") or info.fps)
     if not fps > 0:
         raise InputError(
             invalid("fps", fps, "a frame rate > 0 (the video has none: set fps in the calibration)")
         )
+    return fps
+
+
+def _background_frames(cal: dict[str, Any], info: VideoInfo) -> tuple[int, int]:
+    """How many leading frames show the empty scene, and the video's length (10^9 if unknown)."""
     n_bg = int(cal.get("background_frames", 30))
     if n_bg < 2:
         raise InputError(invalid("background_frames", n_bg, "an integer >= 2"))
@@ -246,6 +234,13 @@ def track_video(
                 f"more than background_frames={n_bg} frames (the leading frames must show the empty scene)",
             )
         )
+    return n_bg, n_frames
+
+
+def _make_tracker(
+    cal: dict[str, Any], info: VideoInfo, calibration: Path, drop_frames: tuple[int, int] | None
+) -> VideoRadioTracker:
+    """The tracker configured from the calibration file (errors name the file)."""
     try:
         cfg = TrackerConfig(
             foot_homography=np.asarray(cal["foot_homography"], float),
@@ -258,13 +253,15 @@ def track_video(
             min_area=int(cal.get("min_area", 150)),
             drop_frames=drop_frames,
         )
-        tracker = VideoRadioTracker(cfg)
+        return VideoRadioTracker(cfg)
     except ConfigError as e:
         raise InputError(f"calibration={str(calibration)!r}: {e}") from None
-    video_start = float(cal.get("video_start", 0.0))
-    log = read_radio(
-        Path(radio), clock_offset=clock_offset, video_start=video_start, duration=n_frames / fps
-    )
+
+
+def _split_tags(
+    log: pd.DataFrame, cal: dict[str, Any]
+) -> tuple[str, pd.DataFrame, NDArray[np.float64]]:
+    """The subject's tag and fixes, and the other tags' fixes as rows (t, x, y, tag index)."""
     subject = str(cal.get("subject_tag", log["tag"].iloc[0]))
     if subject not in set(log["tag"]):
         raise InputError(
@@ -276,8 +273,13 @@ def track_video(
     other_arr = np.column_stack(
         [others[["t", "x", "y"]].to_numpy(float), others["tag"].map(tag_ids).to_numpy(float)]
     )
+    return subject, mine, other_arr
 
-    frames = read_frames(Path(video))
+
+def _train_background(
+    tracker: VideoRadioTracker, frames: Iterator[NDArray[np.uint8]], n_bg: int
+) -> None:
+    """Train the background model on the first ``n_bg`` frames (an error if the video is shorter)."""
     background = []
     for _ in range(n_bg):
         f = next(frames, None)
@@ -290,75 +292,156 @@ def track_video(
         )
     tracker.train_background(np.stack(background))
 
+
+@dataclass(frozen=True)
+class _Inputs:
+    """Everything read and checked before any output is written."""
+
+    info: VideoInfo
+    fps: float
+    n_bg: int
+    cfg: TrackerConfig
+    subject: str
+    mine: pd.DataFrame
+    other_arr: NDArray[np.float64]
+
+
+def _read_inputs(
+    video: Path,
+    radio: Path,
+    calibration: Path,
+    clock_offset: float,
+    drop_frames: tuple[int, int] | None,
+) -> tuple[_Inputs, VideoRadioTracker]:
+    """Open the video, read the calibration and the tag log, check them against each other;
+    the inputs and the tracker they configure."""
+    info = open_video(Path(video))
+    cal = read_calibration(Path(calibration))
+    fps = _frame_rate(cal, info)
+    n_bg, n_frames = _background_frames(cal, info)
+    tracker = _make_tracker(cal, info, calibration, drop_frames)
+    video_start = float(cal.get("video_start", 0.0))
+    log = read_radio(
+        Path(radio), clock_offset=clock_offset, video_start=video_start, duration=n_frames / fps
+    )
+    subject, mine, other_arr = _split_tags(log, cal)
+    return _Inputs(info, fps, n_bg, tracker.cfg, subject, mine, other_arr), tracker
+
+
+def _track_and_annotate(
+    tracker: VideoRadioTracker,
+    inp: _Inputs,
+    frames: Iterator[NDArray[np.uint8]],
+    annotated: Path,
+    progress: bool | None,
+) -> list[dict[str, Any]]:
+    """Track every frame after the background ones, writing the annotated video as it goes."""
+    import cv2
+    from tqdm import tqdm
+
+    from ..sensors.camera_geometry import apply_homography
+
+    info, fps, n_bg, cfg, other_arr = inp.info, inp.fps, inp.n_bg, inp.cfg, inp.other_arr
+    writer = cv2.VideoWriter(
+        str(annotated),
+        cv2.VideoWriter.fourcc(*"mp4v"),
+        fps,
+        (info.width, info.height),
+    )
+    rows: list[dict[str, Any]] = []
+    total = max(info.n_frames - n_bg, 0) or None
+    bar = tqdm(total=total, desc="track-video", unit="frame", disable=(progress is False))
+    buffered: list[tuple[int, float, NDArray[np.uint8]]] = []
+
+    def feed() -> Iterator[tuple[int, float, NDArray[np.uint8]]]:
+        for k, image in enumerate(frames, start=n_bg):
+            item = (k, k / fps, image)
+            buffered.append(item)
+            yield item
+
+    radio_arr = inp.mine[["t", "x", "y"]].to_numpy(float)
+    for r in tracker.run(feed(), radio_arr, other_arr if len(other_arr) else None):
+        while buffered and buffered[0][0] <= r.frame:
+            k, _t, image = buffered.pop(0)
+            res = r if k == r.frame else None
+            px = (
+                apply_homography(cfg.foot_homography, np.array([r.radio_x, r.radio_y]))
+                if res
+                else None
+            )
+            writer.write(_annotate(image, res, px))
+            bar.update()
+        rows.append(r.as_row())
+    for _k, _t, image in buffered:
+        writer.write(_annotate(image, None, None))
+    writer.release()
+    bar.close()
+    return rows
+
+
+def _track_table(rows: list[dict[str, Any]], subject: str, n_bg: int) -> pd.DataFrame:
+    """The per-frame rows as a table; an error if the subject was never located or never seen."""
+    if not rows:
+        raise InputError(
+            "the subject was never located: no tag fix of tag "
+            f"{subject!r} during the video and no foreground blob to start from"
+        )
+    df = pd.DataFrame(rows)
+    if not df["updated_visual"].any():
+        raise InputError(
+            f"the subject (tag {subject!r}) never appears in the video: no foreground blob matched it in "
+            f"{len(df)} frames (check that the first {n_bg} frames show the empty scene and that the "
+            "foot_homography maps the floor into this image)"
+        )
+    return df
+
+
+def _write_outputs(
+    tmp: Path, df: pd.DataFrame, inp: _Inputs, video: Path, clock_offset: float, start: float
+) -> dict[str, Any]:
+    """Tracks (CSV, Parquet), the floor plan and the summary into ``tmp``; the summary."""
+    df.to_csv(tmp / "tracks.csv", index=False)
+    df.to_parquet(tmp / "tracks.parquet", index=False)
+    _floorplan(tmp / "floorplan.png", df, inp.mine)
+    summary = {
+        "video": str(video),
+        "frames": int(len(df) + inp.n_bg),
+        "background_frames": inp.n_bg,
+        "fps": inp.fps,
+        "tracked_frames": len(df),
+        "visual_updates": int(df["updated_visual"].sum()),
+        "occluded_frames": int(df["occluded"].sum()),
+        "radio_fixes": len(inp.mine),
+        "subject_tag": inp.subject,
+        "clock_offset": clock_offset,
+        "seconds": round(time.perf_counter() - start, 3),
+    }
+    (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary
+
+
+def track_video(
+    video: Path,
+    radio: Path,
+    calibration: Path,
+    out: Path,
+    *,
+    clock_offset: float = 0.0,
+    progress: bool | None = None,
+    drop_frames: tuple[int, int] | None = None,
+) -> dict[str, Any]:
+    """Run the chain and write the outputs (see the module docstring); returns the summary."""
+    start = time.perf_counter()
+    inp, tracker = _read_inputs(video, radio, calibration, clock_offset, drop_frames)
+    frames = read_frames(Path(video))
+    _train_background(tracker, frames, inp.n_bg)
     tmp = Path(
         tempfile.mkdtemp(prefix=f".{Path(out).name}.partial-", dir=Path(out).absolute().parent)
     )
     try:
-        writer = cv2.VideoWriter(
-            str(tmp / "annotated.mp4"),
-            cv2.VideoWriter.fourcc(*"mp4v"),
-            fps,
-            (info.width, info.height),
-        )
-        rows: list[dict[str, Any]] = []
-        total = max(info.n_frames - n_bg, 0) or None
-        bar = tqdm(total=total, desc="track-video", unit="frame", disable=(progress is False))
-        buffered: list[tuple[int, float, NDArray[np.uint8]]] = []
-
-        def feed() -> Iterator[tuple[int, float, NDArray[np.uint8]]]:
-            for k, image in enumerate(frames, start=n_bg):
-                item = (k, k / fps, image)
-                buffered.append(item)
-                yield item
-
-        radio_arr = mine[["t", "x", "y"]].to_numpy(float)
-        done: set[int] = set()
-        for r in tracker.run(feed(), radio_arr, other_arr if len(other_arr) else None):
-            while buffered and buffered[0][0] <= r.frame:
-                k, _t, image = buffered.pop(0)
-                res = r if k == r.frame else None
-                px = (
-                    apply_homography(cfg.foot_homography, np.array([r.radio_x, r.radio_y]))
-                    if res
-                    else None
-                )
-                writer.write(_annotate(image, res, px))
-                bar.update()
-            rows.append(r.as_row())
-            done.add(r.frame)
-        for _k, _t, image in buffered:
-            writer.write(_annotate(image, None, None))
-        writer.release()
-        bar.close()
-        if not rows:
-            raise InputError(
-                "the subject was never located: no tag fix of tag "
-                f"{subject!r} during the video and no foreground blob to start from"
-            )
-        df = pd.DataFrame(rows)
-        if not df["updated_visual"].any():
-            raise InputError(
-                f"the subject (tag {subject!r}) never appears in the video: no foreground blob matched it in "
-                f"{len(df)} frames (check that the first {n_bg} frames show the empty scene and that the "
-                "foot_homography maps the floor into this image)"
-            )
-        df.to_csv(tmp / "tracks.csv", index=False)
-        df.to_parquet(tmp / "tracks.parquet", index=False)
-        _floorplan(tmp / "floorplan.png", df, mine)
-        summary = {
-            "video": str(video),
-            "frames": int(len(df) + n_bg),
-            "background_frames": n_bg,
-            "fps": fps,
-            "tracked_frames": len(df),
-            "visual_updates": int(df["updated_visual"].sum()),
-            "occluded_frames": int(df["occluded"].sum()),
-            "radio_fixes": len(mine),
-            "subject_tag": subject,
-            "clock_offset": clock_offset,
-            "seconds": round(time.perf_counter() - start, 3),
-        }
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        rows = _track_and_annotate(tracker, inp, frames, tmp / "annotated.mp4", progress)
+        df = _track_table(rows, inp.subject, inp.n_bg)
+        summary = _write_outputs(tmp, df, inp, video, clock_offset, start)
         dest = Path(out)
         dest.mkdir(parents=True, exist_ok=True)
         for item in tmp.iterdir():

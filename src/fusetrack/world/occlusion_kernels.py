@@ -332,6 +332,195 @@ def _q_one(
     return min(max(v, 0.0), 1.0)
 
 
+@numba.njit(cache=True, inline="always")
+def _occluder_precisions(occ_cov: np.ndarray) -> tuple:  # pragma: no cover - jit
+    """Per occluder prior: precision entries ``(p11, p12, p22)``, whether it is isotropic, ``1/sd``
+    and the tail cutoff ``CUTOFF sd`` (Ercan et al. 2013, Eq. 7)."""
+    M = occ_cov.shape[0]
+    p11, p12, p22 = np.zeros(M), np.zeros(M), np.zeros(M)
+    iso = np.zeros(M, dtype=np.bool_)
+    inv_sd, reach = np.zeros(M), np.zeros(M)
+    for j in range(M):
+        det = occ_cov[j, 0, 0] * occ_cov[j, 1, 1] - occ_cov[j, 0, 1] * occ_cov[j, 0, 1]
+        p11[j] = occ_cov[j, 1, 1] / det
+        p12[j] = -occ_cov[j, 0, 1] / det
+        p22[j] = occ_cov[j, 0, 0] / det
+        iso[j] = occ_cov[j, 0, 1] == 0.0 and occ_cov[j, 0, 0] == occ_cov[j, 1, 1]
+        sd = math.sqrt(occ_cov[j, 0, 0])
+        inv_sd[j] = 1.0 / sd
+        reach[j] = CUTOFF * sd
+    return p11, p12, p22, iso, inv_sd, reach
+
+
+@numba.njit(cache=True, inline="always")
+def _cull_occluders(
+    x: np.ndarray, cam_pos: np.ndarray, occ_mu: np.ndarray, occ_cov: np.ndarray, half: float
+) -> tuple:  # pragma: no cover - jit
+    """Per camera, the occluders that can block a sight line to the particle cloud: ``use[i, :n]``.
+
+    Every sight line of the cloud lies within rho of the segment camera -> centre of the cloud's
+    bounding box, so an occluder farther than rho + D/2 + 5.5 sd from that segment has q < 3e-7
+    for every particle (2-D Gaussian tail) and is skipped."""
+    L, K, M = x.shape[0], cam_pos.shape[0], occ_mu.shape[0]
+    use = np.zeros((K, M), dtype=np.int64)
+    n_use = np.zeros(K, dtype=np.int64)
+    lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
+    for l in range(L):
+        lo_x = min(lo_x, x[l, 0])
+        hi_x = max(hi_x, x[l, 0])
+        lo_y = min(lo_y, x[l, 1])
+        hi_y = max(hi_y, x[l, 1])
+    bx, by = 0.5 * (lo_x + hi_x), 0.5 * (lo_y + hi_y)
+    rho = 0.5 * math.sqrt((hi_x - lo_x) ** 2 + (hi_y - lo_y) ** 2)
+    for i in range(K):
+        sx, sy = bx - cam_pos[i, 0], by - cam_pos[i, 1]
+        len2 = sx * sx + sy * sy
+        n_use[i] = 0
+        for j in range(M):
+            ox, oy = occ_mu[j, 0] - cam_pos[i, 0], occ_mu[j, 1] - cam_pos[i, 1]
+            t = (ox * sx + oy * sy) / len2 if len2 > 0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            fx, fy = ox - t * sx, oy - t * sy
+            sd_max = math.sqrt(  # Gershgorin bound on the largest eigenvalue
+                max(occ_cov[j, 0, 0], occ_cov[j, 1, 1]) + abs(occ_cov[j, 0, 1])
+            )
+            lim = rho + half + 1.1 * CUTOFF * sd_max
+            if fx * fx + fy * fy <= lim * lim:
+                use[i, n_use[i]] = j
+                n_use[i] += 1
+    return use, n_use
+
+
+@numba.njit(cache=True, inline="always")
+def _log_reading(
+    z: float, d: float, h: float, focal: float, var_theta: float, var_pos: float, var_read: float
+) -> float:  # pragma: no cover - jit
+    """``log N(z; f h/d, var(v | x))`` of one camera's image coordinate (Ercan et al. 2013, Eq. 6)."""
+    dd = max(d, 1e-6)  # MIN_DEPTH of perspective_camera
+    ratio = h / dd
+    rr = ratio * ratio
+    f2 = focal * focal
+    var = f2 * (1.0 + rr) ** 2 * var_theta + f2 * (1.0 + rr) / (dd * dd) * var_pos + var_read
+    res = z - focal * ratio
+    return -0.5 * (res * res / var + math.log(2.0 * math.pi * var))
+
+
+@numba.njit(cache=True, inline="always")
+def _disc_pattern(
+    px: float,
+    py: float,
+    assigned: np.ndarray,
+    eta: np.ndarray,
+    cam_pos: np.ndarray,
+    occ_mu: np.ndarray,
+    r2disk: float,
+) -> float:  # pragma: no cover - jit
+    """``p(eta | x)`` with occluders as discs at known centres: 1 when every camera's visibility
+    equals ``eta``, else 0 (Sec. 6.1, RMSE_occ = 0)."""
+    for i in range(cam_pos.shape[0]):
+        vis = assigned[i]
+        if vis:
+            rx, ry = px - cam_pos[i, 0], py - cam_pos[i, 1]
+            len2 = rx * rx + ry * ry
+            for j in range(occ_mu.shape[0]):
+                ox, oy = occ_mu[j, 0] - cam_pos[i, 0], occ_mu[j, 1] - cam_pos[i, 1]
+                t = (ox * rx + oy * ry) / len2 if len2 > 0 else 0.0
+                t = min(max(t, 0.0), 1.0)
+                fx, fy = ox - t * rx, oy - t * ry
+                if fx * fx + fy * fy < r2disk:
+                    vis = False
+                    break
+        if vis != eta[i]:
+            return 0.0
+    return 1.0
+
+
+@numba.njit(cache=True, inline="always")
+def _camera_offsets(
+    cam_pos: np.ndarray, occ_mu: np.ndarray, p11: np.ndarray, p12: np.ndarray, p22: np.ndarray
+) -> tuple:  # pragma: no cover - jit
+    """Occluder means relative to each camera ``m (K, M)`` and their products with the occluder
+    precision ``P m`` (the camera-fixed parts of Eq. 7)."""
+    K, M = cam_pos.shape[0], occ_mu.shape[0]
+    m1, m2, pm1, pm2 = np.zeros((K, M)), np.zeros((K, M)), np.zeros((K, M)), np.zeros((K, M))
+    for i in range(K):
+        for j in range(M):
+            m1[i, j] = occ_mu[j, 0] - cam_pos[i, 0]
+            m2[i, j] = occ_mu[j, 1] - cam_pos[i, 1]
+            pm1[i, j] = p11[j] * m1[i, j] + p12[j] * m2[i, j]
+            pm2[i, j] = p12[j] * m1[i, j] + p22[j] * m2[i, j]
+    return m1, m2, pm1, pm2
+
+
+@numba.njit(cache=True, inline="always")
+def _inclusion_exclusion(
+    q: np.ndarray,
+    s_v: np.ndarray,
+    zeros: np.ndarray,
+    nz: int,
+    s: np.ndarray,
+    active: np.ndarray,
+) -> float:  # pragma: no cover - jit
+    """``Σ_{B ⊆ occluded} (-1)^|B| Π_j (1 - Σ_{i ∈ seen ∪ B} q_ij)`` (Eqs. 8-9) from the per-camera,
+    per-occluder probabilities ``q`` and their sums over the seeing cameras ``s_v``.
+
+    Occluders that no occluded camera's rectangle reaches give the same factor to every term of
+    the inclusion-exclusion: they are multiplied once. The rest are enumerated in Gray-code order
+    (one camera added or removed per term)."""
+    common = 1.0
+    na = 0
+    for j in range(s_v.shape[0]):
+        touched = False
+        for b in range(nz):
+            if q[zeros[b], j] > 0.0:
+                touched = True
+                break
+        if touched:
+            active[na] = j
+            s[na] = s_v[j]
+            na += 1
+        else:
+            f = 1.0 - s_v[j]
+            if f <= 0.0:
+                common = 0.0
+                break
+            if f < 1.0:
+                common *= f
+    total = 0.0
+    if common > 0.0:
+        in_b = 0
+        for step in range(1 << nz):
+            if step > 0:
+                bit = 0
+                while not (step >> bit) & 1:
+                    bit += 1
+                ib = zeros[bit]
+                if in_b & (1 << bit):
+                    for a in range(na):
+                        s[a] -= q[ib, active[a]]
+                else:
+                    for a in range(na):
+                        s[a] += q[ib, active[a]]
+                in_b ^= 1 << bit
+            prod = 1.0
+            for a in range(na):
+                f = 1.0 - s[a]
+                if f <= 0.0:
+                    prod = 0.0
+                    break
+                if f < 1.0:
+                    prod *= f
+            # parity of the subset size: popcount of the Gray code
+            g = in_b
+            odd = False
+            while g:
+                odd = not odd
+                g &= g - 1
+            total += -prod if odd else prod
+        total *= common
+    return min(max(total, 0.0), 1.0)
+
+
 @numba.njit(cache=True, nogil=True)
 def camera_likelihood_kernel(
     x: np.ndarray,
@@ -362,71 +551,24 @@ def camera_likelihood_kernel(
     pattern probability is floored at ``floor`` and raised to ``occlusion_power``. Same formulas as
     :meth:`fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood.log_likelihood_reference`.
     """
-    L, K, M, E = x.shape[0], cam_pos.shape[0], occ_mu.shape[0], edge_a.shape[0]
+    L, K, M = x.shape[0], cam_pos.shape[0], occ_mu.shape[0]
     out = np.empty(L)
     half = 0.5 * diameter
-    r2disk = half * half
     cy_ = np.cos(cam_yaw)
     sy_ = np.sin(cam_yaw)
     eta = np.empty(K, dtype=np.bool_)
     for i in range(K):
         eta[i] = not math.isnan(z[i])
-    # per-occluder precision and per-(camera, occluder) offsets (mode 2)
-    p11 = np.zeros(M)
-    p12 = np.zeros(M)
-    p22 = np.zeros(M)
+    # per-occluder precision, culled occluders and per-(camera, occluder) offsets (mode 2)
+    p11, p12, p22, inv_sd, reach = np.zeros(M), np.zeros(M), np.zeros(M), np.zeros(M), np.zeros(M)
     iso = np.zeros(M, dtype=np.bool_)
-    inv_sd = np.zeros(M)
-    reach = np.zeros(M)
-    m1 = np.zeros((K, M))
-    m2 = np.zeros((K, M))
-    pm1 = np.zeros((K, M))
-    pm2 = np.zeros((K, M))
+    m1, m2, pm1, pm2 = np.zeros((K, M)), np.zeros((K, M)), np.zeros((K, M)), np.zeros((K, M))
     use = np.zeros((K, M), dtype=np.int64)
     n_use = np.zeros(K, dtype=np.int64)
     if mode == 2:
-        for j in range(M):
-            det = occ_cov[j, 0, 0] * occ_cov[j, 1, 1] - occ_cov[j, 0, 1] * occ_cov[j, 0, 1]
-            p11[j] = occ_cov[j, 1, 1] / det
-            p12[j] = -occ_cov[j, 0, 1] / det
-            p22[j] = occ_cov[j, 0, 0] / det
-            iso[j] = occ_cov[j, 0, 1] == 0.0 and occ_cov[j, 0, 0] == occ_cov[j, 1, 1]
-            sd = math.sqrt(occ_cov[j, 0, 0])
-            inv_sd[j] = 1.0 / sd
-            reach[j] = CUTOFF * sd
-        # Cull: every sight line of the cloud lies within rho of the segment camera -> centre of
-        # the cloud's bounding box, so an occluder farther than rho + D/2 + 5.5 sd from that
-        # segment has q < 3e-7 for every particle (2-D Gaussian tail) and is skipped.
-        lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
-        for l in range(L):
-            lo_x = min(lo_x, x[l, 0])
-            hi_x = max(hi_x, x[l, 0])
-            lo_y = min(lo_y, x[l, 1])
-            hi_y = max(hi_y, x[l, 1])
-        bx, by = 0.5 * (lo_x + hi_x), 0.5 * (lo_y + hi_y)
-        rho = 0.5 * math.sqrt((hi_x - lo_x) ** 2 + (hi_y - lo_y) ** 2)
-        for i in range(K):
-            sx, sy = bx - cam_pos[i, 0], by - cam_pos[i, 1]
-            len2 = sx * sx + sy * sy
-            n_use[i] = 0
-            for j in range(M):
-                ox, oy = occ_mu[j, 0] - cam_pos[i, 0], occ_mu[j, 1] - cam_pos[i, 1]
-                t = (ox * sx + oy * sy) / len2 if len2 > 0 else 0.0
-                t = min(max(t, 0.0), 1.0)
-                fx, fy = ox - t * sx, oy - t * sy
-                sd_max = math.sqrt(  # Gershgorin bound on the largest eigenvalue
-                    max(occ_cov[j, 0, 0], occ_cov[j, 1, 1]) + abs(occ_cov[j, 0, 1])
-                )
-                lim = rho + half + 1.1 * CUTOFF * sd_max
-                if fx * fx + fy * fy <= lim * lim:
-                    use[i, n_use[i]] = j
-                    n_use[i] += 1
-        for i in range(K):
-            for j in range(M):
-                m1[i, j] = occ_mu[j, 0] - cam_pos[i, 0]
-                m2[i, j] = occ_mu[j, 1] - cam_pos[i, 1]
-                pm1[i, j] = p11[j] * m1[i, j] + p12[j] * m2[i, j]
-                pm2[i, j] = p12[j] * m1[i, j] + p22[j] * m2[i, j]
+        p11, p12, p22, iso, inv_sd, reach = _occluder_precisions(occ_cov)
+        use, n_use = _cull_occluders(x, cam_pos, occ_mu, occ_cov, half)
+        m1, m2, pm1, pm2 = _camera_offsets(cam_pos, occ_mu, p11, p12, p22)
     assigned = np.empty(K, dtype=np.bool_)
     q = np.zeros((K, M))
     s_v = np.empty(M)
@@ -444,7 +586,7 @@ def camera_likelihood_kernel(
             h = -sy_[i] * rx + cy_[i] * ry
             ok = d > 0.0 and abs(h) <= cam_tan_half[i] * d and not in_static[l]
             if ok:
-                for e in range(E):  # walls of a non-convex room and static occluders
+                for e in range(edge_a.shape[0]):  # walls of a non-convex room, static occluders
                     ax, ay = edge_a[e, 0], edge_a[e, 1]
                     ex, ey = edge_b[e, 0] - ax, edge_b[e, 1] - ay
                     d1 = ex * (cam_pos[i, 1] - ay) - ey * (cam_pos[i, 0] - ax)
@@ -461,43 +603,20 @@ def camera_likelihood_kernel(
                 if not ok:
                     possible = False
                     break
-                dd = max(d, 1e-6)  # MIN_DEPTH of perspective_camera
-                ratio = h / dd
-                rr = ratio * ratio
-                f2 = cam_focal[i] * cam_focal[i]
-                var = (
-                    f2 * (1.0 + rr) ** 2 * cam_var_theta[i]
-                    + f2 * (1.0 + rr) / (dd * dd) * cam_var_pos[i]
-                    + cam_var_read[i]
+                log_g += _log_reading(
+                    z[i], d, h, cam_focal[i], cam_var_theta[i], cam_var_pos[i], cam_var_read[i]
                 )
-                res = z[i] - cam_focal[i] * ratio
-                log_g -= 0.5 * (res * res / var + math.log(2.0 * math.pi * var))
         if not possible:
             out[l] = -np.inf
             continue
         p = 1.0
         if mode == 1:
-            for i in range(K):
-                vis = assigned[i]
-                if vis:
-                    rx, ry = px - cam_pos[i, 0], py - cam_pos[i, 1]
-                    len2 = rx * rx + ry * ry
-                    for j in range(M):
-                        ox, oy = occ_mu[j, 0] - cam_pos[i, 0], occ_mu[j, 1] - cam_pos[i, 1]
-                        t = (ox * rx + oy * ry) / len2 if len2 > 0 else 0.0
-                        t = min(max(t, 0.0), 1.0)
-                        fx, fy = ox - t * rx, oy - t * ry
-                        if fx * fx + fy * fy < r2disk:
-                            vis = False
-                            break
-                if vis != eta[i]:
-                    p = 0.0
-                    break
+            p = _disc_pattern(px, py, assigned, eta, cam_pos, occ_mu, half * half)
         elif mode == 2 and M > 0:
             for j in range(M):
                 s_v[j] = 0.0
             nz = 0
-            for i in range(K):
+            for i in range(K):  # q[i, j] (Eq. 7) on the assigned cameras, summed over the seeing
                 if not assigned[i]:
                     continue
                 rx, ry = px - cam_pos[i, 0], py - cam_pos[i, 1]
@@ -519,61 +638,7 @@ def camera_likelihood_kernel(
                 if not eta[i]:
                     zeros[nz] = i
                     nz += 1
-            # Occluders that no occluded camera's rectangle reaches give the same factor to every
-            # term of the inclusion-exclusion: multiply them once. The rest are enumerated in
-            # Gray-code order (one camera added or removed per term).
-            common = 1.0
-            na = 0
-            for j in range(M):
-                touched = False
-                for b in range(nz):
-                    if q[zeros[b], j] > 0.0:
-                        touched = True
-                        break
-                if touched:
-                    active[na] = j
-                    s[na] = s_v[j]
-                    na += 1
-                else:
-                    f = 1.0 - s_v[j]
-                    if f <= 0.0:
-                        common = 0.0
-                        break
-                    if f < 1.0:
-                        common *= f
-            total = 0.0
-            if common > 0.0:
-                in_b = 0
-                for step in range(1 << nz):
-                    if step > 0:
-                        bit = 0
-                        while not (step >> bit) & 1:
-                            bit += 1
-                        ib = zeros[bit]
-                        if in_b & (1 << bit):
-                            for a in range(na):
-                                s[a] -= q[ib, active[a]]
-                        else:
-                            for a in range(na):
-                                s[a] += q[ib, active[a]]
-                        in_b ^= 1 << bit
-                    prod = 1.0
-                    for a in range(na):
-                        f = 1.0 - s[a]
-                        if f <= 0.0:
-                            prod = 0.0
-                            break
-                        if f < 1.0:
-                            prod *= f
-                    # parity of the subset size: popcount of the Gray code
-                    g = in_b
-                    odd = False
-                    while g:
-                        odd = not odd
-                        g &= g - 1
-                    total += -prod if odd else prod
-                total *= common
-            p = min(max(total, 0.0), 1.0)
+            p = _inclusion_exclusion(q, s_v, zeros, nz, s, active)
         out[l] = log_g + occlusion_power * (math.log(p) if p > floor else log_floor)
     return out
 

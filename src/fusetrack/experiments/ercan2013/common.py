@@ -20,6 +20,7 @@ from matplotlib.patches import Circle, Polygon, Wedge
 from pydantic import Field
 
 from ...core.errors import ConfigError, invalid
+from ...evaluation import plots
 from ...evaluation.options import ExperimentOptions
 from ...evaluation.report import RunContext
 from .scenes import Scene
@@ -182,10 +183,7 @@ def curve_plot(
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return plots.save(fig, path)
 
 
 def room_plot(
@@ -230,10 +228,7 @@ def room_plot(
     ax.set_title(title)
     if truth is not None or obj is not None:
         ax.legend(fontsize=8, loc="upper right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return plots.save(fig, path)
 
 
 def md(df: pd.DataFrame, floatfmt: str = ".3g") -> str:

@@ -19,10 +19,10 @@ from .common import curve_plot, md, mean_std, smoke
 from .simulation import run_tracking
 
 
-def run(ctx: RunContext) -> Outcome:
-    runs = ctx.n_runs(full=3, quick=1)
-    steps, particles = (8, 100) if smoke() else ((60, 1000) if ctx.quick else (400, 1000))
-    ks = [1, 2, 4, 8] if ctx.quick else list(range(1, 9))
+def _time_likelihood(
+    ctx: RunContext, runs: int, steps: int, particles: int, ks: list[int]
+) -> pd.DataFrame:
+    """Estimation: track every prior level and camera count in this process, timing the likelihood."""
     rows = []
     run_tracking({"steps": 3, "particles": 50, "k": 2}, 0)  # compile the kernels before timing
     for r in range(runs):
@@ -33,17 +33,25 @@ def run(ctx: RunContext) -> Outcome:
                        "steps": steps, "particles": particles}  # fmt: skip
                 row = run_tracking(cfg, seed)[0]
                 rows.append({"run": r, "seed": seed, "prior": prior, "k": k, **row})
-    df = pd.DataFrame(rows)
+    return pd.DataFrame(rows)
+
+
+def _relative_table(df: pd.DataFrame) -> tuple[pd.DataFrame, float]:
+    """Likelihood time per step relative to the no-prior likelihood with 2 cameras, and that base."""
     table = mean_std(df, ["prior", "k"], "likelihood_ms_per_step")
     base = float(table.loc[(table["prior"] == "none") & (table["k"] == 2), "mean"].iloc[0])
     table["mean"] = table["mean"] / base
     table["std"] = table["std"] / base
-    piv = table.pivot(index="k", columns="prior", values="mean")
+    return table, base
+
+
+def _claims(piv: pd.DataFrame, ks: list[int]) -> list[Claim]:
+    """C7: the Gaussian-prior likelihood grows about linearly in the cameras, not as 2^N."""
     kmax = max(ks)
     growth_g = float(piv.loc[kmax, "gaussian"] / piv.loc[2, "gaussian"])
     growth_n = float(piv.loc[kmax, "none"] / piv.loc[2, "none"])
     exp_growth = 2.0 ** (kmax - 2)
-    claims = [
+    return [
         Claim(
             "C7_far_below_exponential",
             f"likelihood time with Gaussian priors, k = {kmax} over k = 2",
@@ -69,6 +77,12 @@ def run(ctx: RunContext) -> Outcome:
             growth_g / growth_n <= 3,
         ),
     ]
+
+
+def _figure(
+    ctx: RunContext, table: pd.DataFrame, ks: list[int], steps: int, particles: int, runs: int
+) -> None:
+    """Fig. 10: relative likelihood time against the number of cameras, with 2^N for reference."""
     ref = pd.DataFrame(
         {"prior": "2^N (reference)", "k": ks, "mean": [2.0 ** (k - 2) for k in ks], "std": 0.0}
     )
@@ -86,8 +100,14 @@ def run(ctx: RunContext) -> Outcome:
             "perfect": "RMSE_occ = 0",
         },
     )
+
+
+def _report(
+    df: pd.DataFrame, piv: pd.DataFrame, base: float, steps: int, particles: int, runs: int
+) -> str:
+    """Report text: setup, Fig. 10 as tables, differences and their causes."""
     ms = df.groupby(["prior", "k"])["likelihood_ms_per_step"].mean().unstack("prior").reset_index()
-    report = f"""
+    return f"""
 ## Setup
 
 Square room with the static occluder, M = 40, L = {particles}, {steps} steps, {runs} run(s) per point, timed in
@@ -113,4 +133,16 @@ Absolute milliseconds per step:
   implementation evaluates every triple. Both grow about linearly in the number of cameras.
 * Timings on a shared machine vary from run to run; the error bars show it.
 """
-    return Outcome(df, claims, report, runs=runs)
+
+
+def run(ctx: RunContext) -> Outcome:
+    """E5: timing (estimation), claims, Fig. 10 and report text."""
+    runs = ctx.n_runs(full=3, quick=1)
+    steps, particles = (8, 100) if smoke() else ((60, 1000) if ctx.quick else (400, 1000))
+    ks = [1, 2, 4, 8] if ctx.quick else list(range(1, 9))
+    df = _time_likelihood(ctx, runs, steps, particles, ks)
+    table, base = _relative_table(df)
+    piv = table.pivot(index="k", columns="prior", values="mean")
+    claims = _claims(piv, ks)
+    _figure(ctx, table, ks, steps, particles, runs)
+    return Outcome(df, claims, _report(df, piv, base, steps, particles, runs), runs=runs)

@@ -7,6 +7,7 @@ moderate number, and smaller again when occluders hide the object most of the ti
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -53,9 +54,8 @@ def _gap_claims(gap: np.ndarray, m: np.ndarray, suffix: str, variant: str) -> li
     ]
 
 
-def run(ctx: RunContext) -> Outcome:
-    size = sizes(ctx)
-    runs = ctx.n_runs(full=5, quick=2)
+def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
+    """Scenario: perfect and no priors over M, the perfect-prior series also as printed."""
     ms = M_QUICK if ctx.quick else M_FULL
     configs: list[dict[str, Any]] = [
         {
@@ -78,28 +78,41 @@ def run(ctx: RunContext) -> Outcome:
     ]
     # configurations sharing M (hence the simulated worlds, cached per process) run one after another
     ordered = sorted([*configs, *printed], key=lambda c: c["n_occluders"])
-    df_all = ctx.monte_carlo(run_tracking, ordered, runs, desc="E4 occluders")
+    return ordered
+
+
+@dataclass(frozen=True)
+class _Gaps:
+    """E4's results: RMSE_tr per prior level and M, and the gap none - perfect (also printed)."""
+
+    df_all: pd.DataFrame
+    hard: pd.DataFrame
+    table: pd.DataFrame
+    hard_table: pd.DataFrame
+    piv: pd.DataFrame
+    gap: np.ndarray
+    hard_gap: np.ndarray
+
+
+def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Gaps:
+    """Estimation: run every M and read the value of perfect priors off the curves."""
+    df_all = ctx.monte_carlo(run_tracking, _configs(ctx, size), runs, desc="E4 occluders")
     df = df_all[df_all["label"] == "corrected"]
     hard = df_all[df_all["label"] == "printed"]
     table = mean_std(df, ["prior", "n_occluders"])
     piv = table.pivot(index="n_occluders", columns="prior", values="mean")
     gap = (piv["none"] - piv["perfect"]).to_numpy()
-    peak = int(np.argmax(gap))
     hard_table = mean_std(hard, ["n_occluders"])
     hard_gap = (
         piv["none"].to_numpy()
         - hard_table.set_index("n_occluders")["mean"].reindex(piv.index).to_numpy()
     )
-    hard_peak = int(np.argmax(hard_gap))
-    claims = [
-        *_gap_claims(gap, piv.index.to_numpy(float), "", ""),
-        *_gap_claims(
-            hard_gap,
-            piv.index.to_numpy(float),
-            "_printed",
-            ", with the perfect-prior likelihood as printed (hard zeros)",
-        ),
-    ]
+    return _Gaps(df_all, hard, table, hard_table, piv, gap, hard_gap)
+
+
+def _figure(ctx: RunContext, g: _Gaps, size: dict[str, int], runs: int) -> None:
+    """Fig. 9: RMSE_tr against M for perfect (corrected and printed) and no priors."""
+    table, hard_table = g.table, g.hard_table
     plotted = pd.concat([table, hard_table.assign(prior="perfect, printed")], ignore_index=True)
     curve_plot(
         ctx.figure_path("fig9_rmse_vs_occluders"),
@@ -115,6 +128,13 @@ def run(ctx: RunContext) -> Outcome:
             "perfect, printed": "RMSE_occ = 0, likelihood as printed (hard zeros)",
         },
     )
+
+
+def _report(g: _Gaps, ms: tuple[int, ...], size: dict[str, int], runs: int) -> str:
+    """Report text: setup, Fig. 9 as a table, differences and their causes."""
+    piv, gap, hard_gap, hard, hard_table = g.piv, g.gap, g.hard_gap, g.hard, g.hard_table
+    peak = int(np.argmax(gap))
+    hard_peak = int(np.argmax(hard_gap))
     out = piv.reset_index()
     out["gap"] = gap
     out["perfect printed"] = (
@@ -124,7 +144,7 @@ def run(ctx: RunContext) -> Outcome:
     out["ignored steps/run printed"] = (
         hard.groupby("n_occluders")["ignored_steps"].mean().reindex(piv.index).to_numpy()
     )
-    report = f"""
+    return f"""
 ## Setup
 
 Square room without the static occluder, cameras 1, 7, 5, 3, M in {list(ms)}, {runs} runs x {size["steps"]} steps,
@@ -152,4 +172,22 @@ as printed (hard zeros, "perfect printed"); the no-prior likelihood has neither 
   {size["particles"]} particles; the all-or-nothing perfect-prior likelihood sometimes leaves no consistent
   particle (such steps are skipped and counted in the results' `ignored_steps` column).
 """
-    return Outcome(df_all, claims, report, runs=runs)
+
+
+def run(ctx: RunContext) -> Outcome:
+    """E4: scenario, estimation, claims, Fig. 9 and report text."""
+    size = sizes(ctx)
+    runs = ctx.n_runs(full=5, quick=2)
+    ms = M_QUICK if ctx.quick else M_FULL
+    g = _estimate(ctx, size, runs)
+    claims = [
+        *_gap_claims(g.gap, g.piv.index.to_numpy(float), "", ""),
+        *_gap_claims(
+            g.hard_gap,
+            g.piv.index.to_numpy(float),
+            "_printed",
+            ", with the perfect-prior likelihood as printed (hard zeros)",
+        ),
+    ]
+    _figure(ctx, g, size, runs)
+    return Outcome(g.df_all, claims, _report(g, ms, size, runs), runs=runs)

@@ -196,10 +196,9 @@ def _times(df: pd.DataFrame) -> tuple[pd.Series, pd.Series]:
     return t, t_search
 
 
-def _method_claims(st: _Setup, tb: _Tables) -> list[Claim]:
-    """C8: greedy near brute force, better than the heuristics, weak metric as good, k_max like all."""
-    piv, sd, ks, n = tb.piv, tb.sd, st.ks, st.n
-    all_mean, all_std = tb.all_mean, tb.all_std
+def _method_claims(tb: _Tables) -> list[Claim]:
+    """C8: greedy within one std of brute force, and better than the heuristics."""
+    piv, sd = tb.piv, tb.sd
     avg = piv.mean()
     claims = []
     for model in ("perspective", "weak"):
@@ -227,6 +226,14 @@ def _method_claims(st: _Setup, tb: _Tables) -> list[Claim]:
                 avg[h] > avg["greedy-perspective"],
             )
         )
+    return claims
+
+
+def _ordering_claims(st: _Setup, tb: _Tables) -> list[Claim]:
+    """C8: the fixed list worst at the smallest k, the weak metric as good, k_max like all."""
+    piv, sd, ks, n = tb.piv, tb.sd, st.ks, st.n
+    all_mean, all_std = tb.all_mean, tb.all_std
+    claims = []
     k0 = min(ks)
     claims.append(
         Claim(
@@ -412,7 +419,7 @@ differences between methods within a run are the method's alone.
 Tracker and selection use the same occlusion model: Eq. 7 with the rectangles ending one diameter D before the
 particle (`exclusion` = 1 D, an occluder cannot overlap the object) and p(eta | u) floored at 1e-3 for particles the
 reporting cameras can see (`floor`); both are corrections to the printed model, explained in
-`fusetrack.filters.occlusion_likelihood`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
+`fusetrack.sensors.occlusion_aware_camera`. The selection's P{{eta_i = 1}} and P{{eta_i = 1, eta_j = 1}} are the
 likelihood's p(eta | u) for the same option (tested).
 
 Camera layout (reconstructed; the paper draws it only). Fixed list: {fixed_list}.
@@ -490,7 +497,7 @@ def run(ctx: RunContext) -> Outcome:
     sigma_psi = Options.of(ctx).sigma_psi
     st = _Setup(scene, shown, cfg_path, ks, m, sigma_psi, size, runs)
     tb = _estimate(ctx, st)
-    claims = [*_method_claims(st, tb), *_search_claims(st, tb)]
+    claims = [*_method_claims(tb), *_ordering_claims(st, tb), *_search_claims(st, tb)]
     _figures(ctx, st, tb)
     report = _report_setup(ctx, st, tb) + _report_results(ctx, st, tb)
     return Outcome(tb.df, claims, report, runs=runs)

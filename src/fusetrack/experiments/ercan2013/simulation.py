@@ -24,6 +24,7 @@ import hashlib
 import pickle
 import time
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -32,6 +33,7 @@ from ...core.errors import ConfigError, invalid
 from ...filters.waypoint_asir import WaypointASIR
 from ...management.camera_selection import (
     SELECTION_METHODS,
+    SelectionMoments,
     brute_force_selection,
     closest_selection,
     fixed_selection,
@@ -145,14 +147,38 @@ def camera_readings(scene: Scene, obj: Array, occ: Array, seed: int) -> Array:
     return z
 
 
-def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    """One run of Algorithm 3; one row with the run's RMSEs, costs and counters."""
-    cpu0 = time.process_time()
-    cfg, scene = _resolve(config)
-    steps, m = int(cfg["steps"]), int(cfg["n_occluders"])
-    obj, occ, z_all = world_and_readings(scene, m, steps, seed)
-    center = scene.room.center
-    prior = cfg["prior"]
+@dataclass
+class _Clock:
+    """Wall seconds spent in the likelihood, in selection epochs, and in the subset search."""
+
+    likelihood: float = 0.0
+    selection: float = 0.0
+    search: float = 0.0
+
+
+@dataclass(frozen=True)
+class _Priors:
+    """The occluder priors of one run (means and variances per step when Gaussian) and their
+    accuracy: RMSE_occ and squared error / claimed variance."""
+
+    means: Array | None
+    var: Array | None
+    rmse_occ: float
+    nees: float
+
+    def at(self, prior: str, occ: Array, t: int) -> OccluderPriors | Array | None:
+        """What the tracker knows of the occluders at step ``t``."""
+        if prior == "gaussian":
+            assert self.means is not None and self.var is not None
+            return RandomWalkPriorFilter.priors(self.means[t - 1], float(self.var[t - 1]))
+        if prior == "perfect":
+            return occ[t]
+        return None
+
+
+def _occluder_priors(cfg: dict[str, Any], scene: Scene, occ: Array, seed: int) -> _Priors:
+    """Gaussian priors from a Kalman filter on virtual readings, the truth, or none."""
+    m, center, prior = int(cfg["n_occluders"]), scene.room.center, cfg["prior"]
     if prior == "gaussian":
         means, var = prior_track(
             cfg["prior_filter"],
@@ -165,29 +191,101 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         )
         rmse_occ = rmse_per_coordinate(means, occ[1:]) if m else 0.0
         # calibration: squared error over the variance the priors claim (1 = calibrated)
-        nees = prior_nees(means, var, occ[1:])
-    elif prior == "perfect":
-        rmse_occ = 0.0
-        nees = float("nan")
-    else:
-        rmse_occ = (
-            rmse_per_coordinate(np.broadcast_to(center, occ[1:].shape), occ[1:]) if m else 0.0
-        )
-        nees = float("nan")
-    likelihood = OcclusionAwareLikelihood(
+        return _Priors(means, var, rmse_occ, prior_nees(means, var, occ[1:]))
+    if prior == "perfect":
+        return _Priors(None, None, 0.0, float("nan"))
+    rmse_occ = rmse_per_coordinate(np.broadcast_to(center, occ[1:].shape), occ[1:]) if m else 0.0
+    return _Priors(None, None, rmse_occ, float("nan"))
+
+
+def _likelihood(cfg: dict[str, Any], scene: Scene) -> OcclusionAwareLikelihood:
+    """The occlusion-aware likelihood with this run's prior level and corrections."""
+    return OcclusionAwareLikelihood(
         scene.cameras,
         scene.room,
         scene.diameter,
-        prior,
+        cfg["prior"],
         floor=float(cfg["floor"]),
         exclusion=float(cfg["exclusion"]) * scene.diameter,
         occlusion_power=float(cfg["occlusion_power"]),
     )
+
+
+def _filter(cfg: dict[str, Any], scene: Scene) -> WaypointASIR:
+    """Algorithm 1's ASIR with the tracker's motion noise sigma_v (Eq. 5)."""
     sigma_v = (
         scene.motion_noise if cfg["tracker_sigma_v"] is None else float(cfg["tracker_sigma_v"])
     )
     dynamics = WaypointRegimeDynamics(sigma_v=sigma_v)
-    asir = WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed)
+    return WaypointASIR(scene.room, dynamics, int(cfg["particles"]), scene.speed)
+
+
+def _select(
+    cfg: dict[str, Any],
+    scene: Scene,
+    predicted: Array,
+    w: Array,
+    occluders: OccluderPriors | Array | None,
+    exclusion: float,
+    rng_s: np.random.Generator,
+    clock: _Clock,
+) -> tuple[Array, SelectionMoments | None]:
+    """One selection epoch (Algorithm 2 or a heuristic) on the predicted cloud; the subset and,
+    for greedy with ``metric_gap``, its subset MSE over brute force's (a check, not timed)."""
+    method, k, n_cams = cfg["method"], int(cfg["k"]), len(scene.cameras)
+    if method == "random":
+        return np.array(random_selection(n_cams, k, rng_s)), None
+    if method == "closest":
+        return np.array(closest_selection(scene.cameras.positions, w @ predicted[:, :2], k)), None
+    mom = selection_moments(
+        scene.cameras,
+        scene.room,
+        predicted[:, :2],
+        w,
+        occluders,
+        scene.diameter,
+        cfg["prior"],
+        (cfg["model"],),
+        exclusion=exclusion,
+    )
+    pick = greedy_selection if method == "greedy" else brute_force_selection
+    t_search = time.perf_counter()
+    selected = np.array(pick(mom, k, cfg["model"]))
+    clock.search += time.perf_counter() - t_search
+    return selected, mom
+
+
+def _metric_gap(cfg: dict[str, Any], mom: SelectionMoments | None, selected: Array) -> float:
+    """Greedy's subset MSE over the brute-force optimum's at one epoch."""
+    k = int(cfg["k"])
+    assert mom is not None  # greedy always computes the moments
+    best = brute_force_selection(mom, k, cfg["model"])
+    e = subset_mse(mom, np.array([selected, best]), cfg["model"])
+    return float(e[0] / max(e[1], 1e-300))
+
+
+@dataclass(frozen=True)
+class _Track:
+    """What the tracking loop produced: estimates, readings used, timings and metric gaps."""
+
+    est: Array
+    n_seen: int
+    clock: _Clock
+    gaps: list[float]
+
+
+def _track(
+    cfg: dict[str, Any],
+    scene: Scene,
+    occ: Array,
+    z_all: Array,
+    pri: _Priors,
+    asir: WaypointASIR,
+    seed: int,
+) -> _Track:
+    """Algorithm 3's loop: (every T steps) select cameras, read them, one ASIR step."""
+    likelihood = _likelihood(cfg, scene)
+    steps, prior = int(cfg["steps"]), cfg["prior"]
     rng_f = np.random.default_rng([seed, 3])
     rng_s = np.random.default_rng([seed, 4])
     belief = asir.initialize(rng_f)
@@ -200,84 +298,83 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         else np.array(fixed_selection(scene.fixed_order, k) if method == "fixed" else [])
     )
     est = np.empty((steps, 2))
-    lik_time = sel_time = search_time = 0.0
+    clock = _Clock()
     n_seen = 0
     gaps: list[float] = []
     for t in range(1, steps + 1):
-        occluders: OccluderPriors | Array | None
-        if prior == "gaussian":
-            occluders = RandomWalkPriorFilter.priors(means[t - 1], float(var[t - 1]))
-        elif prior == "perfect":
-            occluders = occ[t]
-        else:
-            occluders = None
+        occluders = pri.at(prior, occ, t)
         if method in ("greedy", "brute", "random", "closest") and (t - 1) % period == 0:
             t0 = time.perf_counter()
             predicted = asir.propagate(u, rng_f)
-            if method == "random":
-                selected = np.array(random_selection(n_cams, k, rng_s))
-            elif method == "closest":
-                selected = np.array(
-                    closest_selection(scene.cameras.positions, w @ predicted[:, :2], k)
-                )
-            else:
-                mom = selection_moments(
-                    scene.cameras,
-                    scene.room,
-                    predicted[:, :2],
-                    w,
-                    occluders,
-                    scene.diameter,
-                    prior,
-                    (cfg["model"],),
-                    exclusion=likelihood.exclusion,
-                )
-                pick = greedy_selection if method == "greedy" else brute_force_selection
-                t_search = time.perf_counter()
-                selected = np.array(pick(mom, k, cfg["model"]))
-                search_time += time.perf_counter() - t_search
-            sel_time += time.perf_counter() - t0
+            selected, mom = _select(
+                cfg, scene, predicted, w, occluders, likelihood.exclusion, rng_s, clock
+            )
+            clock.selection += time.perf_counter() - t0
             if cfg.get("metric_gap") and method == "greedy":  # not timed: a check, not the method
-                best = brute_force_selection(mom, k, cfg["model"])
-                e = subset_mse(mom, np.array([selected, best]), cfg["model"])
-                gaps.append(float(e[0] / max(e[1], 1e-300)))
+                gaps.append(_metric_gap(cfg, mom, selected))
         z = z_all[t, selected]
         n_seen += int(np.isfinite(z).sum())
 
         def loglik(x: Array, z: Array = z, sel: Any = selected, occl: Any = occluders) -> Array:
-            nonlocal lik_time
             t1 = time.perf_counter()
             out = likelihood.log_likelihood(z, sel, x, occl)
-            lik_time += time.perf_counter() - t1
+            clock.likelihood += time.perf_counter() - t1
             return out
 
         belief = asir.step(belief, loglik, rng_f)
         u, w = belief.particles, belief.weights
         est[t - 1] = asir.estimate(u, w)
+    return _Track(est, n_seen, clock, gaps)
+
+
+def _row(
+    cfg: dict[str, Any],
+    scene: Scene,
+    obj: Array,
+    pri: _Priors,
+    tr: _Track,
+    asir: WaypointASIR,
+    cpu0: float,
+) -> dict[str, Any]:
+    """The run's result row: RMSEs after burn-in, prior accuracy, timings, filter statistics."""
+    steps, period, method = int(cfg["steps"]), int(cfg["period"]), cfg["method"]
+    center, est, clock = scene.room.center, tr.est, tr.clock
     b = int(cfg["burn_in"])
     err = est[b:] - obj[1 + b :]
     row: dict[str, Any] = {
         "scene": scene.name,
         "rmse_tr": rmse_per_coordinate(est[b:], obj[1 + b :]),
         "rmse_tr_euclid": float(np.sqrt(np.mean(np.sum(err**2, axis=1)))),
-        "rmse_occ": rmse_occ,
-        "prior_nees": nees,
+        "rmse_occ": pri.rmse_occ,
+        "prior_nees": pri.nees,
         "rmse_max": rmse_per_coordinate(np.broadcast_to(center, obj[1 + b :].shape), obj[1 + b :]),
-        "likelihood_ms_per_step": 1e3 * lik_time / steps,
-        "selection_ms_per_epoch": 1e3 * sel_time / max(1, -(-steps // period))
+        "likelihood_ms_per_step": 1e3 * clock.likelihood / steps,
+        "selection_ms_per_epoch": 1e3 * clock.selection / max(1, -(-steps // period))
         if method not in ("fixed", "all")
         else 0.0,
-        "search_ms_per_epoch": 1e3 * search_time / max(1, -(-steps // period)),
-        "readings_per_step": n_seen / steps,
+        "search_ms_per_epoch": 1e3 * clock.search / max(1, -(-steps // period)),
+        "readings_per_step": tr.n_seen / steps,
         "fallbacks": asir.stats.first_stage_fallbacks,
         "ignored_steps": asir.stats.ignored_steps,
         "reinitialisations": asir.stats.reinitialisations,
         "cpu_seconds": time.process_time() - cpu0,
     }
-    if gaps:
-        row["greedy_over_brute_mse"] = float(np.mean(gaps))
-        row["greedy_equals_brute"] = float(np.mean(np.isclose(gaps, 1.0)))
+    if tr.gaps:
+        row["greedy_over_brute_mse"] = float(np.mean(tr.gaps))
+        row["greedy_equals_brute"] = float(np.mean(np.isclose(tr.gaps, 1.0)))
     if cfg["trace"]:
         row["trace_est"] = est.tolist()
         row["trace_true"] = obj[1:].tolist()
-    return [row]
+    return row
+
+
+def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
+    """One run of Algorithm 3; one row with the run's RMSEs, costs and counters."""
+    cpu0 = time.process_time()
+    cfg, scene = _resolve(config)
+    steps, m = int(cfg["steps"]), int(cfg["n_occluders"])
+    obj, occ, z_all = world_and_readings(scene, m, steps, seed)
+    pri = _occluder_priors(cfg, scene, occ, seed)
+    asir = _filter(cfg, scene)
+    tr = _track(cfg, scene, occ, z_all, pri, asir, seed)
+    return [_row(cfg, scene, obj, pri, tr, asir, cpu0)]

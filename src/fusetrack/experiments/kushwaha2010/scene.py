@@ -52,6 +52,7 @@ from ...sensors.detection_function import (
     mixture_arc_mean,
     normalize_likelihood,
 )
+from ...sensors.likelihood_map import detection_quality
 from ...world.acoustics import harmonic_engine, pink_noise, propagate
 from ...world.clocks import HopTranslation, NodeClock, RbsDomain, fit_clock_map
 from ...world.road_video import RoadRenderer, Vehicle
@@ -289,11 +290,9 @@ def sensor_likelihood(
     """Per-cell likelihood (unit sum, floored) and quality q_k = max λ̃ (Kushwaha 2010, Eqs. 31–32);
     None when the sensor detects nothing (a camera with an empty mixture)."""
     v = np.asarray(values, float)
-    shifted = v - v.min()
-    total = shifted.sum()
-    if not total > 0:
+    quality = detection_quality(v)  # r_k = 1 (spec 003 A-III-11)
+    if quality is None:
         return None
-    quality = float(shifted.max() / total)  # r_k = 1 (spec 003 A-III-11)
     if geo.kind == "audio":
         assert geo.audio_w is not None
         return normalize_likelihood(geo.audio_w @ v), quality

@@ -115,14 +115,30 @@ def _plot_errors(ctx: RunContext, df: pd.DataFrame, case: str) -> str:
     return save(fig, ctx.figure_path(f"{case}_error")).name
 
 
-def run(ctx: RunContext) -> Outcome:
-    runs = ctx.n_runs(full=100, quick=8)
-    df = ctx.monte_carlo(run_once, configs(), runs)
-    q = ctx.quick
+def _tables(df: pd.DataFrame) -> dict[str, pd.Series]:
+    """Mean error per method: S1/S2 over the run, S3/S4 (and the 8-D CA filter) in the window."""
+    tables = {case: _means(df, case, window=False) for case in ("S1", "S2")}
+    for case in ("S3-ca", "S3-cv", "S4-ca", "S4-cv", "S4-ca-CAfilter"):
+        tables[case] = _means(df, case, window=True)
+    return tables
+
+
+def _sweep_rate_offset(df: pd.DataFrame) -> tuple[pd.DataFrame, ...]:
+    """Window errors over the occlusion-length sweep and the tag rates; whole-run and window
+    errors over the clock offsets."""
+    sweep = pd.DataFrame({L: _means(df, f"sweep-L{L}", window=True) for L in SWEEP}).T
+    rate = pd.DataFrame({k: _means(df, f"rate-k{k}", window=True) for k in RATES}).T
+    rate.loc["5 (CV)"] = _means(df, "rate-k5-cv", window=True)
+    off = pd.DataFrame({ms: _means(df, f"offset-{ms}ms", window=False) for ms in OFFSETS_MS}).T
+    off_w = pd.DataFrame({ms: _means(df, f"offset-{ms}ms", window=True) for ms in OFFSETS_MS}).T
+    return sweep, rate, off, off_w
+
+
+def _h1_h2_claims(tables: dict[str, pd.Series]) -> list[Claim]:
+    """H1 (joint beats the tag alone, S1 and S2) and H2 (visual EKF as good without occlusion)."""
     claims: list[Claim] = []
-    tables: dict[str, pd.Series] = {}
     for case in ("S1", "S2"):
-        tables[case] = m = _means(df, case, window=False)
+        m = tables[case]
         ratio = float(min(m["B1"], m["B2"]) / m["J"])
         claims.append(
             Claim(
@@ -156,8 +172,14 @@ def run(ctx: RunContext) -> Outcome:
             m["B3"] > m["J"],
         )
     )
+    return claims
+
+
+def _h3_claims(tables: dict[str, pd.Series]) -> list[Claim]:
+    """H3: in a short occlusion joint beats switching to the tag, and matches the visual EKF."""
+    claims: list[Claim] = []
     for case in ("S3-ca", "S3-cv"):
-        tables[case] = w = _means(df, case, window=True)
+        w = tables[case]
         ratio = float(w["B5"] / w["J"])
         claims.append(
             Claim(
@@ -180,8 +202,14 @@ def run(ctx: RunContext) -> Outcome:
                 rel < 0.25,
             )
         )
+    return claims
+
+
+def _h4_claims(df: pd.DataFrame, tables: dict[str, pd.Series]) -> list[Claim]:
+    """H4: in a long occlusion the visual EKF diverges and the joint tracker stays better."""
+    claims: list[Claim] = []
     for case in ("S4-ca", "S4-cv"):
-        tables[case] = w = _means(df, case, window=True)
+        w = tables[case]
         d = df[(df["case"] == case) & df["occluded"]]
         b4 = d[d["method"] == "B4"].groupby("step")["err"].mean()
         jj = d[d["method"] == "J"].groupby("step")["err"].mean()
@@ -217,7 +245,12 @@ def run(ctx: RunContext) -> Outcome:
                 last > 1,
             )
         )
-    sweep = pd.DataFrame({L: _means(df, f"sweep-L{L}", window=True) for L in SWEEP}).T
+    return claims
+
+
+def _sweep_claims(sweep: pd.DataFrame, q: bool) -> list[Claim]:
+    """H4 over the sweep: the gap B4 - J widens with L; the joint error stays bounded."""
+    claims: list[Claim] = []
     gap = (sweep["B4"] - sweep["J"]).to_numpy()
     tol = 0.02 if q else 0.01
     widens = bool(np.all(np.diff(gap) > -tol)) and gap[-1] > gap[0]
@@ -242,8 +275,12 @@ def run(ctx: RunContext) -> Outcome:
             bounded <= 1.2 * float(sweep["B2"].max()),
         )
     )
-    rate = pd.DataFrame({k: _means(df, f"rate-k{k}", window=True) for k in RATES}).T
-    rate.loc["5 (CV)"] = _means(df, "rate-k5-cv", window=True)
+    return claims
+
+
+def _rate_offset_claims(rate: pd.DataFrame, off: pd.DataFrame, off_w: pd.DataFrame) -> list[Claim]:
+    """H12 (irregular tag rates) and H11 (a 10 ms tag clock offset does not matter)."""
+    claims: list[Claim] = []
     for k in rate.index:
         r = float(rate.loc[k, "B4"] / rate.loc[k, "J"])
         claims.append(
@@ -256,8 +293,6 @@ def run(ctx: RunContext) -> Outcome:
                 r >= 1,
             )
         )
-    off = pd.DataFrame({ms: _means(df, f"offset-{ms}ms", window=False) for ms in OFFSETS_MS}).T
-    off_w = pd.DataFrame({ms: _means(df, f"offset-{ms}ms", window=True) for ms in OFFSETS_MS}).T
     delta = float(abs(off.loc[10, "J"] - off.loc[0, "J"]))
     delta_w = float(abs(off_w.loc[10, "J"] - off_w.loc[0, "J"]))
     claims.append(
@@ -280,30 +315,26 @@ def run(ctx: RunContext) -> Outcome:
             delta_w < 0.01,
         )
     )
+    return claims
+
+
+def _consistency_claim(df: pd.DataFrame) -> Claim:
+    """The joint EKF's position NEES in S1 (not in the thesis)."""
     nees = float(
         df[(df["case"] == "S1") & (df["method"] == "J") & (df["step"] >= BURN_IN)]["nees"].mean()
     )
-    claims.append(
-        Claim(
-            "consistency",
-            "S1: the joint EKF's mean position NEES (2 = consistent)",
-            "not in the thesis",
-            nees,
-            "in [1, 3]",
-            1 <= nees <= 3,
-        )
+    return Claim(
+        "consistency",
+        "S1: the joint EKF's mean position NEES (2 = consistent)",
+        "not in the thesis",
+        nees,
+        "in [1, 3]",
+        1 <= nees <= 3,
     )
 
-    figs = [
-        _plot_case(ctx, df, c, t)
-        for c, t in (
-            ("S1", "S1 (Fig. 5.1): constant acceleration, no occlusion"),
-            ("S2", "S2 (Fig. 5.2): constant velocity, no occlusion"),
-            ("S3-ca", "S3 (Fig. 5.3): occlusion of 3 time instants"),
-            ("S4-ca", "S4 (Fig. 5.4): occlusion of 15 time instants"),
-        )
-    ]
-    figs += [_plot_errors(ctx, df, "S4-ca")]
+
+def _sweep_figure(ctx: RunContext, sweep: pd.DataFrame) -> str:
+    """Window error against occlusion length, ours and the spec's prototype."""
     fig, ax = plt.subplots(figsize=(6.5, 3.8))
     for m, st in (("B4", "g-o"), ("J", "r-o"), ("B5", "m--s"), ("B2", "b:")):
         ax.plot(sweep.index, sweep[m], st, label=f"{m} {METHOD_NAMES[m]}")
@@ -317,13 +348,32 @@ def run(ctx: RunContext) -> Outcome:
     ax.set_ylabel("mean error in the window (m)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    figs.append(save(fig, ctx.figure_path("occlusion_sweep")).name)
+    return save(fig, ctx.figure_path("occlusion_sweep")).name
 
-    def fmt(s: pd.Series | pd.DataFrame) -> str:
-        return s.to_markdown(floatfmt=".3f")
 
+def _figures(ctx: RunContext, df: pd.DataFrame, sweep: pd.DataFrame) -> list[str]:
+    """Figs. 5.1-5.4 (one run each), S4's mean error over time, the sweep; file names."""
+    figs = [
+        _plot_case(ctx, df, c, t)
+        for c, t in (
+            ("S1", "S1 (Fig. 5.1): constant acceleration, no occlusion"),
+            ("S2", "S2 (Fig. 5.2): constant velocity, no occlusion"),
+            ("S3-ca", "S3 (Fig. 5.3): occlusion of 3 time instants"),
+            ("S4-ca", "S4 (Fig. 5.4): occlusion of 15 time instants"),
+        )
+    ]
+    figs += [_plot_errors(ctx, df, "S4-ca")]
+    figs.append(_sweep_figure(ctx, sweep))
+    return figs
+
+
+def _md(s: pd.Series | pd.DataFrame) -> str:
+    return s.to_markdown(floatfmt=".3f")
+
+
+def _ours_and_proto(tables: dict[str, pd.Series]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Mean errors per method and case: ours, and the spec prototype's."""
     rows = []
-    tables["S4-ca-CAfilter"] = _means(df, "S4-ca-CAfilter", window=True)
     for case in ("S1", "S2", "S3-ca", "S3-cv", "S4-ca", "S4-cv", "S4-ca-CAfilter"):
         for mth in ("B1", "B2", "B3", "B4", "B5", "J"):
             p = PROTO.get(case, {}).get(mth)
@@ -337,10 +387,24 @@ def run(ctx: RunContext) -> Outcome:
             )
     main = pd.DataFrame(rows).pivot(index="method", columns="case", values="ours (m)")
     proto = pd.DataFrame(rows).pivot(index="method", columns="case", values="spec [PROTO] (m)")
+    main = pd.DataFrame(rows).pivot(index="method", columns="case", values="ours (m)")
+    proto = pd.DataFrame(rows).pivot(index="method", columns="case", values="spec [PROTO] (m)")
+    return main, proto
+
+
+def _sweep_table(sweep: pd.DataFrame) -> pd.DataFrame:
+    """The sweep's window errors beside the prototype's."""
     sweep_tab = sweep[["B4", "J", "B5", "B2"]].copy()
     sweep_tab["B4 [PROTO]"] = [PROTO["sweep"][L][0] for L in SWEEP]
     sweep_tab["J [PROTO]"] = [PROTO["sweep"][L][1] for L in SWEEP]
     sweep_tab.index.name = "L"
+    return sweep_tab
+
+
+def _worst_differences(
+    tables: dict[str, pd.Series], sweep_tab: pd.DataFrame
+) -> tuple[float, float, float]:
+    """Largest absolute and relative difference from the prototype (cases, then the sweep)."""
     diffs = [
         (abs(tables[c][m] - p), abs(tables[c][m] - p) / p)
         for c in ("S1", "S2", "S3-ca", "S3-cv", "S4-ca", "S4-cv")
@@ -358,8 +422,21 @@ def run(ctx: RunContext) -> Outcome:
             / sweep_tab[["B4 [PROTO]", "J [PROTO]"]].to_numpy()
         )
     )
-    body = (
-        f"""
+    return worst_abs, worst_rel, sweep_rel
+
+
+def _report_numbers(
+    tables: dict[str, pd.Series],
+    sweep: pd.DataFrame,
+    rate: pd.DataFrame,
+    off: pd.DataFrame,
+    off_w: pd.DataFrame,
+    runs: int,
+) -> str:
+    """Report text: set-up, the thesis's words, and our numbers beside the prototype's."""
+    main, proto = _ours_and_proto(tables)
+    sweep_tab = _sweep_table(sweep)
+    return f"""
 ## Set-up
 
 Spec Sec. 6.3 defaults: 640x480 camera at (4.5, -5, 3.5) m tilted 15 degrees down, f = 500 px;
@@ -383,28 +460,34 @@ better". No error values are printed, so the numbers beside ours are the spec's 
 
 Ours (mean error, m; S1/S2 over all steps, S3/S4 in the occlusion window):
 
-{fmt(main)}
+{_md(main)}
 
 Spec prototype [PROTO] (same definitions):
 
-{fmt(proto)}
+{_md(proto)}
 
 Occlusion-length sweep (CA, 100 steps, window mean error, m):
 
-{fmt(sweep_tab)}
+{_md(sweep_tab)}
 
 Irregular tag rate (tag every k-th frame, 15-step occlusion, window mean, m):
 
-{fmt(rate[["B4", "J", "B2", "B5"]])}
+{_md(rate[["B4", "J", "B2", "B5"]])}
 
 Tag clock offset (event-driven filter, tag at 5 Hz with 20 ms jitter, 15-step occlusion; whole
 run / window, joint tracker, m):
 
-{fmt(pd.DataFrame({"J whole run": off["J"], "J window": off_w["J"], "B2 whole run": off["B2"]}))}
+{_md(pd.DataFrame({"J whole run": off["J"], "J window": off_w["J"], "B2 whole run": off["B2"]}))}
 
 """
-        + "\n".join(f"![{f}]({f})" for f in figs)
-        + f"""
+
+
+def _report_differences(
+    tables: dict[str, pd.Series], sweep: pd.DataFrame, rate: pd.DataFrame, off_w: pd.DataFrame
+) -> str:
+    """Report text: differences from the thesis and the prototype, and their causes."""
+    worst_abs, worst_rel, sweep_rel = _worst_differences(tables, _sweep_table(sweep))
+    return f"""
 
 ## Differences and their causes
 
@@ -430,5 +513,26 @@ run / window, joint tracker, m):
   of noise; measured inside the occlusion window the joint error changes by
   {", ".join(f"{off_w.loc[ms, 'J'] - off_w.loc[0, 'J']:+.3f} m at {ms} ms" for ms in OFFSETS_MS[1:])}.
 """
+
+
+def run(ctx: RunContext) -> Outcome:
+    """S1-S4, the sweep, tag rates and clock offsets: estimation, claims, figures, report."""
+    runs = ctx.n_runs(full=100, quick=8)
+    df = ctx.monte_carlo(run_once, configs(), runs)
+    tables = _tables(df)
+    sweep, rate, off, off_w = _sweep_rate_offset(df)
+    claims = [
+        *_h1_h2_claims(tables),
+        *_h3_claims(tables),
+        *_h4_claims(df, tables),
+        *_sweep_claims(sweep, ctx.quick),
+        *_rate_offset_claims(rate, off, off_w),
+        _consistency_claim(df),
+    ]
+    figs = _figures(ctx, df, sweep)
+    body = (
+        _report_numbers(tables, sweep, rate, off, off_w, runs)
+        + "\n".join(f"![{f}]({f})" for f in figs)
+        + _report_differences(tables, sweep, rate, off_w)
     )
     return Outcome(df, claims, body, runs)

@@ -26,19 +26,15 @@ from ...filters.sis import ProposalParticleFilter
 from ...filters.sp_pekf import SPPEKFProposal
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
-from .common import timed_gaussian, timed_sis
+from .common import timed_gaussian, timed_sis, track_rows
 from .comparators import (
     COMPARATORS,
     UPF_NOTE,
     Comparison,
     Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    per_run_scores,
     run_comparators,
-    sis_reference,
 )
+from .equal_time import EqualTime
 from .reporting import order_claim, origin_sensor, plot_rmse, plot_run_tracks, rmse_by_step
 
 METHODS = (
@@ -148,37 +144,20 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     for name, (est, secs) in estimates.items():
         err = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])  # Eq. 36
         err = np.where(np.isfinite(err), err, 1e9)
-        for t in range(len(err)):
-            rows.append(
-                {
-                    "method": name,
-                    "step": t + 1,
-                    "sq_err": float(err[t] ** 2),
-                    "seconds": secs,
-                    "x": est[t, 0],
-                    "y": est[t, 1],
-                    "true_x": truth[t, 0],
-                    "true_y": truth[t, 1],
-                }
-            )
+        rows += track_rows(name, est, truth, sq_err=err**2, seconds=secs)
     return rows
 
 
 def run(ctx: RunContext) -> Outcome:
     """E2-E3: comparators calibrated to PF-SP-PEKF(200), the runs, claims, figures, report."""
     runs = ctx.n_runs(full=100, quick=8)
-    n_equal, target = {}, {}
+    eq = EqualTime.for_run(ctx)
     for s in ("E2", "E3"):  # particles at PF-SP-PEKF(200)'s time, on run 0's scenario
         cs = comparator_scenario(s, ctx.seed)
-        n_equal[s], target[s] = equal_time_particles(
-            cs,
-            sis_reference(cs, partial(sp_pekf, cs, 200)),
-            ("UPF", "bootstrap equal time"),
-            repeats=2 if ctx.quick else 3,
-        )
+        eq.calibrate_sis(s, cs, partial(sp_pekf, cs, 200))
     df = ctx.monte_carlo(
         run_once,
-        [{"scenario": s, "n_particles": 200, "n_equal": n_equal[s]} for s in ("E2", "E3")],
+        [{"scenario": s, "n_particles": 200, "n_equal": eq.n_particles[s]} for s in ("E2", "E3")],
         runs,
     )
     claims: list[Claim] = []
@@ -190,7 +169,7 @@ def run(ctx: RunContext) -> Outcome:
         tables[s] = scenario_table(d, rm)
         claims += scenario_claims(s, rm)
         figs.update(scenario_figures(ctx, s, d, rm, runs))
-    cmp = comparison(ctx, df, n_equal, target)
+    cmp = comparison(ctx, df, eq)
     body = report_text(tables, figs) + cmp.section
     return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
 
@@ -248,23 +227,20 @@ def scenario_figures(
     }
 
 
-def comparison(
-    ctx: RunContext, df: pd.DataFrame, n_equal: dict[str, Any], target: dict[str, float]
-) -> Comparison:
+def comparison(ctx: RunContext, df: pd.DataFrame, eq: EqualTime) -> Comparison:
     """Beyond the paper: UPF, bootstrap at PF-SP-PEKF's time and the IMM-EKF, per scenario."""
-    return compare(
-        per_run_scores(df, ["scenario"], "sq_err"),
+    return eq.compare_runs(
+        ctx,
+        df,
+        ["scenario"],
+        "sq_err",
         "PF-SP-PEKF",
-        ctx.figure_path("error_vs_seconds"),
-        by=["scenario"],
         ylabel="position RMSE per run (mean over runs)",
-        calibration=calibration_note(n_equal, target),
         notes=[
             "IMM-EKF: CV and left/right coordinated turns (E2 0.1 rad/s, E3 3 deg/s), regime "
             f"matrix {IMM_TRANSITION.tolist()}.",
             UPF_NOTE,
         ],
-        n_particles=n_equal,
     )
 
 

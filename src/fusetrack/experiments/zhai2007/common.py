@@ -5,14 +5,15 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import nullcontext
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from ...core import Gaussian, Measurement
+from ...core import Gaussian, Measurement, filter_step
 from ...core.resampling import systematic
-from ...filters.sis import Array, sensor_measurements
+from ...filters.sis import Array
 
 # compile the resampling kernel once per process, so that no filter's timing includes it
 systematic(np.full((1, 2), 0.5), np.random.default_rng(0))
@@ -26,25 +27,39 @@ def run_steps(
     prior: Gaussian,
     zs: Steps,
     dt: float,
-    rng: np.random.Generator,
+    rng: np.random.Generator | None,
     *,
     keep: Callable[[Any], Any] = lambda belief: belief.estimate,
     side: Mapping[str, Sequence[Array | None]] | None = None,
     batch_shape: tuple[int, ...] = (),
+    sensor_ids: Sequence[str] | None = None,
 ) -> list[Any]:
-    """Run a stepping particle filter (:class:`~fusetrack.filters.ProposalParticleFilter`,
-    :class:`~fusetrack.filters.MultipleModelParticleFilter`) from ``prior`` over ``zs``, step
-    ``k`` at time ``(k + 1) dt``; ``side`` adds per-step side inputs by id (e.g. CPF-SP's sensor
-    weights; a None entry is left out). Returns ``keep(belief)`` after every step."""
-    belief = filt.initialize(prior, rng, batch_shape)
+    """Run any filter from ``prior`` over ``zs``, step ``k`` at time ``(k + 1) dt``, one
+    :func:`~fusetrack.core.filter_step` per step, and return ``keep(belief)`` after each.
+
+    With ``rng`` (the particle filters: :class:`~fusetrack.filters.ProposalParticleFilter`,
+    :class:`~fusetrack.filters.MultipleModelParticleFilter`) the belief starts as
+    ``filt.initialize(prior, rng, batch_shape)``; without (Gaussian filters) it is ``prior``, or
+    ``filt.initialize(prior)`` for an IMM, and overflow inside the filter is silenced (a
+    diverging EKF is scored, not reported). ``sensor_ids`` name ``zs``'s columns (default: the
+    filter's sensors); ``side`` adds per-step side inputs by id (e.g. CPF-SP's sensor weights;
+    a None entry is left out)."""
+    if rng is not None:
+        belief = filt.initialize(prior, rng, batch_shape)
+    else:
+        init = getattr(filt, "initialize", None)
+        belief = init(prior) if init is not None else prior
+    ids = list(sensor_ids) if sensor_ids is not None else [s.sensor_id for s in filt.sensors]
     out = []
     for k, step in enumerate(zs):
         t = (k + 1) * dt
-        ms = sensor_measurements(filt.sensors, step, t)
+        ms = [Measurement(t, i, np.asarray(z, float)) for i, z in zip(ids, step) if z is not None]
         for sid, values in (side or {}).items():
             if values[k] is not None:
                 ms.append(Measurement(t, sid, np.asarray(values[k], dtype=float)))
-        belief = filt.step(belief, dt, ms, rng)
+        quiet = np.errstate(over="ignore", invalid="ignore") if rng is None else nullcontext()
+        with quiet:
+            belief = filter_step(filt, belief, dt, ms, rng)
         out.append(keep(belief))
     return out
 
@@ -70,32 +85,29 @@ def timed_sis(
 def timed_gaussian(
     filt: Any,
     prior: Gaussian,
-    zs: Sequence[Sequence[Array | None]],
+    zs: Steps,
     sensor_ids: Sequence[str],
     dt: float,
     probs: list[Array] | None = None,
 ) -> tuple[Array, float]:
     """Run a fusetrack Gaussian filter (EKF/UKF, or an IMM: started with ``filt.initialize``)
-    step by step; NaN/None measurements skipped. An IMM's regime probabilities per step are
-    appended to ``probs`` when it is given."""
+    with :func:`run_steps`; NaN/None measurements skipped. An IMM's regime probabilities per
+    step are appended to ``probs`` when it is given."""
+    finite = [[z if z is not None and np.all(np.isfinite(z)) else None for z in s] for s in zs]
     t0 = time.perf_counter()
-    belief = filt.initialize(prior) if hasattr(filt, "initialize") else prior
-    out = []
-    for k, step in enumerate(zs):
-        with np.errstate(over="ignore", invalid="ignore"):
-            belief = filt.predict(belief, dt)
-        ms = [
-            Measurement(float(k + 1), sid, np.atleast_1d(np.asarray(z, float)))
-            for sid, z in zip(sensor_ids, step)
-            if z is not None and np.all(np.isfinite(z))
-        ]
-        if ms:
-            with np.errstate(over="ignore", invalid="ignore"):
-                belief = filt.update(belief, ms)
-        out.append(np.asarray(belief.mean, float))
-        if probs is not None:
-            probs.append(np.asarray(belief.probs, float))
-    return np.array(out), time.perf_counter() - t0
+    kept = run_steps(
+        filt,
+        prior,
+        finite,
+        dt,
+        None,
+        sensor_ids=sensor_ids,
+        keep=lambda b: (np.asarray(b.mean, float), None if probs is None else b.probs),
+    )
+    secs = time.perf_counter() - t0
+    if probs is not None:
+        probs.extend(np.asarray(p, float) for _, p in kept)
+    return np.array([m for m, _ in kept]), secs
 
 
 def track_rows(method: str, est: Array, truth: Array, **columns: Any) -> list[dict[str, Any]]:

@@ -36,13 +36,9 @@ from .comparators import (
     UPF_NOTE,
     Comparison,
     Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    per_run_scores,
     run_comparators,
-    sis_reference,
 )
+from .equal_time import EqualTime
 from .reporting import order_claim, plot_rmse, rmse_by_method, rmse_by_step
 
 PI_B = np.array(
@@ -240,23 +236,19 @@ def comparators(
     """Beyond the paper: UPF and bootstrap calibrated to the discretisation PF (E16) and the
     discretisation MMPF (E17, per scenario and case), on the first ``CMP_RUNS`` runs; the
     IMM-EKF (E17: four models, Pi_B; E16: one model, i.e. the EKF) comes from every run."""
-    reps, seed0 = 2, run_seed(ctx.seed, 0)
+    eq, seed0 = EqualTime(repeats=2), run_seed(ctx.seed, 0)
     k16, k17 = min(runs[0], CMP_RUNS["E16"]), min(runs[1], CMP_RUNS["E17"])
-    n_equal, target, parts, ref = {}, {}, [], {}
+    parts, ref = [], {}
     cs = e16_scenario(seed0)
-    n_equal["E16"], target["E16"] = equal_time_particles(
+    n16 = eq.calibrate_sis(
+        "E16",
         cs,
-        sis_reference(
-            cs,
-            lambda: ProposalParticleFilter(cs.motion, cs.sensors, DiscretisationProposal(), 200),
-        ),
-        ("UPF", "bootstrap equal time"),
-        repeats=reps,
+        lambda: ProposalParticleFilter(cs.motion, cs.sensors, DiscretisationProposal(), 200),
     )
     ref["E16"] = "discretisation PF 200"
     parts.append(
         ctx.monte_carlo(
-            run_e16, [{"experiment": "E16", "n_equal": n_equal["E16"]}], k16, desc="comparators"
+            run_e16, [{"experiment": "E16", "n_equal": n16}], k16, desc="comparators"
         ).assign(label="E16")
     )
     for c in cfgs17:
@@ -267,40 +259,35 @@ def comparators(
             f = discretisation_mmpf(cs17, n)
             return timed_mm(f, cs17.prior, cs17.zs, 1.0, np.random.default_rng(0))
 
-        n_equal[key], target[key] = equal_time_particles(
-            cs17, mm_ref, ("UPF", "bootstrap equal time"), repeats=reps
-        )
+        n17 = eq.calibrate(key, cs17, mm_ref)
         ref[key] = "discretisation MMPF"
         parts.append(
-            ctx.monte_carlo(run_e17, [{**c, "n_equal": n_equal[key]}], k17, desc=key).assign(
-                label=key
-            )
+            ctx.monte_carlo(run_e17, [{**c, "n_equal": n17}], k17, desc=key).assign(label=key)
         )
     d16 = df16[df16["run"] < k16].assign(label="E16")
     d17 = df17[df17["run"] < k17]
     d17 = d17.assign(label="E17 " + d17["scenario"] + d17["case"])
     rows = pd.concat([d16, d17, *parts], ignore_index=True)
-    return comparison(ctx, rows, ref, n_equal, target, (k16, k17))
+    return comparison(ctx, rows, ref, eq, (k16, k17))
 
 
 def comparison(
     ctx: RunContext,
     rows: pd.DataFrame,
     ref: dict[str, str],
-    n_equal: dict[str, Any],
-    target: dict[str, float],
+    eq: EqualTime,
     runs: tuple[int, int],
 ) -> Comparison:
     """The comparators' table and figure on the first ``runs`` (E16, E17) runs of each label."""
     k16, k17 = runs
-    return compare(
-        per_run_scores(rows, ["label"], "sq_pos_err"),
+    return eq.compare_runs(
+        ctx,
+        rows,
+        ["label"],
+        "sq_pos_err",
         ref,
-        ctx.figure_path("error_vs_seconds"),
-        by=["label"],
         ylabel="position RMSE per run (mean)",
-        calibration=calibration_note(n_equal, target)
-        + f" UPF and the equal-time bootstrap ran on the first {k16} (E16) and {k17} (E17) runs "
+        calibration=f" UPF and the equal-time bootstrap ran on the first {k16} (E16) and {k17} (E17) runs "
         "(same truths as the paper's filters' runs; E17's are few because each equal-time "
         "comparator costs as much as the discretisation MMPF); the table compares every method "
         "on those runs.",
@@ -320,7 +307,6 @@ def comparison(
             "MM-bootstrap",
             *COMPARATORS,
         ],
-        n_particles=n_equal,
         runs={"E16": k16, "E17": k17},
     )
 

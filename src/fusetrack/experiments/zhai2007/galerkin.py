@@ -24,17 +24,9 @@ from ...filters.grid_proposals import GalerkinProposal
 from ...filters.sis import ProposalParticleFilter
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
-from .common import timed_gaussian, timed_sis
-from .comparators import (
-    Comparison,
-    Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    per_run_scores,
-    run_comparators,
-    sis_reference,
-)
+from .common import timed_gaussian, timed_sis, track_rows
+from .comparators import Comparison, Scenario, run_comparators
+from .equal_time import EqualTime
 from .reporting import (
     origin_sensor,
     plot_rmse,
@@ -133,23 +125,17 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     for name, (e, secs) in est.items():
         dx, dy = e[:, 0] - truth[:, 0], e[:, 1] - truth[:, 1]
         dx, dy = (np.where(np.isfinite(v), v, 1e9) for v in (dx, dy))
-        for t in range(len(dx)):
-            rows.append(
-                {
-                    "method": name,
-                    "step": t + 1,
-                    "sq_ex": float(dx[t] ** 2),
-                    "sq_ey": float(dy[t] ** 2),
-                    "e_x": float(np.sqrt(np.mean(dx**2))),
-                    "e_y": float(np.sqrt(np.mean(dy**2))),
-                    "seconds": secs,
-                    "grid_too_small": grid_small,
-                    "x": e[t, 0],
-                    "y": e[t, 1],
-                    "true_x": truth[t, 0],
-                    "true_y": truth[t, 1],
-                }
-            )
+        rows += track_rows(
+            name,
+            e,
+            truth,
+            sq_ex=dx**2,
+            sq_ey=dy**2,
+            e_x=float(np.sqrt(np.mean(dx**2))),
+            e_y=float(np.sqrt(np.mean(dy**2))),
+            seconds=secs,
+            grid_too_small=grid_small,
+        )
     return rows
 
 
@@ -157,15 +143,11 @@ def run(ctx: RunContext) -> Outcome:
     """E13: comparators calibrated to the Galerkin PF, examples 1 and 2, claims, report."""
     runs = ctx.n_runs(full=200, quick=4)
     runs2 = max(2, runs // 10)
-    n_equal, target = {}, {}
+    eq = EqualTime.for_run(ctx)
     for ex in (1, 2):  # UPF and bootstrap particles at the Galerkin PF's time, on run 0
         cs = comparator_scenario(ex, run_seed(ctx.seed, 0))
-        n_equal[f"example {ex}"], target[f"example {ex}"] = equal_time_particles(
-            cs,
-            sis_reference(cs, partial(galerkin_pf, cs)),
-            ("UPF", "bootstrap equal time"),
-            repeats=2 if ctx.quick else 3,
-        )
+        eq.calibrate_sis(f"example {ex}", cs, partial(galerkin_pf, cs))
+    n_equal = eq.n_particles
     df1 = ctx.monte_carlo(
         run_once,
         [{"example": 1, "extras": True, "n_equal": n_equal["example 1"]}],
@@ -180,7 +162,7 @@ def run(ctx: RunContext) -> Outcome:
     claims = [*claims_table9(ours, ctx.quick), claim_turn(df2)]
     figs = figures(ctx, df1, df2, runs)
     body = report_text(ours, df1, figs, runs, runs2)
-    cmp = comparison(ctx, df, n_equal, target, runs2)
+    cmp = comparison(ctx, df, eq, runs2)
     return Outcome(df, claims, body + "\n" + cmp.section, runs, beyond_the_paper=cmp.summary)
 
 
@@ -293,20 +275,19 @@ def figures(ctx: RunContext, df1: pd.DataFrame, df2: pd.DataFrame, runs: int) ->
 def comparison(
     ctx: RunContext,
     df: pd.DataFrame,
-    n_equal: dict[str, Any],
-    target: dict[str, float],
+    eq: EqualTime,
     runs2: int,
 ) -> Comparison:
     """Beyond the paper: UPF, bootstrap at the Galerkin PF's time and the IMM-EKF, per example."""
     d = df.assign(sq_err=df["sq_ex"] + df["sq_ey"])
     d["example"] = d["example"].map(lambda e: f"example {int(e)}")
-    return compare(
-        per_run_scores(d, ["example"], "sq_err"),
+    return eq.compare_runs(
+        ctx,
+        d,
+        ["example"],
+        "sq_err",
         "Galerkin PF 200",
-        ctx.figure_path("error_vs_seconds"),
-        by=["example"],
         ylabel="position RMSE per run (mean over runs)",
-        calibration=calibration_note(n_equal, target),
         notes=[
             "IMM-EKF: CV and left/right coordinated turns at pi/6 rad/step (example 2's turn), "
             f"q = 0.05, regime matrix {IMM_TRANSITION.tolist()}.",
@@ -314,7 +295,6 @@ def comparison(
             f"Example 2 has {runs2} runs.",
         ],
         families={"bootstrap": [f"bootstrap {n}" for n in (200, 500, 1000, 2000)]},
-        n_particles=n_equal,
     )
 
 

@@ -25,17 +25,10 @@ from ...filters.mcmc_moves import IndependenceMove, MHPriorMove, RandomWalkMove
 from ...filters.sis import ProposalParticleFilter
 from ...motion.benchmark import ScalarBenchmark
 from ...sensors.power import Power
+from . import scalar
 from .common import timed_sis
-from .comparators import (
-    UPF_NOTE,
-    Comparison,
-    Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    run_comparators,
-    sis_reference,
-)
+from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators
+from .equal_time import EqualTime
 
 STEPS = 25
 NS = (100, 200, 500, 1000)
@@ -64,13 +57,7 @@ def model() -> tuple[ScalarBenchmark, Power, Gaussian]:
 def simulate(rng: np.random.Generator) -> tuple[np.ndarray, list[list[np.ndarray]]]:
     """``x_0`` from the prior, then ``STEPS`` transitions and measurements."""
     motion, sensor, prior = model()
-    x = prior.sample(rng)
-    xs, zs = [], []
-    for _ in range(STEPS):
-        x = motion.sample(x, 1.0, rng)
-        xs.append(x.copy())
-        zs.append([sensor.simulate(x, rng)])
-    return np.array(xs), zs
+    return scalar.simulate(motion, sensor, rng, STEPS, x0=prior.sample(rng))
 
 
 def make_filter(method: str, n: int) -> ProposalParticleFilter:
@@ -123,19 +110,14 @@ def run(ctx: RunContext) -> Outcome:
     """E19: comparators calibrated to PF-RWM(N), the runs per N, claims, figures, report."""
     runs = ctx.n_runs(full=1000, quick=40)
     cs = comparator_scenario(run_seed(ctx.seed, 0))
-    n_equal, target = {}, {}
+    eq = EqualTime.for_run(ctx)
     for n in NS:  # UPF and bootstrap at PF-RWM(N)'s time
-        n_equal[n], target[n] = equal_time_particles(
-            cs,
-            sis_reference(cs, partial(make_filter, "PF-RWM", n)),
-            ("UPF", "bootstrap equal time"),
-            repeats=2 if ctx.quick else 3,
-        )
+        eq.calibrate_sis(n, cs, partial(make_filter, "PF-RWM", n))
     df_all = ctx.monte_carlo(
-        run_once, [{"n_particles": n, "n_equal": n_equal[n]} for n in NS], runs
+        run_once, [{"n_particles": n, "n_equal": eq.n_particles[n]} for n in NS], runs
     )
     df = df_all[df_all["method"].isin(METHODS)]
-    cmp = comparison(ctx, df_all, n_equal, target)
+    cmp = comparison(ctx, df_all, eq)
     tab = summarise(df)
     claims = claims_table15(df, tab)
     figs = figures(ctx, tab, runs)
@@ -143,17 +125,14 @@ def run(ctx: RunContext) -> Outcome:
     return Outcome(df_all, claims, body, runs, beyond_the_paper=cmp.summary)
 
 
-def comparison(
-    ctx: RunContext, df_all: pd.DataFrame, n_equal: dict[int, Any], target: dict[int, float]
-) -> Comparison:
+def comparison(ctx: RunContext, df_all: pd.DataFrame, eq: EqualTime) -> Comparison:
     """Beyond the paper: UPF, bootstrap at PF-RWM's time and the EKF, per N."""
-    return compare(
+    return eq.compare(
         df_all.assign(error=df_all["mse"]),
         "PF-RWM",
         ctx.figure_path("error_vs_seconds_comparators"),
         by=["n_particles"],
         ylabel="average MSE",
-        calibration=calibration_note(n_equal, target),
         notes=[
             "IMM-EKF: the model has one motion model and a one-model IMM is exactly the EKF; "
             "with y = x^2 and a prior centred on 0 the EKF's Jacobian 2x starts at 0, so it "
@@ -162,7 +141,6 @@ def comparison(
             "n_particles is the particle count of the paper's four filters; the comparators' "
             "counts are the calibrated ones above.",
         ],
-        n_particles=n_equal,
     )
 
 

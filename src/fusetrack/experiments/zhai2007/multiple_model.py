@@ -35,16 +35,8 @@ from ...motion import ConstantVelocity
 from ...motion.maneuver import ManeuverTurn
 from ...sensors import Bearing
 from .common import timed_gaussian, timed_mm, timed_sis, track_rows
-from .comparators import (
-    UPF_NOTE,
-    Comparison,
-    Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    per_run_scores,
-    run_comparators,
-)
+from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators
+from .equal_time import EqualTime
 from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
 
 PI_A = np.array(
@@ -274,9 +266,8 @@ def comparators(
     """Beyond the paper: UPF and bootstrap (CV) calibrated to the paper's filter's time (E7:
     MM-bootstrap; E8: the fused per-sensor MMPFs, against centralised comparators), on the first
     ``CMP_RUNS`` runs; the IMM-EKF rows come from every run."""
-    k, reps = min(runs, CMP_RUNS), 2 if ctx.quick else 3
+    k, eq, parts = min(runs, CMP_RUNS), EqualTime.for_run(ctx), []
     seed0 = run_seed(ctx.seed, 0)
-    n_equal, target, parts = {}, {}, []
     for sig in sigmas:
         cs = e7_scenario({"sigma": sig}, seed0)
         key = f"E7 sigma {sig:g}"
@@ -285,29 +276,26 @@ def comparators(
             f = MultipleModelParticleFilter(list(cs.imm_models), PI_3, cs.sensors, n_part)
             return timed_mm(f, cs.prior, cs.zs, 1.0, np.random.default_rng(0))
 
-        n_equal[key], target[key] = equal_time_particles(
-            cs, mm_ref, ("UPF", "bootstrap equal time"), repeats=reps
-        )
-        cfg = {"experiment": "E7", "sigma": sig, "n_equal": n_equal[key]}
+        cfg = {"experiment": "E7", "sigma": sig, "n_equal": eq.calibrate(key, cs, mm_ref)}
         parts.append(ctx.monte_carlo(run_e7, [cfg], k, desc=f"comparators {key}").assign(label=key))
     cs8 = e8_scenario(seed0)
-    n_equal["E8"], target["E8"] = equal_time_particles(
-        cs8, lambda: fused_mmpf(cs8, n_part, 0), ("UPF", "bootstrap equal time"), repeats=reps
-    )
-    cfg8 = {"experiment": "E8", "n_equal": n_equal["E8"]}
+    cfg8 = {
+        "experiment": "E8",
+        "n_equal": eq.calibrate("E8", cs8, lambda: fused_mmpf(cs8, n_part, 0)),
+    }
     parts.append(ctx.monte_carlo(run_e8, [cfg8], k, desc="comparators E8").assign(label="E8"))
     label = np.where(
         df["experiment"] == "E8", "E8", "E7 sigma " + df["sigma"].map(lambda v: f"{v:g}")
     )
     rows = pd.concat([df[df["run"] < k].assign(label=label[df["run"] < k]), *parts])
-    return compare(
-        per_run_scores(rows, ["label"], "sq_pos_err"),
-        {k: "MMPF multi-sensor (fused)" if k == "E8" else "MM-bootstrap" for k in n_equal},
-        ctx.figure_path("error_vs_seconds"),
-        by=["label"],
+    return eq.compare_runs(
+        ctx,
+        rows,
+        ["label"],
+        "sq_pos_err",
+        {k: "MMPF multi-sensor (fused)" if k == "E8" else "MM-bootstrap" for k in eq.n_particles},
         ylabel="position RMSE per run (mean)",
-        calibration=calibration_note(n_equal, target)
-        + f" UPF and the equal-time bootstrap ran on the first {k} of the {runs} runs (same "
+        calibration=f" UPF and the equal-time bootstrap ran on the first {k} of the {runs} runs (same "
         "truths); the table compares every method on those runs. E8's reference is the fused "
         "multi-sensor MMPF (three filters); its comparators use all three bearings "
         "(centralised).",
@@ -316,7 +304,6 @@ def comparators(
             "UPF and the equal-time bootstrap use the CV model (a single-model filter).",
             UPF_NOTE,
         ],
-        n_particles=n_equal,
         runs=k,
     )
 

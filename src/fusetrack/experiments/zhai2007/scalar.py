@@ -24,17 +24,8 @@ from ...filters.sp_pekf import SPPEKFProposal
 from ...motion.benchmark import ScalarBenchmark
 from ...sensors.power import Power
 from .common import fmt_order, timed_gaussian, timed_sis
-from .comparators import (
-    COMPARATORS,
-    UPF_NOTE,
-    Comparison,
-    Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    run_comparators,
-    sis_reference,
-)
+from .comparators import COMPARATORS, UPF_NOTE, Comparison, Scenario, run_comparators
+from .equal_time import EqualTime
 from .reporting import order_claim, relative_claim, rmse_by_step
 
 T_STEPS = 50
@@ -56,10 +47,15 @@ VARIANTS: dict[str, dict[str, Any]] = {
 
 
 def simulate(
-    motion: ScalarBenchmark, sensor: Power, rng: np.random.Generator, steps: int = T_STEPS
+    motion: ScalarBenchmark,
+    sensor: Power,
+    rng: np.random.Generator,
+    steps: int = T_STEPS,
+    x0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, list[list[np.ndarray]]]:
-    """``x(0) ~ N(0, 1)`` (spec choice), then ``steps`` transitions and measurements."""
-    x = rng.standard_normal(1)
+    """``x(0) = x0``, by default ``~ N(0, 1)`` (spec choice), then ``steps`` transitions and
+    measurements (Eqs. 93-94 use it too, with their prior's draw)."""
+    x = rng.standard_normal(1) if x0 is None else x0
     xs, zs = [], []
     for _ in range(steps):
         x = motion.sample(x, 1.0, rng)
@@ -136,17 +132,14 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
-def _equal_time_particles(seed: int, repeats: int) -> tuple[dict[str, int], float]:
+def equal_time(ctx: RunContext) -> EqualTime:
     """UPF and bootstrap particles that cost what PF-SP-PEKF(200) costs (a pilot on run 0's
-    truth under the printed model; rule in :mod:`.zhai2007_comparators`)."""
-    cs = comparator_scenario(VARIANTS["printed"], run_seed(seed, 0))
+    truth under the printed model; rule in :mod:`.comparators`), under the key ``printed``."""
+    cs = comparator_scenario(VARIANTS["printed"], run_seed(ctx.seed, 0))
     ref = filters_for(VARIANTS["printed"], cs.motion, cs.sensors[0])["PF-SP-PEKF"]  # type: ignore[arg-type]
-    return equal_time_particles(
-        cs,
-        sis_reference(cs, lambda: ref),
-        ("UPF", "bootstrap equal time"),
-        repeats=repeats,
-    )
+    eq = EqualTime.for_run(ctx)
+    eq.calibrate_sis("printed", cs, lambda: ref)
+    return eq
 
 
 def state_pdfs(
@@ -200,7 +193,8 @@ def run(ctx: RunContext) -> Outcome:
     """E1: the printed model's runs (comparators calibrated first) and each reading's runs."""
     runs = ctx.n_runs(full=1000, quick=40)
     var_runs = max(5, runs // 5) if ctx.runs is None else runs
-    n_eq, target = _equal_time_particles(ctx.seed, 2 if ctx.quick else 3)
+    eq = equal_time(ctx)
+    n_eq = eq.n_particles["printed"]
     printed = ctx.monte_carlo(
         run_once,
         [{"variant": "printed", **VARIANTS["printed"], "extras": True, "n_equal_time": n_eq}],
@@ -214,7 +208,7 @@ def run(ctx: RunContext) -> Outcome:
         desc="variants",
     )
     df = pd.concat([printed, others], ignore_index=True)
-    return analyse(ctx, df, runs, var_runs, n_eq, target)
+    return analyse(ctx, df, runs, var_runs, eq)
 
 
 def analyse(
@@ -222,11 +216,10 @@ def analyse(
     df: pd.DataFrame,
     runs: int,
     var_runs: int,
-    n_eq: Mapping[str, int],
-    target: float = float("nan"),
+    eq: EqualTime,
 ) -> Outcome:
     """Claims, tables and figures from the rows of :func:`run_once` (also usable on a saved
-    ``results.parquet``)."""
+    ``results.parquet``, with the calibration ``eq`` of :func:`equal_time`)."""
     per_run, summary = summarise(df)
     ours = summary.loc["printed"]
     claims = claims_table3(ours, ctx.quick)
@@ -234,7 +227,7 @@ def analyse(
     claims += variant_claims
     figs = figures(ctx, df, runs)
     pr = per_run[per_run["variant"] == "printed"].rename(columns={"run_rmse": "error"})
-    cmp = comparison(ctx, pr, n_eq, target)
+    cmp = comparison(ctx, pr, eq)
     body = report_text(summary, runs, var_runs, reproduces, figs) + cmp.section
     return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
 
@@ -375,16 +368,13 @@ def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> dict[str, str]:
     return {"fig8": fig8.name, "fig9": fig9.name, "fig5": _pdf_figure(ctx, ctx.quick)}
 
 
-def comparison(
-    ctx: RunContext, per_run: pd.DataFrame, n_eq: Mapping[str, int], target: float
-) -> Comparison:
+def comparison(ctx: RunContext, per_run: pd.DataFrame, eq: EqualTime) -> Comparison:
     """Beyond the paper: the comparators at PF-SP-PEKF's time on the model as printed."""
-    return compare(
+    return eq.compare(
         per_run,
         "PF-SP-PEKF",
         ctx.figure_path("error_vs_seconds"),
         ylabel="mean over runs of the per-run RMSE",
-        calibration=calibration_note({"printed": n_eq}, {"printed": target}),
         notes=[
             "IMM-EKF: the scalar model has one motion model, and a one-model IMM is exactly the "
             "EKF (its mixing step is the identity), so the IMM-EKF row equals the EKF row.",
@@ -393,7 +383,7 @@ def comparison(
         ],
         families={"bootstrap": ["BS200", "BS1000", "BS2000", "bootstrap equal time"]},
         methods=[*PAPER_TABLE.index, "UKF", *COMPARATORS],
-        n_particles=dict(n_eq),
+        n_particles=dict(eq.n_particles["printed"]),
     )
 
 

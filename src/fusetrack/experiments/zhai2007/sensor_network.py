@@ -29,18 +29,15 @@ from ...management.intensity_activation import activation_radius, active_sensors
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
 from ...sensors.acoustic_intensity import AcousticIntensity
-from .common import run_steps
+from .common import run_steps, track_rows
 from .comparators import (
     COMPARATORS,
     UPF_NOTE,
     Comparison,
     Scenario,
-    calibration_note,
-    compare,
-    equal_time_particles,
-    per_run_scores,
     run_comparators,
 )
+from .equal_time import EqualTime
 from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
 
 WEIGHTS = CPFSPProposal.weights_id  # the measurement id of CPF-SP's per-step sensor weights
@@ -191,28 +188,20 @@ def _rows(
 ) -> list[dict[str, Any]]:
     """Per-step rows of one filter (``truth`` row 0 is t = 0)."""
     d = est - truth[1:]
-    rows = []
-    for t in range(STEPS):
-        rows.append(
-            {
-                "method": name,
-                "step": t + 1,
-                "sq_ex": float(d[t, 0] ** 2),
-                "sq_ey": float(d[t, 1] ** 2),
-                "sq_vel": float(np.sum(d[t, 2:] ** 2)),
-                "seconds": secs,
-                "active": int(counts[t]),
-                "x": est[t, 0],
-                "y": est[t, 1],
-                "vx": est[t, 2],
-                "vy": est[t, 3],
-                "true_x": truth[t + 1, 0],
-                "true_y": truth[t + 1, 1],
-                "true_vx": truth[t + 1, 2],
-                "true_vy": truth[t + 1, 3],
-            }
-        )
-    return rows
+    return track_rows(
+        name,
+        est,
+        truth[1:],
+        sq_ex=d[:, 0] ** 2,
+        sq_ey=d[:, 1] ** 2,
+        sq_vel=np.sum(d[:, 2:] ** 2, axis=1),
+        seconds=secs,
+        active=np.asarray(counts[:STEPS], dtype=int),
+        vx=est[:, 2],
+        vy=est[:, 3],
+        true_vx=truth[1:, 2],
+        true_vy=truth[1:, 3],
+    )
 
 
 def active_counts(
@@ -234,25 +223,22 @@ def comparators(
     """Beyond the paper: UPF and bootstrap calibrated to CPF-SP (200)'s time per configuration,
     IMM-EKF; on the first ``CMP_RUNS`` runs (same truths as the paper's filters' runs)."""
     k = min(runs, CMP_RUNS)
-    n_equal, target, ccfgs = {}, {}, []
+    eq, ccfgs = EqualTime.for_run(ctx), []
     for c in cfgs:
-        key = f"{c['scenario']} {c['threshold']:.0%}"
         cs, ws, _ = comparator_scenario(c, run_seed(ctx.seed, 0))
-        n_equal[key], target[key] = equal_time_particles(
-            cs, cpf_sp(cs, ws), ("UPF", "bootstrap equal time"), repeats=2 if ctx.quick else 3
-        )
-        ccfgs.append({**c, "n_equal": n_equal[key]})
+        n_equal = eq.calibrate(f"{c['scenario']} {c['threshold']:.0%}", cs, cpf_sp(cs, ws))
+        ccfgs.append({**c, "n_equal": n_equal})
     dc = ctx.monte_carlo(run_once, ccfgs, k, desc="comparators")
     rows = pd.concat([df[df["run"] < k], dc], ignore_index=True)
     rows["sq_pos"] = rows["sq_ex"] + rows["sq_ey"]
-    return compare(
-        per_run_scores(rows, ["scenario", "threshold"], "sq_pos"),
+    return eq.compare_runs(
+        ctx,
+        rows,
+        ["scenario", "threshold"],
+        "sq_pos",
         "CPF-SP (200)",
-        ctx.figure_path("error_vs_seconds"),
-        by=["scenario", "threshold"],
         ylabel="position RMSE per run (m, mean)",
-        calibration=calibration_note(n_equal, target)
-        + f" Comparators ran on the first {k} of the {runs} runs (same truths); the table "
+        calibration=f" Comparators ran on the first {k} of the {runs} runs (same truths); the table "
         "compares every method on those runs only.",
         notes=[
             "IMM-EKF: CV and left/right coordinated turns at pi/10 rad/s (the S2 truth's rate), "
@@ -261,7 +247,6 @@ def comparators(
             UPF_NOTE,
         ],
         methods=["CPF-SP (200)", "bootstrap (2000)", "bootstrap (200)", *COMPARATORS],
-        n_particles=n_equal,
         runs=k,
     )
 
@@ -300,6 +285,22 @@ def summarise(df: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def quarter_claim(
+    claim_id: str, statement: str, paper: str, cp: pd.Series, bs: pd.Series, stat: str
+) -> Claim:
+    """CPF-SP's RMSE ``stat`` (``mean`` or ``var`` over runs) below a quarter of the
+    bootstrap's in x and in y (Table 5)."""
+    x, y = f"RMSE x {stat}", f"RMSE y {stat}"
+    return Claim(
+        claim_id,
+        statement,
+        paper,
+        f"{cp[x]:.3g}/{cp[y]:.3g} vs {bs[x]:.3g}/{bs[y]:.3g}",
+        "< 0.25x both axes",
+        bool(cp[x] < 0.25 * bs[x] and cp[y] < 0.25 * bs[y]),
+    )
+
+
 def claims_table5(summ: pd.DataFrame) -> list[Claim]:
     """C5 (CPF-SP against the bootstrap on S1 at 75%, Table 5) and C6 (78% is similar)."""
     s1 = summ.loc[("S1", 0.75)]
@@ -309,27 +310,21 @@ def claims_table5(summ: pd.DataFrame) -> list[Claim]:
         max(c78["RMSE x mean"] / cp["RMSE x mean"], c78["RMSE y mean"] / cp["RMSE y mean"])
     )
     return [
-        Claim(
+        quarter_claim(
             "C5_cpfsp_vs_bootstrap",
             "S1, 75%: CPF-SP mean RMSE < 25% of the bootstrap's in x and y (Table 5)",
             "1.909/4.004 vs 23.180/30.060",
-            f"{cp['RMSE x mean']:.3g}/{cp['RMSE y mean']:.3g} vs {bs['RMSE x mean']:.3g}/{bs['RMSE y mean']:.3g}",
-            "< 0.25x both axes",
-            bool(
-                cp["RMSE x mean"] < 0.25 * bs["RMSE x mean"]
-                and cp["RMSE y mean"] < 0.25 * bs["RMSE y mean"]
-            ),
+            cp,
+            bs,
+            "mean",
         ),
-        Claim(
+        quarter_claim(
             "C5_variance",
             "S1, 75%: CPF-SP's RMSE variance is much smaller than the bootstrap's (Table 5)",
             "1.693/6.978 vs 154.63/223.291",
-            f"{cp['RMSE x var']:.3g}/{cp['RMSE y var']:.3g} vs {bs['RMSE x var']:.3g}/{bs['RMSE y var']:.3g}",
-            "< 0.25x both axes",
-            bool(
-                cp["RMSE x var"] < 0.25 * bs["RMSE x var"]
-                and cp["RMSE y var"] < 0.25 * bs["RMSE y var"]
-            ),
+            cp,
+            bs,
+            "var",
         ),
         Claim(
             "C6_threshold_78",
