@@ -166,7 +166,7 @@ def step_with_likelihood(
     ``step_with_likelihood`` (its proposal's estimate, the same draws as ``step``) when it has
     one, else predict (when ``dt > 0``) then ``update_with_likelihood``."""
     own = getattr(filt, "step_with_likelihood", None)
-    if own is not None and isinstance(filt, SteppingFilter):
+    if own is not None and callable(getattr(filt, "step", None)):
         result: tuple[B, Array] = own(belief, dt, measurements, rng)
         return result
     if dt > 0:
@@ -185,8 +185,12 @@ def filter_step(
 ) -> B:
     """One step of any filter: its own ``step`` when it has one, else predict (when ``dt > 0``)
     then update (when there are measurements)."""
-    if isinstance(filt, SteppingFilter):
-        return filt.step(belief, dt, measurements, rng)
+    step = getattr(
+        filt, "step", None
+    )  # not isinstance(SteppingFilter): that check is slow per step
+    if callable(step):
+        result: B = step(belief, dt, measurements, rng)
+        return result
     if dt > 0:
         belief = filt.predict(belief, dt, rng)
     return filt.update(belief, measurements, rng) if measurements else belief

@@ -163,8 +163,7 @@ def _filter_loop(
         else:
             dt = 0.0
         if log_likelihood and group:
-            assert isinstance(filt, LikelihoodFilter)
-            belief, increment = step_with_likelihood(filt, belief, dt, group, rng)
+            belief, increment = step_with_likelihood(filt, belief, dt, group, rng)  # type: ignore[arg-type]
             loglik = loglik + increment
         else:
             belief = filter_step(filt, belief, dt, group, rng)
