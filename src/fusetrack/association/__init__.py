@@ -1,5 +1,10 @@
-"""fusetrack.association (see DESIGN.md)."""
+"""Data association: the per-scan associator interface, MCMCDA, likelihood peaks."""
 
+from .base import Association as Association
+from .base import Associator as Associator
+from .base import ScanLikelihoods as ScanLikelihoods
+from .base import SingleHypothesis as SingleHypothesis
+from .base import hypotheses_of as hypotheses_of
 from .mcmcda import MCMCDA as MCMCDA
 from .mcmcda import AssociationState as AssociationState
 from .mcmcda import HypothesisSampler as HypothesisSampler
