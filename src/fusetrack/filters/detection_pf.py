@@ -11,8 +11,8 @@ the grid's shift-and-box; resampling is systematic every step.
 The filter is pure: the belief is a :class:`~fusetrack.core.beliefs.Particles` whose weights are
 those of the last update (``info["resample"]``: resample before the next prediction, which is
 where the systematic draw happens). A step whose weights all vanish keeps the predicted particles
-with equal weights and is counted in ``stats.degenerate_steps``. The particle loop stays private
-(not the shared engine) so that the published runs' random draws are unchanged.
+with equal weights and is counted in ``stats.degenerate_steps``. Weights are normalised and
+resampled by the shared :mod:`~fusetrack.filters.weighting`.
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ from ..core.beliefs import Particles
 from ..core.errors import MeasurementError, invalid
 from ..core.measurement import Measurement
 from ..core.models import MotionModel
-from ..core.resampling import systematic
 from ..sensors.bearing_detection import DetectionFunctionSensor
+from .weighting import draw_ancestors, particle_weights
 
 Array = NDArray[np.float64]
 
@@ -38,14 +38,6 @@ class DetectionPFStats:
     """Diagnostic counters (not part of the belief)."""
 
     degenerate_steps: int = 0
-
-
-def _normalised(log_w: Array) -> tuple[Array, float, float]:
-    """Weights ``w / sum w``, ``max log w`` and ``sum exp(log w - max)``."""
-    m = float(log_w.max())
-    w = np.exp(log_w - m)
-    total = float(w.sum())
-    return w / total, m, total
 
 
 @dataclass
@@ -72,8 +64,7 @@ class DetectionParticleFilter:
         gen = np.random.default_rng() if rng is None else rng
         x = belief.states
         if belief.info.get("resample"):
-            w, _, _ = _normalised(belief.log_weights)
-            x = x[systematic(w, gen)]
+            x = x[draw_ancestors(particle_weights(belief.log_weights), gen)]
         return Particles.uniform(self.motion.sample(x, dt, gen))
 
     def update(
@@ -101,19 +92,17 @@ class DetectionParticleFilter:
                     invalid("sensor_id", m.sensor_id, f"one of {sorted(self.sensors)}")
                 )
             log_w += sensor.log_likelihood(m.value, x)
-        m_ = log_w.max()
-        total = np.exp(log_w - m_).sum()
-        if not np.isfinite(total) or total <= 0:
+        pw = particle_weights(log_w)
+        if pw.any_degenerate:
             self.stats.degenerate_steps += 1
             return Particles(x, np.zeros(x.shape[0]), {"resample": True}), np.array(np.nan)
-        log_evidence = float(m_ + np.log(total / x.shape[0]))
-        return Particles(x, log_w, {"resample": True}), np.array(log_evidence)
+        return Particles(x, log_w, {"resample": True}), pw.log_mean
 
 
 def position_estimate(belief: Particles) -> tuple[Array, Array]:
     """Weighted mean and covariance of the position ``(x, y)`` of a (weighted) particle belief."""
     x = belief.states
-    w, _, _ = _normalised(belief.log_weights)
+    w = particle_weights(belief.log_weights).weights
     mean = w @ x[:, :2]
     r = x[:, :2] - mean
     return mean, (r * w[:, None]).T @ r

@@ -36,11 +36,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.special import logsumexp
 
 from ..core.errors import ConfigError, ShapeError, invalid
 from ..core.measurement import Measurement
-from ..core.resampling import systematic
 from ..motion.accel_turn import AccelTurn
 from ..sensors.doa_plane_likelihood import DoaCone, ProjectedPlaneBearing
 from ..sensors.doa_projection import (
@@ -51,6 +49,7 @@ from ..sensors.doa_projection import (
     literal_second_plane,
     projected_variance,
 )
+from .weighting import draw_ancestors, particle_weights
 
 Array = np.ndarray
 Pair = tuple[int, str]  # (sensor index, plane)
@@ -80,13 +79,11 @@ def sir_update(particles: Array, log_lik: Array, rng: np.random.Generator) -> tu
     particles and the step's report. If every weight is zero the predicted particles are kept
     with equal weights and the step is marked degenerate (never NaN).
     """
-    log_w_sum = float(logsumexp(log_lik))
-    if not np.isfinite(log_w_sum):
+    pw = particle_weights(log_lik)
+    if pw.any_degenerate:
         return particles, SirStep(particles.mean(axis=0), -np.inf, True)
-    w = np.exp(log_lik - log_w_sum)
-    mean = w @ particles
-    idx = systematic(w, rng)
-    return particles[idx], SirStep(mean, log_w_sum, False)
+    mean = pw.weights @ particles
+    return particles[draw_ancestors(pw, rng)], SirStep(mean, float(pw.log_sum), False)
 
 
 def select_pairs(

@@ -49,9 +49,9 @@ from ..core.errors import (
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
 from ..core.resampling import get_resampler
-from . import kernels
 from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .stats import FilterStats
+from .weighting import ParticleWeights, draw_ancestors, particle_weights
 
 Array = NDArray[np.float64]
 Zs = Sequence[Array | None]
@@ -172,27 +172,20 @@ def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
     return bool(np.allclose(motion.log_density(x1, x0, dt), ref, rtol=1e-9, atol=1e-9))
 
 
-def resample_log_weights(
-    log_w: Array,
+def resample_weights(
+    weights: ParticleWeights,
     resample: Callable[..., Any],
     rng: np.random.Generator,
     stats: FilterStats,
     owner: str = "particle filter",
 ) -> NDArray[np.intp]:
-    """Normalise log-weights ``(..., N)`` per run and resample: ancestor indices ``(..., N)``.
-
-    The normalisation is the particle filters' shared kernel
-    (:func:`~fusetrack.filters.kernels.normalize_log_weights`). NaN counts as ``-inf``; a run
-    whose weights all vanished keeps them equal and the step is counted and warned
-    (:meth:`~fusetrack.filters.stats.FilterStats.note_degenerate`; never NaN).
-    """
-    _, w, lse, _ = kernels.normalize_log_weights(log_w)
-    bad = ~np.isfinite(lse)
-    if np.any(bad):
+    """Ancestor indices ``(..., N)`` from normalised weights (:func:`~.weighting.particle_weights`:
+    a run whose weights all vanished keeps them equal); such a run is counted and warned
+    (:meth:`~fusetrack.filters.stats.FilterStats.note_degenerate`; never NaN)."""
+    if weights.any_degenerate:
         stats.note_degenerate(owner, "every weight of a run was zero; it kept them equal", 5)
-        w[bad] = 1.0 / w.shape[-1]
     stats.resample_count += 1
-    return np.asarray(resample(w, rng), dtype=np.intp)
+    return draw_ancestors(weights, rng, resample)
 
 
 @dataclass(frozen=True, eq=False)
@@ -400,11 +393,9 @@ class ProposalParticleFilter:
             log_w = (loglik(x) if loglik else 0.0) + log_q
         else:
             log_w = loglik(x) + self.log_transition(x, prev, dt) - log_q
-        if loglik:
-            increment = logsumexp(log_w, axis=-1) - np.log(log_w.shape[-1])
-        else:
-            increment = np.zeros(np.shape(log_w)[:-1])
-        return self._select(x, prev, log_w, loglik, pstate, dt, gen, ctx), increment
+        pw = particle_weights(log_w)
+        increment = pw.log_mean if loglik else np.zeros(np.shape(log_w)[:-1])
+        return self._select(x, prev, pw, loglik, pstate, dt, gen, ctx), increment
 
     def predict(
         self, belief: SISBelief, dt: float, rng: np.random.Generator | None = None
@@ -438,32 +429,31 @@ class ProposalParticleFilter:
             return belief, np.zeros(belief.batch_shape)
         parents = belief.parents if belief.parents is not None else belief.states
         x = belief.states
-        ll = loglik(x)
-        increment = logsumexp(ll, axis=-1) - np.log(x.shape[-2])
+        pw = particle_weights(loglik(x))
         return self._select(
             x,
             parents,
-            ll,
+            pw,
             loglik,
             belief.proposal,
             belief.dt,
             check_generator(rng),
             self.context(side),
-        ), np.asarray(increment, dtype=float)
+        ), pw.log_mean
 
     def _select(
         self,
         x: Array,
         prev: Array,
-        log_w: Array,
+        weights: ParticleWeights,
         loglik: LogLikelihood,
         pstate: Any,
         dt: float,
         rng: np.random.Generator,
         ctx: ProposalContext,
     ) -> SISBelief:
-        """Resample by ``log_w``, move (with the likelihood in view), estimate, feed back."""
-        idx = resample_log_weights(log_w, self.resample, rng, self.stats, type(self).__name__)
+        """Resample by ``weights``, move (with the likelihood in view), estimate, feed back."""
+        idx = resample_weights(weights, self.resample, rng, self.stats, type(self).__name__)
         x_res = np.take_along_axis(x, idx[..., None], axis=-2)
         reindex = getattr(self.proposal, "reindex", None)
         if reindex is not None:  # per-particle parts of the proposal state (regimes)

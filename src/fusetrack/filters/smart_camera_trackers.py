@@ -45,12 +45,10 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import minimize
-from scipy.special import logsumexp
 
 from ..core.beliefs import Gaussian, GaussianMixture, Particles
 from ..core.errors import ConfigError, MeasurementError, invalid
 from ..core.measurement import Measurement
-from ..core.resampling import systematic
 from ..motion import ConstantVelocity
 from ..sensors import PositionFix
 from ..sensors.appearance import AppearanceModel, FeatureImage
@@ -77,6 +75,7 @@ from .gaussian_mixtures import (
     reduce_mixture,
 )
 from .kalman import KalmanFilter
+from .weighting import draw_ancestors, particle_weights
 
 Array = NDArray[np.float64]
 
@@ -482,7 +481,7 @@ class Particle3DTracker(_ModalTracker):
         total = np.asarray(sum(logw.values()), dtype=np.float64)
         particles = Particles(states, total)
         if self.mode == "T0":
-            w = np.exp(total - logsumexp(total))
+            w = particle_weights(total).weights
             nbytes = STATE_BYTES + WEIGHT_BYTES * s.n_particles * len(used)
             links = STATE_BYTES + sum(WEIGHT_BYTES * s.n_particles * hops(parent, n) for n in used)
             sent = Communication(nbytes, links, len(used))
@@ -737,13 +736,13 @@ class RayIntersectionTracker(SmartCameraTracker):
             pixels = track.particles.states
             pts = pixels + self.s.sigma_px * rng.standard_normal(pixels.shape)
             lw = colour_log_likelihood(frames[n], pts, track.shape, belief.references[n])
-            w = np.exp(lw - logsumexp(lw))
-            est = w @ pts
+            pw = particle_weights(lw)
+            est = pw.weights @ pts
             wd, ht = cam.size
             if not (0 <= est[0] < wd and 0 <= est[1] < ht):
                 continue  # the 2-D tracker lost the target
             estimates[n] = est
-            tracks[n] = PixelTrack(track.shape, Particles.uniform(pts[systematic(w, rng)]))
+            tracks[n] = PixelTrack(track.shape, Particles.uniform(pts[draw_ancestors(pw, rng)]))
         estimate: Array | None = None
         if len(estimates) >= 2:
             cams = [self.net.cameras[n] for n in estimates]

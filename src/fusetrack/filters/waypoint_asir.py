@@ -37,9 +37,9 @@ from numpy.typing import NDArray
 
 from ..core.errors import ConfigError, UnknownSensorError, check_positive, invalid
 from ..core.measurement import Measurement
-from ..core.resampling import systematic
 from ..motion.waypoint_regime import WaypointRegimeDynamics
 from ..world.room import Room
+from .weighting import draw_ancestors, particle_weights
 
 Array = NDArray[np.float64]
 LogLikelihood = Callable[[Array], Array]
@@ -90,12 +90,6 @@ class ASIRBelief:
     def cov(self) -> Array:
         r = self.particles - self.mean
         return np.asarray((r * self.weights[:, None]).T @ r)
-
-
-def _normalise(log_w: Array) -> Array:
-    top = np.max(log_w)
-    w = np.exp(log_w - top)
-    return w / w.sum()
 
 
 @dataclass
@@ -176,7 +170,7 @@ class WaypointASIR:
             )
         if not np.any(np.isfinite(log_w)):
             return self._ignore(belief, rng, belief.particles)
-        return ASIRBelief(belief.particles, _normalise(log_w))
+        return ASIRBelief(belief.particles, _weights_of(log_w))
 
     def step(
         self,
@@ -200,14 +194,14 @@ class WaypointASIR:
             self.stats.first_stage_fallbacks += 1
             log_first = np.log(np.maximum(w, 1e-300))
             log_l1 = np.zeros_like(log_l1)
-        parents = systematic(_normalise(log_first), rng)
+        parents = draw_ancestors(particle_weights(log_first), rng)
         new = self.propagate(u[parents], rng)
         log_l2 = log_likelihood(new[:, :2])
         denom = log_l1[parents]
         log_w2 = log_l2 - np.where(np.isfinite(denom), denom, 0.0)
         if not np.any(np.isfinite(log_w2)):
             return self._ignore(belief, rng)
-        return ASIRBelief(new, _normalise(log_w2))
+        return ASIRBelief(new, _weights_of(log_w2))
 
     def _ignore(
         self, belief: ASIRBelief, rng: np.random.Generator | None, predicted: Array | None = None
@@ -227,3 +221,8 @@ def _require(rng: np.random.Generator | None) -> np.random.Generator:
     if rng is None:
         raise ConfigError(invalid("rng", rng, "a numpy Generator (the ASIR draws particles)"))
     return rng
+
+
+def _weights_of(log_w: Array) -> Array:
+    """Normalised weights of ``log_w`` (the shared :func:`~.weighting.particle_weights`)."""
+    return particle_weights(log_w).weights
