@@ -39,13 +39,17 @@ def run_quick(name: str) -> dict:
 def check(names: list[str]) -> int:
     """Run ``names`` (default: all) and print where they differ from the fixture; 1 if any does."""
     sys.path.insert(0, str(Path(__file__).parent))
-    from golden import claim_differences, load
+    from golden import claim_differences, floating_point_notes, load
 
     golden, bad = load(), 0
     for name in names or sorted(golden):
-        diff = claim_differences(name, golden[name]["claims"], run_quick(name)["claims"])
+        got = run_quick(name)["claims"]
+        diff = claim_differences(name, golden[name]["claims"], got)
+        notes = [
+            f"(floating point) {n}" for n in floating_point_notes(name, golden[name]["claims"], got)
+        ]
         bad += bool(diff)
-        print(f"{name}: {'OK' if not diff else 'DIFFERS'}", *diff, sep="\n  ", flush=True)
+        print(f"{name}: {'OK' if not diff else 'DIFFERS'}", *diff, *notes, sep="\n  ", flush=True)
     return int(bad > 0)
 
 

@@ -10,7 +10,7 @@ import os
 
 import pytest
 
-from .golden import claim_differences, load
+from .golden import FLOATING_POINT, TIMING, claim_differences, load
 from .record import run_quick
 
 GOLDEN = load()
@@ -23,6 +23,14 @@ def test_fixture_covers_every_experiment():
     from fusetrack.experiments import REGISTRY
 
     assert sorted(GOLDEN) == sorted(REGISTRY)
+
+
+def test_presence_only_claims_are_recorded_claims():
+    """Every timing / floating-point exemption names a claim of the fixture (no typo exempts
+    nothing, and nothing is exempted by a name that does not exist)."""
+    for table in (TIMING, FLOATING_POINT):
+        for name, ids in table.items():
+            assert ids <= GOLDEN[name]["claims"].keys(), (name, ids - GOLDEN[name]["claims"].keys())
 
 
 @pytest.mark.parametrize("name", NAMES)
