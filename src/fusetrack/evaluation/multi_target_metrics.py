@@ -270,13 +270,9 @@ class _Grid:
     times: Array  # (K,)
     truth: Array  # (K, n, k)
     estimates: Array  # (K, m, k)
-    truth_ids: tuple[object, ...]
-    estimate_ids: tuple[object, ...]
 
 
-def _track_positions(track: object, field: str, index: Sequence[int] | None) -> Array:
-    if not isinstance(track, Track):
-        raise ConfigError(invalid(field, type(track).__name__, "a fusetrack.core.Track"))
+def _track_positions(track: Track, field: str, index: Sequence[int] | None) -> Array:
     if track.means.ndim != 2:
         raise ShapeError(invalid(f"{field}.means.shape", track.means.shape, "(T, d): one run"))
     return _select(track.means, index, field)
@@ -290,11 +286,16 @@ def _time_grid(tracks: Sequence[Track], tol: float) -> Array:
     return t[np.concatenate([[True], np.diff(t) > tol])]
 
 
-def _ids(tracks: Sequence[Track], name: str) -> tuple[object, ...]:
-    ids = tuple(tr.id if tr.id is not None else j for j, tr in enumerate(tracks))
+def _check_tracks(tracks: object, name: str) -> None:
+    """``tracks`` is a sequence of :class:`Track` with distinct ids (None: the list index)."""
+    if isinstance(tracks, Track) or not isinstance(tracks, Sequence):
+        raise ConfigError(invalid(name, type(tracks).__name__, "a sequence of core.Track"))
+    for j, tr in enumerate(tracks):
+        if not isinstance(tr, Track):
+            raise ConfigError(invalid(f"{name}[{j}]", type(tr).__name__, "a fusetrack.core.Track"))
+    ids = [tr.id if tr.id is not None else j for j, tr in enumerate(tracks)]
     if len(set(ids)) != len(ids):
         raise ConfigError(invalid(f"{name} ids", ids, "distinct ids (None means the list index)"))
-    return ids
 
 
 def _lay_on_grid(
@@ -323,10 +324,8 @@ def _grid(
     time_tol: float,
 ) -> _Grid:
     tol = check_positive("time_tol", time_tol, allow_zero=True)
-    for name, tracks in (("estimates", estimates), ("truth", truth)):
-        if isinstance(tracks, Track) or not isinstance(tracks, Sequence):
-            raise ConfigError(invalid(name, type(tracks).__name__, "a sequence of core.Track"))
-    est_ids, truth_ids = _ids(estimates, "estimates"), _ids(truth, "truth")
+    _check_tracks(estimates, "estimates")
+    _check_tracks(truth, "truth")
     grid = _time_grid([*estimates, *truth], tol)
     E = _lay_on_grid(estimates, grid, index, "estimates")
     T = _lay_on_grid(truth, grid, index if truth_index is None else truth_index, "truth")
@@ -336,7 +335,7 @@ def _grid(
     k = max(E.shape[2], T.shape[2])  # an empty side takes the other's dimension
     E = E if E.shape[1] else np.zeros((grid.size, 0, k))
     T = T if T.shape[1] else np.zeros((grid.size, 0, k))
-    return _Grid(grid, T, E, truth_ids, est_ids)
+    return _Grid(grid, T, E)
 
 
 def _present(states: Array) -> NDArray[np.bool_]:
@@ -357,7 +356,7 @@ def _pair_distances(T: Array, E: Array) -> Array:
 def _track_base_distances(T: Array, E: Array, c: float) -> Array:
     """Time-averaged base distance between every true and estimated track ``(n, m)``.
 
-    Beard, Vo & Vo 2017, Eq. (8): ``d(x, y) = sum_{t in D_x u D_y} d_c({x(t)}, {y(t)}) /
+    Beard, Vo & Vo 2017: ``d(x, y) = sum_{t in D_x u D_y} d_c({x(t)}, {y(t)}) /
     |D_x u D_y|``, where the OSPA between the one-or-no-point sets is ``min(c, |x(t) - y(t)|)``
     when both exist and ``c`` when only one does.
     """
@@ -415,8 +414,8 @@ def ospa2_over_time(
 ) -> tuple[Array, Array]:
     """OSPA^(2) over a sliding window of ``window`` steps ending at each step.
 
-    Returns ``(times, values)``, both ``(K,)`` on the grid of all tracks' times; early steps use
-    the shorter window available (Beard, Vo & Vo 2017 evaluate it this way over time).
+    Returns ``(times, values)``, both ``(K,)`` on the grid of all tracks' times; a track is in
+    a window when it has an estimate in it, and early steps use the shorter window available.
     """
     cc = check_positive("c", c)
     pp = _check_order(p)
@@ -441,8 +440,8 @@ def ospa2_over_time(
 class ClearMotResult:
     """CLEAR MOT scores (Bernardin & Stiefelhagen 2008) and the counts behind them.
 
-    ``mota = 1 - (misses + false_positives + id_switches) / n_truth`` (Eq. 2) and
-    ``motp = total matched distance / matches`` (Eq. 1, a distance: lower is better); NaN when
+    ``mota = 1 - (misses + false_positives + id_switches) / n_truth`` and
+    ``motp = total matched distance / matches`` (a distance: lower is better); NaN when
     there is no truth / no match. ``n_truth`` counts true objects over all steps.
     """
 
@@ -457,7 +456,7 @@ class ClearMotResult:
 
 
 def _match_step(D: Array, threshold: float, previous: IntArray) -> IntArray:
-    """Bernardin & Stiefelhagen 2008, §2.1.1: for each truth, the matched estimate or -1.
+    """Bernardin & Stiefelhagen 2008, mapping procedure: each truth's matched estimate or -1.
 
     ``D`` ``(n, m)`` distances (inf where absent). Correspondences of the previous step that
     are still valid (``D <= threshold``) are kept; the remaining truths and estimates are
@@ -505,7 +504,7 @@ def clear_mot(
 ) -> ClearMotResult:
     """CLEAR MOT metrics of estimated tracks against true tracks (both with ``.id``).
 
-    Step by step (Bernardin & Stiefelhagen 2008, §2.1): a truth and an estimate may match when
+    Step by step (Bernardin & Stiefelhagen 2008): a truth and an estimate may match when
     their distance is ``<= threshold``; last step's matches are kept while valid, the rest are
     matched by the Hungarian method (:func:`_match_step`). A new match of a truth whose last
     match (at any earlier step) was another track is an id switch. Unmatched truths are
