@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from fusetrack.core import ConfigError, ShapeError
-from fusetrack.evaluation.metrics import ospa, ospa_components, ospa_over_time
+from fusetrack.evaluation import ospa, ospa_components, ospa_over_time
 
 X = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]])
 

@@ -1,4 +1,5 @@
-"""Evaluation: metrics, Cramér–Rao bounds, the Monte Carlo runner, plots and reports."""
+"""Evaluation: single- and multi-target metrics, Cramér–Rao bounds, the Monte Carlo runner,
+plots and reports."""
 
 from .crlb import (
     axis_bounds,
@@ -14,15 +15,27 @@ from .metrics import (
     chi2_interval,
     nees,
     nis,
-    ospa,
-    ospa_components,
-    ospa_over_time,
     position_error,
     rmse,
     track_loss_onset,
     track_loss_rate,
 )
 from .montecarlo import ENGINES, run_monte_carlo, run_seed
+from .multi_target_metrics import (
+    ClearMotResult,
+    GospaResult,
+    GospaSeries,
+    SiapResult,
+    clear_mot,
+    gospa,
+    gospa_over_time,
+    ospa,
+    ospa2,
+    ospa2_over_time,
+    ospa_components,
+    ospa_over_time,
+    siap,
+)
 from .options import ExperimentOptions, describe_options, load_yaml, parse_options
 from .projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from .report import Claim, Outcome, RunContext, peak_memory_mb, write_outputs
@@ -30,20 +43,29 @@ from .report import Claim, Outcome, RunContext, peak_memory_mb, write_outputs
 __all__ = [
     "ENGINES",
     "Claim",
+    "ClearMotResult",
     "ExperimentOptions",
+    "GospaResult",
+    "GospaSeries",
     "Outcome",
     "RunContext",
+    "SiapResult",
     "average",
     "axis_bounds",
     "chi2_interval",
+    "clear_mot",
     "describe_options",
     "deterministic_crlb",
     "direct3d_crlb",
     "fused_bound",
+    "gospa",
+    "gospa_over_time",
     "load_yaml",
     "nees",
     "nis",
     "ospa",
+    "ospa2",
+    "ospa2_over_time",
     "ospa_components",
     "ospa_over_time",
     "parse_options",
@@ -57,6 +79,7 @@ __all__ = [
     "rmse_bound",
     "run_monte_carlo",
     "run_seed",
+    "siap",
     "track_loss_onset",
     "track_loss_rate",
     "velocity_rmse_bound",

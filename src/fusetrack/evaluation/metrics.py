@@ -1,4 +1,5 @@
-"""Accuracy and consistency metrics: RMSE, NEES/NIS, track loss, OSPA.
+"""Accuracy and consistency metrics: RMSE, NEES/NIS, track loss (OSPA and other multi-target
+metrics are in :mod:`.multi_target_metrics`).
 
 Array layout (the :class:`~fusetrack.core.Track` convention): a state array is ``(T, ..., d)`` —
 time first, then any number of Monte Carlo run axes (none for a single run), then the state.
@@ -25,7 +26,6 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2
 
 from ..core.errors import ConfigError, ShapeError, check_positive, invalid
@@ -342,73 +342,3 @@ def track_loss_rate(
         errors, threshold=threshold, k=k, lost_at_end=lost_at_end, time_axis=time_axis
     )
     return float(np.mean(onset >= 0)) if onset.size else 0.0
-
-
-# --------------------------------------------------------------------------------------------
-# OSPA
-
-
-def _as_set(points: ArrayLike, name: str) -> Array:
-    a = np.asarray(points, dtype=float)
-    if a.size == 0:
-        return a.reshape(0, a.shape[-1] if a.ndim == 2 else 0)
-    if a.ndim == 1:
-        a = a[None, :]
-    if a.ndim != 2:
-        raise ShapeError(invalid(f"{name}.shape", a.shape, "(n, d): one row per object"))
-    return a[np.all(np.isfinite(a), axis=1)]  # a NaN row is no estimate
-
-
-def ospa_components(
-    estimates: ArrayLike, truth: ArrayLike, *, c: float, p: float = 1.0
-) -> tuple[float, float]:
-    """OSPA split into localisation and cardinality parts, ``ospa^p = loc^p + card^p``.
-
-    With ``m <= n`` the smaller and larger set sizes, ``d_c(x, y) = min(c, |x - y|)`` and the
-    best assignment ``pi`` (Hungarian, :func:`scipy.optimize.linear_sum_assignment`):
-    ``loc = (sum_i d_c(x_i, y_pi(i))^p / n)^(1/p)``, ``card = (c^p (n - m) / n)^(1/p)``
-    (Schuhmacher, Vo & Vo 2008; the split as in Ristic, Vo, Clark & Vo 2011). Both sets empty:
-    (0, 0); exactly one empty: (0, c). Rows with NaN are dropped (a NaN estimate is no estimate).
-    """
-    cc = check_positive("c", c)
-    pp = float(p)
-    if not (pp >= 1.0 and np.isfinite(pp)):
-        raise ConfigError(invalid("p", p, "a finite order >= 1"))
-    X = _as_set(estimates, "estimates")
-    Y = _as_set(truth, "truth")
-    if X.shape[0] and Y.shape[0] and X.shape[1] != Y.shape[1]:
-        raise ShapeError(invalid("estimates.shape", X.shape, f"(n, {Y.shape[1]}) to match truth"))
-    if X.shape[0] > Y.shape[0]:
-        X, Y = Y, X
-    m, n = X.shape[0], Y.shape[0]
-    if n == 0:
-        return 0.0, 0.0
-    if m == 0:
-        return 0.0, cc
-    D = np.sqrt(np.sum((X[:, None, :] - Y[None, :, :]) ** 2, axis=-1))
-    cost = np.minimum(D, cc) ** pp  # Schuhmacher, Vo & Vo 2008: cut-off base distance
-    rows, cols = linear_sum_assignment(cost)
-    loc = (cost[rows, cols].sum() / n) ** (1.0 / pp)
-    card = (cc**pp * (n - m) / n) ** (1.0 / pp)
-    return float(loc), float(card)
-
-
-def ospa(estimates: ArrayLike, truth: ArrayLike, *, c: float, p: float = 1.0) -> float:
-    """OSPA distance of order ``p``, cut-off ``c``, between finite sets ``(n, d)`` and ``(m, d)``.
-
-    ``d_p^(c)(X, Y) = ( (1/n) (min_pi sum_{i<=m} d_c(x_i, y_pi(i))^p + c^p (n - m)) )^(1/p)`` for
-    ``m <= n`` (Schuhmacher, Vo & Vo 2008); 0 when both are empty, ``c`` when one is.
-    The result lies in ``[0, c]``.
-    """
-    loc, card = ospa_components(estimates, truth, c=c, p=p)
-    pp = float(p)
-    return float((loc**pp + card**pp) ** (1.0 / pp))
-
-
-def ospa_over_time(
-    estimates: Sequence[ArrayLike], truth: Sequence[ArrayLike], *, c: float, p: float = 1.0
-) -> Array:
-    """OSPA at every step of two equally long sequences of sets: ``(T,)``."""
-    if len(estimates) != len(truth):
-        raise ShapeError(invalid("len(estimates)", len(estimates), f"{len(truth)} (= len(truth))"))
-    return np.array([ospa(x, y, c=c, p=p) for x, y in zip(estimates, truth)], dtype=float)
