@@ -24,7 +24,7 @@ from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.stats import chi2
+from scipy.special import chdtr, chdtri
 
 from ..core import (
     Belief,
@@ -37,7 +37,6 @@ from ..core import (
     check_positive,
     invalid,
 )
-from ..filters import as_sensor_map, validate_measurement
 from .base import Array, ScanLikelihoods
 
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -72,14 +71,14 @@ def check_gate_probability(probability: float) -> float:
 def gate_threshold(probability: float, dim: int) -> float:
     """The squared-distance gate ``chi2.ppf(P_G, m)`` (``inf`` for ``P_G = 1``: no gating)."""
     p = check_gate_probability(probability)
-    return math.inf if p == 1.0 else float(chi2.ppf(p, dim))
+    return math.inf if p == 1.0 else float(chdtri(dim, 1.0 - p))  # = scipy.stats.chi2.ppf
 
 
 def gate_probability(threshold: float, dim: int) -> float:
     """``P_G = chi2.cdf(threshold, m)``: the probability that a target's own measurement falls in
     a gate of squared Mahalanobis size ``threshold`` (the inverse of :func:`gate_threshold`)."""
     g = check_positive("threshold", threshold)
-    return float(chi2.cdf(g, dim))
+    return float(chdtr(dim, g))  # = scipy.stats.chi2.cdf
 
 
 def predicted_measurement(
@@ -254,6 +253,8 @@ def scan_likelihoods(
     measurement from a sensor not in ``sensors`` raises
     :class:`~fusetrack.core.UnknownSensorError` (a :class:`MeasurementError`).
     """
+    from ..filters import as_sensor_map, validate_measurement  # here: importing filters is slow
+
     n = len(track_ids)
     if len(beliefs) != n:
         raise ShapeError(invalid("len(beliefs)", len(beliefs), f"{n}, one per track id"))
