@@ -1,5 +1,5 @@
 """Data association: the per-scan associator interface, gating and scan scores, GNN, JPDA,
-MCMCDA, likelihood peaks."""
+track-oriented MHT, MCMCDA, likelihood peaks."""
 
 from .base import Association as Association
 from .base import Associator as Associator
@@ -26,6 +26,11 @@ from .mcmcda import AssociationState as AssociationState
 from .mcmcda import HypothesisSampler as HypothesisSampler
 from .mcmcda import MCMCDAConfig as MCMCDAConfig
 from .mcmcda import MCMCDAStats as MCMCDAStats
+from .mht import MHTState as MHTState
+from .mht import TrackHypothesis as TrackHypothesis
+from .mht import TrackOrientedMHT as TrackOrientedMHT
+from .mht import best_global_hypothesis as best_global_hypothesis
+from .mht import n_scan_prune as n_scan_prune
 from .peaks import likelihood_peaks as likelihood_peaks
 from .scores import gated_pairs as gated_pairs
 from .scores import log_likelihood_ratios as log_likelihood_ratios
