@@ -208,3 +208,34 @@ def test_scan_likelihoods_bad_input():
         scan_likelihoods([1, 2], [TRACK], SCAN, [SENSOR], kf, 0.9, 1.0)
     with pytest.raises(MeasurementError, match=r"value\.shape"):
         scan_likelihoods([1], [TRACK], [Measurement(0, "pos", [1.0])], [SENSOR], kf, 0.9, 1.0)
+    batched = Measurement(0, "pos", np.zeros((3, 2)))
+    with pytest.raises(MeasurementError, match="a vector"):
+        scan_likelihoods([1], [TRACK], [batched], [SENSOR], kf, 0.9, 1.0)
+    frame = Measurement(0, "pos", {"pixels": None})
+    with pytest.raises(MeasurementError, match="a vector"):
+        scan_likelihoods([1], [TRACK], [frame], [SENSOR], kf, 0.9, 1.0)
+
+
+def test_scan_scores_feed_every_associator():
+    from fusetrack.association import (
+        Associator,
+        GlobalNearestNeighbour,
+        JointProbabilisticDataAssociation,
+        TrackOrientedMHT,
+    )
+
+    scores = scan_likelihoods([7, 9], [TRACK, OTHER], SCAN, [SENSOR], _kf(), 0.9, 1e-3)
+    for associator in (
+        GlobalNearestNeighbour(),
+        JointProbabilisticDataAssociation(),
+        TrackOrientedMHT(n_scan=0),
+    ):
+        assert isinstance(associator, Associator)
+        result = associator.associate(scores)
+        best = {
+            t: max(hs, key=lambda h: h.probability).measurement
+            for t, hs in result.hypotheses.items()
+        }
+        # track 7 prefers z2 (innovation (0.5, 0.5)) over z0, track 9 takes z1; z3 is NaN
+        assert best == {7: 2, 9: 1}
+        assert 3 in result.unassociated

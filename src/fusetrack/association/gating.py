@@ -146,14 +146,25 @@ def gaussian_log_density(y: Array, s: Array) -> float:
     return -0.5 * (maha + float(np.linalg.slogdet(s)[1]) + y.size * _LOG_2PI)
 
 
-def _per_track(name: str, value: float | Sequence[float], n: int, low_open: bool) -> Array:
-    """A probability (scalar or one per track) as an ``(n,)`` array, or :class:`ConfigError`."""
-    a = np.asarray(value, dtype=float)
+def _per_track(name: str, value: float | Sequence[float], n: int) -> Array:
+    """A probability in ``(0, 1]`` (one, or one per track) as an ``(n,)`` array."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        a = np.array(math.nan)
     a = np.broadcast_to(a, (n,)) if a.ndim == 0 else a
-    ok = (a > 0) & (a <= 1) if low_open else (a >= 0) & (a <= 1)
-    if a.shape != (n,) or not ok.all():
+    if a.shape != (n,) or not ((a > 0) & (a <= 1)).all():
         raise ConfigError(invalid(name, value, f"a probability in (0, 1], or {n} of them"))
     return np.asarray(a)
+
+
+def _vector(z: Measurement) -> None:
+    """:class:`MeasurementError` unless ``z`` has one vector value ``(m,)`` (a gate needs one)."""
+    if not isinstance(z.value, np.ndarray) or z.value.ndim != 1:
+        shown = getattr(z.value, "shape", type(z.value).__name__)
+        raise MeasurementError(
+            invalid(f"value (sensor {z.sensor_id!r}, time={z.time})", shown, "a vector (m,)")
+        )
 
 
 def _clutter_of(clutter_density: float | Mapping[str, float], sensor_id: str) -> float:
@@ -259,8 +270,10 @@ def scan_likelihoods(
     if len(beliefs) != n:
         raise ShapeError(invalid("len(beliefs)", len(beliefs), f"{n}, one per track id"))
     pg = check_gate_probability(gate_probability)
-    pd = _per_track("p_detect", p_detect, n, low_open=True)
+    pd = _per_track("p_detect", p_detect, n)
     sensor_map = as_sensor_map(sensors)
+    for z in measurements:
+        _vector(z)
     checked = [validate_measurement(z, sensor_map) for z in measurements]
     log_clutter = np.array(
         [math.log(_clutter_of(clutter_density, z.sensor_id)) for z in measurements]
@@ -268,10 +281,6 @@ def scan_likelihoods(
     ll = np.full((n, len(measurements)), -np.inf)
     posteriors: dict[tuple[int, int], Any] = {}
     for j, (z, c) in enumerate(zip(measurements, checked, strict=True)):
-        if c.value.ndim != 1:
-            raise MeasurementError(
-                invalid(f"value.shape (sensor {z.sensor_id!r})", c.value.shape, "(m,): one run")
-            )
         if not bool(c.usable):
             continue
         threshold = gate_threshold(pg, c.sensor.dim)

@@ -136,7 +136,7 @@ def best_global_hypothesis(leaves: Sequence[TrackHypothesis]) -> dict[int, Track
     if result.x is None:  # cannot happen: the "no leaf" variables keep it feasible
         raise FusetrackError(f"global hypothesis: the integer program failed ({result.message})")
     chosen = np.flatnonzero(np.round(result.x[:n]) == 1)
-    return {leaves[k].family: leaves[k] for k in chosen}
+    return {leaves[int(k)].family: leaves[int(k)] for k in chosen}
 
 
 def n_scan_prune(
