@@ -146,6 +146,7 @@ def test_add_track_starts_a_family_at_the_next_scan():
     assert 7 in second.info["best"]
     with pytest.raises(ConfigError, match="family"):
         state.add_track(7)
+    assert {leaf.family for leaf in second.info["state"].remove_track(1).leaves} == {7}
 
 
 def test_bad_input():

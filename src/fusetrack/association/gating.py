@@ -2,8 +2,8 @@
 
 A measurement ``z`` falls in a track's gate when its squared Mahalanobis distance from the
 predicted measurement is below the ``P_G`` quantile of the chi-square distribution with ``m``
-degrees of freedom (Bar-Shalom, Willett & Tian 2011, Sec. 3.2; Blackman & Popoli 1999, Sec.
-6.3)::
+degrees of freedom (the ellipsoidal validation gate; Blackman & Popoli 1999, Ch. 6;
+Bar-Shalom, Daum & Huang 2009)::
 
     y = z - h(x^-)             (sensor.residual: angle components wrapped)
     S = H P^- H^T + R          H = dh/dx at x^-, R = sensor.noise_cov(x^-) (or z's own covariance)

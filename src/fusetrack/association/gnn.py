@@ -3,7 +3,7 @@
 The best joint event (each track takes at most one measurement, each measurement at most one
 track) maximises ``sum_{(i,j)} (l_ij - log kappa_j) + sum_{i missed} log(1 - P_D P_G)`` (see
 :mod:`fusetrack.association.scores`). It is an optimal 2-D assignment on the augmented
-``(T + M) x (M + T)`` cost matrix of Blackman & Popoli 1999, Sec. 6.5 (solved by
+``(T + M) x (M + T)`` cost matrix (Blackman & Popoli 1999, Ch. 6; solved by
 :func:`scipy.optimize.linear_sum_assignment`)::
 
                  measurements j          missed i'
@@ -45,7 +45,7 @@ def _augmented_costs(scores: ScanLikelihoods) -> tuple[Array, float]:
 
 @dataclass(frozen=True)
 class GlobalNearestNeighbour:
-    """Optimal hard assignment of one scan (GNN; Blackman & Popoli 1999, Sec. 6.5).
+    """Optimal hard assignment of one scan (GNN; Blackman & Popoli 1999, Ch. 6).
 
     ``associate(scores)`` gives every track one hypothesis with probability 1: its measurement
     or ``None`` (missed). ``unassociated`` are the measurements no track took. ``info`` holds

@@ -1,6 +1,6 @@
 """Track-oriented multiple hypothesis tracking (TOMHT) with N-scan pruning, as a pure function of
 an explicit :class:`MHTState` (Blackman 2004, "Multiple hypothesis tracking for multiple target
-tracking", IEEE AES Magazine 19(1); Blackman & Popoli 1999, Ch. 16).
+tracking", IEEE AES Magazine 19(1), Part 2; Blackman & Popoli 1999).
 
 Each target (a *family*, keyed by the tracker's track id) keeps a tree of track hypotheses; its
 leaves (:class:`TrackHypothesis`) are the association histories still alive, each with its
@@ -26,7 +26,8 @@ family's output), and ``hypotheses[row id]`` lists each surviving child of that 
 probability among the row's surviving children (rows with none are absent and listed in
 ``info["dead"]``). ``unassociated`` are the measurements that no leaf of the best global
 hypothesis used. Call with ``state=None`` to start from one root leaf per row, the leaf id being
-the row's track id (= its family); :meth:`MHTState.add_track` starts a new family later.
+the row's track id (= its family); :meth:`MHTState.add_track` starts a new family later and
+:meth:`MHTState.remove_track` deletes one.
 """
 
 from __future__ import annotations
@@ -89,6 +90,10 @@ class MHTState:
         root = TrackHypothesis(self.next_id, int(family), self.scan)
         return replace(self, leaves=(*self.leaves, root), next_id=self.next_id + 1), root.id
 
+    def remove_track(self, family: int) -> MHTState:
+        """The state without family ``family`` (a deleted track); unknown families are ignored."""
+        return replace(self, leaves=tuple(leaf for leaf in self.leaves if leaf.family != family))
+
     def family_leaves(self) -> dict[int, list[TrackHypothesis]]:
         """Leaves grouped by family, in order of first appearance."""
         out: dict[int, list[TrackHypothesis]] = {}
@@ -100,8 +105,8 @@ class MHTState:
 def best_global_hypothesis(leaves: Sequence[TrackHypothesis]) -> dict[int, TrackHypothesis]:
     """The most likely global hypothesis: family -> leaf, at most one leaf per family, no
     ``(scan, measurement)`` used by two chosen leaves, maximum total ``log_score``; every family
-    gets a leaf whenever a consistent choice exists (the integer program of Blackman 2004,
-    Sec. "Global hypothesis formation", solved with :func:`scipy.optimize.milp`)."""
+    gets a leaf whenever a consistent choice exists (the integer program of Blackman 2004's
+    global hypothesis formation, solved with :func:`scipy.optimize.milp`)."""
     families = sorted({leaf.family for leaf in leaves})
     if not leaves:
         return {}
