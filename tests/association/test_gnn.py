@@ -14,7 +14,7 @@ from fusetrack.association import (
     joint_events,
     log_likelihood_ratios,
 )
-from fusetrack.core import ShapeError
+from fusetrack.core import ConfigError, ShapeError
 
 NO = -np.inf
 
@@ -101,8 +101,6 @@ def test_gnn_is_the_most_likely_enumerated_event():
 @pytest.mark.parametrize(
     ("scores", "field"),
     [
-        (scan([[np.nan, 1.0]], -1.0), "log_likelihood="),
-        (scan([[np.inf, 1.0]], -1.0), "log_likelihood="),
         (
             ScanLikelihoods((1,), np.zeros((1, 2)), np.array([-1.0]), np.zeros(3)),
             "log_likelihood.shape",
@@ -112,10 +110,24 @@ def test_gnn_is_the_most_likely_enumerated_event():
             "log_missed.shape",
         ),
         (ScanLikelihoods((1, 1), np.zeros((2, 2)), np.array([-1.0, -1]), np.zeros(2)), "track_ids"),
-        (scan([[1.0]], 0.5), "log_missed="),
-        (scan([[1.0]], -1.0, clutter=[np.nan]), "log_clutter="),
     ],
 )
-def test_bad_scores_are_shape_errors(scores, field):
+def test_inconsistent_shapes_are_shape_errors(scores, field):
     with pytest.raises(ShapeError, match=field):
+        GlobalNearestNeighbour().associate(scores)
+
+
+@pytest.mark.parametrize(
+    ("scores", "field"),
+    [
+        (scan([[np.nan, 1.0]], -1.0), "log_likelihood="),
+        (scan([[np.inf, 1.0]], -1.0), "log_likelihood="),
+        (scan([[1.0]], 0.5), "log_missed="),
+        (scan([[1.0]], -1.0, clutter=[np.nan]), "log_clutter="),
+        (ScanLikelihoods((1,), np.array([["a"]]), np.array([-1.0]), np.zeros(1)), "numeric"),
+        ("not scores", "ScanLikelihoods"),
+    ],
+)
+def test_bad_values_are_config_errors(scores, field):
+    with pytest.raises(ConfigError, match=field):
         GlobalNearestNeighbour().associate(scores)

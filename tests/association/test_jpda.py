@@ -17,7 +17,7 @@ from fusetrack.association import (
     joint_events,
     log_likelihood_ratios,
 )
-from fusetrack.core import ConfigError, ShapeError
+from fusetrack.core import ConfigError
 
 NO = -np.inf
 JPDA = JointProbabilisticDataAssociation()
@@ -177,5 +177,5 @@ def test_bad_configuration(kwargs, field):
 
 def test_bad_scores():
     bad = ScanLikelihoods((1,), np.array([[np.nan]]), np.array([-1.0]), np.zeros(1))
-    with pytest.raises(ShapeError, match="JointProbabilisticDataAssociation: log_likelihood="):
+    with pytest.raises(ConfigError, match="JointProbabilisticDataAssociation: log_likelihood="):
         JPDA.associate(bad)

@@ -158,5 +158,5 @@ def test_bad_input():
     with pytest.raises(ShapeError, match="leaf ids"):
         TrackOrientedMHT().associate(scan([1, 3], np.zeros((2, 1)), -1.0), state=state)
     bad = ScanLikelihoods((1,), np.array([[np.nan]]), np.array([-1.0]), np.zeros(1))
-    with pytest.raises(ShapeError, match="TrackOrientedMHT: log_likelihood="):
+    with pytest.raises(ConfigError, match="TrackOrientedMHT: log_likelihood="):
         TrackOrientedMHT().associate(bad)

@@ -19,21 +19,28 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core import ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 from .base import Array, ScanLikelihoods
 
 
 def validate_scores(scores: ScanLikelihoods, owner: str = "associator") -> None:
-    """Raise :class:`~fusetrack.core.ShapeError` unless ``scores`` is a consistent scan.
+    """Raise :class:`~fusetrack.core.ShapeError` (shapes, ids) or
+    :class:`~fusetrack.core.ConfigError` (values) unless ``scores`` is a consistent scan:
 
     ``log_likelihood`` ``(T, M)`` without NaN or ``+inf`` (``-inf`` = outside the gate),
     ``log_missed`` ``(T,)`` in ``[-inf, 0]`` (a log probability), ``log_clutter`` ``(M,)``
     finite, ``track_ids`` unique.
     """
     if not isinstance(scores, ScanLikelihoods):
-        raise ShapeError(f"{owner}: " + invalid("scores", scores, "a ScanLikelihoods"))
-    t, m = len(scores.track_ids), np.shape(scores.log_clutter)
-    ll, missed = np.asarray(scores.log_likelihood), np.asarray(scores.log_missed)
+        raise ConfigError(f"{owner}: " + invalid("scores", scores, "a ScanLikelihoods"))
+    try:
+        ll, missed, clutter = (
+            np.asarray(a, dtype=float)
+            for a in (scores.log_likelihood, scores.log_missed, scores.log_clutter)
+        )
+    except (TypeError, ValueError):
+        raise ConfigError(f"{owner}: " + invalid("scores", scores, "numeric arrays")) from None
+    t, m = len(scores.track_ids), clutter.shape
     if len(m) != 1:
         raise ShapeError(f"{owner}: " + invalid("log_clutter.shape", m, "(M,)"))
     if ll.shape != (t, m[0]):
@@ -46,19 +53,16 @@ def validate_scores(scores: ScanLikelihoods, owner: str = "associator") -> None:
     if len(set(scores.track_ids)) != t:
         raise ShapeError(f"{owner}: " + invalid("track_ids", scores.track_ids, "unique ids"))
     if np.isnan(ll).any() or np.isposinf(ll).any():
-        raise ShapeError(
+        raise ConfigError(
             f"{owner}: "
             + invalid("log_likelihood", ll.tolist(), "finite entries, or -inf outside the gate")
         )
     if np.isnan(missed).any() or (missed > 0).any():
-        raise ShapeError(
+        raise ConfigError(
             f"{owner}: " + invalid("log_missed", missed.tolist(), "log probabilities in [-inf, 0]")
         )
-    if not np.isfinite(scores.log_clutter).all():
-        raise ShapeError(
-            f"{owner}: "
-            + invalid("log_clutter", np.asarray(scores.log_clutter).tolist(), "finite entries")
-        )
+    if not np.isfinite(clutter).all():
+        raise ConfigError(f"{owner}: " + invalid("log_clutter", clutter.tolist(), "finite entries"))
 
 
 def log_likelihood_ratios(scores: ScanLikelihoods) -> Array:
