@@ -252,7 +252,8 @@ def scan_likelihoods(
     log P_D,i + log p(z_j | track i)``: the increment of ``filt.update_with_likelihood(belief,
     [z_j], rng)`` when the filter is a :class:`~fusetrack.core.LikelihoodFilter`, else the
     Gaussian innovation density :func:`gaussian_log_density` of the linearised gate; ``-inf``
-    outside the gate or when ``z_j`` is not finite (a report that saw nothing). ``log P_D`` is
+    outside the gate, when ``z_j`` is not finite (a report that saw nothing) or when the
+    filter's increment is not finite. ``log P_D`` is
     included so that the scores alone give the association posterior (see
     :mod:`fusetrack.association.scores`). ``log_missed[i] = log(1 - P_D,i P_G)``;
     ``log_clutter[j] = log(clutter_density)`` of ``z_j``'s sensor (one density for all sensors or
