@@ -1,0 +1,32 @@
+"""Clusters of one scan: connected components of the gate graph (Fortmann, Bar-Shalom & Scheffe
+1983, "validation matrix" clustering).
+
+Tracks and measurements are the nodes of a bipartite graph with an edge where a measurement is
+inside a track's gate. Joint events of different components are independent, so association
+probabilities factor over components and each one can be computed alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+IntArray = NDArray[np.int64]
+
+
+def gate_clusters(gated: NDArray[np.bool_]) -> list[tuple[IntArray, IntArray]]:
+    """``[(track rows, measurement columns), ...]`` of the gate matrix ``gated`` ``(T, M)``, one
+    entry per connected component that holds at least one track, in order of its first track.
+    Measurements gated by no track belong to no cluster."""
+    t, m = gated.shape
+    rows, cols = np.nonzero(gated)
+    graph = coo_matrix((np.ones(rows.size), (rows, t + cols)), shape=(t + m, t + m))
+    _, labels = connected_components(graph, directed=False)
+    clusters = []
+    for label in dict.fromkeys(labels[:t].tolist()):  # first-seen order of the tracks
+        tracks = np.flatnonzero(labels[:t] == label)
+        measurements = np.flatnonzero(labels[t:] == label)
+        clusters.append((tracks.astype(np.int64), measurements.astype(np.int64)))
+    return clusters

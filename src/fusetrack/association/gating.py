@@ -1,0 +1,297 @@
+"""Validation gates and the scan's association scores.
+
+A measurement ``z`` falls in a track's gate when its squared Mahalanobis distance from the
+predicted measurement is below the ``P_G`` quantile of the chi-square distribution with ``m``
+degrees of freedom (the ellipsoidal validation gate; Blackman & Popoli 1999, Ch. 6;
+Bar-Shalom, Daum & Huang 2009)::
+
+    y = z - h(x^-)             (sensor.residual: angle components wrapped)
+    S = H P^- H^T + R          H = dh/dx at x^-, R = sensor.noise_cov(x^-) (or z's own covariance)
+    d^2 = y^T S^-1 y <= chi2.ppf(P_G, m)
+
+For a non-linear sensor this is the linearised (EKF) gate whatever the track's filter; any belief
+with ``mean`` ``(d,)`` and ``cov`` ``(d, d)`` (Gaussian, particles, mixture) can be gated.
+
+:func:`scan_likelihoods` builds a :class:`~fusetrack.association.ScanLikelihoods` for one scan
+from the tracks' predicted beliefs and their filter.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any, Literal, overload
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.special import chdtr, chdtri
+
+from ..core import (
+    Belief,
+    ConfigError,
+    Filter,
+    Measurement,
+    MeasurementError,
+    SensorModel,
+    ShapeError,
+    check_positive,
+    invalid,
+)
+from .base import Array, ScanLikelihoods
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+def _moments(belief: Belief) -> tuple[Array, Array]:
+    """``(mean (d,), cov (d, d))`` of one (unbatched) belief, or :class:`ShapeError`."""
+    mean = np.asarray(belief.mean, dtype=float)
+    cov = np.asarray(belief.cov, dtype=float)
+    if mean.ndim != 1 or cov.shape != (mean.size, mean.size):
+        raise ShapeError(
+            invalid(
+                "belief (mean.shape, cov.shape)",
+                (mean.shape, cov.shape),
+                "one belief: mean (d,) and cov (d, d), no batch axes",
+            )
+        )
+    return mean, cov
+
+
+def check_gate_probability(probability: float) -> float:
+    """``float(probability)`` or :class:`ConfigError` unless it is in ``(0, 1]``."""
+    try:
+        p = float(probability)
+    except (TypeError, ValueError):
+        p = math.nan
+    if not 0.0 < p <= 1.0:
+        raise ConfigError(invalid("gate probability", probability, "a probability in (0, 1]"))
+    return p
+
+
+def gate_threshold(probability: float, dim: int) -> float:
+    """The squared-distance gate ``chi2.ppf(P_G, m)`` (``inf`` for ``P_G = 1``: no gating)."""
+    p = check_gate_probability(probability)
+    return math.inf if p == 1.0 else float(chdtri(dim, 1.0 - p))  # = scipy.stats.chi2.ppf
+
+
+def gate_probability(threshold: float, dim: int) -> float:
+    """``P_G = chi2.cdf(threshold, m)``: the probability that a target's own measurement falls in
+    a gate of squared Mahalanobis size ``threshold`` (the inverse of :func:`gate_threshold`)."""
+    g = check_positive("threshold", threshold)
+    return float(chdtr(dim, g))  # = scipy.stats.chi2.cdf
+
+
+def predicted_measurement(
+    belief: Belief, sensor: SensorModel, noise_cov: ArrayLike | None = None
+) -> tuple[Array, Array]:
+    """``(z_pred (m,), S (m, m))``: ``h(x^-)`` and ``H P^- H^T + R``, linearised at the mean.
+
+    ``noise_cov`` overrides ``R = sensor.noise_cov(mean)`` (a measurement's own covariance).
+    """
+    mean, cov = _moments(belief)
+    z_pred = np.asarray(sensor.predict(mean), dtype=float)
+    h = np.asarray(sensor.jacobian(mean), dtype=float)
+    r = np.asarray(sensor.noise_cov(mean) if noise_cov is None else noise_cov, dtype=float)
+    m = z_pred.shape[-1]
+    if h.shape != (m, mean.size) or r.shape != (m, m):
+        raise ShapeError(
+            invalid(
+                f"sensor {sensor.sensor_id!r} (jacobian.shape, noise_cov.shape)",
+                (h.shape, r.shape),
+                f"({m}, {mean.size}) and ({m}, {m}) for a state of size {mean.size}",
+            )
+        )
+    s = h @ cov @ h.T + r
+    return z_pred, 0.5 * (s + s.T)
+
+
+def _value_and_cov(z: ArrayLike | Measurement) -> tuple[Array, Array | None]:
+    if isinstance(z, Measurement):
+        cov = None if z.covariance is None else np.asarray(z.covariance, dtype=float)
+        return np.asarray(z.value, dtype=float), cov
+    return np.asarray(z, dtype=float), None
+
+
+def innovation(
+    belief: Belief, sensor: SensorModel, z: ArrayLike | Measurement
+) -> tuple[Array, Array]:
+    """``(y, S)``: the residual ``sensor.residual(z, h(x^-))`` and its covariance. A
+    :class:`~fusetrack.core.Measurement` with its own ``covariance`` uses it as ``R``."""
+    value, cov = _value_and_cov(z)
+    z_pred, s = predicted_measurement(belief, sensor, cov)
+    if value.shape != z_pred.shape:
+        raise MeasurementError(
+            invalid("z.shape", value.shape, f"{z_pred.shape}, sensor {sensor.sensor_id!r}'s size")
+        )
+    return np.asarray(sensor.residual(value, z_pred), dtype=float), s
+
+
+def mahalanobis_distance(belief: Belief, sensor: SensorModel, z: ArrayLike | Measurement) -> float:
+    """Squared Mahalanobis distance ``y^T S^-1 y`` of ``z`` from the predicted measurement."""
+    y, s = innovation(belief, sensor, z)
+    return float(y @ np.linalg.solve(s, y))
+
+
+def mahalanobis_gate(
+    belief: Belief, sensor: SensorModel, z: ArrayLike | Measurement, probability: float = 0.99
+) -> bool:
+    """True when ``z`` is inside the ``probability`` (``P_G``) gate of the track."""
+    threshold = gate_threshold(probability, sensor.dim)
+    return mahalanobis_distance(belief, sensor, z) <= threshold
+
+
+def gaussian_log_density(y: Array, s: Array) -> float:
+    """``log N(y; 0, S) = -(y^T S^-1 y + log det S + m log 2 pi) / 2``."""
+    maha = float(y @ np.linalg.solve(s, y))
+    return -0.5 * (maha + float(np.linalg.slogdet(s)[1]) + y.size * _LOG_2PI)
+
+
+def _per_track(name: str, value: float | Sequence[float], n: int) -> Array:
+    """A probability in ``(0, 1]`` (one, or one per track) as an ``(n,)`` array."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        a = np.array(math.nan)
+    a = np.broadcast_to(a, (n,)) if a.ndim == 0 else a
+    if a.shape != (n,) or not ((a > 0) & (a <= 1)).all():
+        raise ConfigError(invalid(name, value, f"a probability in (0, 1], or {n} of them"))
+    return np.asarray(a)
+
+
+def _vector(z: Measurement) -> None:
+    """:class:`MeasurementError` unless ``z`` has one vector value ``(m,)`` (a gate needs one)."""
+    if not isinstance(z.value, np.ndarray) or z.value.ndim != 1:
+        shown = getattr(z.value, "shape", type(z.value).__name__)
+        raise MeasurementError(
+            invalid(f"value (sensor {z.sensor_id!r}, time={z.time})", shown, "a vector (m,)")
+        )
+
+
+def _clutter_of(clutter_density: float | Mapping[str, float], sensor_id: str) -> float:
+    if isinstance(clutter_density, Mapping):
+        if sensor_id not in clutter_density:
+            raise ConfigError(
+                invalid("clutter_density", dict(clutter_density), f"a density for {sensor_id!r}")
+            )
+        return check_positive(f"clutter_density[{sensor_id!r}]", clutter_density[sensor_id])
+    return check_positive("clutter_density", clutter_density)
+
+
+def _gated_pair(
+    filt: Filter[Any],
+    belief: Belief,
+    sensor: SensorModel,
+    z: Measurement,
+    threshold: float,
+    rng: np.random.Generator | None,
+    keep_posterior: bool,
+) -> tuple[float, Any] | None:
+    """``(log p(z | track), posterior or None)`` when ``z`` is in the gate, else None."""
+    y, s = innovation(belief, sensor, z)
+    if float(y @ np.linalg.solve(s, y)) > threshold:
+        return None
+    update_with_likelihood = getattr(filt, "update_with_likelihood", None)
+    if callable(update_with_likelihood):
+        post, inc = update_with_likelihood(belief, [z], rng)
+        pair = float(np.asarray(inc))
+    else:
+        pair = gaussian_log_density(y, s)
+        post = filt.update(belief, [z], rng) if keep_posterior else None
+    return (pair if math.isfinite(pair) else -math.inf), post
+
+
+@overload
+def scan_likelihoods(
+    track_ids: Sequence[int],
+    beliefs: Sequence[Belief],
+    measurements: Sequence[Measurement],
+    sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
+    filt: Filter[Any],
+    p_detect: float | Sequence[float],
+    clutter_density: float | Mapping[str, float],
+    gate_probability: float = 0.99,
+    rng: np.random.Generator | None = None,
+    *,
+    keep_posteriors: Literal[False] = False,
+) -> ScanLikelihoods: ...
+
+
+@overload
+def scan_likelihoods(
+    track_ids: Sequence[int],
+    beliefs: Sequence[Belief],
+    measurements: Sequence[Measurement],
+    sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
+    filt: Filter[Any],
+    p_detect: float | Sequence[float],
+    clutter_density: float | Mapping[str, float],
+    gate_probability: float = 0.99,
+    rng: np.random.Generator | None = None,
+    *,
+    keep_posteriors: Literal[True],
+) -> tuple[ScanLikelihoods, dict[tuple[int, int], Any]]: ...
+
+
+def scan_likelihoods(
+    track_ids: Sequence[int],
+    beliefs: Sequence[Belief],
+    measurements: Sequence[Measurement],
+    sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
+    filt: Filter[Any],
+    p_detect: float | Sequence[float],
+    clutter_density: float | Mapping[str, float],
+    gate_probability: float = 0.99,
+    rng: np.random.Generator | None = None,
+    *,
+    keep_posteriors: bool = False,
+) -> ScanLikelihoods | tuple[ScanLikelihoods, dict[tuple[int, int], Any]]:
+    """The :class:`ScanLikelihoods` of one scan (and, with ``keep_posteriors``, the updates).
+
+    ``beliefs[i]`` is track ``track_ids[i]``'s predicted belief at the scan time. For every
+    measurement ``j`` inside track ``i``'s ``gate_probability`` gate, ``log_likelihood[i, j] =
+    log P_D,i + log p(z_j | track i)``: the increment of ``filt.update_with_likelihood(belief,
+    [z_j], rng)`` when the filter is a :class:`~fusetrack.core.LikelihoodFilter`, else the
+    Gaussian innovation density :func:`gaussian_log_density` of the linearised gate; ``-inf``
+    outside the gate, when ``z_j`` is not finite (a report that saw nothing) or when the
+    filter's increment is not finite. ``log P_D`` is
+    included so that the scores alone give the association posterior (see
+    :mod:`fusetrack.association.scores`). ``log_missed[i] = log(1 - P_D,i P_G)``;
+    ``log_clutter[j] = log(clutter_density)`` of ``z_j``'s sensor (one density for all sensors or
+    a mapping ``sensor_id -> density``, per unit of measurement space per scan).
+
+    ``p_detect``: one probability in ``(0, 1]`` or one per track. Returns ``scores``, or
+    ``(scores, posteriors)`` with ``keep_posteriors=True``: ``posteriors[(i, j)]`` the belief
+    of track row ``i`` updated with measurement ``j`` alone, for every gated pair. A
+    measurement from a sensor not in ``sensors`` raises
+    :class:`~fusetrack.core.UnknownSensorError` (a :class:`MeasurementError`).
+    """
+    from ..filters import as_sensor_map, validate_measurement  # here: importing filters is slow
+
+    n = len(track_ids)
+    if len(beliefs) != n:
+        raise ShapeError(invalid("len(beliefs)", len(beliefs), f"{n}, one per track id"))
+    pg = check_gate_probability(gate_probability)
+    pd = _per_track("p_detect", p_detect, n)
+    sensor_map = as_sensor_map(sensors)
+    for z in measurements:
+        _vector(z)
+    checked = [validate_measurement(z, sensor_map) for z in measurements]
+    log_clutter = np.array(
+        [math.log(_clutter_of(clutter_density, z.sensor_id)) for z in measurements]
+    )
+    ll = np.full((n, len(measurements)), -np.inf)
+    posteriors: dict[tuple[int, int], Any] = {}
+    for j, (z, c) in enumerate(zip(measurements, checked, strict=True)):
+        if not bool(c.usable):
+            continue
+        threshold = gate_threshold(pg, c.sensor.dim)
+        for i, belief in enumerate(beliefs):
+            pair = _gated_pair(filt, belief, c.sensor, z, threshold, rng, keep_posteriors)
+            if pair is not None:
+                ll[i, j] = math.log(pd[i]) + pair[0]
+                if keep_posteriors:
+                    posteriors[(i, j)] = pair[1]
+    with np.errstate(divide="ignore"):
+        log_missed = np.log1p(-pd * pg)
+    scores = ScanLikelihoods(tuple(int(t) for t in track_ids), ll, log_missed, log_clutter)
+    return (scores, posteriors) if keep_posteriors else scores
