@@ -24,8 +24,9 @@ Array = NDArray[np.float64]
 class ScanLikelihoods:
     """Scores of one scan, for ``T`` tracks and ``M`` measurements.
 
-    ``log_likelihood`` ``(T, M)``: ``log p(z_j | track i)`` (the filter's log-likelihood
-    increment of updating track ``i`` with measurement ``j`` alone), ``-inf`` outside the gate.
+    ``log_likelihood`` ``(T, M)``: ``log P_D,i + log p(z_j | track i)`` (the detection
+    probability times the filter's likelihood increment of updating track ``i`` with
+    measurement ``j`` alone; :func:`~.gating.scan_likelihoods`), ``-inf`` outside the gate.
     ``log_missed`` ``(T,)``: ``log(1 - P_D P_G)`` of each track. ``log_clutter`` ``(M,)``:
     ``log`` of the clutter (false-alarm) intensity at each measurement, ``log(lambda_c c(z_j))``.
     ``track_ids`` ``(T,)`` the tracks' persistent ids.
