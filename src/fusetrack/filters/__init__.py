@@ -15,6 +15,11 @@ from .detection_fusion import quality_weighted_statistic as quality_weighted_sta
 from .detection_fusion import to_image as to_image
 from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
 from .detection_pf import position_estimate as position_estimate
+from .gm_phd import GMPHDFilter as GMPHDFilter
+from .gm_phd import PhdIntensity as PhdIntensity
+from .gm_phd import SpawnComponent as SpawnComponent
+from .gm_phd import extract_states as extract_states
+from .gm_phd import prune_and_merge as prune_and_merge
 from .grid import DirectionalGridBelief as DirectionalGridBelief
 from .grid import DirectionalMotion as DirectionalMotion
 from .grid import GridFilter as GridFilter
