@@ -121,8 +121,8 @@ class PhdIntensity:
     weights: Array
     means: Array
     covs: Array
-    labels: Labels | None = None
-    next_label: int | None = None
+    labels: Labels = None  # type: ignore[assignment]  # None: 0..J-1 (set in __post_init__)
+    next_label: int = None  # type: ignore[assignment]  # None: one above the largest label
 
     def __post_init__(self) -> None:
         m = np.asarray(self.means, dtype=float)
@@ -153,7 +153,8 @@ class PhdIntensity:
     @classmethod
     def empty(cls, dim: int, next_label: int = 0) -> PhdIntensity:
         """No components (no targets expected) in a ``dim``-dimensional state space."""
-        return cls(np.zeros(0), np.zeros((0, dim)), np.zeros((0, dim, dim)), None, next_label)
+        no_labels = np.zeros(0, dtype=np.int64)
+        return cls(np.zeros(0), np.zeros((0, dim)), np.zeros((0, dim, dim)), no_labels, next_label)
 
     @property
     def dim(self) -> int:
@@ -206,8 +207,8 @@ def _concat(parts: Sequence[PhdIntensity], dim: int) -> PhdIntensity:
         np.concatenate([p.weights for p in parts]),
         np.concatenate([p.means for p in parts]).reshape(-1, dim),
         np.concatenate([p.covs for p in parts]).reshape(-1, dim, dim),
-        np.concatenate([p.labels for p in parts if p.labels is not None]),
-        max(int(p.next_label or 0) for p in parts),
+        np.concatenate([p.labels for p in parts]),
+        max(p.next_label for p in parts),
     )
 
 
@@ -269,7 +270,7 @@ def prune_and_merge(
         raise ConfigError(invalid("max_components", max_components, "an integer >= 1"))
     keep = np.flatnonzero(intensity.weights > t)
     w, m, c = intensity.weights[keep], intensity.means[keep], intensity.covs[keep]
-    labels = np.asarray(intensity.labels)[keep]
+    labels = intensity.labels[keep]
     inv = np.linalg.pinv(c, hermitian=True) if len(keep) else c
     left = np.ones(len(keep), dtype=bool)
     out: list[tuple[float, Array, Array, int]] = []
@@ -306,7 +307,7 @@ def extract_states(
     targets, both with its label), heaviest first."""
     threshold = check_positive("threshold", threshold, allow_zero=True)
     order = np.argsort(-intensity.weights, kind="stable")
-    labels = np.asarray(intensity.labels)
+    labels = intensity.labels
     states: list[tuple[int, Array, Array]] = []
     for i in order:
         w = float(intensity.weights[i])
@@ -452,10 +453,10 @@ class GMPHDFilter:
                 belief.labels,
                 belief.next_label,
             )
-        first = int(belief.next_label or 0)
+        first = belief.next_label
         for term in self.spawn:
             parts.append(term.spawn(belief, first))
-            first = int(parts[-1].next_label or 0)
+            first = parts[-1].next_label
         parts.append(_fresh(self.birth.weights, self.birth.means, self.birth.covs, first))
         return _concat(parts, d)
 
@@ -545,15 +546,17 @@ class GMPHDFilter:
             weights.ravel(),
             means.reshape(n * j, d),
             np.broadcast_to(covs, (n, j, d, d)).reshape(n * j, d, d),
-            np.tile(np.asarray(prior.labels), n),
+            np.tile(prior.labels, n),
             prior.next_label,
         )
         return _concat([missed, detected], d), float(log_den.sum()) - expected
 
     def _detection_probability(self, sid: str, x: Array) -> Array:
         """``p_D`` at every component mean, ``(J,)``."""
-        if self.detection_probability is not None or not len(x):
-            return np.full(len(x), self.detection_probability or 0.0)
+        if self.detection_probability is not None:
+            return np.full(len(x), self.detection_probability)
+        if not len(x):
+            return np.zeros(0)
         p = np.asarray(self.sensors[sid].detection_probability(x), dtype=float)
         p = np.broadcast_to(p, (len(x),))
         if not np.all((p >= 0.0) & (p <= 1.0)):
