@@ -69,7 +69,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -318,6 +318,35 @@ def extract_states(
     return states
 
 
+class DetectionTerms(NamedTuple):
+    """One sensor's detections against a prior intensity of ``J`` components: ``p_d`` ``(J,)``
+    at the component means, ``log_kappa`` ``(n,)`` the clutter intensity at each detection,
+    ``log_q`` ``(n, J)`` = ``log N(z; h(m_j), S_j)``, and the Kalman-updated ``means``
+    ``(n, J, d)`` and ``covs`` ``(1 or n, J, d, d)``."""
+
+    p_d: Array
+    log_kappa: Array
+    log_q: Array
+    means: Array
+    covs: Array
+
+
+def corrected_intensity(
+    prior: PhdIntensity, terms: DetectionTerms, missed: Array, detected: Array
+) -> PhdIntensity:
+    """The updated mixture: the prior components with weights ``missed`` ``(J,)``, then one
+    Kalman-updated copy per detection and component with weights ``detected`` ``(n, J)``;
+    every copy keeps its parent's label."""
+    n, (j, d) = detected.shape[0], prior.means.shape
+    return PhdIntensity(
+        np.concatenate([missed, detected.ravel()]),
+        np.concatenate([prior.means, terms.means.reshape(n * j, d)]),
+        np.concatenate([prior.covs, np.broadcast_to(terms.covs, (n, j, d, d)).reshape(-1, d, d)]),
+        np.tile(prior.labels, n + 1),
+        prior.next_label,
+    )
+
+
 def _per_sensor(name: str, value: Any, sensor_ids: Sequence[str]) -> dict[str, Any]:
     """``value`` for every sensor: a mapping must name each sensor exactly once."""
     if not isinstance(value, Mapping):
@@ -479,7 +508,7 @@ class GMPHDFilter:
         """:meth:`update` and ``log p(Z)`` of the scan under the Poisson predicted measurement
         process (module doc), summed over the sensors in the order they are applied."""
         self._check_belief(belief)
-        scans = self._scans(
+        scans = self.sensor_scans(
             [measurements] if isinstance(measurements, Measurement) else measurements
         )
         loglik = 0.0
@@ -489,7 +518,7 @@ class GMPHDFilter:
             loglik += ll
         return belief, np.asarray(loglik)
 
-    def _scans(
+    def sensor_scans(
         self, measurements: Sequence[Measurement]
     ) -> dict[str, tuple[Array, list[Array | None]]]:
         """Each sensor's detections ``(n, m)`` and their own covariances, in order of the
@@ -526,30 +555,30 @@ class GMPHDFilter:
         self, prior: PhdIntensity, sid: str, values: Array, covariances: list[Array | None]
     ) -> tuple[PhdIntensity, float]:
         """One sensor's corrector (Vo & Ma Eqs. 28-33) and its log-likelihood term."""
-        sensor = self.sensors[sid]
-        p_d = self._detection_probability(sid, prior.means)
-        missed = PhdIntensity(
-            (1.0 - p_d) * prior.weights, prior.means, prior.covs, prior.labels, prior.next_label
-        )
-        expected = float(p_d @ prior.weights) + self.clutter_rate[sid]  # of the Poisson scan
-        log_kappa = self._log_clutter(sid, values)
-        if not (len(values) and prior.n_components):
-            return missed, float(log_kappa.sum()) - expected
-        log_q, means, covs = _kalman_update(sensor, prior, values, covariances)
+        terms = self.detection_terms(prior, sid, values, covariances)
         with np.errstate(divide="ignore"):
-            log_num = np.log(p_d * prior.weights) + log_q  # log p_D w_j q_j(z), (n, J)
-        log_den = logsumexp(np.concatenate([log_kappa[:, None], log_num], axis=1), axis=1)
+            log_num = np.log(terms.p_d * prior.weights) + terms.log_q  # log p_D w_j q_j(z)
+        log_den = logsumexp(np.concatenate([terms.log_kappa[:, None], log_num], axis=1), axis=1)
         seen = np.isfinite(log_den)  # False: z is impossible under the model (weights 0)
         weights = np.exp(log_num - np.where(seen, log_den, 0.0)[:, None]) * seen[:, None]
+        posterior = corrected_intensity(prior, terms, (1.0 - terms.p_d) * prior.weights, weights)
+        expected = float(terms.p_d @ prior.weights) + self.clutter_rate[sid]  # Poisson scan
+        return posterior, float(log_den.sum()) - expected
+
+    def detection_terms(
+        self, prior: PhdIntensity, sid: str, values: Array, covariances: list[Array | None]
+    ) -> DetectionTerms:
+        """What a PHD or CPHD corrector needs of sensor ``sid``'s detections ``values``
+        ``(n, m)`` (and their own covariances, None for the sensor's) given ``prior``."""
         n, (j, d) = len(values), prior.means.shape
-        detected = PhdIntensity(
-            weights.ravel(),
-            means.reshape(n * j, d),
-            np.broadcast_to(covs, (n, j, d, d)).reshape(n * j, d, d),
-            np.tile(prior.labels, n),
-            prior.next_label,
-        )
-        return _concat([missed, detected], d), float(log_den.sum()) - expected
+        p_d = self._detection_probability(sid, prior.means)
+        log_kappa = self._log_clutter(sid, values)
+        if not (n and j):
+            return DetectionTerms(
+                p_d, log_kappa, np.zeros((n, j)), np.zeros((n, j, d)), np.zeros((1, j, d, d))
+            )
+        log_q, means, covs = _kalman_update(self.sensors[sid], prior, values, covariances)
+        return DetectionTerms(p_d, log_kappa, log_q, means, covs)
 
     def _detection_probability(self, sid: str, x: Array) -> Array:
         """``p_D`` at every component mean, ``(J,)``."""
