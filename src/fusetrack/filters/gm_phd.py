@@ -47,7 +47,8 @@ and predicted components keep their parent's label, and a merged component keeps
 its heaviest member. :func:`extract_states` (Table III) reads ``(label, mean, cov)`` off the
 components with weight above 0.5.
 
-The cardinalised variant (GM-CPHD, Vo, Vo & Cantoni 2007) is not implemented.
+The cardinalised variant (GM-CPHD, Vo, Vo & Cantoni 2007) on these components is
+:mod:`fusetrack.filters.gm_cphd`.
 
 Example::
 
