@@ -285,14 +285,15 @@ class GMCPHDFilter:
         log_x = logsumexp(log_pw + terms.log_q, axis=1) - terms.log_kappa  # (n,)
         log_a = float(_log(np.asarray((1.0 - terms.p_d) @ prior.weights)))
         args = (log_a, float(np.log(total)), belief.max_count)
-        log_u0 = _log_upsilon(_log_esf(log_x), 0, *args)
+        log_e = _log_esf(log_x)
+        log_u0 = _log_upsilon(log_e, 0, *args)
         norm = float(logsumexp(log_u0 + log_p))
         if not np.isfinite(norm):
             raise MeasurementError(
                 f"sensor {sid!r}: a scan of {len(values)} detections has probability 0 under "
                 "the predicted cardinality and detection probability (p(Z) = 0)"
             )
-        missed = np.exp(logsumexp(_log_upsilon(_log_esf(log_x), 1, *args) + log_p) - norm)
+        missed = np.exp(logsumexp(_log_upsilon(log_e, 1, *args) + log_p) - norm)
         log_factor = np.array(
             [
                 logsumexp(_log_upsilon(_log_esf(np.delete(log_x, z)), 1, *args) + log_p)
