@@ -15,6 +15,15 @@ from .detection_fusion import quality_weighted_statistic as quality_weighted_sta
 from .detection_fusion import to_image as to_image
 from .detection_pf import DetectionParticleFilter as DetectionParticleFilter
 from .detection_pf import position_estimate as position_estimate
+from .gm_cphd import CphdBelief as CphdBelief
+from .gm_cphd import GMCPHDFilter as GMCPHDFilter
+from .gm_cphd import extract_cphd_states as extract_cphd_states
+from .gm_cphd import predict_cardinality as predict_cardinality
+from .gm_phd import GMPHDFilter as GMPHDFilter
+from .gm_phd import PhdIntensity as PhdIntensity
+from .gm_phd import SpawnComponent as SpawnComponent
+from .gm_phd import extract_states as extract_states
+from .gm_phd import prune_and_merge as prune_and_merge
 from .grid import DirectionalGridBelief as DirectionalGridBelief
 from .grid import DirectionalMotion as DirectionalMotion
 from .grid import GridFilter as GridFilter
