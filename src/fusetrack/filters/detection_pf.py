@@ -3,100 +3,53 @@
 The grid SBE of Kushwaha 2010 evaluates each sensor's detection function on 2800 cells. Here the
 same detection functions weight particles in a continuous state [x, y, vx, vy]: a particle's
 weight is the product over sensors (Kushwaha 2010, Eq. 30) of the sensor's normalised detection
-function at the particle's bearing -- :class:`~fusetrack.sensors.bearing_detection.DetectionFunctionSensor`,
-the piecewise-linear beams of an acoustic node (Eq. 34) or the Gaussian mixture of a camera
+function at the particle's bearing -- :class:`~fusetrack.sensors.DetectionFunctionSensor`, the
+piecewise-linear beams of an acoustic node (Eq. 34) or the Gaussian mixture of a camera
 (Eq. 35). Motion is any :mod:`fusetrack.motion` model (constant velocity by default) instead of
-the grid's shift-and-box; resampling is systematic every step.
+the grid's shift-and-box.
 
-The filter is pure: the belief is a :class:`~fusetrack.core.beliefs.Particles` whose weights are
-those of the last update (``info["resample"]``: resample before the next prediction, which is
-where the systematic draw happens). A step whose weights all vanish keeps the predicted particles
-with equal weights and is counted in ``stats.degenerate_steps``. Weights are normalised and
-resampled by the shared :mod:`~fusetrack.filters.weighting`.
+It is the shared particle engine (:class:`~.particle.ParticleFilter`) with the detection
+functions as likelihood-only sensors and systematic resampling before every prediction
+(``ess_threshold=1``); the belief is a :class:`~fusetrack.core.Particles` whose weights are
+those of the last update.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.beliefs import Particles
-from ..core.errors import MeasurementError, invalid
-from ..core.measurement import Measurement
-from ..core.models import MotionModel
-from ..sensors.bearing_detection import DetectionFunctionSensor
-from .weighting import draw_ancestors, particle_weights
+from ..core import MotionModel, Particles
+from ..sensors import DetectionFunctionSensor
+from .particle import ParticleFilter
+from .weighting import particle_weights
 
 Array = NDArray[np.float64]
 
 
-@dataclass
-class DetectionPFStats:
-    """Diagnostic counters (not part of the belief)."""
+class DetectionParticleFilter(ParticleFilter):
+    """Bootstrap particle filter weighting by the detection functions of ``sensors`` (by id),
+    resampling (systematic) before every prediction."""
 
-    degenerate_steps: int = 0
-
-
-@dataclass
-class DetectionParticleFilter:
-    """Bootstrap particle filter weighting by the detection functions of ``sensors`` (by id)."""
-
-    motion: MotionModel
-    sensors: Mapping[str, DetectionFunctionSensor]
-    n_particles: int = 2000
-    stats: DetectionPFStats = field(default_factory=DetectionPFStats)
+    def __init__(
+        self,
+        motion: MotionModel,
+        sensors: Mapping[str, DetectionFunctionSensor],
+        n_particles: int = 2000,
+    ) -> None:
+        super().__init__(motion, dict(sensors), n_particles, ess_threshold=1.0)  # type: ignore[arg-type]
 
     def initial_belief(
         self, positions: ArrayLike, velocity_std: float, rng: np.random.Generator
     ) -> Particles:
-        """Particles at ``positions (N, 2)`` (e.g. drawn from a grid prior) with N(0, σ²) velocities."""
+        """Particles at ``positions (N, 2)`` (e.g. drawn from a grid prior) with N(0, σ²)
+        velocities, equally weighted (not resampled before the first prediction)."""
         pos = np.asarray(positions, float).reshape(-1, 2)
         vel = rng.normal(0.0, velocity_std, pos.shape)
-        return Particles.uniform(np.concatenate([pos, vel], axis=1))
-
-    def predict(
-        self, belief: Particles, dt: float, rng: np.random.Generator | None = None
-    ) -> Particles:
-        """Resample the last update's weights (systematic), then move every particle by ``dt``."""
-        gen = np.random.default_rng() if rng is None else rng
-        x = belief.states
-        if belief.info.get("resample"):
-            x = x[draw_ancestors(particle_weights(belief.log_weights), gen)]
-        return Particles.uniform(self.motion.sample(x, dt, gen))
-
-    def update(
-        self,
-        belief: Particles,
-        measurements: Sequence[Measurement],
-        rng: np.random.Generator | None = None,
-    ) -> Particles:
-        """Weight by the product of the reporting sensors' detection functions (Eq. 30)."""
-        return self.update_with_likelihood(belief, measurements, rng)[0]
-
-    def update_with_likelihood(
-        self,
-        belief: Particles,
-        measurements: Sequence[Measurement],
-        rng: np.random.Generator | None = None,
-    ) -> tuple[Particles, Array]:
-        """:meth:`update` and ``log p(z_k | z_1:k-1)`` (the mean weight; NaN if degenerate)."""
-        x = belief.states
-        log_w = np.zeros(x.shape[0])
-        for m in measurements:
-            sensor = self.sensors.get(m.sensor_id)
-            if sensor is None:
-                raise MeasurementError(
-                    invalid("sensor_id", m.sensor_id, f"one of {sorted(self.sensors)}")
-                )
-            log_w += sensor.log_likelihood(m.value, x)
-        pw = particle_weights(log_w)
-        if pw.any_degenerate:
-            self.stats.degenerate_steps += 1
-            return Particles(x, np.zeros(x.shape[0]), {"resample": True}), np.array(np.nan)
-        return Particles(x, log_w, {"resample": True}), pw.log_mean
+        states = np.concatenate([pos, vel], axis=1)
+        return self._particles(states, self._uniform(1, states.shape[0]))
 
 
 def position_estimate(belief: Particles) -> tuple[Array, Array]:

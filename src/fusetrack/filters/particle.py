@@ -154,9 +154,15 @@ class _Checked(NamedTuple):
     which runs may use it ``(R,)``."""
 
     sensor: SensorModel
-    z: Array
+    z: Array | _RawValue
     cov: Array | None
     usable: NDArray[np.bool_]
+
+
+class _RawValue(NamedTuple):
+    """A likelihood-only sensor's report, passed to its ``log_likelihood`` as given."""
+
+    value: Any
 
 
 class _Engine(NamedTuple):
@@ -699,6 +705,10 @@ class ParticleFilter:
                 raise MeasurementError(
                     invalid("measurements", m, "a sequence of fusetrack Measurement")
                 )
+            raw = self._check_raw_report(m, runs)
+            if raw is not None:
+                out.append(raw)
+                continue
             quick = self._check_one_report(m, runs)
             if quick is not None:
                 out.append(quick)
@@ -738,6 +748,16 @@ class ParticleFilter:
             out.append(_Checked(v.sensor, z, cov, usable))
         return out
 
+    def _check_raw_report(self, m: Measurement, runs: int) -> _Checked | None:
+        """A report for a likelihood-only sensor (one without ``dim``: only ``sensor_id`` and
+        ``log_likelihood(value, x)``, e.g. a detection function whose value has no fixed size):
+        its value goes to the sensor as given, the same for every run. None for other sensors."""
+        sensor = self.sensors.get(m.sensor_id)
+        if sensor is None or hasattr(sensor, "dim"):
+            return None
+        usable = np.ones(runs, dtype=bool)
+        return _Checked(sensor, _RawValue(m.value), None, usable)
+
     def _check_one_report(self, m: Measurement, runs: int) -> _Checked | None:
         """The common case of :meth:`_check_measurements` without its array checks: a known
         sensor, one finite value ``(m,)`` for every run, no covariance. None otherwise (the
@@ -765,6 +785,9 @@ class ParticleFilter:
         s2 = states.reshape(-1, n, d)
         rows = s2.shape[0]
         z, cov = c.z, c.cov
+        if isinstance(z, _RawValue):  # a likelihood-only sensor: one value for every run
+            ll = np.asarray(c.sensor.log_likelihood(z.value, states), dtype=float)
+            return np.array(np.broadcast_to(ll, states.shape[:-1]).reshape(rows, n))
         if per_run:  # the very calls a single run makes, one run at a time
             out = np.empty((rows, n))
             for r in range(rows):
