@@ -262,7 +262,7 @@ def _lag_one_correlations(exact, motion, dt, samples=None):
 
 
 def test_backward_simulation_matches_rts_within_monte_carlo_error():
-    motion, sensors, prior, ms = problem = _particle_problem()
+    motion, sensors, prior, ms = _particle_problem()
     n = 500
     exact = run_filter(KalmanFilter(motion, sensors), prior, ms, smooth=True)
     pf = BootstrapFilter(motion, sensors, n_particles=n)
@@ -276,13 +276,18 @@ def test_backward_simulation_matches_rts_within_monte_carlo_error():
     rho = _lag_one_correlations(exact, motion, 1.0)
     got = _lag_one_correlations(exact, motion, 1.0, track.info["samples"])
     np.testing.assert_allclose(got, rho, rtol=0, atol=0.05)
-    # the filtered track kept in info is the run without smoothing, draw for draw
-    plain = run_filter(pf, prior, ms, rng=np.random.default_rng(0))
+
+
+def test_smoothed_run_keeps_the_filtered_track_and_lag_t_minus_1_is_the_fixed_interval_pass():
+    motion, sensors, prior, ms = _particle_problem()
+    pf = BootstrapFilter(motion, sensors, n_particles=50)
+    track = run_filter(pf, prior, ms, smooth=True, rng=np.random.default_rng(0))
+    plain = run_filter(pf, prior, ms, rng=np.random.default_rng(0))  # draw for draw
     np.testing.assert_array_equal(track.info["filtered"].means, plain.means)
     np.testing.assert_array_equal(track.info["filtered"].covariances, plain.covariances)
-    # lag = T - 1 is the same single backward pass: the same draws
-    lagged = run_filter(pf, *problem[2:], smooth=True, lag=14, rng=np.random.default_rng(0))
-    np.testing.assert_array_equal(lagged.means, track.means)
+    lagged = run_filter(pf, prior, ms, smooth=True, lag=14, rng=np.random.default_rng(0))
+    np.testing.assert_array_equal(lagged.means, track.means)  # one backward pass: same draws
+    assert track.info["smoother"] == "backward simulation"
 
 
 def test_fixed_lag_backward_simulation_matches_the_fixed_lag_kalman_smoother():
