@@ -32,9 +32,14 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.beliefs import Particles
-from ..core.errors import ConfigError, DegenerateWeightsWarning, ShapeError, invalid
-from ..core.models import MotionModel
+from ..core import (
+    ConfigError,
+    DegenerateWeightsWarning,
+    MotionModel,
+    Particles,
+    ShapeError,
+    invalid,
+)
 from .smoothing import check_dts, check_lag, fixed_lag
 
 Array = NDArray[np.float64]

@@ -55,8 +55,7 @@ from typing import Any, Protocol, TypeVar, cast
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, Gaussian, ShapeError, invalid
 from .kalman import ExtendedKalmanFilter, GaussianFilter, KalmanFilter, UnscentedKalmanFilter
 
 Array = NDArray[np.float64]
