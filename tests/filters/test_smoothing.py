@@ -7,7 +7,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusetrack.core import ConfigError, Gaussian, Measurement, ShapeError
+from fusetrack.core import (
+    ConfigError,
+    DegenerateWeightsWarning,
+    Gaussian,
+    Measurement,
+    Particles,
+    ShapeError,
+)
 from fusetrack.filters import (
     BootstrapFilter,
     ExtendedKalmanFilter,
@@ -320,6 +327,41 @@ def test_backward_simulation_draws_whole_trajectories_from_the_filter_particles(
         assert np.all(hit.sum(axis=-1) >= 1)  # each draw is a particle of step k
     hit1 = np.all(draws[1][:, :, None, :] == beliefs[1].states[:, None, :, :], axis=-1)
     assert not hit1[..., :25].any()
+
+
+class _CVThroughLogDensity(ConstantVelocity):
+    """The same model with ``mean`` overridden: no ``fused_transition``, so the backward
+    step goes through ``log_density`` instead of the whitened matrix product."""
+
+    def mean(self, x, dt):
+        return super().mean(x, dt)
+
+
+def test_whitened_fast_path_draws_what_log_density_draws():
+    motion, sensors, prior, ms = _particle_problem(runs=2, steps=6)
+    slow = _CVThroughLogDensity(ndim=1, q=0.5)
+    assert motion.fused_transition(1.0) is not None and slow.fused_transition(1.0) is None
+    pf = BootstrapFilter(motion, sensors, n_particles=200)
+    rng = np.random.default_rng(3)
+    beliefs = [pf.update(pf.initialize(prior, rng, batch_shape=(2,)), [ms[0]])]
+    for m in ms[1:]:
+        beliefs.append(pf.update(pf.predict(beliefs[-1], 1.0, rng), [m]))
+    fast = backward_simulation(motion, beliefs, np.ones(5), np.random.default_rng(4))
+    ref = backward_simulation(slow, beliefs, np.ones(5), np.random.default_rng(4))
+    np.testing.assert_array_equal(fast, ref)
+
+
+def test_unreachable_successors_fall_back_to_the_filter_weights_with_a_warning():
+    """Discrete (rank-1) process noise: the transition density is -inf off a line, so no
+    particle of step 0 reaches the drawn state of step 1."""
+    motion = ConstantVelocity(ndim=1, q=0.5, noise="discrete")
+    rng = np.random.default_rng(5)
+    beliefs = [Particles.uniform(rng.standard_normal((30, 2))) for _ in range(2)]
+    with pytest.warns(DegenerateWeightsWarning, match="backward simulation"):
+        draws = backward_simulation(motion, beliefs, [1.0], rng, n_trajectories=40)
+    assert np.all(np.isfinite(draws))
+    hit = np.all(draws[0][:, None, :] == beliefs[0].states[None, :, :], axis=-1)
+    assert np.all(hit.sum(axis=-1) == 1)
 
 
 # -- bad input --------------------------------------------------------------------------------

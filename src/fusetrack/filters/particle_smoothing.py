@@ -12,6 +12,11 @@ model (``motion.log_density(x_next, x, dt)``), each of ``M`` trajectories is dra
 156-168: the backward simulation of smoothed trajectories). The trajectories are draws from the particle approximation of
 the joint smoothing density ``p(x_1:T | z_1:T)``; their mean and covariance at each step estimate
 the smoothed marginals. The cost is ``O(T M N)`` transition densities (``M`` defaults to ``N``).
+For a linear-Gaussian motion model (one that offers ``fused_transition(dt)``, the contract the
+particle filters' fused step relies on) with a nonsingular ``Q``, the ``M x N`` log densities are
+one matrix product of whitened states: ``log f(x' | x) = u^T v - |v|^2 / 2 + c(x')`` with
+``u = L^-1 x'``, ``v = L^-1 F x``, ``L L^T = Q``; the term ``c(x')`` is the same for every
+candidate ``x`` and drops out of the draw. Other models go through ``motion.log_density``.
 
 **Fixed lag.** With ``lag=L`` the draws at step ``k`` come from a backward pass started at step
 ``min(k + L, T - 1)`` (:func:`~fusetrack.filters.smoothing.fixed_lag`): draws from the marginal
@@ -43,6 +48,7 @@ from ..core import (
 from .smoothing import check_dts, check_lag, fixed_lag
 
 Array = NDArray[np.float64]
+_RANK_RTOL = 1e6 * np.finfo(float).eps  # full rank as the motion models judge it (log_density)
 
 
 def categorical(logits: Array, rng: np.random.Generator) -> NDArray[np.intp]:
@@ -58,6 +64,40 @@ def categorical(logits: Array, rng: np.random.Generator) -> NDArray[np.intp]:
 def _take(states: Array, idx: NDArray[np.intp]) -> Array:
     """``states[..., idx, :]`` row by row: states ``(..., N, d)``, idx ``(..., M)``."""
     return np.take_along_axis(states, idx[..., None], axis=-2)
+
+
+def _whitening(motion: MotionModel, dt: float) -> tuple[Array, Array] | None:
+    """``(L^-1 F, L^-1)`` with ``L L^T = Q(dt)`` for a linear-Gaussian model with a
+    nonsingular ``Q``, else None (the backward step then calls ``log_density``)."""
+    offer = getattr(motion, "fused_transition", None)
+    if not callable(offer) or offer(dt) is None:
+        return None
+    f = np.asarray(offer(dt)[0], dtype=float)
+    q = np.asarray(motion.noise_cov(dt), dtype=float)
+    sd = np.sqrt(np.diag(q))
+    if not np.all(sd > 0):
+        return None
+    eig = np.linalg.eigvalsh(q / np.outer(sd, sd))  # rank judged on the correlation matrix
+    if not eig[0] > _RANK_RTOL * eig[-1]:
+        return None  # singular Q: log_density's degenerate density (-inf off its support)
+    w = np.linalg.solve(np.linalg.cholesky(q), np.eye(q.shape[-1]))
+    return np.asarray(w @ f), np.asarray(w)
+
+
+def backward_logits(motion: MotionModel, x_next: Array, particles: Particles, dt: float) -> Array:
+    """``log w_k^i + log f(x_next^j | x_k^i)`` ``(..., M, N)`` for draws ``x_next`` ``(..., M, d)``,
+    up to a constant per draw ``j`` (which a categorical draw ignores)."""
+    lw = particles.log_weights[..., None, :]
+    white = _whitening(motion, dt)
+    if white is None:
+        logf = motion.log_density(x_next[..., :, None, :], particles.states[..., None, :, :], dt)
+        return np.asarray(lw + logf, dtype=float)
+    wf, w = white
+    v = particles.states @ wf.T  # (..., N, d): L^-1 F x_k^i
+    u = x_next @ w.T  # (..., M, d): L^-1 x_next^j
+    centre = v.mean(axis=-2, keepdims=True)  # shift both: keeps u.v - |v|^2/2 well conditioned
+    u, v = u - centre, v - centre
+    return np.asarray(lw + u @ np.swapaxes(v, -1, -2) - 0.5 * np.sum(v * v, axis=-1)[..., None, :])
 
 
 def _check_particles(particles: Sequence[Particles]) -> tuple[tuple[int, ...], int]:
@@ -91,11 +131,7 @@ def _backward_pass(
     degenerate = False
     for k in range(b - 1, a - 1, -1):
         p = particles[k]
-        logf = np.asarray(
-            motion.log_density(x[..., :, None, :], p.states[..., None, :, :], float(dts[k])),
-            dtype=float,
-        )  # (..., M, N): f(x~_{k+1}^j | x_k^i)
-        logits = p.log_weights[..., None, :] + logf
+        logits = backward_logits(motion, x, p, float(dts[k]))  # (..., M, N)
         ok = np.isfinite(logits.max(axis=-1))
         if not ok.all():
             degenerate = True
