@@ -9,14 +9,18 @@ model (``motion.log_density(x_next, x, dt)``), each of ``M`` trajectories is dra
     x~_k  = x_k^i       with probability  ∝ w_k^i f(x~_{k+1} | x_k^i)        k = T-1, ..., 1
 
 (Godsill, Doucet & West 2004, "Monte Carlo smoothing for nonlinear time series", JASA 99(465),
-156-168: the backward simulation of smoothed trajectories). The trajectories are draws from the particle approximation of
-the joint smoothing density ``p(x_1:T | z_1:T)``; their mean and covariance at each step estimate
-the smoothed marginals. The cost is ``O(T M N)`` transition densities (``M`` defaults to ``N``).
-For a linear-Gaussian motion model (one that offers ``fused_transition(dt)``, the contract the
-particle filters' fused step relies on) with a nonsingular ``Q``, the ``M x N`` log densities are
-one matrix product of whitened states: ``log f(x' | x) = u^T v - |v|^2 / 2 + c(x')`` with
-``u = L^-1 x'``, ``v = L^-1 F x``, ``L L^T = Q``; the term ``c(x')`` is the same for every
-candidate ``x`` and drops out of the draw. Other models go through ``motion.log_density``.
+156-168: the backward simulation of smoothed trajectories). The trajectories are draws from the
+particle approximation of the joint smoothing density ``p(x_1:T | z_1:T)``; their mean and
+covariance at each step estimate the smoothed marginals.
+
+**Cost.** ``O(T M N)`` transition densities (``M`` defaults to ``N``). For a linear-Gaussian
+motion model (one that offers ``fused_transition(dt)``, the contract the particle filters' fused
+step relies on) with a nonsingular ``Q``, the ``M x N`` log densities are one matrix product of
+whitened states: ``log f(x' | x) = u^T v - |v|^2 / 2 + c(x')`` with ``u = L^-1 x'``,
+``v = L^-1 F x``, ``L L^T = Q``; ``c(x')`` is the same for every candidate ``x`` and drops out
+of the draw. This assumes the model's ``log_density`` is the ``N(F x, Q)`` it samples from, as
+for every linear-Gaussian model in :mod:`fusetrack.motion`; other models go through
+``motion.log_density``.
 
 **Fixed lag.** With ``lag=L`` the draws at step ``k`` come from a backward pass started at step
 ``min(k + L, T - 1)`` (:func:`~fusetrack.filters.smoothing.fixed_lag`): draws from the marginal
@@ -51,7 +55,7 @@ Array = NDArray[np.float64]
 _RANK_RTOL = 1e6 * np.finfo(float).eps  # full rank as the motion models judge it (log_density)
 
 
-def categorical(logits: Array, rng: np.random.Generator) -> NDArray[np.intp]:
+def _categorical(logits: Array, rng: np.random.Generator) -> NDArray[np.intp]:
     """One index per row of ``logits`` ``(..., N)`` (unnormalised log-probabilities, finite
     maximum), by inverse CDF: ``(...)``."""
     w = np.exp(logits - logits.max(axis=-1, keepdims=True))
@@ -70,9 +74,10 @@ def _whitening(motion: MotionModel, dt: float) -> tuple[Array, Array] | None:
     """``(L^-1 F, L^-1)`` with ``L L^T = Q(dt)`` for a linear-Gaussian model with a
     nonsingular ``Q``, else None (the backward step then calls ``log_density``)."""
     offer = getattr(motion, "fused_transition", None)
-    if not callable(offer) or offer(dt) is None:
+    fg = offer(dt) if callable(offer) else None
+    if fg is None:
         return None
-    f = np.asarray(offer(dt)[0], dtype=float)
+    f = np.asarray(fg[0], dtype=float)
     q = np.asarray(motion.noise_cov(dt), dtype=float)
     sd = np.sqrt(np.diag(q))
     if not np.all(sd > 0):
@@ -84,7 +89,7 @@ def _whitening(motion: MotionModel, dt: float) -> tuple[Array, Array] | None:
     return np.asarray(w @ f), np.asarray(w)
 
 
-def backward_logits(motion: MotionModel, x_next: Array, particles: Particles, dt: float) -> Array:
+def _backward_logits(motion: MotionModel, x_next: Array, particles: Particles, dt: float) -> Array:
     """``log w_k^i + log f(x_next^j | x_k^i)`` ``(..., M, N)`` for draws ``x_next`` ``(..., M, d)``,
     up to a constant per draw ``j`` (which a categorical draw ignores)."""
     lw = particles.log_weights[..., None, :]
@@ -126,17 +131,17 @@ def _backward_pass(
     """Draws ``(..., M, d)`` at steps ``a..b`` from one backward pass started at ``b``."""
     last = particles[b]
     lw = np.broadcast_to(last.log_weights[..., None, :], (*last.batch_shape, m, last.n))
-    x = _take(last.states, categorical(lw, rng))
+    x = _take(last.states, _categorical(lw, rng))
     out = [x]
     degenerate = False
     for k in range(b - 1, a - 1, -1):
         p = particles[k]
-        logits = backward_logits(motion, x, p, float(dts[k]))  # (..., M, N)
+        logits = _backward_logits(motion, x, p, float(dts[k]))  # (..., M, N)
         ok = np.isfinite(logits.max(axis=-1))
         if not ok.all():
             degenerate = True
             logits = np.where(ok[..., None], logits, p.log_weights[..., None, :])
-        x = _take(p.states, categorical(logits, rng))
+        x = _take(p.states, _categorical(logits, rng))
         out.append(x)
     if degenerate:
         warnings.warn(

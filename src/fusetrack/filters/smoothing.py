@@ -1,5 +1,5 @@
-r"""Rauch–Tung–Striebel smoothing for the Kalman family, and the fixed-lag windows every smoother
-here shares.
+r"""Rauch–Tung–Striebel smoothing for the Kalman family, and the fixed-lag windows every
+smoother here shares.
 
 A filter gives ``p(x_k | z_1:k)``; a smoother gives ``p(x_k | z_1:T)`` (fixed interval) or
 ``p(x_k | z_1:min(k+L, T))`` (fixed lag ``L``). For a Gaussian filter the backward pass needs,
