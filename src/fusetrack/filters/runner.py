@@ -229,12 +229,13 @@ def run_filter(
         ``track.info["log_likelihood"]`` (per batch entry); the filter must be a
         :class:`~fusetrack.core.LikelihoodFilter`.
     smooth:
-        return the smoothed track instead (see :func:`_smoothed`): the RTS smoother for
+        return the smoothed track instead: the RTS smoother for
         :class:`KalmanFilter`, :class:`ExtendedKalmanFilter` and :class:`UnscentedKalmanFilter`
         (:func:`~fusetrack.filters.rts_smoother`), backward simulation for the
         :class:`ParticleFilter` family (:func:`~fusetrack.filters.backward_simulation`, drawing
-        from ``rng``, as many trajectories as particles). Other filters raise
-        :class:`~fusetrack.core.ConfigError` before any work.
+        from ``rng``, which must then be one Generator; as many trajectories as particles).
+        Other filters raise :class:`~fusetrack.core.ConfigError` before any work. The
+        filtering itself is unchanged (the same draws as without ``smooth``).
     lag:
         with ``smooth``: None for fixed-interval smoothing (every estimate uses every
         measurement), an int ``L >= 0`` for fixed-lag smoothing (the estimate at step ``k`` uses
@@ -246,7 +247,10 @@ def run_filter(
         ``times`` ``(T,)``, ``means`` ``(T, ..., d)``, ``covariances`` ``(T, ..., d, d)`` — the
         belief after the update at each step. ``info["stats"]`` holds how much each of
         ``filt.stats``'s counters grew during this run. With ``smooth=True`` the smoothed
-        estimates at the same times, and ``info["filtered"]`` the filtered track.
+        estimates at the same times; ``info`` keeps the filtered track's entries and adds
+        ``"filtered"`` (the filtered track), ``"smoother"`` (the method's name), ``"lag"`` and,
+        for particle filters, ``"samples"`` ``(T, ..., M, d)``: the backward draws the
+        smoothed means and covariances are taken from (joint trajectories for ``lag=None``).
     """
     _check_options(filt, order, log_likelihood)
     _check_smoothing(filt, smooth, lag, rng)
