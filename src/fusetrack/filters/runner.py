@@ -12,6 +12,11 @@ The loop is the same for every filter (Kalman family, particle filters, anything
 Time steps may be irregular; measurements at the same time (within 1e-9 s) are applied together
 (in the order given). Output times without measurements are predict-only steps.
 
+``run_filter(..., smooth=True)`` keeps every step's belief and returns the smoothed track
+instead (:mod:`~fusetrack.filters.smoothing` for the Kalman family,
+:mod:`~fusetrack.filters.particle_smoothing` for particle filters), the filtered one in
+``track.info["filtered"]``.
+
 >>> import numpy as np
 >>> from fusetrack.core import Gaussian, Measurement
 >>> from fusetrack.filters import KalmanFilter
