@@ -61,6 +61,7 @@ from .particle import AuxiliaryParticleFilter as AuxiliaryParticleFilter
 from .particle import BootstrapFilter as BootstrapFilter
 from .particle import ParticleFilter as ParticleFilter
 from .particle import RegularizedParticleFilter as RegularizedParticleFilter
+from .particle_smoothing import backward_simulation as backward_simulation
 from .projected_planes import Direct3DFilter as Direct3DFilter
 from .projected_planes import PlanesBelief as PlanesBelief
 from .projected_planes import ProjectedPlanesTracker as ProjectedPlanesTracker
@@ -81,6 +82,8 @@ from .smart_camera_trackers import RayIntersectionTracker as RayIntersectionTrac
 from .smart_camera_trackers import SmartCameraBelief as SmartCameraBelief
 from .smart_camera_trackers import SmartCameraTracker as SmartCameraTracker
 from .smart_camera_trackers import TrackerSettings as TrackerSettings
+from .smoothing import fixed_lag as fixed_lag
+from .smoothing import rts_smoother as rts_smoother
 from .sp_pekf import SPPEKFBank as SPPEKFBank
 from .sp_pekf import SPPEKFProposal as SPPEKFProposal
 from .stats import FilterStats as FilterStats

@@ -12,6 +12,11 @@ The loop is the same for every filter (Kalman family, particle filters, anything
 Time steps may be irregular; measurements at the same time (within 1e-9 s) are applied together
 (in the order given). Output times without measurements are predict-only steps.
 
+``run_filter(..., smooth=True)`` keeps every step's belief and returns the smoothed track
+instead (:mod:`~fusetrack.filters.smoothing` for the Kalman family,
+:mod:`~fusetrack.filters.particle_smoothing` for particle filters), the filtered one in
+``track.info["filtered"]``.
+
 >>> import numpy as np
 >>> from fusetrack.core import Gaussian, Measurement
 >>> from fusetrack.filters import KalmanFilter
@@ -28,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -38,6 +43,10 @@ from ..core.errors import ConfigError, MeasurementError, invalid
 from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
 from ..core.models import Filter, LikelihoodFilter, filter_step, step_with_likelihood
 from ..core.track import Track
+from .kalman import GaussianFilter
+from .particle import ParticleFilter
+from .particle_smoothing import backward_simulation
+from .smoothing import check_lag, rts_smoother, smoother_name
 from .stats import validate_measurement
 
 _TIME_TOLERANCE = 1e-9
@@ -147,9 +156,11 @@ def _filter_loop(
     t_prev: float,
     rng: np.random.Generator | None,
     log_likelihood: bool,
+    kept: list[tuple[Any, float]] | None = None,
 ) -> tuple[Any, list[float], list[np.ndarray], list[np.ndarray], Any]:
     """Predict and update at every step; the last belief, the estimates' times, means and
-    covariances, and the summed log-likelihood increments (0 unless asked for)."""
+    covariances, and the summed log-likelihood increments (0 unless asked for). ``kept``
+    (when given) receives every step's belief and the ``dt`` predicted over to reach it."""
     # a filter's own estimator (particle filters: one fused pass) beats the belief's generic one
     estimate = getattr(filt, "estimate", None)
     out_t: list[float] = []
@@ -167,6 +178,8 @@ def _filter_loop(
             loglik = loglik + increment
         else:
             belief = filter_step(filt, belief, dt, group, rng)
+        if kept is not None:
+            kept.append((belief, dt))
         out_t.append(t)
         summary = estimate(belief) if estimate is not None else belief
         out_mean.append(np.asarray(summary.mean))
@@ -184,6 +197,8 @@ def run_filter(
     times: ArrayLike | None = None,
     t0: float | None = None,
     log_likelihood: bool = False,
+    smooth: bool = False,
+    lag: int | None = None,
 ) -> Track:
     """Run ``filt`` from ``prior`` over ``measurements`` and return the filtered track.
 
@@ -218,15 +233,32 @@ def run_filter(
         also sum the filter's log-likelihood increments ``log p(z_k | z_1:k-1)`` into
         ``track.info["log_likelihood"]`` (per batch entry); the filter must be a
         :class:`~fusetrack.core.LikelihoodFilter`.
+    smooth:
+        return the smoothed track instead: the RTS smoother for
+        :class:`KalmanFilter`, :class:`ExtendedKalmanFilter` and :class:`UnscentedKalmanFilter`
+        (:func:`~fusetrack.filters.rts_smoother`), backward simulation for the
+        :class:`ParticleFilter` family (:func:`~fusetrack.filters.backward_simulation`, drawing
+        from ``rng``, which must then be one Generator; as many trajectories as particles).
+        Other filters raise :class:`~fusetrack.core.ConfigError` before any work. The
+        filtering itself is unchanged (the same draws as without ``smooth``).
+    lag:
+        with ``smooth``: None for fixed-interval smoothing (every estimate uses every
+        measurement), an int ``L >= 0`` for fixed-lag smoothing (the estimate at step ``k`` uses
+        the measurements up to step ``k + L``).
 
     Returns
     -------
     Track
         ``times`` ``(T,)``, ``means`` ``(T, ..., d)``, ``covariances`` ``(T, ..., d, d)`` — the
         belief after the update at each step. ``info["stats"]`` holds how much each of
-        ``filt.stats``'s counters grew during this run.
+        ``filt.stats``'s counters grew during this run. With ``smooth=True`` the smoothed
+        estimates at the same times; ``info`` keeps the filtered track's entries and adds
+        ``"filtered"`` (the filtered track), ``"smoother"`` (the method's name), ``"lag"`` and,
+        for particle filters, ``"samples"`` ``(T, ..., M, d)``: the backward draws the
+        smoothed means and covariances are taken from (joint trajectories for ``lag=None``).
     """
     _check_options(filt, order, log_likelihood)
+    _check_smoothing(filt, smooth, lag, rng)
     ms = order_by_time(as_measurements(measurements), order)
     sensors = getattr(filt, "sensors", None)
     if isinstance(sensors, Mapping):  # unknown sensors and wrong sizes fail before any work
@@ -237,8 +269,9 @@ def run_filter(
     stats = getattr(filt, "stats", None)
     before = stats.as_dict() if stats is not None else {}
     t_prev = _start_time(t0, steps)
+    kept: list[tuple[Any, float]] | None = [] if smooth else None
     belief, out_t, out_mean, out_cov, loglik = _filter_loop(
-        filt, belief, steps, t_prev, rng, log_likelihood
+        filt, belief, steps, t_prev, rng, log_likelihood, kept
     )
 
     info: dict[str, Any] = {"filter": type(filt).__name__}
@@ -251,5 +284,80 @@ def run_filter(
     if not out_t:
         mean0 = np.asarray(belief.mean)
         empty = np.empty((0, *mean0.shape))
-        return Track(np.empty(0), empty, np.empty((*empty.shape, mean0.shape[-1])), label, info)
-    return Track(np.array(out_t), np.stack(out_mean), np.stack(out_cov), label, info)
+        track = Track(np.empty(0), empty, np.empty((*empty.shape, mean0.shape[-1])), label, info)
+    else:
+        track = Track(np.array(out_t), np.stack(out_mean), np.stack(out_cov), label, info)
+    if kept is None:
+        return track
+    return _smoothed(filt, track, kept, rng, lag)
+
+
+def _check_smoothing(
+    filt: Filter[Any], smooth: bool, lag: int | None, rng: np.random.Generator | None
+) -> None:
+    """``smooth`` is a bool, ``lag`` only with it, and ``filt`` is a filter we can smooth."""
+    if not isinstance(smooth, bool | np.bool_):
+        raise ConfigError(invalid("smooth", smooth, "True or False"))
+    if not smooth:
+        if lag is not None:
+            raise ConfigError(invalid("lag", lag, "None unless smooth=True"))
+        return
+    check_lag(lag)
+    if smoother_name(filt) is not None:
+        return
+    if isinstance(filt, ParticleFilter) and callable(getattr(filt.motion, "log_density", None)):
+        if not isinstance(rng, np.random.Generator):
+            raise ConfigError(
+                invalid(
+                    "rng",
+                    rng,
+                    "one numpy Generator with smooth=True: the backward simulation draws from it",
+                )
+            )
+        return
+    raise ConfigError(
+        invalid(
+            "smooth",
+            True,
+            f"False for {type(filt).__name__}: smoothing is implemented for KalmanFilter, "
+            "ExtendedKalmanFilter, UnscentedKalmanFilter (RTS) and the ParticleFilter family "
+            "(BootstrapFilter, RegularizedParticleFilter, AuxiliaryParticleFilter; backward "
+            "simulation)",
+        )
+    )
+
+
+def _smoothed(
+    filt: Filter[Any],
+    filtered: Track,
+    kept: list[tuple[Any, float]],
+    rng: np.random.Generator | None,
+    lag: int | None,
+) -> Track:
+    """The smoothed track at the filtered track's times; ``info`` adds ``"filtered"`` (the
+    filtered track), ``"smoother"`` (its name), ``"lag"`` and, for particle filters,
+    ``"samples"`` ``(T, ..., M, d)`` (the backward draws: joint trajectories for
+    ``lag=None``, draws of each step's fixed-lag marginal otherwise)."""
+    name = smoother_name(filt) or "backward simulation"
+    info: dict[str, Any] = {**filtered.info, "filtered": filtered, "smoother": name, "lag": lag}
+    if not kept:
+        return Track(filtered.times, filtered.means, filtered.covariances, filtered.label, info)
+    beliefs = [b for b, _ in kept]
+    dts = np.array([dt for _, dt in kept[1:]])
+    if isinstance(filt, ParticleFilter):
+        samples = backward_simulation(
+            filt.motion, beliefs, dts, cast(np.random.Generator, rng), lag=lag
+        )
+        info["samples"] = samples
+        means = samples.mean(axis=-2)
+        r = samples - means[..., None, :]
+        covs = np.einsum("...mi,...mj->...ij", r, r) / samples.shape[-2]
+    else:
+        means, covs = rts_smoother(
+            cast(GaussianFilter, filt),
+            np.stack([b.mean for b in beliefs]),
+            np.stack([b.cov for b in beliefs]),
+            dts,
+            lag=lag,
+        )
+    return Track(filtered.times, means, covs, f"{filtered.label} ({name})", info)
