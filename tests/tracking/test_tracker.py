@@ -357,3 +357,89 @@ def test_the_module_examples_run():
     for module in (tracker, initiators):
         result = doctest.testmod(module)
         assert result.failed == 0 and result.attempted > 0
+
+
+class Soft:
+    """A JPDA-like stand-in: every track takes each gated measurement with a probability
+    proportional to its likelihood ratio, and is missed with weight exp(log_missed)."""
+
+    def associate(self, scores, rng=None):
+        ratios = np.exp(scores.log_likelihood - scores.log_clutter)
+        hyp = {}
+        for k, i in enumerate(scores.track_ids):
+            w = np.r_[np.exp(scores.log_missed[k]), ratios[k]]
+            w = w / w.sum()
+            hyp[i] = tuple(
+                SingleHypothesis(i, None if j == 0 else j - 1, float(p))
+                for j, p in enumerate(w)
+                if p > 0
+            )
+        return Association(hyp, ())
+
+
+def test_a_soft_associator_gives_the_pda_combination_and_the_ipda_existence():
+    from fusetrack.tracking import combine_hypotheses, update_existence
+
+    prior_from = InverseMeasurementPrior([POS], WIDE)
+    tr = MultiTargetTracker(
+        KalmanFilter(MOTION, [POS]),
+        [POS],
+        Soft(),
+        SinglePointInitiator(prior_from),
+        MissedCountDeleter(3),
+        p_detect=0.9,
+        clutter_density=0.01,
+        gate_probability=0.999,
+    )
+    state = tr.step(tr.initial_state(), 0.0, [Measurement(0.0, "pos", [0.0, 0.0])])
+    zs = [Measurement(1.0, "pos", v) for v in ([0.3, -0.2], [-0.8, 0.9], [40.0, 40.0])]
+    after = tr.step(state, 1.0, zs)
+    (track,) = after.tracks
+    pred = tr.filter.predict(state.tracks[0].belief, 1.0)
+    posts, lls = zip(*(tr.filter.update_with_likelihood(pred, [z]) for z in zs[:2]))
+    ratios = 0.9 * np.exp(np.array(lls, dtype=float)) / 0.01
+    w = np.r_[1 - 0.9 * 0.999, ratios]
+    expected = combine_hypotheses([pred, *posts], w / w.sum())
+    np.testing.assert_allclose(track.belief.mean, expected.mean, rtol=1e-12)
+    np.testing.assert_allclose(track.belief.cov, expected.cov, rtol=1e-12)
+    assert track.measurements == (0, 1)  # the far one is outside the gate
+    np.testing.assert_allclose(track.probabilities, w[1:] / w.sum(), rtol=1e-12)
+    r = update_existence(0.99 * 0.5, 0.9 * 0.999, np.log(ratios))
+    assert track.existence == pytest.approx(r, rel=1e-12)
+    assert track.hits == 2 and track.misses == 0
+
+
+def test_a_particle_filter_tracks_too():
+    """Births become particles (``filter.initialize``); each track keeps its most probable
+    hypothesis' posterior. One target, no clutter: the track follows it."""
+    from fusetrack.filters import BootstrapFilter
+
+    zs, truth, source = scenario(seed=4, n_scans=12, p_detect=1.0, clutter=0.0)
+    pf = BootstrapFilter(MOTION, [POS], n_particles=2000, engine="numpy")
+    tr = tracker(filt=pf, initiator=SinglePointInitiator(InverseMeasurementPrior([POS], WIDE)))
+    tracks = tr.run(zs, np.random.default_rng(0))
+    assert len(tracks) == 2
+    for t in tracks:
+        (owner,) = {int(source[j]) for u in t.info["measurements"] for j in u}
+        err = t.means[:, :2] - truth[owner, :, :2]
+        assert np.sqrt(np.mean(np.sum(err**2, axis=1))) < 0.9  # 2-D measurement RMSE: 0.71
+
+
+def test_only_the_sensors_that_scanned_count_a_miss():
+    tag = PositionFix("tag", cov=0.25 * np.eye(2))
+    kf = KalmanFilter(MOTION, [POS, tag])
+    tr = MultiTargetTracker(
+        kf,
+        [POS, tag],
+        Greedy(),
+        SinglePointInitiator(InverseMeasurementPrior([POS], WIDE)),
+        MissedCountDeleter(2),
+        p_detect=0.9,
+        clutter_density=1e-4,
+    )
+    state = tr.step(tr.initial_state(), 0.0, [Measurement(0.0, "pos", [0.0, 0.0])])
+    quiet = tr.step(state, 1.0, [], scanned=["tag"])  # the tag looked, saw nothing: one miss
+    assert quiet.tracks[0].misses == 1 and quiet.tracks[0].scans == 2
+    assert tr.step(quiet, 2.0, [], scanned=["tag"]).tracks == ()  # second miss: deleted
+    with pytest.raises(UnknownSensorError, match="scanned"):
+        tr.step(state, 1.0, [], scanned=["radar"])
