@@ -74,19 +74,22 @@ def mahalanobis_squared(
     hph = h @ covs @ np.swapaxes(h, -1, -2)  # (T, m, m)
     r_sensor = np.broadcast_to(np.asarray(sensor.noise_cov(means), float), hph.shape)
     values = np.stack([measurements[j].value for j in vector])  # (M', m)
-    r = np.stack(
-        [
-            r_sensor
-            if measurements[j].covariance is None
-            else np.broadcast_to(measurements[j].covariance, hph.shape)
-            for j in vector
-        ],
-        axis=1,
-    )  # (T, M', m, m)
+    r = np.stack([_noise(measurements[j], r_sensor) for j in vector], axis=1)  # (T, M', m, m)
     s = hph[:, None] + r
     y = np.asarray(sensor.residual(values[None, :, :], z_pred[:, None, :]), float)  # (T, M', m)
-    out[:, vector] = np.einsum("tmi,tmi->tm", y, np.linalg.solve(s, y[..., None])[..., 0])
+    try:
+        s_inv_y = np.linalg.solve(s, y[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # a singular S (no noise, no uncertainty): least squares
+        s_inv_y = (np.linalg.pinv(s, hermitian=True) @ y[..., None])[..., 0]
+    out[:, vector] = np.einsum("tmi,tmi->tm", y, s_inv_y)
     return out
+
+
+def _noise(measurement: Measurement, sensor_noise: Array) -> Array:
+    """The measurement's own covariance when it has one, else the sensor's, as ``(T, m, m)``."""
+    if measurement.covariance is None:
+        return sensor_noise
+    return np.broadcast_to(np.asarray(measurement.covariance, float), sensor_noise.shape)
 
 
 def score_scan(
