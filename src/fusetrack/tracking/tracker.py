@@ -75,7 +75,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..association import Association, Associator, hypotheses_of
+from ..association import Association, Associator, SingleHypothesis, hypotheses_of
 from ..core import (
     ConfigError,
     Gaussian,
@@ -94,7 +94,7 @@ from .deleters import Deleter
 from .existence import predict_existence, update_existence
 from .initiators import Initiator
 from .mixing import combine_hypotheses
-from .scoring import score_scan
+from .scoring import ScoredScan, score_scan
 from .state import LiveTrack, TrackerState
 
 TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
@@ -130,6 +130,24 @@ def _require(obj: Any, name: str, methods: Sequence[str], what: str) -> None:
     missing = [m for m in methods if not callable(getattr(obj, m, None))]
     if missing:
         raise ConfigError(invalid(name, obj, f"{what} (missing {', '.join(missing)})"))
+
+
+def _check_association(associator: Any, association: Association, n: int) -> None:
+    """Raise :class:`ConfigError` when an associator's answer names measurements outside the
+    scan or gives a negative or non-finite probability."""
+    indices = [h.measurement for hs in association.hypotheses.values() for h in hs]
+    indices += list(association.unassociated)
+    bad = [k for k in indices if k is not None and not 0 <= k < n]
+    probs = [h.probability for hs in association.hypotheses.values() for h in hs]
+    if bad or not all(math.isfinite(p) and p >= 0 for p in probs):
+        raise ConfigError(
+            invalid(
+                "associator",
+                associator,
+                f"an Association with measurement indices in [0, {n}) and probabilities >= 0"
+                f" (got indices {bad}, probabilities {probs})",
+            )
+        )
 
 
 @dataclass
@@ -235,7 +253,7 @@ class MultiTargetTracker:
 
     # -- one scan ------------------------------------------------------------------------------
 
-    def check_scan(
+    def _check_scan(
         self,
         state: TrackerState,
         time: float,
@@ -282,7 +300,7 @@ class MultiTargetTracker:
         and reported nothing misses every track). Sensors with measurements always count.
         Measurements with NaN or infinite values are left out.
         """
-        t = self.check_scan(state, time, measurements, rng, scanned)
+        t = self._check_scan(state, time, measurements, rng, scanned)
         tracks = {tr.id: self._predict(tr, t, rng) for tr in state.tracks}
         records = {i: _ScanRecord() for i in tracks}
         next_id = state.next_id
@@ -370,47 +388,54 @@ class MultiTargetTracker:
             rng=rng,
         )
         association = self.associator.associate(scored.scores, rng) if chosen else Association({})
-        ratios = scored.scores.log_likelihood - scored.scores.log_clutter
+        _check_association(self.associator, association, len(chosen))
         for row, i in enumerate(ids):
-            hyps = hypotheses_of(association, i)
-            beliefs = []
-            for h in hyps:
-                k = h.measurement
-                if k is not None and not 0 <= k < len(chosen):
-                    raise ConfigError(
-                        invalid(
-                            "associator",
-                            self.associator,
-                            f"measurement indices in [0, {len(chosen)}) (got {k})",
-                        )
-                    )
-                if k is None:
-                    beliefs.append(predictions[row])
-                elif (row, k) in scored.posteriors:
-                    beliefs.append(scored.posteriors[(row, k)])
-                else:  # the associator chose a pair outside the gate
-                    beliefs.append(self.filter.update(predictions[row], [chosen[k]], rng))
+            hyps = [h for h in hypotheses_of(association, i) if h.probability > 0]
+            hyps = hyps or [SingleHypothesis(i, None, 1.0)]  # no weight anywhere: missed
+            tracks[i] = self._apply(tracks[i], row, hyps, scored, chosen, p_d, rng)
+            total = sum(h.probability for h in hyps)
             used = [
-                (cols[h.measurement], h.probability)
+                (cols[h.measurement], h.probability / total)
                 for h in hyps
-                if h.measurement is not None and h.probability > 0
+                if h.measurement is not None
             ]
-            p_missed = sum(h.probability for h in hyps if h.measurement is None)
-            log_ratios = [
-                ratios[row, h.measurement]
-                for h in hyps
-                if h.measurement is not None and h.probability > 0
-            ]
-            tracks[i] = replace(
-                tracks[i],
-                belief=combine_hypotheses(beliefs, [h.probability for h in hyps]),
-                existence=update_existence(
-                    tracks[i].existence, p_d * self.gate_probability, log_ratios
-                ),
-            )
             records[i].used.extend(used)
-            records[i].detected |= p_missed <= 0.5
+            records[i].detected |= sum(p for _, p in used) >= 0.5
         return [cols[k] for k in association.unassociated] if chosen else cols
+
+    def _apply(
+        self,
+        track: LiveTrack,
+        row: int,
+        hyps: Sequence[SingleHypothesis],
+        scored: ScoredScan,
+        chosen: Sequence[Measurement],
+        p_detect: float,
+        rng: np.random.Generator | None,
+    ) -> LiveTrack:
+        """The track (row ``row`` of the scores) after its hypotheses: the belief of each (the
+        prediction when missed) combined (:func:`.mixing.combine_hypotheses`), and its
+        existence updated with the likelihood ratios of their measurements (IPDA)."""
+        beliefs, log_ratios = [], []
+        for h in hyps:
+            k = h.measurement
+            if k is None:
+                beliefs.append(track.belief)
+                continue
+            post = scored.posteriors.get((row, k))
+            if post is None:  # the associator chose a pair outside the gate
+                post = self.filter.update(track.belief, [chosen[k]], rng)
+            beliefs.append(post)
+            log_ratios.append(
+                float(scored.scores.log_likelihood[row, k] - scored.scores.log_clutter[k])
+            )
+        return replace(
+            track,
+            belief=combine_hypotheses(beliefs, [h.probability for h in hyps]),
+            existence=update_existence(
+                track.existence, p_detect * self.gate_probability, log_ratios
+            ),
+        )
 
     @staticmethod
     def _count(track: LiveTrack, record: _ScanRecord, time: float, newborn: bool) -> LiveTrack:
