@@ -237,7 +237,7 @@ class MultiTargetTracker:
             "survival_probability", survival_probability, ["all"], 0.0, 1.0
         )["all"]
         self.birth_existence = _per_sensor(
-            "initiator.existence", initiator.existence, ["all"], 0.0, 1.0
+            "initiator.existence", getattr(initiator, "existence", None), ["all"], 0.0, 1.0
         )["all"]
 
     def __repr__(self) -> str:
