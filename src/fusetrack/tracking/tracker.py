@@ -100,30 +100,30 @@ from .state import LiveTrack, TrackerState
 TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
 
 
+def _in_range(name: str, value: object, lo: float, hi: float, valid: str = "") -> float:
+    """``float(value)`` if it is in ``(lo, hi]``, else :class:`ConfigError`."""
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        v = math.nan
+    if not lo < v <= hi:
+        raise ConfigError(invalid(name, value, valid or f"a number in ({lo:g}, {hi:g}]"))
+    return v
+
+
 def _per_sensor(
-    name: str, value: float | Mapping[str, float], sensors: Collection[str], lo: float, hi: float
+    name: str, value: object, sensors: Collection[str], lo: float, hi: float
 ) -> dict[str, float]:
     """``value`` (one number or ``sensor_id -> number``) as a dict over ``sensors``, each in
     ``(lo, hi]``, else :class:`ConfigError`."""
-    valid = f"a number in ({lo:g}, {hi:g}] or a mapping sensor_id -> such a number for {sorted(sensors)}"
-    if isinstance(value, Mapping):
-        missing = sorted(set(sensors) - set(value))
-        if missing:
-            raise ConfigError(invalid(name, dict(value), valid + f" (missing {missing})"))
-        out = {s: value[s] for s in sensors}
-    else:
-        out = dict.fromkeys(sensors, value)
-    for s, v in out.items():
-        try:
-            ok = lo < float(v) <= hi
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise ConfigError(
-                invalid(name if not isinstance(value, Mapping) else f"{name}[{s!r}]", v, valid)
-            )
-        out[s] = float(v)
-    return out
+    valid = f"a number in ({lo:g}, {hi:g}], or a mapping sensor_id -> such a number for {sorted(sensors)}"
+    if not isinstance(value, Mapping):
+        v = _in_range(name, value, lo, hi, valid)
+        return dict.fromkeys(sensors, v)
+    missing = sorted(set(sensors) - set(value))
+    if missing:
+        raise ConfigError(invalid(name, dict(value), valid + f" (missing {missing})"))
+    return {s: _in_range(f"{name}[{s!r}]", value[s], lo, hi, valid) for s in sensors}
 
 
 def _require(obj: Any, name: str, methods: Sequence[str], what: str) -> None:
@@ -230,15 +230,13 @@ class MultiTargetTracker:
         self.clutter_density = _per_sensor(
             "clutter_density", clutter_density, self.sensors, 0.0, math.inf
         )
-        self.gate_probability = _per_sensor(
-            "gate_probability", gate_probability, ["all"], 0.0, 1.0
-        )["all"]
-        self.survival_probability = _per_sensor(
-            "survival_probability", survival_probability, ["all"], 0.0, 1.0
-        )["all"]
-        self.birth_existence = _per_sensor(
-            "initiator.existence", getattr(initiator, "existence", None), ["all"], 0.0, 1.0
-        )["all"]
+        self.gate_probability = _in_range("gate_probability", gate_probability, 0.0, 1.0)
+        self.survival_probability = _in_range(
+            "survival_probability", survival_probability, 0.0, 1.0
+        )
+        self.birth_existence = _in_range(
+            "initiator.existence", getattr(initiator, "existence", None), 0.0, 1.0
+        )
 
     def __repr__(self) -> str:
         return (
@@ -297,8 +295,10 @@ class MultiTargetTracker:
         """The state after the scan at ``time`` with ``measurements`` (module docstring).
 
         ``scanned``: the sensors that looked in this scan, default all (a sensor that looked
-        and reported nothing misses every track). Sensors with measurements always count.
-        Measurements with NaN or infinite values are left out.
+        and reported nothing misses every track). Sensors with measurements always count; they
+        are processed in the order of their first measurement, then the silent ones.
+        Measurements with NaN or infinite values are left out. Raises before any work on an
+        unknown sensor, a value of the wrong size, or a time before the last scan's.
         """
         t = self._check_scan(state, time, measurements, rng, scanned)
         tracks = {tr.id: self._predict(tr, t, rng) for tr in state.tracks}
