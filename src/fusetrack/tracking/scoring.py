@@ -14,7 +14,8 @@ association filter", IEEE Control Systems 29(6); Blackman & Popoli 1999, Ch. 6):
 
 so that a joint association event ``theta`` has posterior
 ``prod_{(i,j) in theta} exp(l_ij) / kappa_j  prod_{i missed} (1 - P_D P_G)`` from the scores
-alone.
+alone. (``log P_D`` is part of ``log_likelihood``, the convention of the associators'
+``association/scores.py``; the bare ``log p(z_j | track i)`` is ``log_likelihood - log P_D``.)
 
 The gate (Bar-Shalom, Willett & Tian 2011, Sec. 3.2) is the Mahalanobis distance of the
 innovation on the Gaussian approximation of the belief (its ``mean`` and ``cov``, whatever the
@@ -124,7 +125,8 @@ def score_scan(
             j = cols[int(c)]
             post, ll = filt.update_with_likelihood(predictions[i], [measurements[j]], rng)
             posteriors[(int(i), j)] = post
-            log_lik[i, j] = log_pd + float(np.asarray(ll))
+            score = log_pd + float(np.asarray(ll))
+            log_lik[i, j] = score if not np.isnan(score) else -np.inf  # a degenerate update
     missed = (
         float(np.log1p(-p_detect * gate_probability))
         if p_detect * gate_probability < 1
