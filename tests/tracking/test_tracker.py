@@ -344,6 +344,9 @@ def test_unknown_sensor_or_time_going_back_fails_before_any_filter_call():
     with pytest.raises(MeasurementError, match=r"value\.shape"):
         tr.run([*zs, Measurement(4.0, "pos", [1.0, 2.0, 3.0])], np.random.default_rng(0))
     assert CountingKF.calls == 0
+    with pytest.raises(MeasurementError, match=r"one report"):
+        tr.run([*zs, Measurement(4.0, "pos", np.zeros((3, 2)))], np.random.default_rng(0))
+    assert CountingKF.calls == 0
     state = tr.step(tr.initial_state(), 3.0, [zs[0]])
     with pytest.raises(MeasurementError, match=r"time=2\.0"):
         tr.step(state, 2.0, [])

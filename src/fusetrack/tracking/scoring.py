@@ -14,8 +14,9 @@ association filter", IEEE Control Systems 29(6); Blackman & Popoli 1999, Ch. 6):
 
 so that a joint association event ``theta`` has posterior
 ``prod_{(i,j) in theta} exp(l_ij) / kappa_j  prod_{i missed} (1 - P_D P_G)`` from the scores
-alone. (``log P_D`` is part of ``log_likelihood``, the convention of the associators'
-``association/scores.py``; the bare ``log p(z_j | track i)`` is ``log_likelihood - log P_D``.)
+alone. (``log P_D`` is part of ``log_likelihood``, as the GNN and JPDA associators written
+alongside this module expect; ``association/base.py`` describes the bare
+``log p(z_j | track i)``, which is ``log_likelihood - log P_D`` here.)
 
 The gate (Bar-Shalom, Willett & Tian 2011, Sec. 3.2) is the Mahalanobis distance of the
 innovation on the Gaussian approximation of the belief (its ``mean`` and ``cov``, whatever the

@@ -251,6 +251,21 @@ class MultiTargetTracker:
 
     # -- one scan ------------------------------------------------------------------------------
 
+    def _check_measurements(self, measurements: Iterable[Measurement]) -> None:
+        """Unknown sensors, wrong sizes and batched values raise :class:`MeasurementError`."""
+        for m in measurements:
+            if not isinstance(m, Measurement):
+                raise MeasurementError(invalid("measurements", m, "Measurement objects"))
+            validate_measurement(m, self.sensors)
+            if isinstance(m.value, np.ndarray) and m.value.ndim != 1:
+                raise MeasurementError(
+                    invalid(
+                        f"value.shape (sensor {m.sensor_id!r}, time={m.time})",
+                        m.value.shape,
+                        "(m,): one report (the tracker takes no batched Monte Carlo runs)",
+                    )
+                )
+
     def _check_scan(
         self,
         state: TrackerState,
@@ -268,10 +283,7 @@ class MultiTargetTracker:
             raise MeasurementError(
                 invalid("time", time, f"a finite time >= the last scan's time {state.time}")
             )
-        for m in measurements:
-            if not isinstance(m, Measurement):
-                raise MeasurementError(invalid("measurements", m, "Measurement objects"))
-            validate_measurement(m, self.sensors)
+        self._check_measurements(measurements)
         for sid in scanned or ():
             if sid not in self.sensors:
                 raise UnknownSensorError(
@@ -494,18 +506,20 @@ class MultiTargetTracker:
         ordered = order_by_time([ms[k] for k in index], "reject")
         scans = self._scans(ordered, list(index), times)
         state = self.initial_state()
-        for m in ordered:  # unknown sensors and wrong sizes fail before any work
-            validate_measurement(m, self.sensors)
-        history: dict[int, _History] = {}
+        self._check_measurements(ordered)  # before any work
+        history: dict[int, _History] = {}  # tracks alive, and ended ones that were confirmed
+        alive: set[int] = set()
         for t, idx in scans:
             state = self.step(state, t, [ms[k] for k in idx], rng)
-            alive = set()
             for tr in state.tracks:
                 history.setdefault(tr.id, _History()).add(self.filter, tr, t, idx)
-                alive.add(tr.id)
-            for i, h in history.items():
-                if i not in alive and h.deleted is None:
-                    h.deleted = t
+            now = {tr.id for tr in state.tracks}
+            for i in alive - now:
+                if any(history[i].confirmed):
+                    history[i].deleted = t
+                else:  # a tentative track dropped: never reported
+                    del history[i]
+            alive = now
         return [h.track(i) for i, h in sorted(history.items()) if any(h.confirmed)]
 
     @staticmethod
