@@ -218,3 +218,39 @@ def test_ekf_scores_are_its_own_likelihood_increment():
     _, ll = ekf.update_with_likelihood(b, [z])
     assert scored.scores.log_likelihood[0, 0] == pytest.approx(float(ll), rel=1e-12)
     assert scored.scores.log_missed[0] == -np.inf  # P_D P_G = 1
+
+
+class PlainKF(KalmanFilter):
+    """The same filter, seen as one the batch path does not trust (methods overridden)."""
+
+    def predict(self, belief, dt, rng=None):
+        return super().predict(belief, dt, rng)
+
+    def update_with_likelihood(self, belief, measurements, rng=None):
+        return super().update_with_likelihood(belief, measurements, rng)
+
+
+def test_batched_filter_calls_equal_one_call_per_track():
+    from fusetrack.tracking.batch import batches, predict_many, update_pairs
+
+    rng = np.random.default_rng(5)
+    beliefs = []
+    for _ in range(6):
+        a = rng.standard_normal((4, 4))
+        beliefs.append(Gaussian(rng.normal(0, 5, 4), a @ a.T + np.eye(4)))
+    zs = [Measurement(1.0, "pos", rng.normal(0, 5, 2)) for _ in range(6)]
+    zs[2] = Measurement(1.0, "pos", [1.0, 2.0], covariance=[[2.0, 0.3], [0.3, 1.0]])
+    plain = PlainKF(KF.motion, [POS])
+    assert batches(KF, beliefs) and not batches(plain, beliefs)
+    assert not batches(KF, [Particles.uniform(np.zeros((3, 4)))])
+    for got, ref in zip(
+        predict_many(KF, beliefs, 0.7, None), predict_many(plain, beliefs, 0.7, None)
+    ):
+        np.testing.assert_allclose(got.mean, ref.mean, rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(got.cov, ref.cov, rtol=1e-13, atol=1e-13)
+    for (got, ll), (ref, ref_ll) in zip(
+        update_pairs(KF, beliefs, zs, None), update_pairs(plain, beliefs, zs, None)
+    ):
+        np.testing.assert_allclose(got.mean, ref.mean, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(got.cov, ref.cov, rtol=1e-12, atol=1e-12)
+        assert ll == pytest.approx(ref_ll, rel=1e-12)

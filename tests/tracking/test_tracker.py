@@ -446,3 +446,14 @@ def test_only_the_sensors_that_scanned_count_a_miss():
     assert tr.step(quiet, 2.0, [], scanned=["tag"]).tracks == ()  # second miss: deleted
     with pytest.raises(UnknownSensorError, match="scanned"):
         tr.step(state, 1.0, [], scanned=["radar"])
+
+
+def test_the_batched_kalman_path_gives_the_tracks_of_one_call_per_track():
+    zs, _, _ = scenario(seed=3, n_scans=20)
+    fast = tracker().run(zs, np.random.default_rng(0))
+    slow = tracker(filt=CountingKF(MOTION, [POS])).run(zs, np.random.default_rng(0))
+    assert [t.id for t in fast] == [t.id for t in slow]
+    for a, b in zip(fast, slow):
+        assert a.info["measurements"] == b.info["measurements"]
+        np.testing.assert_allclose(a.means, b.means, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(a.covariances, b.covariances, rtol=0, atol=1e-9)

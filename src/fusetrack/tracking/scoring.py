@@ -22,7 +22,8 @@ The gate (Bar-Shalom, Willett & Tian 2011, Sec. 3.2) is the Mahalanobis distance
 innovation on the Gaussian approximation of the belief (its ``mean`` and ``cov``, whatever the
 belief is), linearised at the mean: ``y = residual(z, h(x))``, ``S = H P H^T + R``,
 ``y^T S^-1 y <= chi2_m^-1(P_G)``. It is computed for all pairs in a few batched array
-operations; only the pairs inside it pay for a filter update.
+operations; only the pairs inside it pay for a filter update (one batched call per sensor for
+the Kalman family, :mod:`.batch`).
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from scipy.stats import chi2
 
 from ..association import ScanLikelihoods
 from ..core import Measurement, SensorModel
+from .batch import update_pairs
 
 Array = NDArray[np.float64]
 
@@ -122,11 +124,13 @@ def score_scan(
         sensor = sensors[sid]
         d2 = mahalanobis_squared(sensor, predictions, [measurements[j] for j in cols])
         inside = d2 <= gate_threshold(gate_probability, int(sensor.dim))
-        for i, c in zip(*np.nonzero(inside)):
-            j = cols[int(c)]
-            post, ll = filt.update_with_likelihood(predictions[i], [measurements[j]], rng)
-            posteriors[(int(i), j)] = post
-            score = log_pd + float(np.asarray(ll))
+        pairs = [(int(i), cols[int(c)]) for i, c in zip(*np.nonzero(inside))]
+        updates = update_pairs(
+            filt, [predictions[i] for i, _ in pairs], [measurements[j] for _, j in pairs], rng
+        )
+        for (i, j), (post, ll) in zip(pairs, updates):
+            posteriors[(i, j)] = post
+            score = log_pd + ll
             log_lik[i, j] = score if not np.isnan(score) else -np.inf  # a degenerate update
     missed = (
         float(np.log1p(-p_detect * gate_probability))

@@ -90,6 +90,7 @@ from ..core import (
     order_by_time,
 )
 from ..filters import as_sensor_map, validate_measurement
+from .batch import predict_many
 from .deleters import Deleter
 from .existence import predict_existence, update_existence
 from .initiators import Initiator
@@ -313,7 +314,7 @@ class MultiTargetTracker:
         unknown sensor, a value of the wrong size, or a time before the last scan's.
         """
         t = self._check_scan(state, time, measurements, rng, scanned)
-        tracks = {tr.id: self._predict(tr, t, rng) for tr in state.tracks}
+        tracks = {tr.id: tr for tr in self._predict(state.tracks, t, rng)}
         records = {i: _ScanRecord() for i in tracks}
         next_id = state.next_id
         for sid in self._scan_order(measurements, scanned):
@@ -349,16 +350,26 @@ class MultiTargetTracker:
         rest = self.sensors if scanned is None else scanned
         return order + [s for s in self.sensors if s in rest and s not in order]
 
-    def _predict(self, track: LiveTrack, time: float, rng: np.random.Generator | None) -> LiveTrack:
-        dt = time - track.time
-        if dt <= TIME_TOLERANCE:
-            return track
-        return replace(
-            track,
-            belief=self.filter.predict(track.belief, dt, rng),
-            time=time,
-            existence=predict_existence(track.existence, self.survival_probability),
-        )
+    def _predict(
+        self, tracks: Sequence[LiveTrack], time: float, rng: np.random.Generator | None
+    ) -> list[LiveTrack]:
+        """The tracks predicted to ``time`` (those of one time in one batched call, :mod:`.batch`),
+        their existence with ``P_S``."""
+        out = list(tracks)
+        due: dict[float, list[int]] = {}
+        for k, tr in enumerate(tracks):
+            if time - tr.time > TIME_TOLERANCE:
+                due.setdefault(tr.time, []).append(k)
+        for t0, ks in due.items():
+            beliefs = predict_many(self.filter, [tracks[k].belief for k in ks], time - t0, rng)
+            for k, belief in zip(ks, beliefs):
+                out[k] = replace(
+                    tracks[k],
+                    belief=belief,
+                    time=time,
+                    existence=predict_existence(tracks[k].existence, self.survival_probability),
+                )
+        return out
 
     def _birth(
         self, track_id: int, time: float, measurement: Measurement, rng: np.random.Generator | None
