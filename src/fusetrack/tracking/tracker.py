@@ -17,6 +17,9 @@ measurement per sensor, but may give one to each):
    left, so a track that is not yet confirmed never steals a confirmed track's measurement;
 4. each measurement still left may start a tentative track (``initiator.birth``).
 
+For the Kalman family the predictions of all tracks, and the updates of all gated pairs of a
+sensor, are one batched filter call each (:mod:`.batch`).
+
 After the scan every track counts a hit or a miss; the initiator confirms or drops tentative
 tracks (M-of-N), the deleter ends confirmed ones. Everything lives in a :class:`TrackerState`.
 
