@@ -27,6 +27,8 @@ NOT_FILTERS = {
     "fusetrack.core.models.SteppingFilter": "a protocol",
     "fusetrack.filters.projected_planes.PlanesBelief": "a belief (its step field is the PPS step)",
     "fusetrack.association.mcmcda.MCMCDA": "an associator: step(state, observations) -> state",
+    "fusetrack.tracking.tracker.MultiTargetTracker": "many targets: step(state, time, "
+    "measurements) -> TrackerState, each track running a Filter",
     "fusetrack.management.camera_triggering.AcousticTracker": "the configuration that builds "
     "the per-object MultiModelBearingPF (models, dt, particles), not a filter",
     "fusetrack.motion.walking_person.WalkingPerson": "a motion model (step = one simulated stride)",

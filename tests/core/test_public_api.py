@@ -27,6 +27,7 @@ STAGES = (
     "association",
     "perception",
     "management",
+    "tracking",
     "evaluation",
 )
 
@@ -38,6 +39,7 @@ CHECKED = (
     "association/**/*.py",
     "perception/**/*.py",
     "management/**/*.py",
+    "tracking/**/*.py",
     "service/**/*.py",
     "tools/**/*.py",
     "experiments/lee2009/**/*.py",

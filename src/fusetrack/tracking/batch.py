@@ -1,0 +1,84 @@
+"""Many tracks through one filter call: the Kalman family's batch axes, used when they apply.
+
+A :class:`~fusetrack.filters.GaussianFilter` (Kalman, extended, unscented) runs a belief with
+leading batch axes ``(K, d)`` as ``K`` independent filters, in a handful of array operations
+instead of ``K`` Python calls. So the tracker predicts all its Gaussian tracks at once and
+updates all the gated (track, measurement) pairs of a sensor at once. Any other filter (or a
+subclass that overrides ``predict`` / ``update_with_likelihood``, which might not keep the
+batch semantics) goes one call per track; both give the same numbers (to rounding: the batched
+products may sum in another order).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..core import Gaussian, Measurement
+from ..filters import GaussianFilter
+
+
+def batches(filt: Any, beliefs: Sequence[Any]) -> bool:
+    """True when ``filt`` is a Gaussian filter with its own batched ``predict`` and
+    ``update_with_likelihood`` and every belief is one (unbatched) Gaussian."""
+    kind = type(filt)
+    return (
+        isinstance(filt, GaussianFilter)
+        and kind.predict is GaussianFilter.predict
+        and kind.update_with_likelihood is GaussianFilter.update_with_likelihood
+        and all(isinstance(b, Gaussian) and b.mean.ndim == 1 for b in beliefs)
+    )
+
+
+def _split(stacked: Gaussian) -> list[Gaussian]:
+    return [Gaussian(m, c) for m, c in zip(stacked.mean, stacked.cov)]
+
+
+def _stack(beliefs: Sequence[Gaussian]) -> Gaussian:
+    return Gaussian(np.stack([b.mean for b in beliefs]), np.stack([b.cov for b in beliefs]))
+
+
+def predict_many(
+    filt: Any, beliefs: Sequence[Any], dt: float, rng: np.random.Generator | None
+) -> list[Any]:
+    """``[filt.predict(b, dt, rng) for b in beliefs]``, batched when :func:`batches`."""
+    if len(beliefs) > 1 and batches(filt, beliefs):
+        return _split(filt.predict(_stack(beliefs), dt, rng))
+    return [filt.predict(b, dt, rng) for b in beliefs]
+
+
+def update_pairs(
+    filt: Any,
+    beliefs: Sequence[Any],
+    measurements: Sequence[Measurement],
+    rng: np.random.Generator | None,
+) -> list[tuple[Any, float]]:
+    """``filt.update_with_likelihood(beliefs[k], [measurements[k]], rng)`` for every ``k`` as
+    ``(posterior, log-likelihood)``. Batched when :func:`batches` and the measurements are
+    vectors of one sensor: their values stacked ``(K, m)``, their covariances too when any has
+    its own (the others take the sensor's ``R`` at the belief's mean)."""
+    same_sensor = len({m.sensor_id for m in measurements}) == 1
+    vectors = all(isinstance(m.value, np.ndarray) and m.value.ndim == 1 for m in measurements)
+    if len(beliefs) < 2 or not (same_sensor and vectors and batches(filt, beliefs)):
+        out = []
+        for b, m in zip(beliefs, measurements):
+            post, ll = filt.update_with_likelihood(b, [m], rng)
+            out.append((post, float(np.asarray(ll))))
+        return out
+    first = measurements[0]
+    cov = None
+    if any(m.covariance is not None for m in measurements):
+        sensor = filt.sensors[first.sensor_id]
+        cov = np.stack(
+            [
+                np.asarray(sensor.noise_cov(b.mean) if m.covariance is None else m.covariance)
+                for b, m in zip(beliefs, measurements)
+            ]
+        )
+    stacked = Measurement(
+        first.time, first.sensor_id, np.stack([m.value for m in measurements]), cov
+    )
+    post, ll = filt.update_with_likelihood(_stack(beliefs), [stacked], rng)
+    return list(zip(_split(post), np.asarray(ll, dtype=float).tolist()))

@@ -1,0 +1,50 @@
+"""One belief from a track's weighted single-measurement hypotheses (the PDA combination).
+
+Given hypotheses ``j = 0..M`` with probabilities ``beta_j`` (``j = 0``: missed, whose belief is
+the prediction) and their posteriors ``N(x_j, P_j)``, the Gaussian that matches the mixture's
+first two moments is (Bar-Shalom, Daum & Huang 2009, Eqs. 39-40; Bar-Shalom et al. 2001,
+Sec. 11.2.1)::
+
+    x = sum_j beta_j x_j
+    P = sum_j beta_j (P_j + (x_j - x)(x_j - x)^T)
+
+For a Kalman filter this is exactly the PDAF update ``P = beta_0 P^- + (1 - beta_0) P^+ + P~``
+with the spread of the innovations ``P~ = K (sum_j beta_j nu_j nu_j^T - nu nu^T) K^T``.
+
+Beliefs that are not :class:`~fusetrack.core.Gaussian` (particles, grids, model-conditioned
+beliefs) are not mixed: the track keeps the posterior of its most probable hypothesis (the
+first of equals). A particle filter may resample inside each update, so the hypotheses'
+particle sets need not share their states, and a mixture would multiply the particle count.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..core import ConfigError, Gaussian, invalid
+
+
+def combine_hypotheses(beliefs: Sequence[Any], probabilities: Sequence[float]) -> Any:
+    """The belief of a track from its hypotheses' ``beliefs`` and ``probabilities`` (module
+    docstring): the moment-matched Gaussian when all are Gaussian, else the most probable one.
+    The probabilities are normalised; they must be finite, ``>= 0`` and not all 0."""
+    p = np.asarray(probabilities, dtype=float)
+    if len(beliefs) != p.size or p.size == 0:
+        raise ConfigError(
+            invalid("probabilities", p.tolist(), f"{len(beliefs)} values, one per belief (>= 1)")
+        )
+    if not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
+        raise ConfigError(invalid("probabilities", p.tolist(), "finite values >= 0, not all 0"))
+    p = p / p.sum()
+    best = int(np.argmax(p))
+    if p[best] == 1.0 or not all(isinstance(b, Gaussian) for b in beliefs):
+        return beliefs[best]
+    means = np.stack([b.mean for b in beliefs])  # (J, d)
+    covs = np.stack([b.cov for b in beliefs])  # (J, d, d)
+    mean = np.einsum("j,jd->d", p, means)
+    spread = means - mean
+    cov = np.einsum("j,jde->de", p, covs) + np.einsum("j,jd,je->de", p, spread, spread)
+    return Gaussian(mean, 0.5 * (cov + cov.T))

@@ -1,0 +1,602 @@
+"""A multi-target tracker assembled from parts: a filter, sensors, an associator, an initiator and
+a deleter (the Stone Soup way), pure: ``state = tracker.step(state, time, measurements, rng)``.
+
+One scan (all the measurements of one time, from any sensors) goes through, per sensor that
+scanned (each sensor's measurements are associated on their own: a target gives at most one
+measurement per sensor, but may give one to each):
+
+1. every live track is predicted to the scan time (``filter.predict``), its existence with
+   ``P_S`` (:mod:`.existence`);
+2. the confirmed tracks are scored against the sensor's measurements with the tracks' own
+   filter (:func:`.scoring.score_scan`: ``log P_D p(z | track)`` behind a Mahalanobis gate) and
+   the associator turns the scores into weighted hypotheses (:class:`~fusetrack.association.
+   Associator`: any of them plugs in, hard or soft); each track's belief becomes the posterior
+   of a probability-1 hypothesis, the prediction when missed, or the PDA combination of several
+   (:mod:`.mixing`), and its existence is updated (IPDA);
+3. the tentative tracks are scored and associated the same way against what the confirmed ones
+   left, so a track that is not yet confirmed never steals a confirmed track's measurement;
+4. each measurement still left may start a tentative track (``initiator.birth``).
+
+For the Kalman family the predictions of all tracks, and the updates of all gated pairs of a
+sensor, are one batched filter call each (:mod:`.batch`).
+
+After the scan every track counts a hit or a miss; the initiator confirms or drops tentative
+tracks (M-of-N), the deleter ends confirmed ones. Everything lives in a :class:`TrackerState`.
+
+Example: two targets in a 100 m square, a position sensor, one false alarm per scan; tracks
+are confirmed when detected in 3 of their first 4 scans::
+
+    >>> import numpy as np
+    >>> from fusetrack.core import Gaussian, Measurement
+    >>> from fusetrack.filters import KalmanFilter
+    >>> from fusetrack.motion import ConstantVelocity
+    >>> from fusetrack.sensors import PositionFix
+    >>> from fusetrack.tracking import (InverseMeasurementPrior, MissedCountDeleter,
+    ...     MofNInitiator, MultiTargetTracker)
+    >>> tag = PositionFix("tag", cov=0.25 * np.eye(2))
+    >>> kf = KalmanFilter(ConstantVelocity(ndim=2, q=0.1), [tag])
+    >>> from fusetrack.association import Association, SingleHypothesis
+    >>> class Greedy:  # any Associator plugs in; this one: best pairs first, each used once
+    ...     def associate(self, scores, rng=None):
+    ...         gain = scores.log_likelihood - scores.log_clutter - scores.log_missed[:, None]
+    ...         hyp, taken = {}, set()
+    ...         for k, j in zip(*np.unravel_index(np.argsort(-gain, None), gain.shape)):
+    ...             i = scores.track_ids[k]
+    ...             if gain[k, j] > 0 and i not in hyp and j not in taken:
+    ...                 hyp[i] = (SingleHypothesis(i, int(j)),)
+    ...                 taken.add(int(j))
+    ...         rest = tuple(j for j in range(gain.shape[1]) if j not in taken)
+    ...         return Association(hyp, rest)  # tracks not in hyp: missed
+    >>> tracker = MultiTargetTracker(
+    ...     kf, [tag], Greedy(),
+    ...     initiator=MofNInitiator(3, 4, InverseMeasurementPrior(
+    ...         [tag], Gaussian(np.zeros(4), np.diag([0, 0, 25.0, 25.0])))),
+    ...     deleter=MissedCountDeleter(3), p_detect=0.9, clutter_density=1e-4)
+    >>> rng = np.random.default_rng(1)
+    >>> zs = []
+    >>> for k in range(10):
+    ...     for x0, v in (([0.0, 0.0], [5.0, 5.0]), ([0.0, 50.0], [5.0, -5.0])):
+    ...         zs.append(Measurement(k, "tag", np.add(x0, np.multiply(v, k)) + rng.normal(0, 0.5, 2)))
+    ...     zs.append(Measurement(k, "tag", rng.uniform(0, 100, 2)))  # a false alarm
+    >>> tracks = tracker.run(zs, rng)
+    >>> [(t.id, len(t)) for t in tracks]
+    [(0, 10), (1, 10)]
+    >>> np.round(tracks[0].means[-1, :2])
+    array([45., 45.])
+
+``tracks`` are :class:`~fusetrack.core.Track` values with their persistent ``id``, from the
+birth scan on (tentative scans included); tracks never confirmed are left out.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..association import Association, Associator, SingleHypothesis, hypotheses_of
+from ..core import (
+    ConfigError,
+    Gaussian,
+    Measurement,
+    MeasurementError,
+    SensorModel,
+    Track,
+    UnknownSensorError,
+    as_measurements,
+    group_by_time,
+    invalid,
+    order_by_time,
+)
+from ..filters import as_sensor_map, validate_measurement
+from .batch import predict_many
+from .deleters import Deleter
+from .existence import predict_existence, update_existence
+from .initiators import Initiator
+from .mixing import combine_hypotheses
+from .scoring import ScoredScan, score_scan
+from .state import LiveTrack, TrackerState
+
+TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
+
+
+def _in_range(name: str, value: object, lo: float, hi: float, valid: str = "") -> float:
+    """``float(value)`` if it is in ``(lo, hi]``, else :class:`ConfigError`."""
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        v = math.nan
+    if not lo < v <= hi:
+        raise ConfigError(invalid(name, value, valid or f"a number in ({lo:g}, {hi:g}]"))
+    return v
+
+
+def _per_sensor(
+    name: str, value: object, sensors: Collection[str], lo: float, hi: float
+) -> dict[str, float]:
+    """``value`` (one number or ``sensor_id -> number``) as a dict over ``sensors``, each in
+    ``(lo, hi]``, else :class:`ConfigError`."""
+    valid = f"a number in ({lo:g}, {hi:g}], or a mapping sensor_id -> such a number for {sorted(sensors)}"
+    if not isinstance(value, Mapping):
+        v = _in_range(name, value, lo, hi, valid)
+        return dict.fromkeys(sensors, v)
+    missing = sorted(set(sensors) - set(value))
+    if missing:
+        raise ConfigError(invalid(name, dict(value), valid + f" (missing {missing})"))
+    return {s: _in_range(f"{name}[{s!r}]", value[s], lo, hi, valid) for s in sensors}
+
+
+def _require(obj: Any, name: str, methods: Sequence[str], what: str) -> None:
+    missing = [m for m in methods if not callable(getattr(obj, m, None))]
+    if missing:
+        raise ConfigError(invalid(name, obj, f"{what} (missing {', '.join(missing)})"))
+
+
+def _check_association(associator: Any, association: Association, n: int) -> None:
+    """Raise :class:`ConfigError` when an associator's answer names measurements outside the
+    scan or gives a negative or non-finite probability."""
+    indices = [h.measurement for hs in association.hypotheses.values() for h in hs]
+    indices += list(association.unassociated)
+    bad = [k for k in indices if k is not None and not 0 <= k < n]
+    probs = [h.probability for hs in association.hypotheses.values() for h in hs]
+    if bad or not all(math.isfinite(p) and p >= 0 for p in probs):
+        raise ConfigError(
+            invalid(
+                "associator",
+                associator,
+                f"an Association with measurement indices in [0, {n}) and probabilities >= 0"
+                f" (got indices {bad}, probabilities {probs})",
+            )
+        )
+
+
+@dataclass
+class _ScanRecord:
+    """What one scan did to one track: whether it was detected, with which measurements."""
+
+    detected: bool = False
+    used: list[tuple[int, float]] = field(default_factory=list)
+
+
+class MultiTargetTracker:
+    """A multi-target tracker (module docstring), pure: it holds only its parts.
+
+    Parameters
+    ----------
+    filter:
+        a :class:`~fusetrack.core.LikelihoodFilter` (``predict``, ``update``,
+        ``update_with_likelihood``) for one target; every track runs it on its own belief.
+    sensors:
+        the sensor models by ``sensor_id`` (mapping or sequence); None: the filter's own
+        ``filter.sensors``. Each measurement is gated with its own sensor.
+    associator:
+        any :class:`~fusetrack.association.Associator` (``associate(scores, rng)``).
+    initiator:
+        an :class:`~fusetrack.tracking.Initiator` (:class:`MofNInitiator`, ...).
+    deleter:
+        a :class:`~fusetrack.tracking.Deleter` (:class:`MissedCountDeleter`, :class:`AnyOf`, ...).
+    p_detect:
+        ``P_D`` in ``(0, 1]``, one for all sensors or ``sensor_id -> P_D``.
+    clutter_density:
+        false alarms per scan per unit measurement volume (``lambda c(z)``, > 0), one number or
+        ``sensor_id -> density`` (sensors measure in different units).
+    gate_probability:
+        ``P_G`` in ``(0, 1]``: the gate holds this fraction of a track's measurements (1: no gate).
+    survival_probability:
+        ``P_S`` in ``(0, 1]``: a target's probability of surviving from one scan to the next,
+        for the existence probability only.
+    """
+
+    def __init__(
+        self,
+        filter: Any,
+        sensors: Mapping[str, SensorModel] | Sequence[SensorModel] | None,
+        associator: Associator,
+        initiator: Initiator,
+        deleter: Deleter,
+        p_detect: float | Mapping[str, float],
+        clutter_density: float | Mapping[str, float],
+        gate_probability: float = 0.99,
+        *,
+        survival_probability: float = 0.99,
+    ) -> None:
+        _require(
+            filter, "filter", ("predict", "update", "update_with_likelihood"), "a LikelihoodFilter"
+        )
+        _require(associator, "associator", ("associate",), "an Associator")
+        _require(initiator, "initiator", ("birth", "status"), "an Initiator")
+        _require(deleter, "deleter", ("should_delete",), "a Deleter")
+        if sensors is None:
+            sensors = getattr(filter, "sensors", None)
+            if not isinstance(sensors, Mapping):
+                raise ConfigError(
+                    invalid("sensors", None, "sensor models (the filter has no sensors map)")
+                )
+        self.sensors = as_sensor_map(sensors)
+        if not self.sensors:
+            raise ConfigError(invalid("sensors", sensors, "at least one sensor model"))
+        own = getattr(filter, "sensors", None)
+        if isinstance(own, Mapping) and set(self.sensors) - set(own):
+            raise ConfigError(
+                invalid(
+                    "sensors", sorted(self.sensors), f"sensors the filter knows ({sorted(own)})"
+                )
+            )
+        self.filter = filter
+        self.associator = associator
+        self.initiator = initiator
+        self.deleter = deleter
+        self.p_detect = _per_sensor("p_detect", p_detect, self.sensors, 0.0, 1.0)
+        self.clutter_density = _per_sensor(
+            "clutter_density", clutter_density, self.sensors, 0.0, math.inf
+        )
+        self.gate_probability = _in_range("gate_probability", gate_probability, 0.0, 1.0)
+        self.survival_probability = _in_range(
+            "survival_probability", survival_probability, 0.0, 1.0
+        )
+        self.birth_existence = _in_range(
+            "initiator.existence", getattr(initiator, "existence", None), 0.0, 1.0
+        )
+
+    def __repr__(self) -> str:
+        return (
+            f"MultiTargetTracker(filter={type(self.filter).__name__}, sensors={sorted(self.sensors)}, "
+            f"associator={self.associator!r}, initiator={self.initiator!r}, deleter={self.deleter!r})"
+        )
+
+    @staticmethod
+    def initial_state() -> TrackerState:
+        """No tracks, no scan yet."""
+        return TrackerState()
+
+    # -- one scan ------------------------------------------------------------------------------
+
+    def _check_measurements(self, measurements: Iterable[Measurement]) -> None:
+        """Unknown sensors, wrong sizes and batched values raise :class:`MeasurementError`."""
+        for m in measurements:
+            if not isinstance(m, Measurement):
+                raise MeasurementError(invalid("measurements", m, "Measurement objects"))
+            validate_measurement(m, self.sensors)
+            if isinstance(m.value, np.ndarray) and m.value.ndim != 1:
+                raise MeasurementError(
+                    invalid(
+                        f"value.shape (sensor {m.sensor_id!r}, time={m.time})",
+                        m.value.shape,
+                        "(m,): one report (the tracker takes no batched Monte Carlo runs)",
+                    )
+                )
+
+    def _check_scan(
+        self,
+        state: TrackerState,
+        time: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None,
+        scanned: Collection[str] | None = None,
+    ) -> float:
+        """Raise before any work when the scan cannot be processed; return the time as float."""
+        try:
+            t = float(time)
+        except (TypeError, ValueError):
+            raise MeasurementError(invalid("time", time, "a finite number (seconds)")) from None
+        if not math.isfinite(t) or (state.time is not None and t < state.time - TIME_TOLERANCE):
+            raise MeasurementError(
+                invalid("time", time, f"a finite time >= the last scan's time {state.time}")
+            )
+        self._check_measurements(measurements)
+        for sid in scanned or ():
+            if sid not in self.sensors:
+                raise UnknownSensorError(
+                    invalid("scanned", sid, f"one of the sensors {sorted(self.sensors)}")
+                )
+        if rng is None and callable(getattr(self.filter, "initialize", None)):
+            raise ConfigError(
+                invalid("rng", rng, f"a numpy Generator: {type(self.filter).__name__} draws")
+            )
+        return t
+
+    def step(
+        self,
+        state: TrackerState,
+        time: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+        *,
+        scanned: Collection[str] | None = None,
+    ) -> TrackerState:
+        """The state after the scan at ``time`` with ``measurements`` (module docstring).
+
+        ``scanned``: the sensors that looked in this scan, default all (a sensor that looked
+        and reported nothing misses every track). Sensors with measurements always count; they
+        are processed in the order of their first measurement, then the silent ones.
+        Measurements with NaN or infinite values are left out. Raises before any work on an
+        unknown sensor, a value of the wrong size, or a time before the last scan's.
+        """
+        t = self._check_scan(state, time, measurements, rng, scanned)
+        tracks = {tr.id: tr for tr in self._predict(state.tracks, t, rng)}
+        records = {i: _ScanRecord() for i in tracks}
+        next_id = state.next_id
+        for sid in self._scan_order(measurements, scanned):
+            cols = [j for j, m in enumerate(measurements) if m.sensor_id == sid and m.is_finite]
+            for confirmed in (True, False):
+                ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
+                cols = self._associate(tracks, records, ids, measurements, cols, sid, rng)
+            for j in cols:
+                born = self._birth(next_id, t, measurements[j], rng)
+                if born is not None:
+                    tracks[next_id] = born
+                    records[next_id] = _ScanRecord(True, [(j, 1.0)])
+                    next_id += 1
+        survivors = []
+        for i, tr in tracks.items():
+            tr = self._count(tr, records[i], t, newborn=i >= state.next_id)
+            if not tr.confirmed:
+                status = self.initiator.status(tr)
+                if status == "dropped":
+                    continue
+                tr = replace(tr, confirmed=status == "confirmed")
+            if tr.confirmed and self.deleter.should_delete(tr):
+                continue
+            survivors.append(tr)
+        return TrackerState(tuple(survivors), t, next_id)
+
+    def _scan_order(
+        self, measurements: Sequence[Measurement], scanned: Collection[str] | None
+    ) -> list[str]:
+        """The sensors of the scan: those with measurements (in order of first appearance), then
+        the others that looked."""
+        order = list(dict.fromkeys(m.sensor_id for m in measurements))
+        rest = self.sensors if scanned is None else scanned
+        return order + [s for s in self.sensors if s in rest and s not in order]
+
+    def _predict(
+        self, tracks: Sequence[LiveTrack], time: float, rng: np.random.Generator | None
+    ) -> list[LiveTrack]:
+        """The tracks predicted to ``time`` (those of one time in one batched call, :mod:`.batch`),
+        their existence with ``P_S``."""
+        out = list(tracks)
+        due: dict[float, list[int]] = {}
+        for k, tr in enumerate(tracks):
+            if time - tr.time > TIME_TOLERANCE:
+                due.setdefault(tr.time, []).append(k)
+        for t0, ks in due.items():
+            beliefs = predict_many(self.filter, [tracks[k].belief for k in ks], time - t0, rng)
+            for k, belief in zip(ks, beliefs):
+                out[k] = replace(
+                    tracks[k],
+                    belief=belief,
+                    time=time,
+                    existence=predict_existence(tracks[k].existence, self.survival_probability),
+                )
+        return out
+
+    def _birth(
+        self, track_id: int, time: float, measurement: Measurement, rng: np.random.Generator | None
+    ) -> LiveTrack | None:
+        belief = self.initiator.birth(measurement)
+        if belief is None:
+            return None
+        initialize = getattr(self.filter, "initialize", None)
+        if isinstance(belief, Gaussian) and callable(initialize):
+            belief = initialize(belief, rng)
+        return LiveTrack(track_id, belief, time, time, time, existence=self.birth_existence)
+
+    def _associate(
+        self,
+        tracks: dict[int, LiveTrack],
+        records: dict[int, _ScanRecord],
+        ids: list[int],
+        measurements: Sequence[Measurement],
+        cols: list[int],
+        sensor_id: str,
+        rng: np.random.Generator | None,
+    ) -> list[int]:
+        """Associate the tracks ``ids`` with the measurements ``cols`` (all of ``sensor_id``),
+        update them in ``tracks`` and ``records``; return the columns left unassociated."""
+        if not ids:
+            return cols
+        p_d = self.p_detect[sensor_id]
+        predictions = [tracks[i].belief for i in ids]
+        chosen = [measurements[j] for j in cols]
+        scored = score_scan(
+            self.filter,
+            self.sensors,
+            ids,
+            predictions,
+            chosen,
+            p_detect=p_d,
+            clutter_density=self.clutter_density[sensor_id],
+            gate_probability=self.gate_probability,
+            rng=rng,
+        )
+        association = self.associator.associate(scored.scores, rng) if chosen else Association({})
+        _check_association(self.associator, association, len(chosen))
+        for row, i in enumerate(ids):
+            hyps = [h for h in hypotheses_of(association, i) if h.probability > 0]
+            hyps = hyps or [SingleHypothesis(i, None, 1.0)]  # no weight anywhere: missed
+            tracks[i] = self._apply(tracks[i], row, hyps, scored, chosen, p_d, rng)
+            total = sum(h.probability for h in hyps)
+            used = [
+                (cols[h.measurement], h.probability / total)
+                for h in hyps
+                if h.measurement is not None
+            ]
+            records[i].used.extend(used)
+            records[i].detected |= sum(p for _, p in used) >= 0.5
+        return [cols[k] for k in association.unassociated] if chosen else cols
+
+    def _apply(
+        self,
+        track: LiveTrack,
+        row: int,
+        hyps: Sequence[SingleHypothesis],
+        scored: ScoredScan,
+        chosen: Sequence[Measurement],
+        p_detect: float,
+        rng: np.random.Generator | None,
+    ) -> LiveTrack:
+        """The track (row ``row`` of the scores) after its hypotheses: the belief of each (the
+        prediction when missed) combined (:func:`.mixing.combine_hypotheses`), and its
+        existence updated with the likelihood ratios of their measurements (IPDA)."""
+        beliefs, log_ratios = [], []
+        for h in hyps:
+            k = h.measurement
+            if k is None:
+                beliefs.append(track.belief)
+                continue
+            post = scored.posteriors.get((row, k))
+            if post is None:  # the associator chose a pair outside the gate
+                post = self.filter.update(track.belief, [chosen[k]], rng)
+            beliefs.append(post)
+            log_ratios.append(
+                float(scored.scores.log_likelihood[row, k] - scored.scores.log_clutter[k])
+            )
+        return replace(
+            track,
+            belief=combine_hypotheses(beliefs, [h.probability for h in hyps]),
+            existence=update_existence(
+                track.existence, p_detect * self.gate_probability, log_ratios
+            ),
+        )
+
+    @staticmethod
+    def _count(track: LiveTrack, record: _ScanRecord, time: float, newborn: bool) -> LiveTrack:
+        """The track's hit and miss counts after the scan (a new track's birth is its first hit)."""
+        used = tuple(j for j, _ in record.used)
+        probabilities = tuple(p for _, p in record.used)
+        if newborn:
+            return replace(track, measurements=used, probabilities=probabilities)
+        if record.detected:
+            return replace(
+                track,
+                scans=track.scans + 1,
+                hits=track.hits + 1,
+                misses=0,
+                last_hit=time,
+                measurements=used,
+                probabilities=probabilities,
+            )
+        return replace(
+            track,
+            scans=track.scans + 1,
+            misses=track.misses + 1,
+            measurements=used,
+            probabilities=probabilities,
+        )
+
+    # -- a whole recording -----------------------------------------------------------------------
+
+    def run(
+        self,
+        measurements: Iterable[Measurement | tuple[Any, ...]],
+        rng: np.random.Generator | None = None,
+        *,
+        times: ArrayLike | None = None,
+        order: Literal["reject", "reorder"] = "reject",
+    ) -> list[Track]:
+        """Track over a whole recording: one scan per distinct measurement time (within 1e-9 s,
+        :func:`~fusetrack.core.group_by_time`) plus one empty scan at each of ``times`` where
+        no measurement falls (every sensor looked and saw nothing).
+
+        Returns the tracks that were ever confirmed, by id: ``times`` from the birth scan to the
+        last scan alive, ``means``/``covariances`` after each scan, and ``info`` with
+        ``"measurements"`` (per scan, the indices into ``measurements`` the track used),
+        ``"probabilities"`` (their association probabilities), ``"existence"`` ``(T,)``,
+        ``"confirmed"`` ``(T,)`` bool, and ``"deleted"`` (the time of the first scan without it,
+        or None when it was alive at the end).
+        """
+        ms = as_measurements(measurements)
+        if order not in ("reject", "reorder"):
+            raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
+        index = (
+            sorted(range(len(ms)), key=lambda k: ms[k].time)
+            if order == "reorder"
+            else range(len(ms))
+        )
+        ordered = order_by_time([ms[k] for k in index], "reject")
+        scans = self._scans(ordered, list(index), times)
+        state = self.initial_state()
+        self._check_measurements(ordered)  # before any work
+        history: dict[int, _History] = {}  # tracks alive, and ended ones that were confirmed
+        alive: set[int] = set()
+        for t, idx in scans:
+            state = self.step(state, t, [ms[k] for k in idx], rng)
+            for tr in state.tracks:
+                history.setdefault(tr.id, _History()).add(self.filter, tr, t, idx)
+            now = {tr.id for tr in state.tracks}
+            for i in alive - now:
+                if any(history[i].confirmed):
+                    history[i].deleted = t
+                else:  # a tentative track dropped: never reported
+                    del history[i]
+            alive = now
+        return [h.track(i) for i, h in sorted(history.items()) if any(h.confirmed)]
+
+    @staticmethod
+    def _scans(
+        ordered: list[Measurement], index: list[int], times: ArrayLike | None
+    ) -> list[tuple[float, list[int]]]:
+        """``(time, indices into the original measurements)`` per scan, with empty scans at ``times``."""
+        scans: list[tuple[float, list[int]]] = []
+        k = 0
+        for t, group in group_by_time(ordered, TIME_TOLERANCE):
+            scans.append((t, index[k : k + len(group)]))
+            k += len(group)
+        if times is not None:
+            extra = np.atleast_1d(np.asarray(times, dtype=float))
+            if extra.ndim != 1 or not np.all(np.isfinite(extra)):
+                raise ConfigError(
+                    invalid("times", times, "a 1-D sequence of finite times (seconds)")
+                )
+            have = np.array([t for t, _ in scans])
+            for t in np.unique(extra):
+                if not have.size or np.min(np.abs(have - t)) > TIME_TOLERANCE:
+                    scans.append((float(t), []))
+            scans.sort(key=lambda s: s[0])
+        return scans
+
+
+@dataclass
+class _History:
+    """One track's estimates scan by scan, gathered by :meth:`MultiTargetTracker.run`."""
+
+    times: list[float] = field(default_factory=list)
+    means: list[np.ndarray] = field(default_factory=list)
+    covs: list[np.ndarray] = field(default_factory=list)
+    used: list[tuple[int, ...]] = field(default_factory=list)
+    probabilities: list[tuple[float, ...]] = field(default_factory=list)
+    existence: list[float] = field(default_factory=list)
+    confirmed: list[bool] = field(default_factory=list)
+    deleted: float | None = None
+
+    def add(self, filt: Any, track: LiveTrack, time: float, scan_index: Sequence[int]) -> None:
+        estimate = getattr(filt, "estimate", None)
+        summary = estimate(track.belief) if callable(estimate) else track.belief
+        self.times.append(time)
+        self.means.append(np.asarray(summary.mean, float))
+        self.covs.append(np.asarray(summary.cov, float))
+        self.used.append(tuple(scan_index[j] for j in track.measurements))
+        self.probabilities.append(track.probabilities)
+        self.existence.append(track.existence)
+        self.confirmed.append(track.confirmed)
+
+    def track(self, track_id: int) -> Track:
+        info = {
+            "measurements": tuple(self.used),
+            "probabilities": tuple(self.probabilities),
+            "existence": np.array(self.existence),
+            "confirmed": np.array(self.confirmed),
+            "deleted": self.deleted,
+        }
+        return Track(
+            np.array(self.times),
+            np.stack(self.means),
+            np.stack(self.covs),
+            label=f"track {track_id}",
+            info=info,
+            id=track_id,
+        )
