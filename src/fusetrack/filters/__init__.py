@@ -65,7 +65,6 @@ from .particle_smoothing import backward_simulation as backward_simulation
 from .projected_planes import Direct3DFilter as Direct3DFilter
 from .projected_planes import PlanesBelief as PlanesBelief
 from .projected_planes import ProjectedPlanesTracker as ProjectedPlanesTracker
-from .projected_planes import SirBelief as SirBelief
 from .projected_planes import select_pairs as select_pairs
 from .runner import run_filter as run_filter
 from .sis import PriorProposal as PriorProposal

@@ -33,10 +33,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.beliefs import Particles
 from ..core.errors import ConfigError, ShapeError, invalid
 from ..core.measurement import Measurement
 from ..motion.accel_turn import AccelTurn
@@ -49,6 +51,7 @@ from ..sensors.doa_projection import (
     literal_second_plane,
     projected_variance,
 )
+from .particle import ParticleFilter
 from .weighting import draw_ancestors, particle_weights
 
 Array = np.ndarray
@@ -147,31 +150,6 @@ def fuse_planes(
             continue
         out[axis], out[axis + 3] = val
     return out
-
-
-@dataclass(frozen=True, eq=False)
-class SirBelief:
-    """Equal-weight particles ``(N, d)`` after a SIR step and what the step reported: ``mean``
-    the weighted mean before resampling (the estimate), ``log_weight_sum`` the log of the
-    unnormalised weight sum ``W``, ``degenerate`` whether every weight vanished."""
-
-    particles: Array
-    estimate: Array
-    log_weight_sum: float = float("nan")
-    degenerate: bool = False
-
-    @classmethod
-    def around(cls, x: Array, std: Array, n: int, rng: np.random.Generator) -> SirBelief:
-        parts = np.asarray(x, float) + std * rng.standard_normal((n, len(std)))
-        return cls(parts, parts.mean(axis=0))
-
-    @property
-    def mean(self) -> Array:
-        return self.estimate
-
-    @property
-    def cov(self) -> Array:
-        return np.atleast_2d(np.cov(self.particles, rowvar=False, bias=True))
 
 
 @dataclass(frozen=True, eq=False)
@@ -404,46 +382,32 @@ class Direct3DResult:
     degenerate_steps: int = 0
 
 
-@dataclass
-class Direct3DFilter:
+class Direct3DFilter(ParticleFilter):
     """The baseline: one SIR filter on ``[x, y, z, vx, vy, vz]`` with both angles (Lee 2009,
-    Sec. 2.2.2), a :class:`~fusetrack.core.models.Filter` over :class:`SirBelief` weighting with
-    :class:`DoaCone`. The particle loop is :func:`sir_update` (weight, estimate, systematic
-    resampling), kept here rather than on the shared particle engine so that the published
-    reproduction's random draws stay the same."""
+    Sec. 2.2.2): the shared particle engine (:class:`~.particle.ParticleFilter`) weighting by
+    :class:`DoaCone` (a likelihood-only sensor) and resampling (systematic) before every
+    prediction. A step is degenerate only when every weight vanished (``min_log_evidence``
+    is ``-inf``): it then keeps the predicted particles, as :func:`sir_update` does."""
 
-    sensor: DoaSensor3D
-    model: AccelTurn
-    n_particles: int = 1000
-    init_std: tuple[float, float] = (0.1, 0.05)
-
-    def initial_belief(self, x0: ArrayLike, rng: np.random.Generator) -> SirBelief:
-        std = np.array([self.init_std[0]] * 3 + [self.init_std[1]] * 3)
-        return SirBelief.around(np.asarray(x0, float), std, self.n_particles, rng)
-
-    def predict(
-        self, belief: SirBelief, dt: float, rng: np.random.Generator | None = None
-    ) -> SirBelief:
-        gen = np.random.default_rng() if rng is None else rng
-        parts = self.model.sample(belief.particles, dt, gen)
-        return SirBelief(parts, parts.mean(axis=0))
-
-    def update(
+    def __init__(
         self,
-        belief: SirBelief,
-        measurements: Sequence[Measurement],
-        rng: np.random.Generator | None = None,
-    ) -> SirBelief:
-        """Weight by the sensor's measurement (:class:`DoaCone`) and resample."""
-        gen = np.random.default_rng() if rng is None else rng
-        for m in measurements:
-            if m.sensor_id != self.sensor.sensor_id:
-                continue
-            z = check_angles(m.value)
-            log_lik = DoaCone(self.sensor).log_likelihood(z, belief.particles)
-            parts, step = sir_update(belief.particles, log_lik, gen)
-            belief = SirBelief(parts, step.mean, step.log_weight_sum, step.degenerate)
-        return belief
+        sensor: DoaSensor3D,
+        model: AccelTurn,
+        n_particles: int = 1000,
+        init_std: tuple[float, float] = (0.1, 0.05),
+    ) -> None:
+        cone: Any = DoaCone(sensor)
+        super().__init__(
+            model, {sensor.sensor_id: cone}, n_particles, ess_threshold=1.0,
+            min_log_evidence=-np.inf,
+        )  # fmt: skip
+        self.sensor, self.model, self.init_std = sensor, model, init_std
+
+    def initial_belief(self, x0: ArrayLike, rng: np.random.Generator) -> Particles:
+        """``N`` equally weighted particles around ``x0`` (``init_std``: position, velocity)."""
+        std = np.array([self.init_std[0]] * 3 + [self.init_std[1]] * 3)
+        states = np.asarray(x0, float) + std * rng.standard_normal((self.n_particles, 6))
+        return self._particles(states, self._uniform(1, self.n_particles))
 
     def run(
         self, measurements: Array, dt: float, x0: Array, rng: np.random.Generator
@@ -456,12 +420,15 @@ class Direct3DFilter:
             raise ShapeError(invalid("measurements.shape", z_all.shape, "(T, 2) or (T, K, 2)"))
         belief = self.initial_belief(x0, rng)
         out = Direct3DResult(np.zeros((len(z_all), 6)), np.zeros(len(z_all)))
+        log_n = np.log(self.n_particles)
         for n, z in enumerate(z_all):
             check_angles(z)
             if n > 0:
                 belief = self.predict(belief, dt, rng)
-            belief = self.update(belief, [Measurement(n * dt, self.sensor.sensor_id, z)], rng)
-            out.estimates[n] = belief.estimate
-            out.log_weight_sums[n] = belief.log_weight_sum
-            out.degenerate_steps += belief.degenerate
+            before = self.stats.degenerate_steps
+            measurement = Measurement(n * dt, self.sensor.sensor_id, z)
+            belief, increment = self.update_with_likelihood(belief, [measurement], rng)
+            out.estimates[n] = self.mean(belief)
+            out.log_weight_sums[n] = float(increment) + log_n  # log W of the unnormalised weights
+            out.degenerate_steps += self.stats.degenerate_steps - before
         return out
