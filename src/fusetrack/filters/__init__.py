@@ -44,13 +44,12 @@ from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
 from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
-from .multi_model_kernel import kernel_bank as kernel_bank
-from .multi_model_kernel import predict_weigh_kernel as predict_weigh_kernel
 from .multi_model_pf import MultiModelBearingPF as MultiModelBearingPF
 from .multi_model_pf import MultiModelBelief as MultiModelBelief
 from .multi_model_pf import resample_l as resample_l
 from .multi_model_pf import reset_to_fix as reset_to_fix
 from .multi_model_pf import turn_models as turn_models
+from .multi_model_pf import weigh_every_model as weigh_every_model
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter
 from .multiple_model import PaddedModel as PaddedModel
 from .multiple_model import RegimeState as RegimeState

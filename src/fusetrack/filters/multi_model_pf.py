@@ -132,6 +132,44 @@ def bearings_of(measurements: Sequence[Measurement]) -> Array:
     return z
 
 
+def weigh_every_model(
+    filt: MultiModelBearingPF, parts: Array, z: Array, dt: float, rng: np.random.Generator
+) -> tuple[Array, Array, Array, int]:
+    """Predict through every model and weigh against every bearing, for ``B x O`` independent
+    filters at once (Eqs. 3.3-3.6, the consistent estimator): ``parts (B, O, L, 4)`` equally
+    weighted, ``z (B, nz)`` each run's bearings. Returns the predictions ``(B, O, J, L, 4)``,
+    their normalised weights summed over the bearings ``(B, O, J, L)``, the estimates
+    ``(B, O, 4)`` and the number of degenerate filters (weights kept equal). Engine "numba"
+    fuses it all in one kernel when it implements the bank; "numpy" is the reference (same
+    draws, results equal to rounding)."""
+    B, O, L = parts.shape[:3]
+    J = len(filt.models)
+    alphas = kernel_bank(filt.models)
+    if filt.engine == "numba" and alphas is not None:
+        sigma_a = float(filt.models[0].sigma_a)
+        shape = (J, B, O, L, 2)  # the draw of propagate_every_model
+        eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
+        pred = np.empty((B, O, J, L, 4))
+        w_ml = np.empty((B, O, J, L))
+        est = np.empty((B, O, 4))
+        degenerate = predict_weigh_kernel(
+            parts, eta, alphas, dt, np.asarray(filt.sensor_position, float), z,
+            1.0 / filt.sigma**2, pred, w_ml, est,
+        )  # fmt: skip
+        return pred, w_ml, est, int(degenerate)
+    pred = np.moveaxis(filt.propagate_every_model(parts, dt, rng), 0, 2)  # (B, O, J, L, 4)
+    r = filt.bearing(pred)[..., None] - z[:, None, None, None, :]  # Eqs. 3.4-3.5
+    wrap_angle_inplace(r)
+    logw = -0.5 * (1.0 / filt.sigma**2) * r * r
+    top = logw.max(axis=(2, 3, 4), keepdims=True)
+    w_ml = np.exp(logw - top).sum(axis=-1)  # Eq. 3.6, summed over the bearings
+    total = w_ml.sum(axis=(2, 3), keepdims=True)
+    bad = ~(np.isfinite(top[..., 0]) & (total > 0))
+    w_ml = np.where(bad, 1.0, w_ml) / np.where(bad, J * L, total)
+    est = np.einsum("bojl,bojld->bod", w_ml, pred)  # consistent estimator
+    return pred, w_ml, est, int(bad.sum())
+
+
 @dataclass(frozen=True)
 class MultiModelBearingPF:
     """Lee 2009's IMM-PF for one object, bearings from a sensor at ``sensor_position``.
@@ -222,16 +260,9 @@ class MultiModelBearingPF:
         ):
             return self.update(self.predict(belief, dt, rng), measurements, rng)
         J, L = len(alphas), len(belief.states)
-        sigma_a = float(self.models[0].sigma_a)
-        shape = (J, 1, 1, L, 2)  # the draw of propagate_every_model
-        eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
-        pred = np.empty((1, 1, J, L, 4))
-        w_ml = np.empty((1, 1, J, L))
-        est = np.empty((1, 1, 4))
-        deg = predict_weigh_kernel(
-            belief.states[None, None], eta, alphas, dt, np.asarray(self.sensor_position, float),
-            z.reshape(1, -1), 1.0 / self.sigma**2, pred, w_ml, est,
-        )  # fmt: skip
+        pred, w_ml, est, deg = weigh_every_model(
+            self, belief.states[None, None], z.reshape(1, -1), dt, rng
+        )
         w, p = w_ml[0, 0], pred[0, 0]
         p_m = w.sum(axis=1)
         means = np.einsum("jl,jld->jd", w, p) / np.where(p_m > 0, p_m, 1.0)[:, None]

@@ -27,14 +27,13 @@ from typing import Any
 
 import numpy as np
 
-from ..core import ConfigError, Measurement, invalid, wrap_angle_inplace
+from ..core import ConfigError, Measurement, invalid
 from ..filters import (
     MultiModelBearingPF,
     MultiModelBelief,
-    kernel_bank,
-    predict_weigh_kernel,
     resample_l,
     reset_to_fix,
+    weigh_every_model,
 )
 from ..sensors import merge_close, simulate_bearings, true_bearings
 
@@ -359,11 +358,6 @@ def run_periodic_batch(
     T, O = truth.shape[:2]
     B, L = len(periods), tracker.n_particles
     filt = tracker.build(sensor, sigma)
-    inv_var = 1.0 / filt.sigma**2
-    J = len(tracker.models)
-    alphas = kernel_bank(tracker.models)
-    sigma_a = float(tracker.models[0].sigma_a)
-    sensor_xy = np.asarray(sensor, float)
     v0 = truth[0, :, 2:] if tracker.known_initial_velocity else np.zeros((O, 2))
     fix = truth[0, :, :2] + tracker.sigma_r * rng.standard_normal((B, O, 2))
     mean = np.concatenate([fix, np.broadcast_to(v0, (B, O, 2))], axis=-1)
@@ -375,29 +369,8 @@ def run_periodic_batch(
     for k in range(1, T):
         b = merge_close(true_bearings(truth[k, :, :2], sensor)[all_audible], tracker.dz_critical)
         z = b + sigma * rng.standard_normal((B, len(b)))  # order is irrelevant to the filter
-        if tracker.engine == "numba" and alphas is not None:
-            shape = (J, B, O, L, 2)  # the reference's draw (none when sigma_a = 0)
-            eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
-            pred = np.empty((B, O, J, L, 4))
-            w_ml = np.empty((B, O, J, L))
-            est = np.empty((B, O, 4))
-            res.degenerate_steps += predict_weigh_kernel(
-                parts, eta, alphas, tracker.dt, sensor_xy, z, inv_var, pred, w_ml, est
-            )
-        else:
-            pred = np.moveaxis(
-                filt.propagate_every_model(parts, tracker.dt, rng), 0, 2
-            )  # (B, O, J, L, 4)  Eq. 3.3
-            r = filt.bearing(pred)[..., None] - z[:, None, None, None, :]  # Eqs. 3.4-3.5
-            wrap_angle_inplace(r)
-            logw = -0.5 * inv_var * r * r
-            top = logw.max(axis=(2, 3, 4), keepdims=True)
-            w_ml = np.exp(logw - top).sum(axis=-1)  # (B, O, J, L)  Eq. 3.6, over bearings
-            total = w_ml.sum(axis=(2, 3), keepdims=True)
-            bad = ~(np.isfinite(top[..., 0]) & (total > 0))
-            res.degenerate_steps += int(bad.sum())
-            w_ml = np.where(bad, 1.0, w_ml) / np.where(bad, J * L, total)
-            est = np.einsum("bojl,bojld->bod", w_ml, pred)  # consistent estimator
+        pred, w_ml, est, degenerate = weigh_every_model(filt, parts, z, tracker.dt, rng)
+        res.degenerate_steps += degenerate
         idx = resample_l(w_ml, L, rng)  # (B, O, L) indices into J*L
         flat = pred.reshape(B, O, -1, 4)
         parts = np.take_along_axis(flat, idx[..., None], axis=2)
