@@ -137,7 +137,7 @@ class Scenario:
     @classmethod
     def simulate(cls, targets: int, clutter: float, scans: int, seed: int) -> Scenario:
         rng = np.random.default_rng(seed)
-        F, Q, H, R = cv_model()
+        F, Q, H, _ = cv_model()
         LQ = np.linalg.cholesky(Q)
         x = np.zeros((targets, 4))
         x[:, [0, 2]] = rng.uniform(-START_HALF_SIDE, START_HALF_SIDE, (targets, 2))
@@ -307,9 +307,7 @@ class StoneSoupRun:
             prob_gate=P_GATE,
         )
         initiator = MultiMeasurementInitiator(
-            prior_state=GaussianState(
-                np.zeros((4, 1)), np.diag([0.0, PRIOR_SPEED_SIGMA**2] * 2)
-            ),
+            prior_state=GaussianState(np.zeros((4, 1)), np.diag([0.0, PRIOR_SPEED_SIGMA**2] * 2)),
             measurement_model=mm,
             deleter=UpdateTimeStepsDeleter(1),
             data_associator=GNNWith2DAssignment(hyp),
@@ -370,9 +368,9 @@ class StoneSoupRun:
         _, tracks = self.tracker.update_tracker(self.times[k], self.scans[k])  # type: ignore[attr-defined]
         if self.kind == "phd":
             return _extract_mixture(self.tracker.gaussian_mixture)  # type: ignore[attr-defined]
-        return np.array([np.asarray(t.state_vector, float).ravel()[[0, 2]] for t in tracks]).reshape(
-            -1, 2
-        )
+        return np.array(
+            [np.asarray(t.state_vector, float).ravel()[[0, 2]] for t in tracks]
+        ).reshape(-1, 2)
 
 
 RUNNERS: dict[str, Callable[[str, Scenario, int], FusetrackRun | StoneSoupRun]] = {
@@ -406,9 +404,7 @@ def run_once(
     return cpu / done, done, float(np.mean(dist)), float(np.mean(count))
 
 
-def measure(
-    kind: str, targets: int, clutter: float, args: argparse.Namespace
-) -> dict[str, object]:
+def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -> dict[str, object]:
     warm = Scenario.simulate(targets, clutter, 3, 12345)
     for lib in args.libs:
         run_once(lib, kind, warm, 12345, 3, np.inf)
@@ -455,7 +451,9 @@ def _row(res: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--trackers", nargs="+", default=["gnn", "jpda", "phd"], choices=["gnn", "jpda", "phd"])
+    ap.add_argument(
+        "--trackers", nargs="+", default=["gnn", "jpda", "phd"], choices=["gnn", "jpda", "phd"]
+    )
     ap.add_argument("--targets", nargs="+", type=int, default=[10, 50])
     ap.add_argument("--clutter", nargs="+", type=float, default=[10.0])
     ap.add_argument("--scans", type=int, default=100)
@@ -464,8 +462,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=float, default=np.inf, help="CPU seconds per library run")
     ap.add_argument("--json", action="store_true", help="one JSON object per configuration")
     args = ap.parse_args(argv)
-    if min(args.targets) < 1 or args.scans < 1 or args.seeds < 1 or min(args.clutter) < 0:
-        ap.error("--targets, --scans and --seeds must be >= 1, --clutter >= 0")
+    if min(args.targets) < 1 or args.scans < 1 or args.seeds < 1 or min(args.clutter) <= 0:
+        ap.error("--targets, --scans and --seeds must be >= 1, --clutter > 0")
     if not args.json:
         print(
             f"{args.scans} scans, {args.seeds} seeds, CPU time per scan (process_time), BLAS 1 "
