@@ -62,14 +62,18 @@ divided by their number; building measurement and detection objects is outside t
 alternate between the libraries seed by seed. BLAS is limited to one thread. A 3-scan warm-up
 run of each (library, tracker) comes first, untimed. ``--budget S``: a library's run stops
 after the scan at which its CPU time passed ``S`` seconds (its ``scans`` in the output says how
-many it measured; its GOSPA is then over those scans only).
+many it measured), and every figure of the configuration (both libraries' times and GOSPAs) is
+then over the first scans that every run measured. A scan that alone would pass the budget is
+cut off by a CPU-time alarm (``SIGPROF``): ``cut_by_budget`` is then true for that library and
+its time per scan is a lower bound (its GOSPA over the cut scan is NaN).
 
 ``--json`` prints one object per (tracker, targets, clutter) on one line::
 
     {"tracker": "jpda", "targets": 50, "clutter": 10, "seeds": 10,
-     "scans": {"fusetrack": 100, "stonesoup": 100},
+     "scans": 100,
      "seconds_per_scan": {"fusetrack": ..., "stonesoup": ...}, "speedup": ...,
-     "gospa": {...}, "gospa_se": {...}, "estimates_per_scan": {...}, "load": ...}
+     "gospa": {...}, "gospa_se": {...}, "estimates_per_scan": {...},
+     "seconds_per_scan_own": {...}, "scans_own": {...}, "load": ...}
 """
 
 from __future__ import annotations
@@ -78,6 +82,7 @@ import argparse
 import datetime
 import json
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable
@@ -383,38 +388,71 @@ RUNNERS: dict[str, Callable[[str, Scenario, int], FusetrackRun | StoneSoupRun]] 
 # measuring
 
 
+class _OverBudget(Exception):
+    """Raised by the CPU-time alarm (``SIGPROF``) when a run passes its budget inside a scan."""
+
+
+def _raise_over_budget(signum: int, frame: object) -> None:
+    raise _OverBudget
+
+
 def run_once(
     lib: str, kind: str, scn: Scenario, seed: int, scans: int, budget: float
-) -> tuple[float, int, float, float]:
-    """CPU seconds per scan, scans run, mean GOSPA and mean number of estimates of one run."""
+) -> tuple[Array, bool]:
+    """``(3, n)``: per scan the CPU seconds, the GOSPA and the number of estimates, for the
+    ``n`` scans run (all, or up to the one at which the CPU time passed ``budget``); and
+    whether the last scan was cut off by the budget (its time is then a lower bound and its
+    GOSPA NaN)."""
     from fusetrack.evaluation import gospa
 
     runner = RUNNERS[lib](kind, scn, seed)
-    cpu, done, dist, count = 0.0, 0, [], []
-    for k in range(scans):
-        c0 = time.process_time()
-        est = runner.scan(k)
-        cpu += time.process_time() - c0
-        done += 1
-        truth = scn.truth[k][:, [0, 2]]
-        dist.append(gospa(est, truth, c=GOSPA_C, p=GOSPA_P, alpha=GOSPA_ALPHA).distance)
-        count.append(len(est))
-        if cpu > budget:
-            break
-    return cpu / done, done, float(np.mean(dist)), float(np.mean(count))
+    rows: list[tuple[float, float, float]] = []
+    cpu, cut = 0.0, False
+    old = signal.signal(signal.SIGPROF, _raise_over_budget)
+    try:
+        for k in range(scans):
+            if np.isfinite(budget):  # a CPU-time alarm for what is left of the budget
+                signal.setitimer(signal.ITIMER_PROF, max(budget - cpu, 1e-3))
+            c0 = time.process_time()
+            try:
+                est = runner.scan(k)
+            except _OverBudget:
+                rows.append((time.process_time() - c0, np.nan, np.nan))
+                cut = True
+                break
+            finally:
+                signal.setitimer(signal.ITIMER_PROF, 0.0)
+            dt = time.process_time() - c0
+            cpu += dt
+            truth = scn.truth[k][:, [0, 2]]
+            g = gospa(est, truth, c=GOSPA_C, p=GOSPA_P, alpha=GOSPA_ALPHA).distance
+            rows.append((dt, g, len(est)))
+            if cpu > budget:
+                break
+    finally:
+        signal.signal(signal.SIGPROF, old)
+    return np.array(rows, dtype=float).T, cut
 
 
 def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -> dict[str, object]:
+    """One configuration over ``args.seeds`` seeds. Every figure is over the first ``n`` scans
+    of each run, ``n`` the fewest any run of any library measured (all of them without
+    ``--budget``), so both libraries are timed and scored on the same scans;
+    ``seconds_per_scan_own`` is each library's time over all the scans it ran."""
     warm = Scenario.simulate(targets, clutter, 3, 12345)
     for lib in args.libs:
         run_once(lib, kind, warm, 12345, 3, np.inf)
-    per: dict[str, list[tuple[float, int, float, float]]] = {lib: [] for lib in args.libs}
+    per: dict[str, list[Array]] = {lib: [] for lib in args.libs}
+    cut: dict[str, bool] = dict.fromkeys(args.libs, False)
     for seed in range(args.seeds):
         scn = Scenario.simulate(targets, clutter, args.scans, seed)
         for lib in args.libs:
-            per[lib].append(run_once(lib, kind, scn, seed, args.scans, args.budget))
-    sec = {lib: float(np.mean([r[0] for r in rs])) for lib, rs in per.items()}
-    g = {lib: np.array([r[2] for r in rs]) for lib, rs in per.items()}
+            rows, was_cut = run_once(lib, kind, scn, seed, args.scans, args.budget)
+            per[lib].append(rows)
+            cut[lib] |= was_cut
+    n = min(r.shape[1] for rs in per.values() for r in rs)
+    sec = {lib: float(np.mean([r[0, :n].mean() for r in rs])) for lib, rs in per.items()}
+    g = {lib: np.array([r[1, :n].mean() for r in rs]) for lib, rs in per.items()}
     se = {
         lib: float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else float("nan")
         for lib, v in g.items()
@@ -424,11 +462,18 @@ def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -
         "targets": targets,
         "clutter": clutter,
         "seeds": args.seeds,
-        "scans": {lib: int(np.min([r[1] for r in rs])) for lib, rs in per.items()},
+        "scans": n,
         "seconds_per_scan": sec,
         "gospa": {lib: float(v.mean()) for lib, v in g.items()},
         "gospa_se": se,
-        "estimates_per_scan": {lib: float(np.mean([r[3] for r in rs])) for lib, rs in per.items()},
+        "estimates_per_scan": {
+            lib: float(np.mean([r[2, :n].mean() for r in rs])) for lib, rs in per.items()
+        },
+        "seconds_per_scan_own": {
+            lib: float(np.mean([r[0].mean() for r in rs])) for lib, rs in per.items()
+        },
+        "scans_own": {lib: [int(r.shape[1]) for r in rs] for lib, rs in per.items()},
+        "cut_by_budget": cut,
         "load": os.getloadavg()[0],
     }
     if "fusetrack" in sec and "stonesoup" in sec:
@@ -438,10 +483,13 @@ def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -
 
 def _row(res: dict) -> str:
     sec, g, se = res["seconds_per_scan"], res["gospa"], res["gospa_se"]
-    parts = [f"{res['tracker']:>4} {res['targets']:>4} targets {res['clutter']:>5g} clutter:"]
+    parts = [
+        f"{res['tracker']:>4} {res['targets']:>4} targets {res['clutter']:>5g} clutter "
+        f"({res['scans']} scans):"
+    ]
     for lib in sec:
         parts.append(
-            f"{lib} {sec[lib] * 1e3:8.2f} ms/scan ({res['scans'][lib]} scans), "
+            f"{lib} {sec[lib] * 1e3:8.2f} ms/scan, "
             f"GOSPA {g[lib]:6.2f} +- {se[lib]:.2f}, {res['estimates_per_scan'][lib]:.1f} est;"
         )
     if "speedup" in res:
