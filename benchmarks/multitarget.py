@@ -60,7 +60,7 @@ scan's call (fusetrack ``tracker.step`` / ``predict`` + ``update`` + ``extract_s
 Soup ``tracker.update_tracker`` (+ the extraction for the PHD)), summed over the scans and
 divided by their number; building measurement and detection objects is outside the clock. Runs
 alternate between the libraries seed by seed. BLAS is limited to one thread. A 3-scan warm-up
-run of each (library, tracker) comes first, untimed. ``--budget S``: a library's run stops
+run of each (library, tracker) comes first, untimed (within the budget). ``--budget S``: a library's run stops
 after the scan at which its CPU time passed ``S`` seconds (its ``scans`` in the output says how
 many it measured), and every figure of the configuration (both libraries' times and GOSPAs) is
 then over the first scans that every run measured. A scan that alone would pass the budget is
@@ -441,7 +441,7 @@ def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -
     ``seconds_per_scan_own`` is each library's time over all the scans it ran."""
     warm = Scenario.simulate(targets, clutter, 3, 12345)
     for lib in args.libs:
-        run_once(lib, kind, warm, 12345, 3, np.inf)
+        run_once(lib, kind, warm, 12345, 3, args.budget)
     per: dict[str, list[Array]] = {lib: [] for lib in args.libs}
     cut: dict[str, bool] = dict.fromkeys(args.libs, False)
     for seed in range(args.seeds):
