@@ -10,8 +10,7 @@ from .initiators import (
     SinglePointInitiator,
 )
 from .mixing import combine_hypotheses
-from .scoring import ScoredScan, gate_threshold, mahalanobis_squared, score_scan
-from .state import LiveTrack, TrackerState
+from .state import LiveTrack, TrackerState, TrackerStats
 from .tracker import MultiTargetTracker
 
 __all__ = [
@@ -25,13 +24,10 @@ __all__ = [
     "MissedCountDeleter",
     "MofNInitiator",
     "MultiTargetTracker",
-    "ScoredScan",
     "SinglePointInitiator",
     "TrackerState",
+    "TrackerStats",
     "combine_hypotheses",
-    "gate_threshold",
-    "mahalanobis_squared",
     "predict_existence",
-    "score_scan",
     "update_existence",
 ]
