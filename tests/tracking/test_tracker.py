@@ -1,8 +1,8 @@
 """The multi-target tracker end to end: two targets in clutter, deletion, M-of-N confirmation,
 exact agreement with the single-target filter, two sensor kinds in one scan, bad input.
 
-The associator here is a tiny greedy nearest neighbour (best log-likelihood ratio first, each
-track and measurement used once), standing in for the real ones of ``fusetrack.association``.
+The associator here is :class:`~fusetrack.association.GlobalNearestNeighbour`; JPDA and the
+other associators are compared on a hand-worked crossing in ``test_associators.py``.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fusetrack.association import Association, SingleHypothesis
+from fusetrack.association import Association, GlobalNearestNeighbour, SingleHypothesis
 from fusetrack.core import (
     ConfigError,
     Gaussian,
@@ -40,27 +40,12 @@ POS = LinearGaussianSensor("pos", H=H_POS, R=SIGMA**2 * np.eye(2))
 WIDE = Gaussian(np.zeros(4), np.diag([0.0, 0.0, 9.0, 9.0]))  # velocity std 3 m/s
 
 
-class Greedy:
-    """Greedy nearest neighbour: pairs by decreasing ``l_ij - log kappa_j - log_missed_i``."""
-
-    def associate(self, scores, rng=None):
-        gain = scores.log_likelihood - scores.log_clutter - scores.log_missed[:, None]
-        hyp, taken = {}, set()
-        for k, j in zip(*np.unravel_index(np.argsort(-gain, axis=None), gain.shape)):
-            i = scores.track_ids[k]
-            if gain[k, j] > 0 and i not in hyp and int(j) not in taken:
-                hyp[i] = (SingleHypothesis(i, int(j)),)
-                taken.add(int(j))
-        hyp = {i: hyp.get(i, (SingleHypothesis(i, None),)) for i in scores.track_ids}
-        return Association(hyp, tuple(j for j in range(gain.shape[1]) if j not in taken))
-
-
 def tracker(initiator=None, deleter=None, p_detect=0.9, **kw):
     kf = kw.pop("filt", KalmanFilter(MOTION, [POS]))
     return MultiTargetTracker(
         kf,
         [POS],
-        Greedy(),
+        GlobalNearestNeighbour(),
         initiator or MofNInitiator(3, 4, InverseMeasurementPrior([POS], WIDE)),
         deleter or MissedCountDeleter(3),
         p_detect=p_detect,
@@ -252,7 +237,7 @@ def test_two_sensor_kinds_in_one_scan_are_both_used():
     tr = MultiTargetTracker(
         ekf,
         [tag, radar],
-        Greedy(),
+        GlobalNearestNeighbour(),
         SinglePointInitiator(prior_from),
         MissedCountDeleter(3),
         p_detect=1.0,
@@ -300,7 +285,7 @@ def test_bad_configuration_fails_before_any_work():
         MultiTargetTracker(
             KalmanFilter(MOTION, [POS]),
             [POS],
-            Greedy(),
+            GlobalNearestNeighbour(),
             MofNInitiator(1, 1, prior_from),
             MissedCountDeleter(1),
             0.9,
@@ -322,7 +307,7 @@ def test_bad_configuration_fails_before_any_work():
         MultiTargetTracker(
             KalmanFilter(MOTION, [POS]),
             [POS, PositionFix("tag", cov=np.eye(2))],
-            Greedy(),
+            GlobalNearestNeighbour(),
             MofNInitiator(1, 1, prior_from),
             MissedCountDeleter(1),
             0.9,
@@ -434,7 +419,7 @@ def test_only_the_sensors_that_scanned_count_a_miss():
     tr = MultiTargetTracker(
         kf,
         [POS, tag],
-        Greedy(),
+        GlobalNearestNeighbour(),
         SinglePointInitiator(InverseMeasurementPrior([POS], WIDE)),
         MissedCountDeleter(2),
         p_detect=0.9,

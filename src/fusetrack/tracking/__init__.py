@@ -9,6 +9,7 @@ from .initiators import (
     MofNInitiator,
     SinglePointInitiator,
 )
+from .mht_tracker import MHTTracker, MHTTrackerState
 from .mixing import combine_hypotheses
 from .state import LiveTrack, TrackerState, TrackerStats
 from .tracker import MultiTargetTracker
@@ -21,6 +22,8 @@ __all__ = [
     "Initiator",
     "InverseMeasurementPrior",
     "LiveTrack",
+    "MHTTracker",
+    "MHTTrackerState",
     "MissedCountDeleter",
     "MofNInitiator",
     "MultiTargetTracker",

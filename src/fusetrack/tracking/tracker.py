@@ -36,20 +36,9 @@ are confirmed when detected in 3 of their first 4 scans::
     ...     MofNInitiator, MultiTargetTracker)
     >>> tag = PositionFix("tag", cov=0.25 * np.eye(2))
     >>> kf = KalmanFilter(ConstantVelocity(ndim=2, q=0.1), [tag])
-    >>> from fusetrack.association import Association, SingleHypothesis
-    >>> class Greedy:  # any Associator plugs in; this one: best pairs first, each used once
-    ...     def associate(self, scores, rng=None):
-    ...         gain = scores.log_likelihood - scores.log_clutter - scores.log_missed[:, None]
-    ...         hyp, taken = {}, set()
-    ...         for k, j in zip(*np.unravel_index(np.argsort(-gain, None), gain.shape)):
-    ...             i = scores.track_ids[k]
-    ...             if gain[k, j] > 0 and i not in hyp and j not in taken:
-    ...                 hyp[i] = (SingleHypothesis(i, int(j)),)
-    ...                 taken.add(int(j))
-    ...         rest = tuple(j for j in range(gain.shape[1]) if j not in taken)
-    ...         return Association(hyp, rest)  # tracks not in hyp: missed
+    >>> from fusetrack.association import GlobalNearestNeighbour
     >>> tracker = MultiTargetTracker(
-    ...     kf, [tag], Greedy(),
+    ...     kf, [tag], GlobalNearestNeighbour(),
     ...     initiator=MofNInitiator(3, 4, InverseMeasurementPrior(
     ...         [tag], Gaussian(np.zeros(4), np.diag([0, 0, 25.0, 25.0])))),
     ...     deleter=MissedCountDeleter(3), p_detect=0.9, clutter_density=1e-4)
@@ -84,6 +73,7 @@ from ..association import (
     Associator,
     ScanLikelihoods,
     SingleHypothesis,
+    TrackOrientedMHT,
     hypotheses_of,
     predict_many,
     scan_likelihoods,
@@ -216,6 +206,8 @@ class MultiTargetTracker:
         and counted in ``state.stats.skipped_unknown_sensor`` (a live feed with other sensors).
     """
 
+    _leaf_hypotheses = False  # True in MHTTracker: the associator's rows are hypothesis leaves
+
     def __init__(
         self,
         filter: Any,
@@ -234,6 +226,15 @@ class MultiTargetTracker:
             filter, "filter", ("predict", "update", "update_with_likelihood"), "a LikelihoodFilter"
         )
         _require(associator, "associator", ("associate",), "an Associator")
+        if isinstance(associator, TrackOrientedMHT) and not self._leaf_hypotheses:
+            raise ConfigError(
+                invalid(
+                    "associator",
+                    associator,
+                    "a single-scan associator: a TrackOrientedMHT needs a belief per hypothesis"
+                    " leaf, use MHTTracker",
+                )
+            )
         _require(initiator, "initiator", ("birth", "status"), "an Initiator")
         _require(deleter, "deleter", ("should_delete",), "a Deleter")
         if sensors is None:
