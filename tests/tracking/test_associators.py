@@ -51,11 +51,11 @@ MOTION = ConstantVelocity(ndim=2, q=0.001)
 WIDE = Gaussian(np.zeros(4), np.diag([0.0, 0.0, 9.0, 9.0]))
 
 
-def A(k):  # noqa: N802 - the target's name
+def A(k):
     return np.array([k, k], float)
 
 
-def B(k):  # noqa: N802
+def B(k):
     return np.array([1.0 - k, k])
 
 

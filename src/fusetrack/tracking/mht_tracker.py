@@ -44,7 +44,7 @@ class MHTTrackerState(TrackerState):
     by leaf id, families by track id) and ``leaf_beliefs``: leaf id -> the filter's belief at
     ``time`` conditioned on that leaf's association history."""
 
-    hypotheses: MHTState = MHTState()
+    hypotheses: MHTState = field(default_factory=MHTState)
     leaf_beliefs: Mapping[int, Any] = field(default_factory=dict)
 
 
