@@ -9,6 +9,7 @@ from .initiators import (
     MofNInitiator,
     SinglePointInitiator,
 )
+from .mcmcda_tracker import MCMCDATracker, MCMCDATrackerState
 from .mht_tracker import MHTTracker, MHTTrackerState
 from .mixing import combine_hypotheses
 from .state import LiveTrack, TrackerState, TrackerStats
@@ -22,6 +23,8 @@ __all__ = [
     "Initiator",
     "InverseMeasurementPrior",
     "LiveTrack",
+    "MCMCDATracker",
+    "MCMCDATrackerState",
     "MHTTracker",
     "MHTTrackerState",
     "MissedCountDeleter",
