@@ -12,6 +12,7 @@ from .initiators import (
 from .mcmcda_tracker import MCMCDATracker, MCMCDATrackerState
 from .mht_tracker import MHTTracker, MHTTrackerState
 from .mixing import combine_hypotheses
+from .phd_initiator import PHDBirthState, PHDInitiator
 from .state import LiveTrack, TrackerState, TrackerStats
 from .tracker import MultiTargetTracker
 
@@ -30,6 +31,8 @@ __all__ = [
     "MissedCountDeleter",
     "MofNInitiator",
     "MultiTargetTracker",
+    "PHDBirthState",
+    "PHDInitiator",
     "SinglePointInitiator",
     "TrackerState",
     "TrackerStats",

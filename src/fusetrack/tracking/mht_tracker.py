@@ -108,7 +108,7 @@ class MHTTracker(MultiTargetTracker):
             cols = [j for j in usable if measurements[j].sensor_id == sid]
             if scan.hypotheses.leaves:
                 cols = self._associate_leaves(scan, measurements, cols, sid, rng)
-            for tr, j in self._births(births, t, [measurements[j] for j in cols], rng):
+            for tr, j in self._births(births, t, sid, [measurements[j] for j in cols], rng):
                 scan.families[tr.id] = tr
                 scan.records[tr.id] = _ScanRecord(True, [] if j is None else [(cols[j], 1.0)])
                 scan.hypotheses, leaf = scan.hypotheses.add_track(tr.id)

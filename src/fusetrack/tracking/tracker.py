@@ -401,7 +401,7 @@ class MultiTargetTracker:
             for confirmed in (True, False):
                 ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
                 cols = self._associate(tracks, records, ids, measurements, cols, sid, rng)
-            for tr, j in self._births(births, t, [measurements[j] for j in cols], rng):
+            for tr, j in self._births(births, t, sid, [measurements[j] for j in cols], rng):
                 tracks[tr.id] = tr
                 records[tr.id] = _ScanRecord(True, [] if j is None else [(cols[j], 1.0)])
         stats = stats.add(births=births.next_id - state.next_id)
@@ -461,18 +461,19 @@ class MultiTargetTracker:
         self,
         births: _Births,
         time: float,
+        sensor_id: str,
         leftover: Sequence[Measurement],
         rng: np.random.Generator | None,
     ) -> list[tuple[LiveTrack, int | None]]:
         """New tentative tracks from one sensor's ``leftover`` measurements, with the index of
         the measurement each used (None: none in particular); ``births`` advances. A
-        scan-level initiator (with ``births(state, time, measurements, rng)``, e.g.
+        scan-level initiator (with ``births(state, time, sensor_id, measurements, rng)``, e.g.
         :class:`~fusetrack.tracking.PHDInitiator`) sees them all at once, any other each
         alone (``initiator.birth(measurement)``)."""
         scan_level = getattr(self.initiator, "births", None)
         if callable(scan_level):
             births.initiator_state, started = scan_level(
-                births.initiator_state, time, leftover, rng
+                births.initiator_state, time, sensor_id, leftover, rng
             )
         else:
             started = [(self.initiator.birth(m), j) for j, m in enumerate(leftover)]
