@@ -382,7 +382,8 @@ def test_a_soft_associator_gives_the_pda_combination_and_the_ipda_existence():
     state = tr.step(tr.initial_state(), 0.0, [Measurement(0.0, "pos", [0.0, 0.0])])
     zs = [Measurement(1.0, "pos", v) for v in ([0.3, -0.2], [-0.8, 0.9], [40.0, 40.0])]
     after = tr.step(state, 1.0, zs)
-    (track,) = after.tracks
+    track, newborn = after.tracks
+    assert newborn.measurements == (2,)  # in no gate: never offered to the associator
     pred = tr.filter.predict(state.tracks[0].belief, 1.0)
     posts, lls = zip(*(tr.filter.update_with_likelihood(pred, [z]) for z in zs[:2]))
     ratios = 0.9 * np.exp(np.array(lls, dtype=float)) / 0.01

@@ -47,10 +47,12 @@ from .state import LiveTrack
 @dataclass(frozen=True, eq=False)
 class PHDBirthState:
     """The intensity of the targets no track explains yet, at ``time`` (None before the first
-    scan)."""
+    scan), and ``saturated``: how many sensor scans had more leftovers than the initiator's
+    ``max_measurements`` (they started nothing)."""
 
     intensity: PhdIntensity
     time: float | None = None
+    saturated: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +65,10 @@ class PHDInitiator:
     ignored). ``threshold``: the weight above which a component becomes a track (Vo & Ma's
     extraction threshold 0.5). ``m``, ``n``: a tentative track is confirmed when detected in
     ``m`` of its first ``n`` scans. ``existence``: a new track's existence probability.
+    ``max_measurements``: a sensor scan with more leftovers than this (a flood of false alarms)
+    updates the intensity as if the sensor saw nothing and starts no track, counted in
+    ``PHDBirthState.saturated`` (the GM-PHD update and its merging grow with the number of
+    detections times components: a flood would cost seconds).
     """
 
     phd: GMPHDFilter
@@ -70,6 +76,7 @@ class PHDInitiator:
     m: int = 2
     n: int = 3
     existence: float = 0.5
+    max_measurements: int = 500
     _rule: MofNInitiator = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -78,6 +85,9 @@ class PHDInitiator:
         threshold = check_probability("threshold", self.threshold)
         if threshold == 0.0:
             raise ConfigError(invalid("threshold", self.threshold, "a weight in (0, 1]"))
+        cap = self.max_measurements
+        if isinstance(cap, bool) or not isinstance(cap, int | np.integer) or cap < 1:
+            raise ConfigError(invalid("max_measurements", cap, "an integer >= 1"))
         # the M-of-N rule and existence checks of MofNInitiator
         object.__setattr__(self, "_rule", MofNInitiator(self.m, self.n, _no_prior, self.existence))
 
@@ -108,13 +118,13 @@ class PHDInitiator:
         if state.time is None or time > state.time:
             dt = 0.0 if state.time is None else time - state.time
             intensity = self.phd.predict(intensity, dt)
-        scan = list(measurements) or [
-            Measurement(time, sensor_id, np.full(self.phd.sensors[sensor_id].dim, np.nan))
-        ]
-        intensity = self.phd.update(intensity, scan)
+        saturated = len(measurements) > self.max_measurements
+        scan = [] if saturated else list(measurements)
+        nothing = Measurement(time, sensor_id, np.full(self.phd.sensors[sensor_id].dim, np.nan))
+        intensity = self.phd.update(intensity, scan or [nothing])
         heavy = intensity.weights > self.threshold
         started = [
-            (Gaussian(mean, cov), self._credited(sensor_id, mean, cov, measurements))
+            (Gaussian(mean, cov), self._credited(sensor_id, mean, cov, scan))
             for mean, cov in zip(intensity.means[heavy], intensity.covs[heavy], strict=True)
         ]
         light = ~heavy
@@ -125,7 +135,7 @@ class PHDInitiator:
             intensity.labels[light],
             intensity.next_label,
         )
-        return PHDBirthState(rest, time), started
+        return PHDBirthState(rest, time, state.saturated + saturated), started
 
     def _credited(
         self, sensor_id: str, mean: Any, cov: Any, measurements: Sequence[Measurement]

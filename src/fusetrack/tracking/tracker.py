@@ -506,8 +506,7 @@ class MultiTargetTracker:
         p_d = self.p_detect[sensor_id]
         chosen = [measurements[j] for j in cols]
         scores, posteriors = self._score(ids, [tracks[i].belief for i in ids], chosen, p_d, rng)
-        association = self.associator.associate(scores, rng) if chosen else Association({})
-        _check_association(self.associator, association, len(chosen))
+        association = self._associate_gated(scores, rng)
         for row, i in enumerate(ids):
             hyps = [h for h in hypotheses_of(association, i) if h.probability > 0]
             hyps = hyps or [SingleHypothesis(i, None, 1.0)]  # no weight anywhere: missed
@@ -520,7 +519,41 @@ class MultiTargetTracker:
             ]
             records[i].used.extend(used)
             records[i].detected |= sum(p for _, p in used) >= 0.5
-        return [cols[k] for k in association.unassociated] if chosen else cols
+        return [cols[k] for k in association.unassociated]
+
+    def _associate_gated(
+        self, scores: ScanLikelihoods, rng: np.random.Generator | None
+    ) -> Association:
+        """The associator on the gated block only: the tracks with a measurement in their gate
+        against the measurements in some gate. The others drop out of every joint event's
+        score as constant factors (a track without a gated measurement is missed, a measurement
+        in no gate is clutter; Bar-Shalom, Daum & Huang 2009's validation matrix), so the
+        answer is the same, and a scan of thousands of false alarms far from the tracks costs
+        the associator nothing."""
+        gated = np.isfinite(scores.log_likelihood)
+        rows = np.flatnonzero(gated.any(axis=1))
+        cols = np.flatnonzero(gated.any(axis=0))
+        m = scores.shape[1]
+        if not rows.size:
+            return Association({}, tuple(range(m)))
+        block = ScanLikelihoods(
+            tuple(scores.track_ids[r] for r in rows),
+            scores.log_likelihood[np.ix_(rows, cols)],
+            scores.log_missed[rows],
+            scores.log_clutter[cols],
+        )
+        inner = self.associator.associate(block, rng)
+        _check_association(self.associator, inner, cols.size)
+        hypotheses = {
+            i: tuple(
+                h if h.measurement is None else replace(h, measurement=int(cols[h.measurement]))
+                for h in hs
+            )
+            for i, hs in inner.hypotheses.items()
+        }
+        in_no_gate = set(range(m)) - set(cols.tolist())
+        left = sorted(in_no_gate | {int(cols[k]) for k in inner.unassociated})
+        return Association(hypotheses, tuple(left), inner.info)
 
     def _score(
         self,
