@@ -60,6 +60,10 @@ def test_nan_reports_are_counted_skips_never_a_miss_or_a_loss(kind):
     state = tr.step(state, 4.0, [nan, Measurement(4.0, "pos", [0.0, 0.0])])
     assert state.tracks[0].hits == 2 and state.tracks[0].measurements == (1,)
     assert state.stats.skipped_nonfinite == 7 and len(state.tracks) == 1
+    # in a recording: the corrupt scan is in the track, predicted, using nothing
+    zs = [Measurement(0.0, "pos", [0.0, 0.0]), Measurement(1.0, "pos", [np.nan, 0.0])]
+    (whole,) = tr.run([*zs, Measurement(2.0, "pos", [0.0, 0.0])])
+    assert whole.info["measurements"] == ((0,), (), (2,))
 
 
 def test_unknown_sensors_raise_by_default_or_are_counted_skips():

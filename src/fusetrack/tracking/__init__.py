@@ -1,5 +1,8 @@
 """Multi-target tracking assembled from parts: a filter per track, an associator, an initiator
-and a deleter, pure (``state = tracker.step(state, time, measurements, rng)``)."""
+and a deleter, pure (``state = tracker.step(state, time, measurements, rng)``):
+:class:`MultiTargetTracker` (GNN, JPDA, any single-scan associator), :class:`MHTTracker`
+(track-oriented MHT, a belief per hypothesis leaf), :class:`MCMCDATracker` (online MCMCDA on
+position reports), all with ``initial_state / step / run``."""
 
 from .deleters import AnyOf, CovarianceDeleter, Deleter, ExistenceDeleter, MissedCountDeleter
 from .existence import predict_existence, update_existence

@@ -72,7 +72,7 @@ class MHTTracker(MultiTargetTracker):
 
     def __init__(
         self, filter: Any, sensors: Any, associator: TrackOrientedMHT, *args: Any, **kw: Any
-    ):
+    ) -> None:
         if not isinstance(associator, TrackOrientedMHT):
             raise ConfigError(invalid("associator", associator, "a TrackOrientedMHT"))
         super().__init__(filter, sensors, associator, *args, **kw)

@@ -9,20 +9,32 @@ measurement per sensor, but may give one to each):
    ``P_S`` (:mod:`.existence`);
 2. the confirmed tracks are scored against the sensor's measurements with the tracks' own
    filter (:func:`~fusetrack.association.scan_likelihoods`: ``log P_D p(z | track)`` behind a
-   Mahalanobis gate) and
-   the associator turns the scores into weighted hypotheses (:class:`~fusetrack.association.
-   Associator`: any of them plugs in, hard or soft); each track's belief becomes the posterior
-   of a probability-1 hypothesis, the prediction when missed, or the PDA combination of several
-   (:mod:`.mixing`), and its existence is updated (IPDA);
+   Mahalanobis gate) and the associator turns the scores of the gated block (the tracks with a
+   measurement in their gate, the measurements in some gate; the others are missed or left
+   unassociated, which changes no joint event's odds) into weighted hypotheses
+   (:class:`~fusetrack.association.Associator`: GNN, JPDA or any other single-scan one, hard
+   or soft); each track's belief becomes the posterior of a probability-1 hypothesis, the
+   prediction when missed, or the PDA combination of several (:mod:`.mixing`), and its
+   existence is updated (IPDA);
 3. the tentative tracks are scored and associated the same way against what the confirmed ones
    left, so a track that is not yet confirmed never steals a confirmed track's measurement;
-4. each measurement still left may start a tentative track (``initiator.birth``).
+4. the measurements still left may start tentative tracks (``initiator.birth`` for each, or a
+   scan-level initiator's ``births``, e.g. :class:`~fusetrack.tracking.PHDInitiator`).
 
 For the Kalman family the predictions of all tracks, and the updates of all gated pairs of a
-sensor, are one batched filter call each (:mod:`.batch`).
+sensor, are one batched filter call each (:mod:`fusetrack.association.batch`), and the gate of
+all pairs a few array operations, so a scan of thousands of false alarms stays cheap.
 
-After the scan every track counts a hit or a miss; the initiator confirms or drops tentative
-tracks (M-of-N), the deleter ends confirmed ones. Everything lives in a :class:`TrackerState`.
+After the scan every track counts a hit or a miss (none when no sensor looked); the initiator
+confirms or drops tentative tracks (M-of-N), the deleter ends confirmed ones. Everything lives in
+a :class:`TrackerState`, with :class:`TrackerStats` counters. Bad input is a clear error before
+any work (an unknown sensor by default, a wrong size, a scan before the last one: the message
+names both times) or a counted skip (NaN reports; unknown sensors with
+``unknown_sensors="skip"``), never a crash or a silently lost track.
+
+Track-oriented MHT needs a belief per hypothesis leaf: :class:`~fusetrack.tracking.MHTTracker`;
+online MCMCDA on position reports: :class:`~fusetrack.tracking.MCMCDATracker`. Both have the
+same ``initial_state / step / run`` interface.
 
 Example: two targets in a 100 m square, a position sensor, one false alarm per scan; tracks
 are confirmed when detected in 3 of their first 4 scans::
@@ -423,6 +435,8 @@ class MultiTargetTracker:
         for i, tr in tracks.items():
             if looked or i >= first_new:
                 tr = self._count(tr, records[i], time, newborn=i >= first_new)
+            else:  # no sensor looked: neither hit nor miss, and no measurement this scan
+                tr = replace(tr, measurements=(), probabilities=())
             if not tr.confirmed:
                 status = self.initiator.status(tr)
                 if status == "dropped":
