@@ -143,3 +143,39 @@ def test_the_mht_belongs_in_the_mht_tracker():
         make(TrackOrientedMHT())
     with pytest.raises(ConfigError, match="TrackOrientedMHT"):
         make(GlobalNearestNeighbour(), MHTTracker)
+
+
+def _every_tracker():
+    from fusetrack.association import MCMCDAConfig
+    from fusetrack.tracking import MCMCDATracker
+
+    mcmcda = MCMCDAConfig(dt=1.0, max_speed=3.0, obs_std=0.1, area=100.0, n_mc=200, window=5)
+    return {
+        "gnn": make(GlobalNearestNeighbour()),
+        "jpda": make(JointProbabilisticDataAssociation()),
+        "mht": make(TrackOrientedMHT(n_scan=2), MHTTracker),
+        "mcmcda": MCMCDATracker([POS], mcmcda),
+    }
+
+
+@pytest.mark.parametrize("name", ["gnn", "jpda", "mht", "mcmcda"])
+def test_every_tracker_has_the_same_interface(name):
+    """initial_state / step(state, time, measurements, rng) / run(measurements, rng): live
+    tracks with ids and beliefs, core.Track values with ids and the measurements they used.
+    All but GNN end with track 0 on A (MCMCDA: the window's best partition is the two straight
+    lines)."""
+    tr = _every_tracker()[name]
+    rng = np.random.default_rng(0)
+    state = tr.initial_state()
+    for k in range(5):
+        state = tr.step(state, float(k), SCANS[2 * k : 2 * k + 2], rng)
+        assert state.time == float(k) and state.stats.scans == k + 1
+    assert [t.id for t in state.tracks] == [0, 1]
+    on = A(4) if name != "gnn" else B(4)
+    np.testing.assert_allclose(state.tracks[0].belief.mean[:2], on, atol=0.2)
+    # indices into the scan's list: A's report is 0, B's 1
+    assert state.tracks[0].measurements == ((0,) if name != "gnn" else (1,))
+    tracks = tr.run(SCANS, np.random.default_rng(0))
+    assert [t.id for t in tracks] == [0, 1]
+    assert all(len(t) == 5 and len(t.info["measurements"]) == 5 for t in tracks)
+    np.testing.assert_allclose(tracks[0].means[-1, :2], on, atol=0.2)

@@ -114,3 +114,21 @@ def test_bad_input_is_a_clear_error_before_any_work():
         MCMCDATracker([RangeBearing("radar", position=[0, 0], sigma_range=1, sigma_bearing=0.1)])
     with pytest.raises(MeasurementError, match=r"time=0\.25 comes after one at time=0\.5"):
         tr.run([Measurement(0.5, "tag", [1.0, 2.0]), Measurement(0.25, "tag", [1.0, 2.0])], rng)
+
+
+def test_a_tracker_without_history_forgets_what_left_the_window():
+    """keep_history=False (a live node): the state keeps only the window's observations, the
+    live tracks go on with their ids; whole-recording tracks are refused."""
+    zs, _ = scenario(n_steps=14)
+    tr = MCMCDATracker([TAG], MCMCDAConfig(n_mc=300, obs_std=0.3, window=6), keep_history=False)
+    state, rng = tr.initial_state(), np.random.default_rng(1)
+    times = sorted({z.time for z in zs})
+    for t in times:
+        state = tr.step(state, t, [z for z in zs if z.time == t], rng)
+        assert len(state.association.observations) <= 6 and state.scan_index == ()
+    assert [t.id for t in state.tracks] == [0, 1]
+    for live in state.tracks:
+        ends = [p + v * times[-1] for p, v in zip(STARTS, VELS)]
+        assert min(np.linalg.norm(live.belief.mean[:2] - e) for e in ends) < 0.5
+    with pytest.raises(ConfigError, match="keep_history"):
+        tr.run(zs, rng)
