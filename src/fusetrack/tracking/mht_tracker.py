@@ -108,18 +108,21 @@ class MHTTracker(MultiTargetTracker):
             cols = [j for j in usable if measurements[j].sensor_id == sid]
             if scan.hypotheses.leaves:
                 cols = self._associate_leaves(scan, measurements, cols, sid, rng)
-            for tr, j in self._births(births, t, sid, [measurements[j] for j in cols], rng):
+            born = self._births(births, t, sid, [measurements[j] for j in cols], rng)
+            for tr, j in born:
                 scan.families[tr.id] = tr
                 scan.records[tr.id] = _ScanRecord(True, [] if j is None else [(cols[j], 1.0)])
-                scan.hypotheses, leaf = scan.hypotheses.add_track(tr.id)
-                scan.beliefs[leaf] = tr.belief
+            scan.hypotheses, roots = scan.hypotheses.add_tracks([tr.id for tr, _ in born])
+            scan.beliefs.update(zip(roots, (tr.belief for tr, _ in born), strict=True))
         stats = stats.add(births=births.next_id - state.next_id)
         survivors, stats = self._settle(
             scan.families, scan.records, t, state.next_id, bool(order), stats
         )
-        hypotheses = scan.hypotheses
-        for gone in set(scan.families) - {tr.id for tr in survivors}:
-            hypotheses = hypotheses.remove_track(gone)
+        gone = set(scan.families) - {tr.id for tr in survivors}  # MHTState.remove_track, at once
+        hypotheses = replace(
+            scan.hypotheses,
+            leaves=tuple(leaf for leaf in scan.hypotheses.leaves if leaf.family not in gone),
+        )
         beliefs = {leaf.id: scan.beliefs[leaf.id] for leaf in hypotheses.leaves}
         return MHTTrackerState(
             survivors, t, births.next_id, stats, births.initiator_state, hypotheses, beliefs
