@@ -4,6 +4,8 @@ tentative family with one root leaf, dropped by M-of-N) and confirms no extra tr
 from __future__ import annotations
 
 import numpy as np
+from test_bad_input import _with_flood
+from test_tracker import CLUTTER_RATE, MOTION, POS, SIDE, WIDE
 
 from fusetrack.association import TrackOrientedMHT
 from fusetrack.filters import KalmanFilter
@@ -13,8 +15,6 @@ from fusetrack.tracking import (
     MissedCountDeleter,
     MofNInitiator,
 )
-from test_bad_input import _with_flood
-from test_tracker import CLUTTER_RATE, MOTION, POS, SIDE, WIDE
 
 
 def test_a_scan_of_5000_false_alarms_through_the_mht():
