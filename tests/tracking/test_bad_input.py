@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_tracker import CLUTTER_RATE, MOTION, POS, SIDE, WIDE, scenario, tracker
+from _tracking_scenarios import CLUTTER_RATE, MOTION, POS, SIDE, WIDE, tracker, with_flood
 
 from fusetrack.association import JointProbabilisticDataAssociation, TrackOrientedMHT
 from fusetrack.core import Measurement, MeasurementError, UnknownSensorError
@@ -88,19 +88,11 @@ def test_out_of_order_scans_name_the_times():
     assert len(tr.run(zs, order="reorder")) == 1
 
 
-def _with_flood(seed=3, at=6, n=5000):
-    """Two targets over 10 scans (test_tracker's scenario) and ``n`` uniform false alarms
-    more in scan ``at``."""
-    zs, _, _ = scenario(seed=seed, n_scans=10)
-    flood = np.random.default_rng(99).uniform(0.0, SIDE, (n, 2))
-    return zs + [Measurement(float(at), "pos", z) for z in flood]
-
-
 def test_a_scan_of_5000_false_alarms_starts_no_confirmed_track():
     """M-of-N: every false alarm starts a tentative track and each is dropped by the third
     scan after (3 of 4 impossible); the gate keeps the associator's problem to the few false
     alarms near each track."""
-    zs = _with_flood()
+    zs = with_flood()
     tracks, state = tracker().run_with_state(zs, np.random.default_rng(0), order="reorder")
     assert len(tracks) == 2 and all(t.times[-1] == 9 for t in tracks)
     assert state.stats.births >= 5000 and state.stats.dropped >= 5000 - 10
@@ -113,7 +105,7 @@ def test_the_phd_initiator_starts_nothing_from_5000_false_alarms():
         MOTION, [POS], birth, detection_probability=0.9,
         clutter_intensity=CLUTTER_RATE / SIDE**2, merge_threshold=0.0,
     )  # fmt: skip
-    zs = _with_flood()
+    zs = with_flood()
     tr = tracker(initiator=PHDInitiator(phd, m=2, n=3))
     tracks, state = tr.run_with_state(zs, np.random.default_rng(0), order="reorder")
     assert len(tracks) == 2 and state.stats.births == 2
