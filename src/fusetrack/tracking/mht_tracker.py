@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -159,12 +159,15 @@ class MHTTracker(MultiTargetTracker):
         rows = [leaf.id for leaf in scan.hypotheses.leaves]
         chosen = [measurements[j] for j in cols]
         scores, posteriors = self._score(rows, [scan.beliefs[r] for r in rows], chosen, p_d, rng)
-        association = self.associator.associate(scores, rng, scan.hypotheses)  # type: ignore[call-arg]
+        mht = cast(TrackOrientedMHT, self.associator)
+        association = mht.associate(scores, rng, scan.hypotheses)
         info = association.info
+        children = cast(Mapping[tuple[int, int | None], int], info["children"])
+        best = cast(Mapping[int, int], info["best"])
         row_of = {r: k for k, r in enumerate(rows)}
         parent_of: dict[int, tuple[int, int | None]] = {}
         beliefs = {}
-        for (parent, j), child in info["children"].items():  # type: ignore[attr-defined]
+        for (parent, j), child in children.items():
             parent_of[child] = (parent, j)
             if j is None:
                 beliefs[child] = scan.beliefs[parent]
@@ -175,9 +178,8 @@ class MHTTracker(MultiTargetTracker):
                     if post is not None
                     else self.filter.update(scan.beliefs[parent], [chosen[j]], rng)
                 )
-        scan.hypotheses = info["state"]  # type: ignore[assignment]
+        scan.hypotheses = cast(MHTState, info["state"])
         scan.beliefs = beliefs
-        best: Mapping[int, int] = info["best"]  # type: ignore[assignment]
         for family, leaves in scan.hypotheses.family_leaves().items():
             leaf = _family_output(leaves, best.get(family))
             parent, j = parent_of[leaf.id]
