@@ -23,12 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.beliefs import Particles
-from ..core.errors import MeasurementError, invalid
-from ..core.measurement import Measurement
-from ..core.models import MotionModel
-from ..core.resampling import systematic
-from ..sensors.bearing_detection import DetectionFunctionSensor
+from ..core import Measurement, MeasurementError, MotionModel, Particles, invalid, systematic
+from ..sensors import DetectionFunctionSensor
 
 Array = NDArray[np.float64]
 

@@ -38,15 +38,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import logsumexp
 
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..core.measurement import Measurement
-from ..core.resampling import systematic
-from ..motion.accel_turn import AccelTurn
-from ..sensors.doa_plane_likelihood import DoaCone, ProjectedPlaneBearing
-from ..sensors.doa_projection import (
+from ..core import ConfigError, Measurement, ShapeError, invalid, systematic
+from ..motion import AccelTurn
+from ..sensors import (
     PLANE_AXES,
     PLANES,
+    DoaCone,
     DoaSensor3D,
+    ProjectedPlaneBearing,
     check_angles,
     literal_second_plane,
     projected_variance,

@@ -30,15 +30,15 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import (
+from ..core import (
     ConfigError,
     DegenerateWeightsWarning,
+    Measurement,
     MeasurementError,
+    SensorModel,
     UnknownSensorError,
     invalid,
 )
-from ..core.measurement import Measurement
-from ..core.models import SensorModel
 
 
 @dataclass

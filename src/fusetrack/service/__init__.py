@@ -15,6 +15,9 @@ from .auth import SequenceWindow as SequenceWindow
 from .auth import bearer_token as bearer_token
 from .auth import open_frame as open_frame
 from .auth import seal as seal
+from .commands import add_live_options as add_live_options
+from .commands import add_service_parsers as add_service_parsers
+from .commands import run_service_command as run_service_command
 from .config import NetworkConfig as NetworkConfig
 from .config import load_config as load_config
 from .config import parse_config as parse_config

@@ -1,7 +1,7 @@
 """The ``fusetrack serve``, ``fusetrack replay`` and ``fusetrack demo --live`` commands.
 
-:func:`add_parsers` and :func:`add_live_options` extend the CLI's parser (imports stay light);
-:func:`main` runs whichever of the three was asked for.
+:func:`add_service_parsers` and :func:`add_live_options` extend the CLI's parser (imports stay light);
+:func:`run_service_command` runs whichever of the three was asked for.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 
-def add_parsers(sub: Any) -> None:
+def add_service_parsers(sub: Any) -> None:
     """The ``serve`` and ``replay`` subcommands (``fusetrack.cli`` calls this)."""
     serve = sub.add_parser("serve", help="run a live fusion node (HTTP/WebSocket + UDP)")
     serve.add_argument("--config", type=Path, required=True, help="network YAML")
@@ -58,7 +58,7 @@ def add_live_options(demo: argparse.ArgumentParser) -> None:
     )
 
 
-def main(args: argparse.Namespace) -> int:
+def run_service_command(args: argparse.Namespace) -> int:
     """Run ``serve``, ``replay`` or ``demo --live``; the caller maps FusetrackError to exit 2."""
     from .config import load_config
 
