@@ -491,7 +491,7 @@ def run_track_video_command(args: Any) -> int:
         progress=False if args.no_progress or getattr(args, "quiet", 0) else None,
         drop_frames=drop,
     )
-    print(
+    print(  # the command's result, on stdout
         f"track-video: {summary['tracked_frames']} frames tracked, {summary['visual_updates']} visual updates, "
         f"{summary['occluded_frames']} occluded; outputs in {args.out}"
     )
