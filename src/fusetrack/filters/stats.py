@@ -1,6 +1,6 @@
 """Bookkeeping shared by every filter: a counter of what went wrong, and measurement checks.
 
-A long run must never die for one bad report (DESIGN.md, "Errors"). Filters therefore split bad
+A long run must never die for one bad report. Filters therefore split bad
 input in two kinds:
 
 * **Programming errors** raise at once: a measurement from a sensor the filter was not given

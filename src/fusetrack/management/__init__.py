@@ -1,4 +1,4 @@
-"""fusetrack.management (see DESIGN.md)."""
+"""Sensor management: camera selection and triggering, sensor activation, fusion scheduling."""
 
 from .camera_selection import SELECTION_METHODS as SELECTION_METHODS
 from .camera_selection import SelectionMoments as SelectionMoments
