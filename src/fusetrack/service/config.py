@@ -292,7 +292,7 @@ class ScanTrackerAssociation(_Section):
         "sensor id",
     )
     gate_probability: float = Field(
-        default=0.99, gt=0.0, le=1.0, description="P_G: the share of a target's readings gated"
+        default=0.999, gt=0.0, le=1.0, description="P_G: the share of a target's readings gated"
     )
     survival_probability: float = Field(
         default=0.99, gt=0.0, le=1.0, description="P_S from one tick to the next (existence)"
