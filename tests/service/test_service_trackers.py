@@ -250,3 +250,37 @@ def test_a_shared_phd_label_stays_with_the_heaviest_component():
     # 0.9 keeps 4, 0.8 keeps 2, 0.7 gets a fresh 9; 0.3 is below the threshold: unchanged
     assert out.labels.tolist() == [4, 9, 4, 2] and out.next_label == 10
     assert _distinct_labels(PhdIntensity([0.9], [[0.0, 0.0]], [np.eye(2)]), 0.5).labels == [0]
+
+
+# -- one target ------------------------------------------------------------------------------
+
+
+def test_a_non_finite_estimate_restarts_the_one_target_from_the_prior(network):
+    """Never published, counted in /health's filter_resets: the tick shows the prior, the next
+    tick goes on from it."""
+    from fusetrack.service.alignment import Reading
+
+    engine = FusionEngine(network, 0.0)
+    real = engine.filter.update
+    engine.filter.update = lambda b, ms, rng=None: Gaussian(np.full(5, np.nan), real(b, ms).cov)
+    fix = Reading(1, "tag", 0.4, np.array([21.0, 19.0]))
+    state = engine.step(1, 0.5, [fix])
+    prior = network.tracker.prior()
+    assert engine.resets == 1 and state.state == prior.mean.tolist()
+    assert state.covariance == prior.cov.tolist() and state.readings == 1
+    engine.filter.update = real
+    later = engine.step(2, 1.0, [Reading(2, "tag", 0.9, np.array([21.0, 19.0]))])
+    assert engine.resets == 1 and np.all(np.isfinite(later.state))
+    assert abs(later.position[0] - 21.0) < abs(prior.mean[0] - 21.0)  # updated from the prior
+
+
+def test_the_multi_target_example_config_tracks_the_two_targets_scenario():
+    from fusetrack.service.config import load_config
+
+    cfg = load_config("examples/network_multi.yaml")
+    assert cfg.tracker.association.method == "jpda"
+    data = cfg.model_dump(mode="python")
+    data["nodes"][0]["key"] = KEYS["radar-node"]
+    data["fusion"]["idle_flush"] = 0.3
+    states, _, scn = _run(parse_config(data), seed=4, duration=6.0)
+    assert {s.track for s in states} == {1, 2} and _errors(states, scn).max() < 1.5

@@ -219,13 +219,7 @@ class FusionEngine:
         self.rng = np.random.default_rng(cfg.tracker.seed)
         self.state = self.tracker.initial_state()
         self.time = float(start)
-        self.withheld = 0  # multi-target estimates not published: not finite
-
-    @property
-    def resets(self) -> int:
-        """Estimates never published because they were not finite: the single-target filter's
-        restarts from the prior, the multi-target tracks withheld."""
-        return self.withheld + int(getattr(self.state, "restarts", 0))
+        self.resets = 0  # estimates that were not finite (never published)
 
     @property
     def belief(self) -> Any:
@@ -238,11 +232,11 @@ class FusionEngine:
 
         All or nothing: if anything raises, the state, time and random state are as before.
         """
-        saved = (self.state, self.time, self.rng.bit_generator.state, self.withheld)
+        saved = (self.state, self.time, self.rng.bit_generator.state, self.resets)
         try:
             return self._step(tick, t, readings)
         except Exception:
-            self.state, self.time, self.rng.bit_generator.state, self.withheld = saved
+            self.state, self.time, self.rng.bit_generator.state, self.resets = saved
             raise
 
     def step(self, tick: int, t: float, readings: Sequence[Reading]) -> TrackState:
@@ -270,8 +264,11 @@ class FusionEngine:
         for track in self.state.confirmed:
             mean, cov = summary(self.filter, track.belief)
             if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))):
-                self.withheld += 1  # never publish NaN
-                continue
+                self.resets += 1  # never publish NaN: one target restarts from the prior now
+                if not isinstance(self.tracker, SingleTargetTracker):
+                    continue
+                self.state = self.tracker.restart(self.state, self.rng)
+                mean, cov = summary(self.filter, self.state.belief)
             out.append(track_state(track.id + 1, tick, t, mean, cov, self.position_index, readings))
         return out
 

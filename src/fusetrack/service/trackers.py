@@ -64,22 +64,16 @@ def summary(filt: Any, belief: Any) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(s.mean), np.asarray(s.cov)
 
 
-def is_finite(filt: Any, belief: Any) -> bool:
-    mean, cov = summary(filt, belief)
-    return bool(np.all(np.isfinite(mean)) and np.all(np.isfinite(cov)))
-
-
 # -- one target ------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
 class SingleTargetState:
     """The one track's belief at ``time`` (None before the first step: the prior is drawn
-    then), and how often the filter restarted from the prior (a non-finite estimate)."""
+    then)."""
 
     belief: Any
     time: float
-    restarts: int = 0
 
     @property
     def confirmed(self) -> tuple[NodeTrack, ...]:
@@ -87,16 +81,24 @@ class SingleTargetState:
 
 
 class SingleTargetTracker:
-    """A filter as a one-track tracker (module docstring). ``prior(rng)`` gives the initial
-    belief; an estimate that is not finite restarts the track from it (never published)."""
+    """A filter as a one-track tracker (module docstring); ``prior(rng)`` gives the initial
+    belief, and :meth:`restart` the track from it."""
 
-    def __init__(self, filt: Any, prior: Callable[[np.random.Generator | None], Any], start: float):
+    def __init__(
+        self, filt: Any, prior: Callable[[np.random.Generator | None], Any], start: float
+    ) -> None:
         self.filter = filt
         self.prior = prior
         self.start = float(start)
 
     def initial_state(self) -> SingleTargetState:
         return SingleTargetState(None, self.start)
+
+    def restart(
+        self, state: SingleTargetState, rng: np.random.Generator | None = None
+    ) -> SingleTargetState:
+        """The track from the prior again, at the state's time (a filter that diverged)."""
+        return SingleTargetState(self.prior(rng), state.time)
 
     def step(
         self,
@@ -109,15 +111,12 @@ class SingleTargetTracker:
     ) -> SingleTargetState:
         """One :func:`filter_step` to ``time`` with ``measurements`` (``scanned`` is unused)."""
         belief = self.prior(rng) if state.belief is None else state.belief
-        now, dt = state.time, time - state.time
+        dt = time - state.time
         if dt > TIME_TOLERANCE:
-            belief = filter_step(self.filter, belief, dt, measurements, rng)
-            now = time
-        elif measurements:
+            return SingleTargetState(filter_step(self.filter, belief, dt, measurements, rng), time)
+        if measurements:
             belief = filter_step(self.filter, belief, 0.0, measurements, rng)
-        if not is_finite(self.filter, belief):
-            return SingleTargetState(self.prior(rng), now, state.restarts + 1)
-        return SingleTargetState(belief, now, state.restarts)
+        return SingleTargetState(belief, state.time)
 
 
 # -- GM-PHD ----------------------------------------------------------------------------------
