@@ -166,7 +166,7 @@ def test_several_targets_need_every_reading_of_a_tick_and_sensors_that_start_tra
 # -- several targets through the node --------------------------------------------------------
 
 
-@pytest.mark.parametrize("method", ["gnn", "jpda"])
+@pytest.mark.parametrize("method", ["gnn", "jpda", "mht"])
 def test_two_targets_give_two_persistent_tracks(method):
     """Radar plots of two targets (5 % missed, false plots): from the second tick on, two
     tracks, ids 1 and 2 throughout, each within 1.5 m of its own target (measured: 1.27 m at
