@@ -3,7 +3,7 @@
 Sensor nodes send authenticated, versioned messages (:mod:`.schema`, :mod:`.auth`) over UDP,
 HTTP or WebSocket; the node buffers and aligns them to its fusion ticks (:mod:`.alignment`),
 runs the configured tracker (:mod:`.engine`: any filter, the Kushwaha grid through
-:mod:`.grid_cells`; :mod:`.multi_engine`: several targets through MCMCDA, same interface), logs
+:mod:`.grid_cells`; several targets through :mod:`.trackers`, the same engine), logs
 everything durably (:mod:`.log`) and publishes tracks over REST/WebSocket with a dashboard
 (:mod:`.app`). :mod:`.replay` plays a simulated scenario (:mod:`.scenarios`) or a recording into
 a running node. See the README's service section.
