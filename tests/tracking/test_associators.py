@@ -138,9 +138,16 @@ def test_mht_run_gives_the_tracks_with_ids():
     assert state.stats.births == 2 and state.stats.scans == 5
 
 
-def test_the_mht_belongs_in_the_mht_tracker():
-    with pytest.raises(ConfigError, match="use MHTTracker"):
-        make(TrackOrientedMHT())
+def test_a_multi_target_tracker_with_the_mht_is_the_mht_tracker():
+    tr = make(TrackOrientedMHT(n_scan=2))
+    assert type(tr) is MHTTracker and isinstance(tr, MultiTargetTracker)
+    assert isinstance(tr.initial_state(), MHTTrackerState)
+    again = MultiTargetTracker(
+        tr.filter, [POS], associator=TrackOrientedMHT(), initiator=tr.initiator,
+        deleter=tr.deleter, p_detect=0.9, clutter_density=1e-3,
+    )  # fmt: skip
+    assert type(again) is MHTTracker
+    assert type(make(GlobalNearestNeighbour())) is MultiTargetTracker
     with pytest.raises(ConfigError, match="TrackOrientedMHT"):
         make(GlobalNearestNeighbour(), MHTTracker)
 

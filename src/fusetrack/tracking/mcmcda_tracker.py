@@ -106,6 +106,10 @@ class MCMCDATracker:
         ``state.tracks`` then).
     """
 
+    filter: Any = None
+    """No filter object: the beliefs are :class:`~fusetrack.core.Gaussian` values (the live
+    node reads ``tracker.filter`` for an ``estimate``; there is none to apply)."""
+
     def __init__(
         self,
         sensors: Mapping[str, SensorModel] | Sequence[SensorModel],

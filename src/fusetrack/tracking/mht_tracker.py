@@ -63,12 +63,11 @@ class MHTTracker(MultiTargetTracker):
 
     The parameters are those of :class:`~fusetrack.tracking.MultiTargetTracker`, with
     ``associator`` a :class:`~fusetrack.association.TrackOrientedMHT` (``n_scan`` scans of
-    deferred decisions, ``max_hypotheses`` leaves per track). ``step`` returns a
+    deferred decisions, ``max_hypotheses`` leaves per track); ``MultiTargetTracker(...)`` with
+    a TrackOrientedMHT builds this class. ``step`` returns a
     :class:`MHTTrackerState`; ``run`` the confirmed tracks as :class:`~fusetrack.core.Track`
     values, each scan's estimate being that of the best global hypothesis at that scan.
     """
-
-    _leaf_hypotheses = True
 
     def __init__(
         self, filter: Any, sensors: Any, associator: TrackOrientedMHT, *args: Any, **kw: Any

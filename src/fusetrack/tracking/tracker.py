@@ -197,7 +197,10 @@ class MultiTargetTracker:
         the sensor models by ``sensor_id`` (mapping or sequence); None: the filter's own
         ``filter.sensors``. Each measurement is gated with its own sensor.
     associator:
-        any :class:`~fusetrack.association.Associator` (``associate(scores, rng)``).
+        any :class:`~fusetrack.association.Associator` (``associate(scores, rng)``): GNN, JPDA;
+        a :class:`~fusetrack.association.TrackOrientedMHT` makes this tracker an
+        :class:`~fusetrack.tracking.MHTTracker` (the same interface, a belief per hypothesis
+        leaf).
     initiator:
         an :class:`~fusetrack.tracking.Initiator` (:class:`MofNInitiator`, ...).
     deleter:
@@ -218,7 +221,16 @@ class MultiTargetTracker:
         and counted in ``state.stats.skipped_unknown_sensor`` (a live feed with other sensors).
     """
 
-    _leaf_hypotheses = False  # True in MHTTracker: the associator's rows are hypothesis leaves
+    def __new__(cls, *args: Any, **kw: Any) -> MultiTargetTracker:
+        """With a :class:`~fusetrack.association.TrackOrientedMHT` as ``associator`` the
+        tracker is an :class:`~fusetrack.tracking.MHTTracker` (MHT needs a belief per
+        hypothesis leaf), built with the same arguments."""
+        associator = args[2] if len(args) > 2 else kw.get("associator")
+        if cls is MultiTargetTracker and isinstance(associator, TrackOrientedMHT):
+            from .mht_tracker import MHTTracker  # here: mht_tracker builds on this module
+
+            return super().__new__(MHTTracker)
+        return super().__new__(cls)
 
     def __init__(
         self,
@@ -238,15 +250,6 @@ class MultiTargetTracker:
             filter, "filter", ("predict", "update", "update_with_likelihood"), "a LikelihoodFilter"
         )
         _require(associator, "associator", ("associate",), "an Associator")
-        if isinstance(associator, TrackOrientedMHT) and not self._leaf_hypotheses:
-            raise ConfigError(
-                invalid(
-                    "associator",
-                    associator,
-                    "a single-scan associator: a TrackOrientedMHT needs a belief per hypothesis"
-                    " leaf, use MHTTracker",
-                )
-            )
         _require(initiator, "initiator", ("birth", "status"), "an Initiator")
         _require(deleter, "deleter", ("should_delete",), "a Deleter")
         if sensors is None:
