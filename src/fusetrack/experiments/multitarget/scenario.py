@@ -3,7 +3,7 @@
 The field, the cell size, the fusion rate and the array positions are those of Kushwaha 2010's
 simulated road (:mod:`fusetrack.experiments.kushwaha2010.scene`: a 35 m x 20 m field, 0.5 m
 cells, 4 Hz, acoustic nodes at x = 5, 17.5, 30 m on y = 4 m and y = 16 m); the arrays used are
-``A1`` (5, 4) and ``A3`` (30, 4), and ``A5`` (17.5, 16) as the third. Each array reports, every
+``A1`` (5, 4) and ``A6`` (30, 16) on opposite corners, and ``A3`` (30, 4) as the third. Each array reports, every
 scan, an *unlabelled* set of bearings (:func:`fusetrack.sensors.simulate_bearings`, Lee 2009
 Sec. 3.2): each target's bearing with probability ``p_detect`` (two closer than 2 degrees
 merge), Gaussian noise ``sigma``, plus a Poisson number of clutter bearings, uniform on the
@@ -28,7 +28,7 @@ from ...sensors import simulate_bearings
 from ..kushwaha2010.scene import DT, default_layout
 
 Array = NDArray[np.float64]
-ARRAYS_USED = ("A1", "A3", "A5")  # the first n of these (Kushwaha's acoustic nodes)
+ARRAYS_USED = ("A1", "A6", "A3")  # the first n of these (Kushwaha's acoustic nodes)
 
 
 class Options(ExperimentOptions):
