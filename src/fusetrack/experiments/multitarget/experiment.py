@@ -15,13 +15,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from pydantic import Field
 
 from ...core import Track
-from ...evaluation import Outcome, RunContext, run_seed
+from ...evaluation import ExperimentOptions, Outcome, RunContext, run_seed
 from . import methods
 from .claims import claim_kinds, make_claims, summary_table
 from .figures import gospa_figure, scene_figure
-from .scenario import Options, Scene, Truth, make_scene, simulate_scans, simulate_truth
+from .scenario import Scene, Truth, make_scene, simulate_scans, simulate_truth
 from .scoring import score
 from .text import report_text
 from .triangulation import Candidate, candidate_counts, scan_candidates
@@ -29,6 +30,23 @@ from .triangulation import Candidate, candidate_counts, scan_candidates
 __all__ = ["Options", "RunResult", "run", "run_once", "simulate_run"]
 
 ARRAY_COUNTS = (2, 3)
+
+
+class Options(ExperimentOptions):
+    """``--set`` keys of ``multitarget-bearings`` (validated before any work)."""
+
+    targets: int = Field(3, ge=2, le=4, description="number of targets (2-4)")
+    duration: float = Field(
+        14.0, gt=2.0, le=60.0, description="scenario length (s); quick: at most 6"
+    )
+    sigma_deg: float = Field(2.0, gt=0.0, le=10.0, description="bearing noise std (degrees)")
+    p_detect: float = Field(0.9, gt=0.0, le=1.0, description="per-array detection probability")
+    clutter: float = Field(0.5, ge=0.0, le=5.0, description="clutter bearings per array per scan")
+    n_mc: int = Field(
+        400, ge=10, le=5000, description="MCMCDA iterations per scan; quick: at most 80"
+    )
+    gospa_c: float = Field(3.0, gt=0.0, description="GOSPA / OSPA(2) cut-off c (m)")
+    mot_threshold: float = Field(2.0, gt=0.0, description="CLEAR MOT match distance (m)")
 
 
 @dataclass(frozen=True)
@@ -45,7 +63,7 @@ class RunResult:
 def simulate_run(config: Mapping[str, Any], seed: int) -> RunResult:
     """Simulate one scene and run every method on it (draws in a fixed order from ``seed``)."""
     opts = Options.model_validate(config["options"])
-    scene = make_scene(int(config["arrays"]), opts)
+    scene = make_scene(int(config["arrays"]), opts.sigma_deg, opts.p_detect, opts.clutter)
     rng = np.random.default_rng(seed)
     truth = simulate_truth(scene, opts.targets, float(config["duration"]), rng)
     scans = simulate_scans(scene, truth, rng)

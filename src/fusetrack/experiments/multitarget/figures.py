@@ -32,7 +32,8 @@ def _draw_world(ax: Any, res: RunResult) -> None:
 
 def _draw_candidates(ax: Any, res: RunResult, radius: float) -> None:
     """All candidates of the run, true ones grey, ghosts red."""
-    true_pts, ghosts = [], []
+    true_pts: list[np.ndarray] = []
+    ghosts: list[np.ndarray] = []
     for k, cs in enumerate(res.candidates):
         present = res.truth.present(k)
         for c in cs:

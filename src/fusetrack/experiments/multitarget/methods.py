@@ -72,7 +72,7 @@ class BirthOnly:
         self, scores: ScanLikelihoods, rng: np.random.Generator | None = None
     ) -> Association:
         if not np.all(scores.log_missed > -1e-6):
-            return self.inner.associate(scores, rng)  # type: ignore[no-any-return]
+            return self.inner.associate(scores, rng)
         gated = np.isfinite(scores.log_likelihood).any(axis=0)
         free = tuple(int(j) for j in np.flatnonzero(~gated))
         missed = {i: (SingleHypothesis(i, None, 1.0),) for i in scores.track_ids}

@@ -19,33 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field
 
 from ...core import Track
-from ...evaluation import ExperimentOptions
 from ...filters import GridSpec
 from ...sensors import simulate_bearings
 from ..kushwaha2010.scene import DT, default_layout
 
 Array = NDArray[np.float64]
 ARRAYS_USED = ("A1", "A6", "A3")  # the first n of these (Kushwaha's acoustic nodes)
-
-
-class Options(ExperimentOptions):
-    """``--set`` keys of ``multitarget-bearings`` (validated before any work)."""
-
-    targets: int = Field(3, ge=2, le=4, description="number of targets (2-4)")
-    duration: float = Field(
-        14.0, gt=2.0, le=60.0, description="scenario length (s); quick: at most 6"
-    )
-    sigma_deg: float = Field(2.0, gt=0.0, le=10.0, description="bearing noise std (degrees)")
-    p_detect: float = Field(0.9, gt=0.0, le=1.0, description="per-array detection probability")
-    clutter: float = Field(0.5, ge=0.0, le=5.0, description="clutter bearings per array per scan")
-    n_mc: int = Field(
-        400, ge=10, le=5000, description="MCMCDA iterations per scan; quick: at most 80"
-    )
-    gospa_c: float = Field(3.0, gt=0.0, description="GOSPA / OSPA(2) cut-off c (m)")
-    mot_threshold: float = Field(2.0, gt=0.0, description="CLEAR MOT match distance (m)")
 
 
 @dataclass(frozen=True)
@@ -71,12 +52,12 @@ class Scene:
         raise KeyError(array_id)
 
 
-def make_scene(n_arrays: int, opts: Options) -> Scene:
+def make_scene(n_arrays: int, sigma_deg: float, p_detect: float, clutter: float) -> Scene:
     """Kushwaha's field with the first ``n_arrays`` of :data:`ARRAYS_USED`."""
     layout = default_layout()
     nodes = {sid: (x, y) for sid, x, y, _ in layout.audio}
     arrays = tuple((sid, *nodes[sid]) for sid in ARRAYS_USED[:n_arrays])
-    return Scene(layout.grid, arrays, np.deg2rad(opts.sigma_deg), opts.p_detect, opts.clutter)
+    return Scene(layout.grid, arrays, np.deg2rad(sigma_deg), p_detect, clutter)
 
 
 @dataclass(frozen=True)

@@ -4,12 +4,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
 
 from ...evaluation import Claim
 from .claims import mean_se
-from .scenario import ARRAYS_USED, Options
+from .scenario import ARRAYS_USED
+
+if TYPE_CHECKING:
+    from .experiment import Options
 
 
 def _verdict(claims: Sequence[Claim]) -> str:
