@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from importlib.metadata import PackageNotFoundError, version
@@ -177,6 +178,23 @@ def _log_to_stderr(args: argparse.Namespace) -> tuple[logging.Handler, int]:
     return handler, previous
 
 
+def _check_output_dir(out: str | Path) -> None:
+    """Check ``--out`` before any work (nothing is created): the path, or its nearest existing
+    ancestor, must be a directory fusetrack may write in; a path under a file used to fail
+    only after the whole run."""
+    path = Path(out).absolute()
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    problem = None
+    if not existing.is_dir():
+        problem = f"{existing} is not a directory"
+    elif not os.access(existing, os.W_OK | os.X_OK):
+        problem = f"no permission to write in {existing}"
+    if problem is not None:
+        raise ConfigError(
+            invalid("--out", str(out), f"a directory fusetrack can create and write ({problem})")
+        )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler, previous = _log_to_stderr(args)
@@ -209,6 +227,7 @@ def _dispatch(args: argparse.Namespace) -> int:
             print(f"{name:<{width}}  {info.title}")
         return 0
     name = "demo" if args.command == "demo" else args.name
+    _check_output_dir(args.out)
     ctx = RunContext(
         name=name,
         out_dir=args.out,

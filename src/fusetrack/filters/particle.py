@@ -891,6 +891,7 @@ class ParticleFilter:
         s3 = states.reshape(-1, n, d)
         z = np.zeros((rows, len(checked), 3))
         for k, c in enumerate(checked):
+            assert isinstance(c.z, np.ndarray)  # a likelihood-only sensor has no fused form
             z[:, k, : c.z.shape[-1]] = c.z
         usable = np.stack([c.usable for c in checked], axis=1)
         lw, w, lse, ess, mean, maxima = fused_update.log_weight_update_rows(

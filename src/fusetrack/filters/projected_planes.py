@@ -396,9 +396,10 @@ class Direct3DFilter(ParticleFilter):
         n_particles: int = 1000,
         init_std: tuple[float, float] = (0.1, 0.05),
     ) -> None:
-        cone: Any = DoaCone(sensor)
+        cone: Any = DoaCone(sensor)  # a likelihood-only sensor
+        motion: Any = model  # the engine only samples it
         super().__init__(
-            model, {sensor.sensor_id: cone}, n_particles, ess_threshold=1.0,
+            motion, {sensor.sensor_id: cone}, n_particles, ess_threshold=1.0,
             min_log_evidence=-np.inf,
         )  # fmt: skip
         self.sensor, self.model, self.init_std = sensor, model, init_std
