@@ -77,7 +77,9 @@ Methods, all on the same scans:
 * **MCMCDA**: `association.MCMCDA` as `kushwaha2010-mcmcda` runs it, on the candidates of all
   pairs pooled per scan, {n_mc} iterations per scan, window 12 scans; its observation noise is
   one isotropic σ (the median candidate σ), its false-alarm rate the mean number of candidates
-  per scan minus the number of targets.
+  per scan minus the number of targets. Its tracks are the committed ones (an observation's
+  track is fixed when it leaves the window: a 3-s fixed-lag decision), the others' are filtered
+  online.
 * **grid+JPDA**: each array's bearings as a cell likelihood `1 - P_D + P_D/κ Σ_j N(z_j; θ(x), σ²)`
   averaged over the cell's arc (Kushwaha 2010, Eq. 32), fused by product (Eq. 30) without a
   temporal prior, peaks as in `kushwaha2010-mcmcda` (`association.likelihood_peaks`), fed to
