@@ -126,14 +126,12 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="= fusetrack run demo (--live: a live fusion node)")
     _add_run_options(demo, "out/demo")
     _add_verbosity(demo, argparse.SUPPRESS)
-    from .service.commands import add_live_options
-    from .service.commands import add_parsers as add_service
+    from .service import add_live_options, add_service_parsers
+    from .tools import add_track_video_parser
 
     add_live_options(demo)
-    add_service(sub)
-    from .tools.track_video_args import add_parser as add_track_video
-
-    add_track_video(sub)
+    add_service_parsers(sub)
+    add_track_video_parser(sub)
     return parser
 
 
@@ -214,13 +212,13 @@ def _dispatch(args: argparse.Namespace) -> int:
     from .experiments import REGISTRY, run_experiment
 
     if args.command in ("serve", "replay") or getattr(args, "live", False):
-        from .service.commands import main as service_main
+        from .service import run_service_command
 
-        return service_main(args)
+        return run_service_command(args)
     if args.command == "track-video":
-        from .tools.track_video import main as track_video_main
+        from .tools import run_track_video_command
 
-        return track_video_main(args)
+        return run_track_video_command(args)
     if args.command == "list":
         width = max(len(n) for n in REGISTRY)
         for name, info in REGISTRY.items():

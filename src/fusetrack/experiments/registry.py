@@ -1,4 +1,4 @@
-"""The experiment registry and the one way every experiment is run (DESIGN.md contract).
+"""The experiment registry and the one way every experiment is run.
 
 An experiment is a module with ``run(ctx: RunContext) -> Outcome``. The registry maps a name to
 ``module:function`` so that ``fusetrack list`` does not import every experiment. The experiment's

@@ -1,4 +1,4 @@
-"""fusetrack.filters: recursive Bayesian filters and the loop that runs them (see DESIGN.md).
+"""fusetrack.filters: recursive Bayesian filters and the loop that runs them.
 
 One import per line, re-exported with ``as``: add new filters by adding lines.
 """

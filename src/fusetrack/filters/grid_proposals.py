@@ -29,7 +29,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .sis import Array, LogLikelihood, Zs
 

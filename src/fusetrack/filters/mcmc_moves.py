@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import check_positive
+from ..core import check_positive
 from .sis import Array
 
 

@@ -27,11 +27,15 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, invalid
-from ..core.measurement import Measurement  # noqa: F401  (doctest)
-from ..core.models import MotionModel, SensorModel
-from ..motion.switching import MarkovSwitching
+from ..core import (
+    ConfigError,
+    Gaussian,
+    Measurement,  # noqa: F401  (doctest)
+    MotionModel,
+    SensorModel,
+    invalid,
+)
+from ..motion import MarkovSwitching
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
 from .sis import (
     Array,

@@ -103,19 +103,22 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import resampling
-from ..core.beliefs import Gaussian, Particles
-from ..core.errors import (
+from ..core import (
     ConfigError,
+    Gaussian,
+    Measurement,
     MeasurementError,
+    MotionModel,
+    Particles,
+    Resampler,
+    SensorModel,
     ShapeError,
     check_positive,
     check_probability,
+    get_resampler,
     invalid,
+    resampling,
 )
-from ..core.measurement import Measurement
-from ..core.models import MotionModel, SensorModel
-from ..core.resampling import Resampler, get_resampler
 from . import fused, fused_update, kernels, rng_handles, run_streams
 from .stats import FilterStats, as_sensor_map, validate_measurement
 

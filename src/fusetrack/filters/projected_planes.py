@@ -38,15 +38,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.beliefs import Particles
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..core.measurement import Measurement
-from ..motion.accel_turn import AccelTurn
-from ..sensors.doa_plane_likelihood import DoaCone, ProjectedPlaneBearing
-from ..sensors.doa_projection import (
+from ..core import ConfigError, Measurement, Particles, ShapeError, invalid
+from ..motion import AccelTurn
+from ..sensors import (
     PLANE_AXES,
     PLANES,
+    DoaCone,
     DoaSensor3D,
+    ProjectedPlaneBearing,
     check_angles,
     literal_second_plane,
     projected_variance,

@@ -38,11 +38,21 @@ from typing import Any, Literal, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, MeasurementError, invalid
-from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
-from ..core.models import Filter, LikelihoodFilter, filter_step, step_with_likelihood
-from ..core.track import Track
+from ..core import (
+    ConfigError,
+    Filter,
+    Gaussian,
+    LikelihoodFilter,
+    Measurement,
+    MeasurementError,
+    Track,
+    as_measurements,
+    filter_step,
+    group_by_time,
+    invalid,
+    order_by_time,
+    step_with_likelihood,
+)
 from .kalman import GaussianFilter
 from .particle import ParticleFilter
 from .particle_smoothing import backward_simulation

@@ -38,17 +38,18 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import logsumexp
 
-from ..core.beliefs import Gaussian
-from ..core.errors import (
+from ..core import (
     ConfigError,
+    Gaussian,
+    Measurement,
     MeasurementError,
+    MotionModel,
+    SensorModel,
     UnknownSensorError,
     check_positive,
+    get_resampler,
     invalid,
 )
-from ..core.measurement import Measurement
-from ..core.models import MotionModel, SensorModel
-from ..core.resampling import get_resampler
 from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
 from .stats import FilterStats
 from .weighting import ParticleWeights, draw_ancestors, particle_weights

@@ -16,8 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.beliefs import Gaussian
-from ..core.measurement import Measurement
+from ..core import Gaussian, Measurement
 from .kalman import UnscentedKalmanFilter
 from .sis import Array, Zs
 
