@@ -35,6 +35,46 @@ def _candidate_lines(df: pd.DataFrame) -> str:
     return "\n".join(lines)
 
 
+def _methods_text(n_mc: int) -> str:
+    """How each method is built (the report's "Methods" list)."""
+    return f"""Methods, all on the same scans:
+
+* **GNN / JPDA**: every pair of bearings of two arrays intersected (rays crossing at more than
+  5°, in front of both arrays, in the field); each point a position measurement of "its" pair
+  of arrays (one sensor per pair: a target gives at most one point per pair) with covariance
+  `(HᵀR⁻¹H)⁻¹`, `H` the Jacobian of the two bearings at the point (`[-d_y, d_x]/r²` per array),
+  `R = σ² I` — the linearised inverse of the two bearings, checked against Monte Carlo in
+  `tests/experiments/test_multitarget_bearings.py`. `MultiTargetTracker` (Kalman, nearly
+  constant velocity q = 0.5 m²/s³) with `GlobalNearestNeighbour` or
+  `JointProbabilisticDataAssociation`; P_D per pair = P_D²; clutter density per pair = its mean
+  number of points per scan / field area (every point counted as clutter: an upper bound the
+  tracker could measure itself); 3-of-4 confirmation, deletion after 4 misses in a row or
+  existence probability < 0.1.
+* **MCMCDA**: `association.MCMCDA` as `kushwaha2010-mcmcda` runs it, on the candidates of all
+  pairs pooled per scan, {n_mc} iterations per scan, window 12 scans; its observation noise is
+  one isotropic σ (the median candidate σ), its false-alarm rate the mean number of candidates
+  per scan minus the number of targets. Its tracks are the committed ones (an observation's
+  track is fixed when it leaves the window: a 3-s fixed-lag decision), the others' are filtered
+  online.
+* **grid+JPDA**: each array's bearings as a cell likelihood `1 - P_D + P_D/κ Σ_j N(z_j; θ(x), σ²)`
+  averaged over the cell's arc (Kushwaha 2010, Eq. 32), fused by product (Eq. 30) without a
+  temporal prior, peaks as in `kushwaha2010-mcmcda` (`association.likelihood_peaks`), fed to
+  the JPDA tracker with the peak's covariance = inverse Fisher information of all arrays +
+  cell²/12.
+* **direct**: the JPDA tracker on the bearings themselves (EKF, one `sensors.Bearing` per array,
+  clutter density = clutter/2π per rad); candidate points only start tracks (a birth-only sensor:
+  points inside a track's gate are neither used nor start tracks), so no track is ever updated
+  with a triangulated point."""
+
+
+def _metrics_text(opts: Options) -> str:
+    return f"""Metrics per run: GOSPA (c = {opts.gospa_c:g} m, p = 2, α = 2) averaged over scans as
+`mean_t d_t²` components (localisation / missed / false, m²) and its root (`gospa`, m);
+OSPA⁽²⁾ over the whole run (c = {opts.gospa_c:g} m, p = 1); CLEAR MOT at {opts.mot_threshold:g}
+m (identity switches, MOTA); ghost tracks = confirmed tracks whose median distance to the
+nearest target exceeds {opts.mot_threshold:g} m. Mean ± standard error over runs."""
+
+
 def report_text(
     df: pd.DataFrame,
     table: pd.DataFrame,
@@ -61,40 +101,9 @@ intersections are ghosts. Verdict: {_verdict(claims)}
 with P_D = {opts.p_detect:g}, σ = {opts.sigma_deg:g}°, bearings within 2° merged, plus
 Poisson({opts.clutter:g}) clutter bearings uniform on the circle, shuffled.
 
-Methods, all on the same scans:
+{_methods_text(n_mc)}
 
-* **GNN / JPDA**: every pair of bearings of two arrays intersected (rays crossing at more than
-  5°, in front of both arrays, in the field); each point a position measurement of "its" pair
-  of arrays (one sensor per pair: a target gives at most one point per pair) with covariance
-  `(HᵀR⁻¹H)⁻¹`, `H` the Jacobian of the two bearings at the point (`[-d_y, d_x]/r²` per array),
-  `R = σ² I` — the linearised inverse of the two bearings, checked against Monte Carlo in
-  `tests/experiments/test_multitarget_bearings.py`. `MultiTargetTracker` (Kalman, nearly
-  constant velocity q = 0.5 m²/s³) with `GlobalNearestNeighbour` or
-  `JointProbabilisticDataAssociation`; P_D per pair = P_D²; clutter density per pair = its mean
-  number of points per scan / field area (every point counted as clutter: an upper bound the
-  tracker could measure itself); 3-of-4 confirmation, deletion after 4 misses in a row or
-  existence probability < 0.1.
-* **MCMCDA**: `association.MCMCDA` as `kushwaha2010-mcmcda` runs it, on the candidates of all
-  pairs pooled per scan, {n_mc} iterations per scan, window 12 scans; its observation noise is
-  one isotropic σ (the median candidate σ), its false-alarm rate the mean number of candidates
-  per scan minus the number of targets. Its tracks are the committed ones (an observation's
-  track is fixed when it leaves the window: a 3-s fixed-lag decision), the others' are filtered
-  online.
-* **grid+JPDA**: each array's bearings as a cell likelihood `1 - P_D + P_D/κ Σ_j N(z_j; θ(x), σ²)`
-  averaged over the cell's arc (Kushwaha 2010, Eq. 32), fused by product (Eq. 30) without a
-  temporal prior, peaks as in `kushwaha2010-mcmcda` (`association.likelihood_peaks`), fed to
-  the JPDA tracker with the peak's covariance = inverse Fisher information of all arrays +
-  cell²/12.
-* **direct**: the JPDA tracker on the bearings themselves (EKF, one `sensors.Bearing` per array,
-  clutter σ_c = clutter/2π per rad); candidate points only start tracks (a birth-only sensor:
-  points inside a track's gate are neither used nor start tracks), so no track is ever updated
-  with a triangulated point.
-
-Metrics per run: GOSPA (c = {opts.gospa_c:g} m, p = 2, α = 2) averaged over scans as
-`mean_t d_t²` components (localisation / missed / false, m²) and its root (`gospa`, m);
-OSPA⁽²⁾ over the whole run (c = {opts.gospa_c:g} m, p = 1); CLEAR MOT at {opts.mot_threshold:g}
-m (identity switches, MOTA); ghost tracks = confirmed tracks whose median distance to the
-nearest target exceeds {opts.mot_threshold:g} m. Mean ± standard error over runs.
+{_metrics_text(opts)}
 
 Candidates per scan (a candidate within {opts.mot_threshold:g} m of a target counts as true):
 
