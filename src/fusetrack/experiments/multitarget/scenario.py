@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 from ...core import Track
 from ...filters import GridSpec
 from ...sensors import simulate_bearings
-from ..kushwaha2010.scene import DT, default_layout
+from ..kushwaha2010 import DT, default_layout
 
 Array = NDArray[np.float64]
 ARRAYS_USED = ("A1", "A6", "A3")  # the first n of these (Kushwaha's acoustic nodes)
