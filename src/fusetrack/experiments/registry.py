@@ -283,6 +283,14 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 (seed 000)",
             options="SweepOptions",
         ),
+        ExperimentInfo(
+            "multitarget-bearings",
+            "multitarget.experiment:run",
+            "Beyond the papers: several targets from unlabelled bearings of 2-3 arrays, ghost "
+            "intersections; GNN/JPDA on triangulated points, MCMCDA, grid peaks, direct bearings",
+            "fusetrack (issue 17; Kushwaha 2010 field, Lee 2009 bearings)",
+            options="Options",
+        ),
     ]
 }
 
