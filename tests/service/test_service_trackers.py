@@ -24,13 +24,9 @@ from fusetrack.service.log import DurableLog, replay_log
 from fusetrack.service.node import FusionNode
 from fusetrack.service.scenarios import two_targets_network, two_targets_scenario
 from fusetrack.service.schema import SensorMessage, TrackState, reading_from_vector
-from fusetrack.service.trackers import (
-    MCMCDAAdapter,
-    PhdTracker,
-    SingleTargetTracker,
-    _distinct_labels,
-)
-from fusetrack.tracking import MultiTargetTracker
+from fusetrack.service.trackers import MCMCDAAdapter
+from fusetrack.tracking import MultiTargetTracker, PHDTracker, SingleTargetTracker
+from fusetrack.tracking.phd_tracker import _distinct_labels
 
 KEYS = {"radar-node": "test-key-radar-node-00001"}
 
@@ -82,7 +78,7 @@ def _errors(states, scn):
         ("gnn", GlobalNearestNeighbour),
         ("jpda", JointProbabilisticDataAssociation),
         ("mht", TrackOrientedMHT),
-        ("phd", PhdTracker),
+        ("phd", PHDTracker),
         ("mcmcda", MCMCDAAdapter),
     ],
 )

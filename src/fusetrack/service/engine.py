@@ -49,7 +49,15 @@ from ..filters import (
     PhdIntensity,
     UnscentedKalmanFilter,
 )
-from ..tracking import MissedCountDeleter, MofNInitiator, MultiTargetTracker
+from ..tracking import (
+    MissedCountDeleter,
+    MofNInitiator,
+    MultiTargetTracker,
+    PHDTracker,
+    SingleTargetTracker,
+    Tracker,
+    belief_summary,
+)
 from .alignment import Reading
 from .config import (
     JPDAAssociation,
@@ -62,14 +70,9 @@ from .config import (
 from .detections import ReadingBirth, position_detections
 from .grid_cells import CellLikelihoods, grid_filter, grid_of, grid_prior
 from .schema import TrackState
-from .trackers import (
-    TIME_TOLERANCE,
-    MCMCDAAdapter,
-    NodeTracker,
-    PhdTracker,
-    SingleTargetTracker,
-    summary,
-)
+from .trackers import MCMCDAAdapter
+
+TIME_TOLERANCE = 1e-9  # readings this close in time are one update
 
 DETECTIONS = "detections"
 """The sensor id of MCMCDA's position detections (several sensors' readings, grid peaks)."""
@@ -90,7 +93,7 @@ def build_filter(cfg: NetworkConfig) -> Filter[Any]:
     return ExtendedKalmanFilter(motion, sensors, joint=joint)
 
 
-def build_tracker(cfg: NetworkConfig, start: float, cells: CellLikelihoods | None) -> NodeTracker:
+def build_tracker(cfg: NetworkConfig, start: float, cells: CellLikelihoods | None) -> Tracker:
     """The configured tracker (module docstring); ``cells``: the grid's likelihood maps, with
     ``filter: grid``."""
     a = cfg.tracker.association
@@ -137,7 +140,7 @@ def _scan_tracker(cfg: NetworkConfig, a: ScanTrackerAssociation) -> MultiTargetT
     )
 
 
-def _phd_tracker(cfg: NetworkConfig, a: PHDAssociation) -> PhdTracker:
+def _phd_tracker(cfg: NetworkConfig, a: PHDAssociation) -> PHDTracker:
     """The GM-PHD filter on the configured motion and sensors, births over the whole area."""
     phd = GMPHDFilter(
         cfg.tracker.motion.build(),
@@ -150,7 +153,7 @@ def _phd_tracker(cfg: NetworkConfig, a: PHDAssociation) -> PhdTracker:
         merge_threshold=a.merge_threshold,
         max_components=a.max_components,
     )
-    return PhdTracker(phd, a.extract_threshold)
+    return PHDTracker(phd, a.extract_threshold)
 
 
 def birth_intensity(cfg: NetworkConfig, cells: int, weight: float) -> PhdIntensity:
@@ -262,13 +265,13 @@ class FusionEngine:
             self._scan(t, [])
         out = []
         for track in self.state.confirmed:
-            mean, cov = summary(self.filter, track.belief)
+            mean, cov = belief_summary(self.filter, track.belief)
             if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(cov))):
                 self.resets += 1  # never publish NaN: one target restarts from the prior now
                 if not isinstance(self.tracker, SingleTargetTracker):
                     continue
                 self.state = self.tracker.restart(self.state, self.rng)
-                mean, cov = summary(self.filter, self.state.belief)
+                mean, cov = belief_summary(self.filter, self.state.belief)
             out.append(track_state(track.id + 1, tick, t, mean, cov, self.position_index, readings))
         return out
 

@@ -2,7 +2,9 @@
 and a deleter, pure (``state = tracker.step(state, time, measurements, rng)``):
 :class:`MultiTargetTracker` (GNN, JPDA, any single-scan associator), :class:`MHTTracker`
 (track-oriented MHT, a belief per hypothesis leaf), :class:`MCMCDATracker` (online MCMCDA on
-position reports), all with ``initial_state / step / run``."""
+position reports), :class:`PHDTracker` (a GM-PHD intensity's labelled components) and
+:class:`SingleTargetTracker` (any filter as a one-track tracker), all behind one interface
+(:class:`Tracker`: ``initial_state / step``)."""
 
 from .deleters import AnyOf, CovarianceDeleter, Deleter, ExistenceDeleter, MissedCountDeleter
 from .existence import predict_existence, update_existence
@@ -16,6 +18,9 @@ from .mcmcda_tracker import MCMCDATracker, MCMCDATrackerState
 from .mht_tracker import MHTTracker, MHTTrackerState
 from .mixing import combine_hypotheses
 from .phd_initiator import PHDBirthState, PHDInitiator
+from .phd_tracker import PHDTracker, PHDTrackerState
+from .protocol import Tracker, TrackView, belief_summary
+from .single_target import SingleTargetState, SingleTargetTracker
 from .state import LiveTrack, TrackerState, TrackerStats
 from .tracker import MultiTargetTracker
 
@@ -36,9 +41,16 @@ __all__ = [
     "MultiTargetTracker",
     "PHDBirthState",
     "PHDInitiator",
+    "PHDTracker",
+    "PHDTrackerState",
     "SinglePointInitiator",
+    "SingleTargetState",
+    "SingleTargetTracker",
+    "TrackView",
+    "Tracker",
     "TrackerState",
     "TrackerStats",
+    "belief_summary",
     "combine_hypotheses",
     "predict_existence",
     "update_existence",
