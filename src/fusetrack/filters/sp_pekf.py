@@ -27,7 +27,7 @@ from ..core.beliefs import Gaussian
 from ..core.errors import ConfigError, UnknownSensorError, invalid
 from ..core.measurement import Measurement
 from ..core.models import MotionModel, SensorModel
-from .sis import Array, SISStats, Zs
+from .proposals import Array, SISStats, Zs
 
 _LOG_2PI = float(np.log(2 * np.pi))
 
