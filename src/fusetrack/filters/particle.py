@@ -26,7 +26,15 @@ cannot).
 Resampling sits at the start of ``predict`` rather than the end of ``update`` so that the
 estimate after an update (:meth:`ParticleFilter.estimate`) is taken from the weighted particles,
 which has lower variance than taking it after resampling; the sequence of particle sets is the
-usual SIR one.
+usual SIR one. ``resample="every_update"`` is the other policy, the sequential importance
+sampling loop of Zhai 2007 (Sec. 2.1-2.2): the update weights, resamples every run at once,
+optionally moves the particles by MCMC and estimates from the resampled set, and
+:meth:`ParticleFilter.step` draws from a pluggable proposal ``q(x_t | x_{t-1}, z_t)`` with the
+measurements in view (:mod:`~fusetrack.filters.proposals`; the class docstring lists the
+parts). :class:`~fusetrack.filters.ProposalParticleFilter` and
+:class:`~fusetrack.filters.MultipleModelParticleFilter` are that configuration; both policies
+share the likelihoods, the weight normalisation, the degeneracy policy, the resampling schemes
+and the draws from the motion model.
 
 Measurements. Any subset of the filter's sensors may report at a step; several measurements
 are applied in sequence. A value ``(m,)`` applies to every run, ``(R, m)`` (or any leading shape
@@ -97,7 +105,7 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from itertools import repeat
-from typing import Any, Literal, NamedTuple
+from typing import Any, ClassVar, Literal, NamedTuple
 
 import numba
 import numpy as np
@@ -276,6 +284,8 @@ class ParticleFilter:
     ``sample`` (never the fused linear path) from one :class:`numpy.random.Generator`.
     """
 
+    _resamples_every_update: ClassVar[bool] = True  # False: a filter with its own selection
+
     def __init__(
         self,
         motion: MotionModel,
@@ -297,6 +307,8 @@ class ParticleFilter:
         if resample not in ("ess", "every_update"):
             raise ConfigError(invalid("resample", resample, "'ess' or 'every_update'"))
         every = resample == "every_update"
+        if every and not self._resamples_every_update:
+            raise ConfigError(invalid("resample", resample, f"'ess' for {type(self).__name__}"))
         if min_log_evidence is None:
             min_log_evidence = -math.inf if every else LOG_TINY
         for name, value, default in (
@@ -1356,6 +1368,8 @@ class RegularizedParticleFilter(ParticleFilter):
     its symmetric square root instead of Cholesky. Everything else is :class:`ParticleFilter`.
     """
 
+    _resamples_every_update = False  # the jitter belongs to its predict-time resampling
+
     def __init__(self, *args: Any, bandwidth_scale: float = 1.0, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.bandwidth_scale = check_positive("bandwidth_scale", bandwidth_scale, allow_zero=True)
@@ -1411,6 +1425,8 @@ class AuxiliaryParticleFilter(ParticleFilter):
     measurement) is the bootstrap update. If the first stage is degenerate for a run (every
     ``p(z | mu_i)`` vanishes), that run selects by its previous weights.
     """
+
+    _resamples_every_update = False  # its update is its own two-stage selection
 
     def predict(self, particles: Particles, dt: float, rng: Rng | None = None) -> Particles:
         """Draw every child (no resampling) and remember the parents for :meth:`update`."""

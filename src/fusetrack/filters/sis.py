@@ -25,7 +25,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
-import numpy as np
+import numpy as np  # noqa: F401  (doctest)
 
 from ..core.beliefs import Gaussian  # noqa: F401  (doctest)
 from ..core.errors import ConfigError, invalid
