@@ -89,6 +89,9 @@ class ProposalParticleFilter(ParticleFilter):
     True
     """
 
+    stats: SISStats  # ParticleFilter keeps SISStats whenever it has a proposal
+    sensors: list[SensorModel]  # type: ignore[assignment]  # the models, in order
+
     def __init__(
         self,
         motion: MotionModel,
@@ -113,7 +116,7 @@ class ProposalParticleFilter(ParticleFilter):
             estimate="resampled",
             transition=transition,
         )
-        self.sensors = list(self._by_id.values())  # type: ignore[assignment]
+        self.sensors = list(self._by_id.values())
 
     def __repr__(self) -> str:
         return (
