@@ -253,12 +253,14 @@ class ParticleFilter:
     temper_factor:
         ``"inflate"`` multiplies the tempering exponent by this factor in ``(0, 1)`` per try.
     min_log_evidence:
-        Log predictive density below which a measurement counts as degenerate.
+        Log predictive density below which a measurement counts as degenerate (default:
+        :data:`LOG_TINY`; ``-inf`` with ``resample="every_update"``).
     resample:
         ``"ess"`` (default): resample at the next ``predict`` when the ESS is low (above);
         ``"every_update"``: resample every update right after weighting, which is what a
-        proposal's weight assumes (the SIS loop, see :ref:`below <every-update>`); the filter
-        then carries a :class:`~fusetrack.filters.SISBelief`.
+        proposal's weight assumes (the SIS loop, see :ref:`below <every-update>`;
+        ``ess_threshold`` is then unused); the filter carries a
+        :class:`~fusetrack.filters.SISBelief`.
     proposal:
         ``q(x_t | x_{t-1}, z_t)`` (:class:`~fusetrack.filters.proposals.Proposal`) drawn from by
         :meth:`step` with the step's measurements in view; ``"every_update"`` only (default
@@ -304,25 +306,9 @@ class ParticleFilter:
         estimate: Literal["weighted", "resampled"] = "weighted",
         transition: Literal["paired", "marginal"] = "paired",
     ) -> None:
-        if resample not in ("ess", "every_update"):
-            raise ConfigError(invalid("resample", resample, "'ess' or 'every_update'"))
-        every = resample == "every_update"
-        if every and not self._resamples_every_update:
-            raise ConfigError(invalid("resample", resample, f"'ess' for {type(self).__name__}"))
+        every = self._check_policy(resample, proposal, move, estimate, transition)
         if min_log_evidence is None:
             min_log_evidence = -math.inf if every else LOG_TINY
-        for name, value, default in (
-            ("proposal", proposal, None),
-            ("move", move, None),
-            ("estimate", estimate, "weighted"),
-            ("transition", transition, "paired"),
-        ):
-            if not every and value is not default:
-                raise ConfigError(invalid(name, value, f"{default!r} with resample='ess'"))
-        if estimate not in ("weighted", "resampled"):
-            raise ConfigError(invalid("estimate", estimate, "'weighted' or 'resampled'"))
-        if transition not in ("paired", "marginal"):
-            raise ConfigError(invalid("transition", transition, "'paired' or 'marginal'"))
         if (
             isinstance(n_particles, bool)
             or not isinstance(n_particles, int | np.integer)
@@ -368,6 +354,30 @@ class ParticleFilter:
         self._everyone: dict[int, NDArray[np.bool_]] = {}  # read-only all-True "usable" rows
         self._runs: rng_handles.RunStreams | None = None  # handles of the last per-run gens
         self._one: rng_handles.RunStreams | None = None  # handle of the last single generator
+
+    def _check_policy(
+        self, resample: str, proposal: Any, move: Any, estimate: str, transition: str
+    ) -> bool:
+        """Validate the resampling policy and its parts; whether it is ``"every_update"``."""
+        if resample not in ("ess", "every_update"):
+            raise ConfigError(invalid("resample", resample, "'ess' or 'every_update'"))
+        every = resample == "every_update"
+        if every and not self._resamples_every_update:
+            raise ConfigError(invalid("resample", resample, f"'ess' for {type(self).__name__}"))
+        for name, value, default in (
+            ("proposal", proposal, None),
+            ("move", move, None),
+            ("estimate", estimate, "weighted"),
+            ("transition", transition, "paired"),
+        ):
+            given = value is not None if default is None else value != default
+            if given and not every:
+                raise ConfigError(invalid(name, value, f"{default!r} with resample='ess'"))
+        if estimate not in ("weighted", "resampled"):
+            raise ConfigError(invalid("estimate", estimate, "'weighted' or 'resampled'"))
+        if transition not in ("paired", "marginal"):
+            raise ConfigError(invalid("transition", transition, "'paired' or 'marginal'"))
+        return every
 
     def __repr__(self) -> str:
         return (
