@@ -62,9 +62,12 @@ class SISStats(FilterStats):
 
 
 class LogLikelihood:
-    """``log p(z_t | x)`` summed over the sensors that reported (finite values) at one step."""
+    """``log p(z_t | x)`` summed over the sensors that reported (finite values) at one step: the
+    view of the step's likelihood that proposals and MCMC moves evaluate at particles of their
+    own. (The filter weighs through :class:`~fusetrack.filters.ParticleFilter`'s likelihood
+    pass, which counts skipped reports; this one does not.)"""
 
-    def __init__(self, sensors: Sequence[SensorModel], zs: Zs, stats: FilterStats | None = None):
+    def __init__(self, sensors: Sequence[SensorModel], zs: Zs):
         if len(zs) != len(sensors):
             raise ConfigError(
                 invalid("measurements", f"{len(zs)} entries", f"{len(sensors)} (one per sensor)")
@@ -77,8 +80,6 @@ class LogLikelihood:
             if za.ndim == 0:
                 za = za[None]
             if not np.all(np.isfinite(za)):
-                if stats is not None:
-                    stats.skipped_measurements += 1
                 continue
             self.items.append((s, za))
 
