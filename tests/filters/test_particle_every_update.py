@@ -130,3 +130,13 @@ def test_proposals_draw_from_one_generator():
 
 def _rng() -> np.random.Generator:
     return np.random.default_rng(7)
+
+
+def test_mean_of_a_sis_belief_is_its_estimate_even_when_replaced():
+    import dataclasses
+
+    pf = ProposalParticleFilter(CV, [FIX], n_particles=50)
+    b = pf.step(pf.initialize(PRIOR, _rng()), 1.0, [Measurement(1.0, "p", [0.5])], _rng())
+    np.testing.assert_array_equal(pf.mean(b), b.states.mean(axis=0))
+    moved = dataclasses.replace(b, estimate=b.estimate + 1.0)  # e.g. App. B's shared velocity
+    np.testing.assert_array_equal(pf.mean(moved), b.estimate + 1.0)

@@ -546,7 +546,10 @@ class ParticleFilter:
         return Gaussian(mean.reshape((*lead, d)), cov.reshape((*lead, d, d)))
 
     def mean(self, particles: Particles) -> Array:
-        """Weighted mean ``(..., d)`` only (one pass; cheaper than :meth:`estimate`)."""
+        """Weighted mean ``(..., d)`` only (one pass; cheaper than :meth:`estimate`); a
+        :class:`~.proposals.SISBelief`'s own estimate (e.g. of the resampled particles)."""
+        if isinstance(particles, SISBelief) and particles.estimate.size:
+            return np.array(particles.estimate)
         cached = particles.info.get(_MEAN)
         if cached is not None and cached[0] is particles.log_weights:
             return np.array(cached[1].reshape((*particles.batch_shape, particles.dim)))
@@ -740,11 +743,9 @@ class ParticleFilter:
         parents: Array | None = None,
         dt: float = 0.0,
     ) -> SISBelief:
-        """A :class:`~.proposals.SISBelief` with its weights and its estimate (as the mean that
-        :meth:`mean` returns) cached."""
+        """A :class:`~.proposals.SISBelief` with its weights cached."""
         lw = W.lw.reshape(states.shape[:-1])
-        info = {_CACHE: (lw, W), _MEAN: (lw, estimate.reshape(-1, states.shape[-1]))}
-        return SISBelief(states, lw, info, estimate, pstate, parents, dt)
+        return SISBelief(states, lw, {_CACHE: (lw, W)}, estimate, pstate, parents, dt)
 
     # ------------------------------------------------------------------------------------------
     # weights and their cache
