@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..core import Gaussian
-from .sis import Array, Zs
+from .proposals import Array, Zs
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
 
 

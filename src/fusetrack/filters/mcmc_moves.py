@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core import check_positive
-from .sis import Array
+from .proposals import Array
 
 
 def _accept(

@@ -32,7 +32,7 @@ from ..core import (
     UnknownSensorError,
     invalid,
 )
-from .sis import Array, SISStats, Zs
+from .proposals import Array, SISStats, Zs
 
 _LOG_2PI = float(np.log(2 * np.pi))
 

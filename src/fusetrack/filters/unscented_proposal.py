@@ -18,7 +18,7 @@ import numpy as np
 
 from ..core import Gaussian, Measurement
 from .kalman import UnscentedKalmanFilter
-from .sis import Array, Zs
+from .proposals import Array, Zs
 
 _LOG_2PI = float(np.log(2 * np.pi))
 
