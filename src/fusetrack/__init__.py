@@ -1,6 +1,6 @@
 """fusetrack: tracking with networks of different sensors, fused in Bayesian filters.
 
-The package is organised by stage (see ``DESIGN.md``): ``core`` values, ``motion`` and
+The package is organised by stage (``docs/ARCHITECTURE.md``): ``core`` values, ``motion`` and
 ``sensors`` models, ``world`` geometry, ``filters``, ``management``, ``association``,
 ``perception``, ``evaluation`` and the reproduced ``experiments``.
 """

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from importlib.metadata import PackageNotFoundError, version
@@ -125,14 +126,12 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="= fusetrack run demo (--live: a live fusion node)")
     _add_run_options(demo, "out/demo")
     _add_verbosity(demo, argparse.SUPPRESS)
-    from .service.commands import add_live_options
-    from .service.commands import add_parsers as add_service
+    from .service import add_live_options, add_service_parsers
+    from .tools import add_track_video_parser
 
     add_live_options(demo)
-    add_service(sub)
-    from .tools.track_video_args import add_parser as add_track_video
-
-    add_track_video(sub)
+    add_service_parsers(sub)
+    add_track_video_parser(sub)
     return parser
 
 
@@ -177,6 +176,23 @@ def _log_to_stderr(args: argparse.Namespace) -> tuple[logging.Handler, int]:
     return handler, previous
 
 
+def _check_output_dir(out: str | Path) -> None:
+    """Check ``--out`` before any work (nothing is created): the path, or its nearest existing
+    ancestor, must be a directory fusetrack may write in; a path under a file used to fail
+    only after the whole run."""
+    path = Path(out).absolute()
+    existing = next(p for p in (path, *path.parents) if p.exists())
+    problem = None
+    if not existing.is_dir():
+        problem = f"{existing} is not a directory"
+    elif not os.access(existing, os.W_OK | os.X_OK):
+        problem = f"no permission to write in {existing}"
+    if problem is not None:
+        raise ConfigError(
+            invalid("--out", str(out), f"a directory fusetrack can create and write ({problem})")
+        )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler, previous = _log_to_stderr(args)
@@ -196,19 +212,20 @@ def _dispatch(args: argparse.Namespace) -> int:
     from .experiments import REGISTRY, run_experiment
 
     if args.command in ("serve", "replay") or getattr(args, "live", False):
-        from .service.commands import main as service_main
+        from .service import run_service_command
 
-        return service_main(args)
+        return run_service_command(args)
     if args.command == "track-video":
-        from .tools.track_video import main as track_video_main
+        from .tools import run_track_video_command
 
-        return track_video_main(args)
+        return run_track_video_command(args)
     if args.command == "list":
         width = max(len(n) for n in REGISTRY)
         for name, info in REGISTRY.items():
             print(f"{name:<{width}}  {info.title}")
         return 0
     name = "demo" if args.command == "demo" else args.name
+    _check_output_dir(args.out)
     ctx = RunContext(
         name=name,
         out_dir=args.out,

@@ -160,3 +160,16 @@ def test_bad_input():
     bad = ScanLikelihoods((1,), np.array([[np.nan]]), np.array([-1.0]), np.zeros(1))
     with pytest.raises(ConfigError, match="TrackOrientedMHT: log_likelihood="):
         TrackOrientedMHT().associate(bad)
+
+
+def test_add_tracks_is_add_track_for_several_families():
+    state = MHTState.for_tracks([0, 1])
+    one, a = state.add_track(5)
+    both, b = one.add_track(6)
+    batch, roots = state.add_tracks([5, 6])
+    assert roots == (a, b) and batch.next_id == both.next_id
+    assert batch.leaves == both.leaves
+    with pytest.raises(ConfigError, match="family=6"):
+        state.add_tracks([6, 6])
+    with pytest.raises(ConfigError, match="family=1"):
+        state.add_tracks([4, 1])

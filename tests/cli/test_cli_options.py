@@ -183,3 +183,18 @@ def test_every_example_yaml_is_described_by_a_pydantic_model(tmp_path):
         ConfigError, match=r"config.colour is not a known key: expected one of .*cameras"
     ):
         load_yaml(RoomConfig, bad)
+
+
+def test_out_under_a_file_fails_before_any_work(tmp_path, capsys, monkeypatch):
+    """Issue 18: ``--out`` under a file used to fail with a traceback after the whole run."""
+    import fusetrack.experiments as experiments
+    from fusetrack.cli import main
+
+    a_file = tmp_path / "report.md"
+    a_file.write_text("not a directory")
+    ran = []
+    monkeypatch.setattr(experiments, "run_experiment", lambda *a, **k: ran.append(a))
+    code = main(["run", "ercan2013-occluders", "--quick", "--out", str(a_file / "x")])
+    assert code == 2 and not ran
+    err = capsys.readouterr().err
+    assert "--out" in err and "is not a directory" in err and "Traceback" not in err

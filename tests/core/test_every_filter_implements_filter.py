@@ -29,6 +29,15 @@ NOT_FILTERS = {
     "fusetrack.association.mcmcda.MCMCDA": "an associator: step(state, observations) -> state",
     "fusetrack.tracking.tracker.MultiTargetTracker": "many targets: step(state, time, "
     "measurements) -> TrackerState, each track running a Filter",
+    "fusetrack.tracking.mht_tracker.MHTTracker": "many targets: MultiTargetTracker with a "
+    "Filter belief per MHT hypothesis leaf",
+    "fusetrack.tracking.mcmcda_tracker.MCMCDATracker": "many targets: step(state, time, "
+    "measurements) -> state around the MCMCDA associator",
+    "fusetrack.tracking.phd_tracker.PHDTracker": "many targets: step(state, time, "
+    "measurements) -> state around the GM-PHD Filter",
+    "fusetrack.tracking.single_target.SingleTargetTracker": "the tracker interface around one "
+    "Filter (step(state, time, measurements) -> state)",
+    "fusetrack.tracking.protocol.Tracker": "the tracker protocol",
     "fusetrack.management.camera_triggering.AcousticTracker": "the configuration that builds "
     "the per-object MultiModelBearingPF (models, dt, particles), not a filter",
     "fusetrack.motion.walking_person.WalkingPerson": "a motion model (step = one simulated stride)",

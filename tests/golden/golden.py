@@ -40,6 +40,7 @@ FLOATING_POINT = {
     "ercan2013-lab": {"C11_fig15_greedy_brute"},
     "kushwaha2010-crossing": {"per_track_errors"},
     "kushwaha2010-mcmcda": {"av_lowest_error", "product_lower_error", "mcmcda_beats_sbe"},
+    "zhai2007-visual": {"E18-1_beats_baseline", "E18-1_keeps_lock"},  # a lost track's RMSE
     "zhai2007-scalar": {
         "C1_order",
         "C1_order_variant_printed",

@@ -205,6 +205,23 @@ def test_log_density_of_singular_q_is_the_degenerate_gaussian(model):
     assert np.all(model.log_density(off, x, dt) == -np.inf)
 
 
+def test_samples_of_a_singular_q_stay_on_its_support_when_cholesky_succeeds():
+    """Found by test_motion_properties: at this dt ``cholesky(Q)`` succeeds on the rank-3 ``Q``
+    and its factor leaks ~1e-7 into the null space; the density must not call that off-support."""
+    model = ConstantVelocity(3, 2.0, "discrete")
+    dt = 2.3579288105783665
+    np.linalg.cholesky(model.noise_cov(dt))  # does not raise: the factor is not exactly rank 3
+    rng = np.random.default_rng(2316982925)
+    x = rng.normal(size=6)
+    xn = model.sample(x, dt, rng)
+    assert np.isfinite(model.log_density(xn, x, dt))
+    many = np.random.default_rng(0).normal(size=(20000, 6))
+    assert np.all(np.isfinite(model.log_density(model.sample(many, dt, rng), many, dt)))
+    off = xn.copy()
+    off[0] += 1e-4 * np.sqrt(model.noise_cov(dt).max())  # position without the velocity change
+    assert model.log_density(off, x, dt) == -np.inf
+
+
 def test_dt_zero_is_the_identity_and_log_density_raises():
     cv = ConstantVelocity(2, 1.0)
     x = np.array([[1.0, 2.0, 3.0, 4.0]])

@@ -1,4 +1,5 @@
-"""The tracker's parts on hand-computed cases: scan scores and gate, the PDA combination, the
+"""The tracker's parts on hand-computed cases: scan scores and gate (association's, as the
+tracker calls them), the PDA combination, the
 IPDA existence update, the inverse-measurement prior, the M-of-N rule, the deleters."""
 
 from __future__ import annotations
@@ -7,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2, multivariate_normal
 
+from fusetrack.association import gate_threshold, mahalanobis_squared, scan_likelihoods
 from fusetrack.core import ConfigError, Gaussian, Measurement, Particles
 from fusetrack.filters import ExtendedKalmanFilter, KalmanFilter
 from fusetrack.motion import ConstantVelocity
@@ -21,9 +23,6 @@ from fusetrack.tracking import (
     MofNInitiator,
     SinglePointInitiator,
     combine_hypotheses,
-    gate_threshold,
-    mahalanobis_squared,
-    score_scan,
     update_existence,
 )
 
@@ -39,11 +38,10 @@ def test_scores_are_log_pd_plus_the_predictive_density_inside_the_gate():
         Gaussian([10.0, 0.0, 0.0, 0.0], np.eye(4)),
     ]
     zs = [Measurement(0.0, "pos", v) for v in ([0.5, -1.0], [10.2, 0.3], [30.0, 30.0])]
-    scored = score_scan(
-        KF, {"pos": POS}, [7, 9], tracks, zs, p_detect=0.8, clutter_density=1e-3,
-        gate_probability=0.99, rng=None,
+    s, posteriors = scan_likelihoods(
+        [7, 9], tracks, zs, {"pos": POS}, KF, p_detect=0.8, clutter_density=1e-3,
+        gate_probability=0.99, keep_posteriors=True,
     )  # fmt: skip
-    s = scored.scores
     assert s.track_ids == (7, 9) and s.shape == (2, 3)
     expected = np.full((2, 3), -np.inf)
     for i, b in enumerate(tracks):
@@ -56,9 +54,9 @@ def test_scores_are_log_pd_plus_the_predictive_density_inside_the_gate():
     np.testing.assert_allclose(s.log_likelihood, expected, rtol=1e-12)
     np.testing.assert_allclose(s.log_missed, np.log(1 - 0.8 * 0.99))
     np.testing.assert_allclose(s.log_clutter, np.log(1e-3))
-    assert set(scored.posteriors) == {(0, 0), (1, 1)}
+    assert set(posteriors) == {(0, 0), (1, 1)}
     post = KF.update(tracks[1], [zs[1]])
-    np.testing.assert_allclose(scored.posteriors[(1, 1)].mean, post.mean, rtol=1e-14)
+    np.testing.assert_allclose(posteriors[(1, 1)].mean, post.mean, rtol=1e-14)
 
 
 def test_the_gate_uses_the_measurement_covariance_and_the_sensor_residual():
@@ -211,13 +209,13 @@ def test_ekf_scores_are_its_own_likelihood_increment():
     ekf = ExtendedKalmanFilter(ConstantVelocity(ndim=2, q=0.1), [radar])
     b = Gaussian([10.0, 0.0, 0.0, 0.0], np.eye(4))
     z = Measurement(0.0, "radar", [10.3, 0.02])
-    scored = score_scan(
-        ekf, {"radar": radar}, [0], [b], [z], p_detect=1.0, clutter_density=1.0,
+    scores = scan_likelihoods(
+        [0], [b], [z], {"radar": radar}, ekf, p_detect=1.0, clutter_density=1.0,
         gate_probability=1.0,
     )  # fmt: skip
     _, ll = ekf.update_with_likelihood(b, [z])
-    assert scored.scores.log_likelihood[0, 0] == pytest.approx(float(ll), rel=1e-12)
-    assert scored.scores.log_missed[0] == -np.inf  # P_D P_G = 1
+    assert scores.log_likelihood[0, 0] == pytest.approx(float(ll), rel=1e-12)
+    assert scores.log_missed[0] == -np.inf  # P_D P_G = 1
 
 
 class PlainKF(KalmanFilter):
@@ -231,7 +229,7 @@ class PlainKF(KalmanFilter):
 
 
 def test_batched_filter_calls_equal_one_call_per_track():
-    from fusetrack.tracking.batch import batches, predict_many, update_pairs
+    from fusetrack.association import batchable, predict_many, update_pairs
 
     rng = np.random.default_rng(5)
     beliefs = []
@@ -241,8 +239,8 @@ def test_batched_filter_calls_equal_one_call_per_track():
     zs = [Measurement(1.0, "pos", rng.normal(0, 5, 2)) for _ in range(6)]
     zs[2] = Measurement(1.0, "pos", [1.0, 2.0], covariance=[[2.0, 0.3], [0.3, 1.0]])
     plain = PlainKF(KF.motion, [POS])
-    assert batches(KF, beliefs) and not batches(plain, beliefs)
-    assert not batches(KF, [Particles.uniform(np.zeros((3, 4)))])
+    assert batchable(KF, beliefs) and not batchable(plain, beliefs)
+    assert not batchable(KF, [Particles.uniform(np.zeros((3, 4)))])
     for got, ref in zip(
         predict_many(KF, beliefs, 0.7, None), predict_many(plain, beliefs, 0.7, None)
     ):

@@ -1,26 +1,25 @@
 """The multi-target tracker end to end: two targets in clutter, deletion, M-of-N confirmation,
 exact agreement with the single-target filter, two sensor kinds in one scan, bad input.
 
-The associator here is a tiny greedy nearest neighbour (best log-likelihood ratio first, each
-track and measurement used once), standing in for the real ones of ``fusetrack.association``.
+The associator here is :class:`~fusetrack.association.GlobalNearestNeighbour`; JPDA and the
+other associators are compared on a hand-worked crossing in ``test_associators.py``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from _tracking_scenarios import MOTION, POS, SIGMA, WIDE, scenario, tracker
 
-from fusetrack.association import Association, SingleHypothesis
+from fusetrack.association import Association, GlobalNearestNeighbour, SingleHypothesis
 from fusetrack.core import (
     ConfigError,
-    Gaussian,
     Measurement,
     MeasurementError,
     UnknownSensorError,
 )
 from fusetrack.filters import ExtendedKalmanFilter, KalmanFilter, run_filter
-from fusetrack.motion import ConstantVelocity
-from fusetrack.sensors import LinearGaussianSensor, PositionFix, RangeBearing
+from fusetrack.sensors import PositionFix, RangeBearing
 from fusetrack.tracking import (
     AnyOf,
     ExistenceDeleter,
@@ -30,67 +29,6 @@ from fusetrack.tracking import (
     MultiTargetTracker,
     SinglePointInitiator,
 )
-
-H_POS = np.hstack([np.eye(2), np.zeros((2, 2))])
-SIGMA = 0.5  # measurement noise std per axis (m)
-SIDE = 200.0  # the surveillance square (m)
-CLUTTER_RATE = 2.0  # false alarms per scan, uniform over the square
-MOTION = ConstantVelocity(ndim=2, q=0.05)
-POS = LinearGaussianSensor("pos", H=H_POS, R=SIGMA**2 * np.eye(2))
-WIDE = Gaussian(np.zeros(4), np.diag([0.0, 0.0, 9.0, 9.0]))  # velocity std 3 m/s
-
-
-class Greedy:
-    """Greedy nearest neighbour: pairs by decreasing ``l_ij - log kappa_j - log_missed_i``."""
-
-    def associate(self, scores, rng=None):
-        gain = scores.log_likelihood - scores.log_clutter - scores.log_missed[:, None]
-        hyp, taken = {}, set()
-        for k, j in zip(*np.unravel_index(np.argsort(-gain, axis=None), gain.shape)):
-            i = scores.track_ids[k]
-            if gain[k, j] > 0 and i not in hyp and int(j) not in taken:
-                hyp[i] = (SingleHypothesis(i, int(j)),)
-                taken.add(int(j))
-        hyp = {i: hyp.get(i, (SingleHypothesis(i, None),)) for i in scores.track_ids}
-        return Association(hyp, tuple(j for j in range(gain.shape[1]) if j not in taken))
-
-
-def tracker(initiator=None, deleter=None, p_detect=0.9, **kw):
-    kf = kw.pop("filt", KalmanFilter(MOTION, [POS]))
-    return MultiTargetTracker(
-        kf,
-        [POS],
-        Greedy(),
-        initiator or MofNInitiator(3, 4, InverseMeasurementPrior([POS], WIDE)),
-        deleter or MissedCountDeleter(3),
-        p_detect=p_detect,
-        clutter_density=CLUTTER_RATE / SIDE**2,
-        gate_probability=kw.pop("gate_probability", 0.999),
-        **kw,
-    )
-
-
-def scenario(seed, n_scans=40, p_detect=0.9, clutter=CLUTTER_RATE, last_scan=(None, None)):
-    """Two constant-velocity targets (truth drawn from MOTION), position reports with
-    probability ``p_detect``, Poisson clutter; target ``i`` reports up to ``last_scan[i]``.
-    Returns the measurements, the truth ``(2, n_scans, 4)`` and each measurement's source
-    (0, 1, or -1 for clutter)."""
-    rng = np.random.default_rng(seed)
-    x = np.array([[20.0, 20.0, 2.0, 1.0], [180.0, 180.0, -1.0, -1.5]])
-    truth, zs, source = [], [], []
-    for k in range(n_scans):
-        if k:
-            x = MOTION.sample(x, 1.0, rng)
-        truth.append(x.copy())
-        for i in range(2):
-            alive = last_scan[i] is None or k <= last_scan[i]
-            if alive and rng.random() < p_detect:
-                zs.append(Measurement(k, "pos", x[i, :2] + SIGMA * rng.standard_normal(2)))
-                source.append(i)
-        for _ in range(rng.poisson(clutter)):
-            zs.append(Measurement(k, "pos", rng.uniform(0.0, SIDE, 2)))
-            source.append(-1)
-    return zs, np.stack(truth, axis=1), np.array(source)
 
 
 @pytest.mark.parametrize("seed", [0, 3, 7])
@@ -252,7 +190,7 @@ def test_two_sensor_kinds_in_one_scan_are_both_used():
     tr = MultiTargetTracker(
         ekf,
         [tag, radar],
-        Greedy(),
+        GlobalNearestNeighbour(),
         SinglePointInitiator(prior_from),
         MissedCountDeleter(3),
         p_detect=1.0,
@@ -300,7 +238,7 @@ def test_bad_configuration_fails_before_any_work():
         MultiTargetTracker(
             KalmanFilter(MOTION, [POS]),
             [POS],
-            Greedy(),
+            GlobalNearestNeighbour(),
             MofNInitiator(1, 1, prior_from),
             MissedCountDeleter(1),
             0.9,
@@ -322,7 +260,7 @@ def test_bad_configuration_fails_before_any_work():
         MultiTargetTracker(
             KalmanFilter(MOTION, [POS]),
             [POS, PositionFix("tag", cov=np.eye(2))],
-            Greedy(),
+            GlobalNearestNeighbour(),
             MofNInitiator(1, 1, prior_from),
             MissedCountDeleter(1),
             0.9,
@@ -397,7 +335,8 @@ def test_a_soft_associator_gives_the_pda_combination_and_the_ipda_existence():
     state = tr.step(tr.initial_state(), 0.0, [Measurement(0.0, "pos", [0.0, 0.0])])
     zs = [Measurement(1.0, "pos", v) for v in ([0.3, -0.2], [-0.8, 0.9], [40.0, 40.0])]
     after = tr.step(state, 1.0, zs)
-    (track,) = after.tracks
+    track, newborn = after.tracks
+    assert newborn.measurements == (2,)  # in no gate: never offered to the associator
     pred = tr.filter.predict(state.tracks[0].belief, 1.0)
     posts, lls = zip(*(tr.filter.update_with_likelihood(pred, [z]) for z in zs[:2]))
     ratios = 0.9 * np.exp(np.array(lls, dtype=float)) / 0.01
@@ -434,7 +373,7 @@ def test_only_the_sensors_that_scanned_count_a_miss():
     tr = MultiTargetTracker(
         kf,
         [POS, tag],
-        Greedy(),
+        GlobalNearestNeighbour(),
         SinglePointInitiator(InverseMeasurementPrior([POS], WIDE)),
         MissedCountDeleter(2),
         p_detect=0.9,

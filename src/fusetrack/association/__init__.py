@@ -6,6 +6,9 @@ from .base import Associator as Associator
 from .base import ScanLikelihoods as ScanLikelihoods
 from .base import SingleHypothesis as SingleHypothesis
 from .base import hypotheses_of as hypotheses_of
+from .batch import batchable as batchable
+from .batch import predict_many as predict_many
+from .batch import update_pairs as update_pairs
 from .clusters import gate_clusters as gate_clusters
 from .gating import check_gate_probability as check_gate_probability
 from .gating import gate_probability as gate_probability
@@ -14,6 +17,7 @@ from .gating import gaussian_log_density as gaussian_log_density
 from .gating import innovation as innovation
 from .gating import mahalanobis_distance as mahalanobis_distance
 from .gating import mahalanobis_gate as mahalanobis_gate
+from .gating import mahalanobis_squared as mahalanobis_squared
 from .gating import predicted_measurement as predicted_measurement
 from .gating import scan_likelihoods as scan_likelihoods
 from .gnn import GlobalNearestNeighbour as GlobalNearestNeighbour

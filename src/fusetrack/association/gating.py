@@ -12,8 +12,11 @@ Bar-Shalom, Daum & Huang 2009)::
 For a non-linear sensor this is the linearised (EKF) gate whatever the track's filter; any belief
 with ``mean`` ``(d,)`` and ``cov`` ``(d, d)`` (Gaussian, particles, mixture) can be gated.
 
-:func:`scan_likelihoods` builds a :class:`~fusetrack.association.ScanLikelihoods` for one scan
-from the tracks' predicted beliefs and their filter.
+:func:`mahalanobis_squared` gates all the (track, measurement) pairs of a sensor in a few batched
+array operations; :func:`scan_likelihoods` builds a :class:`~fusetrack.association.ScanLikelihoods`
+for one scan from the tracks' predicted beliefs and their filter, paying a filter update only for
+the pairs inside the gate (one batched call per sensor for the Kalman family, :mod:`.batch`), so a
+scan of thousands of clutter points costs a few array operations per track.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from ..core import (
     invalid,
 )
 from .base import Array, ScanLikelihoods
+from .batch import update_pairs
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -177,27 +181,60 @@ def _clutter_of(clutter_density: float | Mapping[str, float], sensor_id: str) ->
     return check_positive("clutter_density", clutter_density)
 
 
-def _gated_pair(
+def mahalanobis_squared(
+    sensor: SensorModel, beliefs: Sequence[Belief], measurements: Sequence[Measurement]
+) -> Array:
+    """``(T, M)``: ``y^T S^-1 y`` of each measurement (all of ``sensor``, vector values
+    ``(m,)``) against each belief, in a few batched array operations: the gate of
+    :func:`mahalanobis_distance` for all pairs at once (``R`` the measurement's own covariance
+    when it has one; a singular ``S`` is solved by least squares)."""
+    n_t, n_m = len(beliefs), len(measurements)
+    if not n_t or not n_m:
+        return np.zeros((n_t, n_m))
+    moments = [_moments(b) for b in beliefs]
+    means = np.stack([m for m, _ in moments])  # (T, d)
+    covs = np.stack([c for _, c in moments])  # (T, d, d)
+    h = np.asarray(sensor.jacobian(means), float)  # (T, m, d)
+    z_pred = np.asarray(sensor.predict(means), float)  # (T, m)
+    hph = h @ covs @ np.swapaxes(h, -1, -2)  # (T, m, m)
+    r_sensor = np.broadcast_to(np.asarray(sensor.noise_cov(means), float), hph.shape)
+    values = np.stack([np.asarray(z.value, float) for z in measurements])  # (M, m)
+    s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
+    y = np.asarray(sensor.residual(values[None, :, :], z_pred[:, None, :]), float)  # (T, M, m)
+    try:
+        s_inv_y = np.linalg.solve(s, y[..., None])[..., 0]
+    except np.linalg.LinAlgError:  # a singular S (no noise, no uncertainty): least squares
+        s_inv_y = (np.linalg.pinv(s, hermitian=True) @ y[..., None])[..., 0]
+    return np.asarray(np.einsum("tmi,tmi->tm", y, s_inv_y))
+
+
+def _noise(z: Measurement, sensor_noise: Array) -> Array:
+    """``z``'s own covariance when it has one, else the sensor's, as ``(T, m, m)``."""
+    if z.covariance is None:
+        return sensor_noise
+    return np.broadcast_to(np.asarray(z.covariance, float), sensor_noise.shape)
+
+
+def _pair_scores(
     filt: Filter[Any],
-    belief: Belief,
+    beliefs: Sequence[Belief],
     sensor: SensorModel,
-    z: Measurement,
-    threshold: float,
+    pairs: Sequence[tuple[int, Measurement]],
     rng: np.random.Generator | None,
-    keep_posterior: bool,
-) -> tuple[float, Any] | None:
-    """``(log p(z | track), posterior or None)`` when ``z`` is in the gate, else None."""
-    y, s = innovation(belief, sensor, z)
-    if float(y @ np.linalg.solve(s, y)) > threshold:
-        return None
-    update_with_likelihood = getattr(filt, "update_with_likelihood", None)
-    if callable(update_with_likelihood):
-        post, inc = update_with_likelihood(belief, [z], rng)
-        pair = float(np.asarray(inc))
-    else:
-        pair = gaussian_log_density(y, s)
-        post = filt.update(belief, [z], rng) if keep_posterior else None
-    return (pair if math.isfinite(pair) else -math.inf), post
+    keep_posteriors: bool,
+) -> list[tuple[float, Any]]:
+    """``(log p(z | track), posterior or None)`` of every gated pair ``(row, z)``: the filter's
+    own increment (batched, :func:`.batch.update_pairs`) when it has ``update_with_likelihood``,
+    else the linearised Gaussian innovation density."""
+    if callable(getattr(filt, "update_with_likelihood", None)):
+        updates = update_pairs(filt, [beliefs[i] for i, _ in pairs], [z for _, z in pairs], rng)
+        return [(ll, post) for post, ll in updates]
+    out = []
+    for i, z in pairs:
+        y, s = innovation(beliefs[i], sensor, z)
+        post = filt.update(beliefs[i], [z], rng) if keep_posteriors else None
+        out.append((gaussian_log_density(y, s), post))
+    return out
 
 
 @overload
@@ -281,16 +318,22 @@ def scan_likelihoods(
     )
     ll = np.full((n, len(measurements)), -np.inf)
     posteriors: dict[tuple[int, int], Any] = {}
-    for j, (z, c) in enumerate(zip(measurements, checked, strict=True)):
-        if not bool(c.usable):
-            continue
-        threshold = gate_threshold(pg, c.sensor.dim)
-        for i, belief in enumerate(beliefs):
-            pair = _gated_pair(filt, belief, c.sensor, z, threshold, rng, keep_posteriors)
-            if pair is not None:
-                ll[i, j] = math.log(pd[i]) + pair[0]
-                if keep_posteriors:
-                    posteriors[(i, j)] = pair[1]
+    by_sensor: dict[str, list[int]] = {}
+    for j, c in enumerate(checked):
+        if bool(c.usable):
+            by_sensor.setdefault(measurements[j].sensor_id, []).append(j)
+    for sid, cols in by_sensor.items():
+        sensor = sensor_map[sid]
+        d2 = mahalanobis_squared(sensor, beliefs, [measurements[j] for j in cols])
+        rows, ks = np.nonzero(d2 <= gate_threshold(pg, sensor.dim))
+        pairs = [(int(i), cols[int(k)]) for i, k in zip(rows, ks, strict=True)]
+        found = _pair_scores(
+            filt, beliefs, sensor, [(i, measurements[j]) for i, j in pairs], rng, keep_posteriors
+        )
+        for (i, j), (pair, post) in zip(pairs, found, strict=True):
+            ll[i, j] = math.log(pd[i]) + pair if math.isfinite(pair) else -math.inf
+            if keep_posteriors:
+                posteriors[(i, j)] = post
     with np.errstate(divide="ignore"):
         log_missed = np.log1p(-pd * pg)
     scores = ScanLikelihoods(tuple(int(t) for t in track_ids), ll, log_missed, log_clutter)

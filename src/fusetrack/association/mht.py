@@ -38,6 +38,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import Bounds, LinearConstraint, milp
+from scipy.sparse import csr_array
 
 from ..core import ConfigError, FusetrackError, ShapeError, invalid
 from .base import Association, ScanLikelihoods, SingleHypothesis
@@ -85,10 +86,20 @@ class MHTState:
     def add_track(self, family: int) -> tuple[MHTState, int]:
         """A new family with one root leaf (born at the next scan); returns the state and the
         root's leaf id (the row id of the new track in the next scan's scores)."""
-        if any(leaf.family == family for leaf in self.leaves):
-            raise ConfigError(invalid("family", family, "a track id not already in the state"))
-        root = TrackHypothesis(self.next_id, int(family), self.scan)
-        return replace(self, leaves=(*self.leaves, root), next_id=self.next_id + 1), root.id
+        state, (leaf_id,) = self.add_tracks([family])
+        return state, leaf_id
+
+    def add_tracks(self, families: Sequence[int]) -> tuple[MHTState, tuple[int, ...]]:
+        """:meth:`add_track` for several new families at once (their root leaf ids, in order)."""
+        new = [int(f) for f in families]
+        seen = {leaf.family for leaf in self.leaves}
+        for f in new:
+            if f in seen:
+                raise ConfigError(invalid("family", f, "a track id not already in the state"))
+            seen.add(f)
+        roots = tuple(TrackHypothesis(self.next_id + k, f, self.scan) for k, f in enumerate(new))
+        state = replace(self, leaves=(*self.leaves, *roots), next_id=self.next_id + len(new))
+        return state, tuple(r.id for r in roots)
 
     def remove_track(self, family: int) -> MHTState:
         """The state without family ``family`` (a deleted track); unknown families are ignored."""
@@ -116,10 +127,11 @@ def best_global_hypothesis(leaves: Sequence[TrackHypothesis]) -> dict[int, Track
     # one "no leaf" variable per family, so that conflicts never make the program infeasible
     big = 1.0 + float(np.abs(scores).sum())
     cost = np.concatenate([-scores, np.full(nf, big)])
-    one_per_family = np.zeros((nf, n + nf))
-    for k, leaf in enumerate(leaves):
-        one_per_family[row_of[leaf.family], k] = 1.0
-    one_per_family[np.arange(nf), n + np.arange(nf)] = 1.0
+    # sparse constraint rows: thousands of families (a scan of false alarms) stay cheap
+    family_rows = [row_of[leaf.family] for leaf in leaves] + list(range(nf))
+    one_per_family = csr_array(
+        (np.ones(n + nf), (family_rows, np.arange(n + nf))), shape=(nf, n + nf)
+    )
     users: dict[tuple[int, int], set[int]] = {}
     for k, leaf in enumerate(leaves):
         for key in leaf.used():
@@ -127,9 +139,9 @@ def best_global_hypothesis(leaves: Sequence[TrackHypothesis]) -> dict[int, Track
     shared = [ks for ks in users.values() if len({leaves[k].family for k in ks}) > 1]
     constraints = [LinearConstraint(one_per_family, 1.0, 1.0)]
     if shared:
-        once = np.zeros((len(shared), n + nf))
-        for r, ks in enumerate(shared):
-            once[r, sorted(ks)] = 1.0
+        rows = [r for r, ks in enumerate(shared) for _ in ks]
+        cols = [k for ks in shared for k in sorted(ks)]
+        once = csr_array((np.ones(len(cols)), (rows, cols)), shape=(len(shared), n + nf))
         constraints.append(LinearConstraint(once, -np.inf, 1.0))
     result = milp(
         cost,
@@ -229,8 +241,10 @@ class TrackOrientedMHT:
         """N-scan pruning, then the ``max_hypotheses`` best leaves per family (best leaf kept)."""
         kept = n_scan_prune(children, best, scan, self.n_scan)
         out: list[TrackHypothesis] = []
-        for family in dict.fromkeys(leaf.family for leaf in kept):
-            leaves = [leaf for leaf in kept if leaf.family == family]
+        by_family: dict[int, list[TrackHypothesis]] = {}
+        for leaf in kept:
+            by_family.setdefault(leaf.family, []).append(leaf)
+        for family, leaves in by_family.items():
             top = best.get(family)
             leaves.sort(key=lambda leaf: (leaf is not top, -leaf.log_score))
             out.extend(leaves[: self.max_hypotheses])

@@ -42,8 +42,7 @@ from typing import Any, TypedDict, Unpack
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..core.models import MotionModel, SensorModel
+from ..core import ConfigError, MotionModel, SensorModel, ShapeError, invalid
 
 Array = NDArray[np.float64]
 Sensors = Mapping[str, SensorModel] | Sequence[SensorModel]

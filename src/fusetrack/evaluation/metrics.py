@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
-from ..core.errors import ConfigError, ShapeError, check_positive, invalid
+from ..core import ConfigError, ShapeError, check_positive, invalid
 
 Array = NDArray[np.float64]
 NanPolicy = Literal["propagate", "omit", "raise"]

@@ -1,4 +1,4 @@
-"""The experiment contract (DESIGN.md): ``results.parquet``, ``summary.json`` and ``report.md``.
+"""The files every experiment run writes: ``results.parquet``, ``summary.json`` and ``report.md``.
 
 An experiment returns an :class:`Outcome` (tidy rows, claims, the report's markdown body); this
 module writes the three files, with the cost of the run (seconds, peak memory) measured here.

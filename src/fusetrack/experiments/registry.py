@@ -1,4 +1,4 @@
-"""The experiment registry and the one way every experiment is run (DESIGN.md contract).
+"""The experiment registry and the one way every experiment is run.
 
 An experiment is a module with ``run(ctx: RunContext) -> Outcome``. The registry maps a name to
 ``module:function`` so that ``fusetrack list`` does not import every experiment. The experiment's
@@ -282,6 +282,14 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Lee 2009 E3.2 (Fig. 3-6): periodic camera cooperation, error against the camera period, 1,000 trials",
             "Lee 2009 (seed 000)",
             options="SweepOptions",
+        ),
+        ExperimentInfo(
+            "multitarget-bearings",
+            "multitarget.experiment:run",
+            "Beyond the papers: several targets from unlabelled bearings of 2-3 arrays, ghost "
+            "intersections; GNN/JPDA on triangulated points, MCMCDA, grid peaks, direct bearings",
+            "fusetrack (issue 17; Kushwaha 2010 field, Lee 2009 bearings)",
+            options="Options",
         ),
     ]
 }

@@ -1,4 +1,4 @@
-"""fusetrack.filters: recursive Bayesian filters and the loop that runs them (see DESIGN.md).
+"""fusetrack.filters: recursive Bayesian filters and the loop that runs them.
 
 One import per line, re-exported with ``as``: add new filters by adding lines.
 """
@@ -65,11 +65,11 @@ from .projected_planes import Direct3DFilter as Direct3DFilter
 from .projected_planes import PlanesBelief as PlanesBelief
 from .projected_planes import ProjectedPlanesTracker as ProjectedPlanesTracker
 from .projected_planes import select_pairs as select_pairs
+from .proposals import PriorProposal as PriorProposal
+from .proposals import SISBelief as SISBelief
+from .proposals import sensor_measurements as sensor_measurements
 from .runner import run_filter as run_filter
-from .sis import PriorProposal as PriorProposal
 from .sis import ProposalParticleFilter as ProposalParticleFilter
-from .sis import SISBelief as SISBelief
-from .sis import sensor_measurements as sensor_measurements
 from .smart_camera_trackers import GMM3_BYTES as GMM3_BYTES
 from .smart_camera_trackers import STATE_BYTES as STATE_BYTES
 from .smart_camera_trackers import WEIGHT_BYTES as WEIGHT_BYTES

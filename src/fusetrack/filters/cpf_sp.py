@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from ..core.beliefs import Gaussian
-from .sis import Array, Zs
+from ..core import Gaussian
+from .proposals import Array, Zs
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
 
 

@@ -26,10 +26,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.errors import ConfigError, ShapeError, check_probability, invalid
-from ..core.measurement import Measurement
-from ..sensors.camera_geometry import apply_homography
-from ..sensors.ground_plane_detection import GroundPlaneDetection
+from ..core import ConfigError, Measurement, ShapeError, check_probability, invalid
+from ..sensors import GroundPlaneDetection, apply_homography
 
 Array = np.ndarray
 

@@ -17,8 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import logsumexp
 
-from ..core.beliefs import GaussianMixture
-from ..core.errors import ConfigError, invalid
+from ..core import ConfigError, GaussianMixture, invalid
 
 Array = NDArray[np.float64]
 

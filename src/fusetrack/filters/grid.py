@@ -30,10 +30,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.ndimage import shift as nd_shift
 from scipy.ndimage import uniform_filter1d
 
-from ..core.beliefs import GridBelief
-from ..core.errors import ConfigError, ShapeError, UnknownSensorError, invalid
-from ..core.measurement import Measurement
-from ..sensors.likelihood_map import LikelihoodMapSensor
+from ..core import ConfigError, GridBelief, Measurement, ShapeError, UnknownSensorError, invalid
+from ..sensors import LikelihoodMapSensor
 
 Fusion = Literal["product", "sum"]
 Architecture = Literal["centralized", "hybrid"]

@@ -29,9 +29,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..core.errors import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, invalid
 from .mixture_density import gauss_logpdf, gaussian_mixture_ancestors
-from .sis import Array, LogLikelihood, Zs
+from .proposals import Array, LogLikelihood, Zs
 
 
 def galerkin_predict(density: Array, kernel: Array, cell: float) -> Array:

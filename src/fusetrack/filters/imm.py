@@ -45,10 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import logsumexp
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..core.measurement import Measurement
-from ..core.models import MotionModel
+from ..core import ConfigError, Gaussian, Measurement, MotionModel, ShapeError, invalid
 from .kalman import Array, ExtendedKalmanFilter, GaussianFilter, Sensors
 from .multiple_model import check_initial_probs, check_transition
 from .stats import FilterStats

@@ -80,12 +80,18 @@ from typing import Any, NamedTuple, Protocol, cast
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.angles import circular_mean
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, ShapeError, check_positive, invalid
-from ..core.measurement import Measurement
-from ..core.models import MotionModel, SensorModel
-from ..sensors.stacked import StackedSensor
+from ..core import (
+    ConfigError,
+    Gaussian,
+    Measurement,
+    MotionModel,
+    SensorModel,
+    ShapeError,
+    check_positive,
+    circular_mean,
+    invalid,
+)
+from ..sensors import StackedSensor
 from .stats import FilterStats, ValidatedMeasurement, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]

@@ -28,8 +28,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import check_positive
-from .sis import Array
+from ..core import check_positive
+from .proposals import Array
 
 
 def _accept(

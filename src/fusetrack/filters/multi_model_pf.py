@@ -32,11 +32,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.angles import wrap_angle_inplace
-from ..core.errors import ConfigError, MeasurementError, invalid
-from ..core.measurement import Measurement
-from ..core.resampling import inverse_cdf
-from ..motion.accel_turn import AccelTurn
+from ..core import (
+    ConfigError,
+    Measurement,
+    MeasurementError,
+    invalid,
+    inverse_cdf,
+    wrap_angle_inplace,
+)
+from ..motion import AccelTurn
 from .multi_model_kernel import kernel_bank, predict_weigh_kernel
 
 Array = np.ndarray

@@ -27,21 +27,18 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, invalid
-from ..core.measurement import Measurement  # noqa: F401  (doctest)
-from ..core.models import MotionModel, SensorModel
-from ..motion.switching import MarkovSwitching
-from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
-from .sis import (
-    Array,
-    LogLikelihood,
-    ProposalContext,
-    ProposalParticleFilter,
-    SISBelief,
-    Zs,
-    check_generator,
+from ..core import (
+    ConfigError,
+    Gaussian,
+    Measurement,  # noqa: F401  (doctest)
+    MotionModel,
+    SensorModel,
+    invalid,
 )
+from ..motion import MarkovSwitching
+from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
+from .proposals import Array, LogLikelihood, ProposalContext, Zs
+from .sis import ProposalParticleFilter
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
 
 IntArray = NDArray[np.intp]
@@ -266,6 +263,14 @@ class RegimeSwitchingProposal:
         n = prev.shape[0]
         return x, log_pred - (log_q + np.log(n_r / n))
 
+    def prior_draw(
+        self, state: RegimeState, prev: Array, dt: float, rng: np.random.Generator
+    ) -> tuple[Array, RegimeState]:
+        """The filter's ``predict``: ``r_t`` by Eq. 47, then ``x_t ~ p(x_t | x_{t-1}, r_t)``."""
+        modes = sample_regimes(state.modes, self.transition, rng)
+        x = self.motion.sample(prev, dt, rng, modes)
+        return x, RegimeState(modes, state.n_models, state.banks)
+
     def reindex(self, state: RegimeState, ancestors: IntArray) -> RegimeState:
         """The regimes follow their particles through resampling."""
         modes = np.take_along_axis(state.modes, ancestors, axis=-1)
@@ -289,9 +294,10 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
     """Jump-Markov particle filter: the one SIS engine (:class:`ProposalParticleFilter`) with a
     :class:`RegimeSwitchingProposal` — MM-bootstrap (``proposal="prior"``), MMPF-SP
     (``"sp-pekf"``) or the discretisation MMPF (``"cells"``). The belief is a
-    :class:`~fusetrack.filters.sis.SISBelief` whose ``proposal`` is a :class:`RegimeState`
+    :class:`~fusetrack.filters.SISBelief` whose ``proposal`` is a :class:`RegimeState`
     (``modes``, ``model_probs``, banks). ``predict`` draws regimes (Eq. 47) and states from each
-    regime's motion model; followed by ``update`` it is the MM-bootstrap step.
+    regime's motion model (the proposal's ``prior_draw``); followed by ``update`` it is the
+    MM-bootstrap step.
 
     >>> from fusetrack.motion import ConstantVelocity
     >>> from fusetrack.motion.maneuver import ManeuverTurn
@@ -339,18 +345,6 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
         super().__init__(models[0], sensors, switching, n_particles, resampler=resampler)
         self.models = models
         self.switching = switching
-
-    def predict(
-        self, belief: SISBelief, dt: float, rng: np.random.Generator | None = None
-    ) -> SISBelief:
-        """``r_t`` by Eq. 47 and ``x_t ~ p(x_t | x_{t-1}, r_t)``; the parents wait for update."""
-        gen = check_generator(rng)
-        state: RegimeState = belief.proposal
-        prev = belief.states
-        modes = sample_regimes(state.modes, self.switching.transition, gen)
-        x = self.switching.motion.sample(prev, dt, gen, modes)
-        regimes = RegimeState(modes, state.n_models, state.banks)
-        return SISBelief(x, x.mean(axis=-2), regimes, prev, dt)
 
 
 def hmm_filter(transition: ArrayLike, loglik: Array, initial: ArrayLike) -> Array:

@@ -26,7 +26,15 @@ cannot).
 Resampling sits at the start of ``predict`` rather than the end of ``update`` so that the
 estimate after an update (:meth:`ParticleFilter.estimate`) is taken from the weighted particles,
 which has lower variance than taking it after resampling; the sequence of particle sets is the
-usual SIR one.
+usual SIR one. ``resample="every_update"`` is the other policy, the sequential importance
+sampling loop of Zhai 2007 (Sec. 2.1-2.2): the update weights, resamples every run at once,
+optionally moves the particles by MCMC and estimates from the resampled set, and
+:meth:`ParticleFilter.step` draws from a pluggable proposal ``q(x_t | x_{t-1}, z_t)`` with the
+measurements in view (:mod:`~fusetrack.filters.proposals`; the class docstring lists the
+parts). :class:`~fusetrack.filters.ProposalParticleFilter` and
+:class:`~fusetrack.filters.MultipleModelParticleFilter` are that configuration; both policies
+share the likelihoods, the weight normalisation, the degeneracy policy, the resampling schemes
+and the draws from the motion model.
 
 Measurements. Any subset of the filter's sensors may report at a step; several measurements
 are applied in sequence. A value ``(m,)`` applies to every run, ``(R, m)`` (or any leading shape
@@ -97,26 +105,41 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from itertools import repeat
-from typing import Any, NamedTuple
+from typing import Any, ClassVar, Literal, NamedTuple
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import resampling
-from ..core.beliefs import Gaussian, Particles
-from ..core.errors import (
+from ..core import (
     ConfigError,
+    Gaussian,
+    Measurement,
     MeasurementError,
+    MotionModel,
+    Particles,
+    Resampler,
+    SensorModel,
     ShapeError,
     check_positive,
     check_probability,
+    get_resampler,
     invalid,
+    resampling,
 )
-from ..core.measurement import Measurement
-from ..core.models import MotionModel, SensorModel
-from ..core.resampling import Resampler, get_resampler
 from . import fused, fused_update, kernels, rng_handles, run_streams
+from .proposals import (
+    LogLikelihood,
+    Move,
+    PriorProposal,
+    Proposal,
+    ProposalContext,
+    SISBelief,
+    SISStats,
+    aligned_values,
+    check_generator,
+    log_transition,
+)
 from .stats import FilterStats, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]
@@ -233,8 +256,40 @@ class ParticleFilter:
     temper_factor:
         ``"inflate"`` multiplies the tempering exponent by this factor in ``(0, 1)`` per try.
     min_log_evidence:
-        Log predictive density below which a measurement counts as degenerate.
+        Log predictive density below which a measurement counts as degenerate (default:
+        :data:`LOG_TINY`; ``-inf`` with ``resample="every_update"``).
+    resample:
+        ``"ess"`` (default): resample at the next ``predict`` when the ESS is low (above);
+        ``"every_update"``: resample every update right after weighting, which is what a
+        proposal's weight assumes (the SIS loop, see :ref:`below <every-update>`;
+        ``ess_threshold`` is then unused); the filter carries a
+        :class:`~fusetrack.filters.SISBelief`.
+    proposal:
+        ``q(x_t | x_{t-1}, z_t)`` (:class:`~fusetrack.filters.proposals.Proposal`) drawn from by
+        :meth:`step` with the step's measurements in view; ``"every_update"`` only (default
+        there: :class:`~fusetrack.filters.PriorProposal`, the transition prior).
+    move:
+        An MCMC kernel applied after resampling (:mod:`~fusetrack.filters.mcmc_moves`);
+        ``"every_update"`` only.
+    estimate:
+        ``"weighted"`` (default): the weighted mean of the weighted particles; ``"resampled"``
+        (``"every_update"`` only): the mean of the resampled (and moved) particles.
+    transition:
+        ``"paired"`` or ``"marginal"``: the transition density in a proposal's weight
+        (:func:`~fusetrack.filters.proposals.log_transition`).
+
+    .. _every-update:
+
+    With ``resample="every_update"`` one update (Zhai 2007, Sec. 2.1-2.2) weights the drawn
+    particles (Eq. 13: ``log p(z_t | x) + log p(x | x_{t-1}) - log q(x)``, the previous weights
+    being equal), normalises, resamples every run with ``resampler``, moves, estimates and feeds
+    the estimate back to the proposal. The weight of a step is one increment: a run is degenerate
+    when it has no finite weight (with the default ``min_log_evidence=-inf``), and the policy
+    ``degenerate`` applies to the whole increment. Every draw goes through the models' own
+    ``sample`` (never the fused linear path) from one :class:`numpy.random.Generator`.
     """
+
+    _resamples_every_update: ClassVar[bool] = True  # False: a filter with its own selection
 
     def __init__(
         self,
@@ -247,8 +302,16 @@ class ParticleFilter:
         *,
         degenerate: str = "keep",
         temper_factor: float = 0.5,
-        min_log_evidence: float = LOG_TINY,
+        min_log_evidence: float | None = None,
+        resample: Literal["ess", "every_update"] = "ess",
+        proposal: Proposal | None = None,
+        move: Move | None = None,
+        estimate: Literal["weighted", "resampled"] = "weighted",
+        transition: Literal["paired", "marginal"] = "paired",
     ) -> None:
+        every = self._check_policy(resample, proposal, move, estimate, transition)
+        if min_log_evidence is None:
+            min_log_evidence = -math.inf if every else LOG_TINY
         if (
             isinstance(n_particles, bool)
             or not isinstance(n_particles, int | np.integer)
@@ -270,6 +333,13 @@ class ParticleFilter:
             raise ConfigError(invalid("min_log_evidence", min_log_evidence, "a number"))
         self.motion = motion
         self.sensors: dict[str, SensorModel] = as_sensor_map(sensors)
+        self._by_id = self.sensors  # the sensors by id (a subclass may expose them otherwise)
+        self.resample_policy = resample
+        self.proposal: Proposal | None = (proposal or PriorProposal()) if every else None
+        self.move = move
+        self.estimate_policy = estimate
+        self.transition = transition
+        self._side_ids: tuple[str, ...] = tuple(getattr(self.proposal, "side_inputs", ()))
         self.n_particles = int(n_particles)
         self.resampler = resampler
         self._resample: Resampler = get_resampler(resampler)
@@ -279,7 +349,7 @@ class ParticleFilter:
         self.degenerate = degenerate
         self.temper_factor = tf
         self.min_log_evidence = mle
-        self.stats = FilterStats()
+        self.stats: FilterStats = SISStats() if every else FilterStats()
         self._fused_dt: tuple[float, tuple[Array, Array] | None] | None = None
         self._fused_ll: dict[int, tuple[SensorModel, tuple[int, Array] | None]] = {}
         self._streams: dict[int, tuple[np.random.Generator, tuple[Any, ...], Any]] = {}
@@ -287,6 +357,30 @@ class ParticleFilter:
         self._everyone: dict[int, NDArray[np.bool_]] = {}  # read-only all-True "usable" rows
         self._runs: rng_handles.RunStreams | None = None  # handles of the last per-run gens
         self._one: rng_handles.RunStreams | None = None  # handle of the last single generator
+
+    def _check_policy(
+        self, resample: str, proposal: Any, move: Any, estimate: str, transition: str
+    ) -> bool:
+        """Validate the resampling policy and its parts; whether it is ``"every_update"``."""
+        if resample not in ("ess", "every_update"):
+            raise ConfigError(invalid("resample", resample, "'ess' or 'every_update'"))
+        every = resample == "every_update"
+        if every and not self._resamples_every_update:
+            raise ConfigError(invalid("resample", resample, f"'ess' for {type(self).__name__}"))
+        for name, value, default in (
+            ("proposal", proposal, None),
+            ("move", move, None),
+            ("estimate", estimate, "weighted"),
+            ("transition", transition, "paired"),
+        ):
+            given = value is not None if default is None else value != default
+            if given and not every:
+                raise ConfigError(invalid(name, value, f"{default!r} with resample='ess'"))
+        if estimate not in ("weighted", "resampled"):
+            raise ConfigError(invalid("estimate", estimate, "'weighted' or 'resampled'"))
+        if transition not in ("paired", "marginal"):
+            raise ConfigError(invalid("transition", transition, "'paired' or 'marginal'"))
+        return every
 
     def __repr__(self) -> str:
         return (
@@ -334,10 +428,18 @@ class ParticleFilter:
                 x[r] = g.standard_normal((n, d)) @ L2[r].T
                 x[r] += m2[r]
             x = x.reshape((*batch, n, d))
-        return self._particles(x, self._uniform(int(np.prod(batch, dtype=np.int64)), n))
+        W = self._uniform(int(np.prod(batch, dtype=np.int64)), n)
+        if self.proposal is None:
+            return self._particles(x, W)
+        assert isinstance(gens, np.random.Generator)  # _generators: one with a proposal
+        pstate = self.proposal.initialize(prior, x, gens)
+        return self._sis_belief(x, W, np.broadcast_to(mean, (*batch, d)).copy(), pstate)
 
     def predict(self, particles: Particles, dt: float, rng: Rng | None = None) -> Particles:
-        """Resample runs with low ESS, then draw ``x_k ~ p(x_k | x_{k-1})`` for each particle."""
+        """Resample runs with low ESS, then draw ``x_k ~ p(x_k | x_{k-1})`` for each particle
+        (``resample="every_update"``: the draw only, its parents kept for :meth:`update`)."""
+        if self.proposal is not None:
+            return self._predict_parents(particles, dt, rng)
         gens = self._generators(rng, particles.batch_shape)
         W = self._weights(particles)
         n, d = particles.states.shape[-2:]
@@ -422,6 +524,8 @@ class ParticleFilter:
         one's ``log sum_i w_i^(m-1) p(z_m | x_i)``. A measurement that a run skips adds 0; one
         recovered by the degeneracy policy adds its (untempered) evidence estimate, very
         negative or ``-inf``: the particles could not explain it."""
+        if self.proposal is not None:
+            return self._update_and_resample(particles, measurements, rng)
         batch = particles.batch_shape
         checked = self._check_measurements(measurements, batch)
         if not checked:
@@ -445,7 +549,10 @@ class ParticleFilter:
         return Gaussian(mean.reshape((*lead, d)), cov.reshape((*lead, d, d)))
 
     def mean(self, particles: Particles) -> Array:
-        """Weighted mean ``(..., d)`` only (one pass; cheaper than :meth:`estimate`)."""
+        """Weighted mean ``(..., d)`` only (one pass; cheaper than :meth:`estimate`); a
+        :class:`~.proposals.SISBelief`'s own estimate (e.g. of the resampled particles)."""
+        if isinstance(particles, SISBelief) and particles.estimate.size:
+            return np.array(particles.estimate)
         cached = particles.info.get(_MEAN)
         if cached is not None and cached[0] is particles.log_weights:
             return np.array(cached[1].reshape((*particles.batch_shape, particles.dim)))
@@ -461,6 +568,187 @@ class ParticleFilter:
     def effective_sample_size(self, particles: Particles) -> Array:
         """``1 / sum_i w_i^2`` per run, ``(...)``."""
         return self._weights(particles).ess.reshape(particles.batch_shape)
+
+    # ------------------------------------------------------------------------------------------
+    # resample="every_update": the proposal-driven loop (Zhai 2007, Sec. 2.1-2.2)
+
+    def step(
+        self,
+        particles: Particles,
+        dt: float,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: Rng | None = None,
+    ) -> Particles:
+        """One step. ``resample="ess"``: :meth:`predict` (when ``dt > 0``) then :meth:`update`
+        (when there are measurements), as :func:`~fusetrack.core.filter_step` does.
+        ``"every_update"``: draw ``x_t ~ q(x_t | x_{t-1}, z_t)`` from the proposal with the
+        measurements in view, weight (Zhai 2007, Eq. 13), resample, move, estimate, feed back."""
+        return self.step_with_likelihood(particles, dt, measurements, rng)[0]
+
+    def step_with_likelihood(
+        self,
+        particles: Particles,
+        dt: float,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: Rng | None = None,
+    ) -> tuple[Particles, Array]:
+        """:meth:`step` and ``log p(z_t | z_1:t-1)`` per run ``(...)``: the update's increment,
+        or, with a proposal, the log mean of the incremental weights (0 where nothing reported)."""
+        if self.proposal is None:
+            if dt > 0:
+                particles = self.predict(particles, dt, rng)
+            if not measurements:
+                return particles, np.zeros(particles.batch_shape)
+            return self.update_with_likelihood(particles, measurements, rng)
+        check_positive("dt", dt)
+        gen = check_generator(rng)  # type: ignore[arg-type]
+        zs, side, checked = self._step_inputs(measurements, particles.batch_shape)
+        ctx = self.context(side)
+        prev = particles.states
+        x, log_q, pstate = self.proposal.draw(
+            getattr(particles, "proposal", None), prev, zs, dt, gen, ctx
+        )
+        ll = self._summed_loglik(x, checked)
+        if log_q is None:
+            log_w = ll
+        elif getattr(self.proposal, "returns_log_ratio", False):
+            # the proposal returned log(p(x_t | z_{1:t-1}) / q(x_t)) (exact marginal weight)
+            log_w = (ll if checked else 0.0) + log_q
+        else:
+            log_w = ll + self.log_transition(x, prev, dt) - log_q
+        return self._weigh_and_resample(x, prev, log_w, bool(checked), zs, pstate, dt, gen, ctx)
+
+    def context(self, side: Mapping[str, Array] | None = None) -> ProposalContext:
+        """What proposals and moves see of this filter (:class:`~.proposals.ProposalContext`)."""
+        assert isinstance(self.stats, SISStats)  # every filter with a proposal keeps SISStats
+        return ProposalContext(self.motion, list(self._by_id.values()), self.stats, side or {})
+
+    def log_transition(self, x: Array, prev: Array, dt: float) -> Array:
+        """The transition term of a proposal's weight (:func:`~.proposals.log_transition`)."""
+        return log_transition(self.motion, x, prev, dt, self.transition)
+
+    def _predict_parents(self, particles: Particles, dt: float, rng: Rng | None) -> SISBelief:
+        """``x_t ~ p(x_t | x_{t-1})`` for every particle through ``motion.sample`` (or the
+        proposal's ``prior_draw``, e.g. regimes first); the parents wait for :meth:`update`."""
+        check_positive("dt", dt)
+        gen = check_generator(rng)  # type: ignore[arg-type]
+        pstate = getattr(particles, "proposal", None)
+        prior_draw = getattr(self.proposal, "prior_draw", None)
+        if prior_draw is None:
+            x = self._sample_motion(particles.states, dt, gen)
+        else:
+            x, pstate = prior_draw(pstate, particles.states, dt, gen)
+        n = x.shape[-2]
+        W = self._uniform(int(np.prod(x.shape[:-2], dtype=np.int64)), n)
+        return self._sis_belief(x, W, x.mean(axis=-2), pstate, particles.states, dt)
+
+    def _update_and_resample(
+        self,
+        particles: Particles,
+        measurements: Sequence[Measurement] | Measurement,
+        rng: Rng | None,
+    ) -> tuple[Particles, Array]:
+        """:meth:`update` with ``resample="every_update"``: weight the predicted particles by
+        ``p(z_t | x_t)``, resample, move, estimate, feed back (nothing when nothing reported)."""
+        batch = particles.batch_shape
+        zs, side, checked = self._step_inputs(measurements, batch)
+        if not checked:
+            return particles, np.zeros(batch)
+        gen = check_generator(rng)  # type: ignore[arg-type]
+        sis = particles if isinstance(particles, SISBelief) else None
+        parents = sis.parents if sis is not None and sis.parents is not None else particles.states
+        x = particles.states
+        return self._weigh_and_resample(
+            x,
+            parents,
+            self._summed_loglik(x, checked),
+            True,
+            zs,
+            getattr(particles, "proposal", None),
+            sis.dt if sis is not None else 0.0,
+            gen,
+            self.context(side),
+        )
+
+    def _step_inputs(
+        self, measurements: Sequence[Measurement] | Measurement, batch: tuple[int, ...]
+    ) -> tuple[list[Array | None], dict[str, Array], list[_Checked]]:
+        """The step's values aligned with the sensors (for proposals; at most one report per
+        sensor), its side inputs, and its checked sensor reports in the sensors' order (so the
+        log-likelihoods are summed in one order whatever the order of the reports)."""
+        ms = [measurements] if isinstance(measurements, Measurement) else list(measurements)
+        for m in ms:
+            if not isinstance(m, Measurement):
+                raise MeasurementError(
+                    invalid("measurements", m, "a sequence of fusetrack Measurement")
+                )
+        zs, side = aligned_values(list(self._by_id.values()), ms, self._side_ids)
+        order = {sid: k for k, sid in enumerate(self._by_id)}
+        ours = sorted((m for m in ms if m.sensor_id in order), key=lambda m: order[m.sensor_id])
+        return zs, side, self._check_measurements(ours, batch)
+
+    def _summed_loglik(self, x: Array, checked: list[_Checked]) -> Array:
+        """``sum_k log p(z_k | x_i)`` ``(..., N)`` over the checked reports (0 without any)."""
+        total = np.zeros(x.shape[:-1])
+        for ll in self._measurement_logliks(x, checked, None):
+            total = total + ll.reshape(x.shape[:-1])
+        return total
+
+    def _weigh_and_resample(
+        self,
+        x: Array,
+        prev: Array,
+        log_w: Array,
+        reported: bool,
+        zs: list[Array | None],
+        pstate: Any,
+        dt: float,
+        gen: np.random.Generator,
+        ctx: ProposalContext,
+    ) -> tuple[SISBelief, Array]:
+        """Normalise the step's log-weights ``(..., N)`` (one increment: the previous weights
+        are equal) with the degeneracy policy, resample every run, reindex the proposal's
+        per-particle state, move (when a sensor ``reported``), estimate, feed back. Returns the
+        belief and the log mean of the incremental weights (0 when nothing ``reported``)."""
+        n, d = x.shape[-2:]
+        batch = x.shape[:-2]
+        rows = int(np.prod(batch, dtype=np.int64))
+        # equal prior weights kept unnormalised (log 0): the log-weights are normalised as given
+        W0 = _Weights(np.zeros((rows, n)), np.full((rows, n), 1.0 / n), np.full(rows, float(n)))
+        lw = np.reshape(log_w, (rows, n))
+        W, degenerate, lse = self._apply_logliks(W0, [np.ones(rows, dtype=bool)], [lw])
+        self._note_degenerate(degenerate)
+        increment = lse.reshape(batch) - math.log(n) if reported else np.zeros(batch)
+        weighted = None
+        if self.estimate_policy == "weighted":
+            weighted = self._k.mean(x.reshape(rows, n, d), W.w).reshape((*batch, d))
+        self.stats.resample_count += 1
+        idx = self._ancestors(W.w, np.arange(rows), gen)
+        x_res = _gather(x.reshape(rows, n, d), idx).reshape(x.shape)
+        reindex = getattr(self.proposal, "reindex", None)
+        if reindex is not None:  # per-particle parts of the proposal state (regimes)
+            pstate = reindex(pstate, idx.reshape((*batch, n)))
+        if self.move is not None and reported:
+            parents = _gather(prev.reshape(rows, n, d), idx).reshape(x.shape)
+            loglik = LogLikelihood(ctx.sensors, zs)
+            x_res = self.move(x_res, parents, loglik, dt, gen, ctx)
+        est = x_res.mean(axis=-2) if weighted is None else weighted
+        assert self.proposal is not None
+        pstate = self.proposal.feedback(pstate, x_res, est, ctx)
+        return self._sis_belief(x_res, self._uniform(rows, n), est, pstate), increment
+
+    def _sis_belief(
+        self,
+        states: Array,
+        W: _Weights,
+        estimate: Array,
+        pstate: Any,
+        parents: Array | None = None,
+        dt: float = 0.0,
+    ) -> SISBelief:
+        """A :class:`~.proposals.SISBelief` with its weights cached."""
+        lw = W.lw.reshape(states.shape[:-1])
+        return SISBelief(states, lw, {_CACHE: (lw, W)}, estimate, pstate, parents, dt)
 
     # ------------------------------------------------------------------------------------------
     # weights and their cache
@@ -503,12 +791,13 @@ class ParticleFilter:
     # ------------------------------------------------------------------------------------------
     # randomness: one generator for the batch, or one per run
 
-    @staticmethod
     def _generators(
-        rng: Rng | None, batch: tuple[int, ...]
+        self, rng: Rng | None, batch: tuple[int, ...]
     ) -> np.random.Generator | list[np.random.Generator]:
         if isinstance(rng, np.random.Generator):
             return rng
+        if self.proposal is not None:  # proposals and moves draw from one generator
+            return check_generator(rng)  # type: ignore[arg-type]
         runs = int(np.prod(batch, dtype=np.int64))
         valid = f"a numpy.random.Generator or a sequence of {runs} of them (one per run)"
         if rng is None or isinstance(rng, str | bytes) or not isinstance(rng, Sequence):
@@ -525,7 +814,8 @@ class ParticleFilter:
         if cached is not None and cached[0] == dt:
             return cached[1]
         offer = getattr(self.motion, "fused_transition", None)
-        fg = offer(dt) if callable(offer) else None
+        # with a proposal every draw is the models' own (the SIS loop's exact draws)
+        fg = offer(dt) if callable(offer) and self.proposal is None else None
         self._fused_dt = (dt, fg)
         return fg
 
@@ -713,7 +1003,7 @@ class ParticleFilter:
             if quick is not None:
                 out.append(quick)
                 continue
-            v = validate_measurement(m, self.sensors, self.stats)
+            v = validate_measurement(m, self._by_id, self.stats)
             lead = v.value.shape[:-1]
             if not _broadcasts(lead, batch) or np.broadcast_shapes(lead, batch) != batch:
                 raise MeasurementError(
@@ -752,7 +1042,7 @@ class ParticleFilter:
         """A report for a likelihood-only sensor (one without ``dim``: only ``sensor_id`` and
         ``log_likelihood(value, x)``, e.g. a detection function whose value has no fixed size):
         its value goes to the sensor as given, the same for every run. None for other sensors."""
-        sensor = self.sensors.get(m.sensor_id)
+        sensor = self._by_id.get(m.sensor_id)
         if sensor is None or hasattr(sensor, "dim"):
             return None
         usable = np.ones(runs, dtype=bool)
@@ -762,7 +1052,7 @@ class ParticleFilter:
         """The common case of :meth:`_check_measurements` without its array checks: a known
         sensor, one finite value ``(m,)`` for every run, no covariance. None otherwise (the
         caller then validates in full, raising or counting as it must)."""
-        sensor = self.sensors.get(m.sensor_id)
+        sensor = self._by_id.get(m.sensor_id)
         z = m.value
         if (
             sensor is None
@@ -830,6 +1120,18 @@ class ParticleFilter:
             fast = self._reweight_fused(states, W, checked)
             if fast is not None:
                 return fast[0], False, fast[2]
+        lls = self._measurement_logliks(states, checked, rng, subtract)
+        return self._apply_logliks(W, [c.usable for c in checked], lls)
+
+    def _measurement_logliks(
+        self,
+        states: Array,
+        checked: list[_Checked],
+        rng: Rng | None,
+        subtract: list[Array] | None = None,
+    ) -> list[Array]:
+        """``log p(z_k | x_i)`` rows ``(R, N)`` per measurement (minus ``subtract[k]``), 0 in
+        the runs that skip it."""
         per_run = rng is not None and not isinstance(rng, np.random.Generator)
         lls = []
         for k, c in enumerate(checked):
@@ -840,17 +1142,25 @@ class ParticleFilter:
             if not c.usable.all():
                 ll[~c.usable] = 0.0  # a skipped row leaves that run's weights alone
             lls.append(ll)
+        return lls
+
+    def _apply_logliks(
+        self, W: _Weights, usable: list[NDArray[np.bool_]], lls: list[Array]
+    ) -> tuple[_Weights, bool, Array]:
+        """Add the log-likelihood rows ``lls`` to ``W`` in sequence and normalise once (the fast
+        path of :meth:`_reweight`, which documents the bound), or one at a time
+        (:meth:`_reweight_exact`) when the bound cannot vouch for every increment."""
         log_n = math.log(W.lw.shape[-1])
         bound = np.zeros(W.lw.shape[0])
         acc: Array | None = None
         rowmax = bound
-        for c, ll in zip(checked, lls):
+        for use, ll in zip(usable, lls):
             acc, rowmax = self._k.add(W.lw if acc is None else acc, ll, out=acc)
             with np.errstate(invalid="ignore"):
                 safe = np.isfinite(rowmax) & (rowmax - bound >= self.min_log_evidence)
-            if not np.all(safe | ~c.usable):
-                return self._reweight_exact(W, checked, lls)
-            bound = np.where(c.usable, rowmax + log_n, bound)
+            if not np.all(safe | ~use):
+                return self._reweight_exact(W, usable, lls)
+            bound = np.where(use, rowmax + log_n, bound)
         lw, w, lse, ess = self._k.normalize(acc, rowmax, overwrite=True)
         return _Weights(lw, w, ess), False, lse
 
@@ -891,6 +1201,7 @@ class ParticleFilter:
         s3 = states.reshape(-1, n, d)
         z = np.zeros((rows, len(checked), 3))
         for k, c in enumerate(checked):
+            assert isinstance(c.z, np.ndarray)  # a likelihood-only sensor has no fused form
             z[:, k, : c.z.shape[-1]] = c.z
         usable = np.stack([c.usable for c in checked], axis=1)
         lw, w, lse, ess, mean, maxima = fused_update.log_weight_update_rows(
@@ -925,18 +1236,18 @@ class ParticleFilter:
         return True
 
     def _reweight_exact(
-        self, W: _Weights, checked: list[_Checked], lls: list[Array]
+        self, W: _Weights, usable: list[NDArray[np.bool_]], lls: list[Array]
     ) -> tuple[_Weights, bool, Array]:
         """One measurement at a time, each normalised and checked for degeneracy; the summed
         (untempered) log evidences ``(R,)`` as the third value."""
         degenerate = False
         total = np.zeros(W.lw.shape[0])
-        for c, ll in zip(checked, lls):
+        for use, ll in zip(usable, lls):
             lw, w, lse, ess = self._k.update(W.lw, ll)
-            total += np.where(c.usable, lse, 0.0)
+            total += np.where(use, lse, 0.0)
             ok = np.isfinite(lse) & (lse >= self.min_log_evidence)
-            bad = c.usable & ~ok
-            keep = ~c.usable
+            bad = use & ~ok
+            keep = ~use
             if bad.any():
                 degenerate = True
                 keep = keep | bad
@@ -1071,6 +1382,8 @@ class RegularizedParticleFilter(ParticleFilter):
     its symmetric square root instead of Cholesky. Everything else is :class:`ParticleFilter`.
     """
 
+    _resamples_every_update = False  # the jitter belongs to its predict-time resampling
+
     def __init__(self, *args: Any, bandwidth_scale: float = 1.0, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.bandwidth_scale = check_positive("bandwidth_scale", bandwidth_scale, allow_zero=True)
@@ -1126,6 +1439,8 @@ class AuxiliaryParticleFilter(ParticleFilter):
     measurement) is the bootstrap update. If the first stage is degenerate for a run (every
     ``p(z | mu_i)`` vanishes), that run selects by its previous weights.
     """
+
+    _resamples_every_update = False  # its update is its own two-stage selection
 
     def predict(self, particles: Particles, dt: float, rng: Rng | None = None) -> Particles:
         """Draw every child (no resampling) and remember the parents for :meth:`update`."""

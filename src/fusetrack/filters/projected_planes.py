@@ -38,15 +38,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.beliefs import Particles
-from ..core.errors import ConfigError, ShapeError, invalid
-from ..core.measurement import Measurement
-from ..motion.accel_turn import AccelTurn
-from ..sensors.doa_plane_likelihood import DoaCone, ProjectedPlaneBearing
-from ..sensors.doa_projection import (
+from ..core import ConfigError, Measurement, Particles, ShapeError, invalid
+from ..motion import AccelTurn
+from ..sensors import (
     PLANE_AXES,
     PLANES,
+    DoaCone,
     DoaSensor3D,
+    ProjectedPlaneBearing,
     check_angles,
     literal_second_plane,
     projected_variance,
@@ -396,9 +395,10 @@ class Direct3DFilter(ParticleFilter):
         n_particles: int = 1000,
         init_std: tuple[float, float] = (0.1, 0.05),
     ) -> None:
-        cone: Any = DoaCone(sensor)
+        cone: Any = DoaCone(sensor)  # a likelihood-only sensor
+        motion: Any = model  # the engine only samples it
         super().__init__(
-            model, {sensor.sensor_id: cone}, n_particles, ess_threshold=1.0,
+            motion, {sensor.sensor_id: cone}, n_particles, ess_threshold=1.0,
             min_log_evidence=-np.inf,
         )  # fmt: skip
         self.sensor, self.model, self.init_std = sensor, model, init_std

@@ -28,7 +28,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.resampling import systematic_from_uniforms, systematic_row
+from ..core import systematic_from_uniforms, systematic_row
 from .fused import BLOCK, PARALLEL_MIN, _affine_block, _twins, threaded
 from .rng_handles import RunStreams, _bitgen, next_double, random_standard_normal
 

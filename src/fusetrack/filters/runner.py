@@ -38,11 +38,21 @@ from typing import Any, Literal, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, MeasurementError, invalid
-from ..core.measurement import Measurement, as_measurements, group_by_time, order_by_time
-from ..core.models import Filter, LikelihoodFilter, filter_step, step_with_likelihood
-from ..core.track import Track
+from ..core import (
+    ConfigError,
+    Filter,
+    Gaussian,
+    LikelihoodFilter,
+    Measurement,
+    MeasurementError,
+    Track,
+    as_measurements,
+    filter_step,
+    group_by_time,
+    invalid,
+    order_by_time,
+    step_with_likelihood,
+)
 from .kalman import GaussianFilter
 from .particle import ParticleFilter
 from .particle_smoothing import backward_simulation
@@ -280,16 +290,26 @@ def run_filter(
     if stats is not None:
         after = stats.as_dict()
         info["stats"] = {k: after[k] - before.get(k, 0) for k in after}
-    label = type(filt).__name__
-    if not out_t:
-        mean0 = np.asarray(belief.mean)
-        empty = np.empty((0, *mean0.shape))
-        track = Track(np.empty(0), empty, np.empty((*empty.shape, mean0.shape[-1])), label, info)
-    else:
-        track = Track(np.array(out_t), np.stack(out_mean), np.stack(out_cov), label, info)
+    track = _as_track(type(filt).__name__, belief, out_t, out_mean, out_cov, info)
     if kept is None:
         return track
     return _smoothed(filt, track, kept, rng, lag)
+
+
+def _as_track(
+    label: str,
+    belief: Any,
+    times: list[float],
+    means: list[Any],
+    covs: list[Any],
+    info: dict[str, Any],
+) -> Track:
+    """The filtered estimates as a :class:`~fusetrack.core.Track` (empty: shaped like ``belief``)."""
+    if not times:
+        mean0 = np.asarray(belief.mean)
+        empty = np.empty((0, *mean0.shape))
+        return Track(np.empty(0), empty, np.empty((*empty.shape, mean0.shape[-1])), label, info)
+    return Track(np.array(times), np.stack(means), np.stack(covs), label, info)
 
 
 def _check_smoothing(

@@ -46,24 +46,29 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import minimize
 
-from ..core.beliefs import Gaussian, GaussianMixture, Particles
-from ..core.errors import ConfigError, MeasurementError, invalid
-from ..core.measurement import Measurement
+from ..core import (
+    ConfigError,
+    Gaussian,
+    GaussianMixture,
+    Measurement,
+    MeasurementError,
+    Particles,
+    invalid,
+)
 from ..motion import ConstantVelocity
-from ..sensors import PositionFix
-from ..sensors.appearance import AppearanceModel, FeatureImage
-from ..sensors.appearance_camera import (
+from ..sensors import (
     RHO_FLOOR,
     AppearanceCamera,
-    colour_log_likelihood,
-    reference_histogram,
-)
-from ..sensors.ellipsoid_camera import (
+    AppearanceModel,
     EllipsoidCamera,
+    FeatureImage,
+    PositionFix,
     axis_angle_quaternion,
+    colour_log_likelihood,
     intersect_rays,
     quaternion_multiply,
     quaternion_to_rotation,
+    reference_histogram,
     rotation_to_quaternion,
 )
 from .gaussian_mixtures import (

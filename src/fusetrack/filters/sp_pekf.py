@@ -23,11 +23,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.beliefs import Gaussian
-from ..core.errors import ConfigError, UnknownSensorError, invalid
-from ..core.measurement import Measurement
-from ..core.models import MotionModel, SensorModel
-from .sis import Array, SISStats, Zs
+from ..core import (
+    ConfigError,
+    Gaussian,
+    Measurement,
+    MotionModel,
+    SensorModel,
+    UnknownSensorError,
+    invalid,
+)
+from .proposals import Array, SISStats, Zs
 
 _LOG_2PI = float(np.log(2 * np.pi))
 

@@ -1,6 +1,6 @@
 """Bookkeeping shared by every filter: a counter of what went wrong, and measurement checks.
 
-A long run must never die for one bad report (DESIGN.md, "Errors"). Filters therefore split bad
+A long run must never die for one bad report. Filters therefore split bad
 input in two kinds:
 
 * **Programming errors** raise at once: a measurement from a sensor the filter was not given
@@ -30,15 +30,15 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import (
+from ..core import (
     ConfigError,
     DegenerateWeightsWarning,
+    Measurement,
     MeasurementError,
+    SensorModel,
     UnknownSensorError,
     invalid,
 )
-from ..core.measurement import Measurement
-from ..core.models import SensorModel
 
 
 @dataclass

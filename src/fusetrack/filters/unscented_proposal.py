@@ -16,10 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from ..core.beliefs import Gaussian
-from ..core.measurement import Measurement
+from ..core import Gaussian, Measurement
 from .kalman import UnscentedKalmanFilter
-from .sis import Array, Zs
+from .proposals import Array, Zs
 
 _LOG_2PI = float(np.log(2 * np.pi))
 

@@ -35,10 +35,9 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.errors import ConfigError, UnknownSensorError, check_positive, invalid
-from ..core.measurement import Measurement
-from ..motion.waypoint_regime import WaypointRegimeDynamics
-from ..world.room import Room
+from ..core import ConfigError, Measurement, UnknownSensorError, check_positive, invalid
+from ..motion import WaypointRegimeDynamics
+from ..world import Room
 from .weighting import draw_ancestors, particle_weights
 
 Array = NDArray[np.float64]

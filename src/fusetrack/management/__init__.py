@@ -1,6 +1,7 @@
-"""fusetrack.management (see DESIGN.md)."""
+"""Sensor management: camera selection and triggering, sensor activation, fusion scheduling."""
 
 from .camera_selection import SELECTION_METHODS as SELECTION_METHODS
+from .camera_selection import SelectionMoments as SelectionMoments
 from .camera_selection import brute_force_selection as brute_force_selection
 from .camera_selection import closest_selection as closest_selection
 from .camera_selection import fixed_selection as fixed_selection

@@ -1,4 +1,4 @@
-"""fusetrack.perception (see DESIGN.md)."""
+"""Perception: raw video, audio and images to detections, features and source positions."""
 
 from . import source_localisation as source_localisation
 from .appearance import appearance_model_from_views as appearance_model_from_views

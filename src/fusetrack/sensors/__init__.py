@@ -77,6 +77,7 @@ __all__ = [
     "Bearing",
     "BinMap",
     "CameraArray",
+    "CameraNetworkReport",
     "DetectionFunctionSensor",
     "DoaCone",
     "DoaSensor3D",
@@ -85,6 +86,7 @@ __all__ = [
     "GroundPlaneDetection",
     "LikelihoodMapSensor",
     "LinearGaussianSensor",
+    "OcclusionAwareCameraSensor",
     "OcclusionAwareLikelihood",
     "PinholeCamera",
     "PositionFix",
@@ -149,6 +151,8 @@ from .ground_plane_detection import GroundPlaneDetection as GroundPlaneDetection
 from .homography_camera import HomographyCamera as HomographyCamera
 from .nfer_tag import NferTagSimulator as NferTagSimulator
 from .nfer_tag import fit_position_fix as fit_position_fix
+from .occlusion_aware_camera import CameraNetworkReport as CameraNetworkReport
+from .occlusion_aware_camera import OcclusionAwareCameraSensor as OcclusionAwareCameraSensor
 from .occlusion_aware_camera import OcclusionAwareLikelihood as OcclusionAwareLikelihood
 from .perspective_camera import CameraArray as CameraArray
 from .perspective_camera import PerspectiveCamera as PerspectiveCamera

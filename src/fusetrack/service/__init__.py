@@ -3,9 +3,10 @@
 Sensor nodes send authenticated, versioned messages (:mod:`.schema`, :mod:`.auth`) over UDP,
 HTTP or WebSocket; the node buffers and aligns them to its fusion ticks (:mod:`.alignment`),
 runs the configured tracker (:mod:`.engine`: any filter, the Kushwaha grid through
-:mod:`.grid_cells`; :mod:`.multi_engine`: several targets through MCMCDA, same interface), logs everything durably (:mod:`.log`) and publishes
-tracks over REST/WebSocket with a dashboard (:mod:`.app`). :mod:`.replay` plays a simulated
-scenario (:mod:`.scenarios`) or a recording into a running node. See DESIGN.md and the README's service section.
+:mod:`.grid_cells`; several targets through :mod:`.trackers`, the same engine), logs
+everything durably (:mod:`.log`) and publishes tracks over REST/WebSocket with a dashboard
+(:mod:`.app`). :mod:`.replay` plays a simulated scenario (:mod:`.scenarios`) or a recording into
+a running node. See the README's service section.
 """
 
 from .alignment import Aligner as Aligner
@@ -15,6 +16,9 @@ from .auth import SequenceWindow as SequenceWindow
 from .auth import bearer_token as bearer_token
 from .auth import open_frame as open_frame
 from .auth import seal as seal
+from .commands import add_live_options as add_live_options
+from .commands import add_service_parsers as add_service_parsers
+from .commands import run_service_command as run_service_command
 from .config import NetworkConfig as NetworkConfig
 from .config import load_config as load_config
 from .config import parse_config as parse_config

@@ -1,20 +1,23 @@
 """The ``fusetrack serve``, ``fusetrack replay`` and ``fusetrack demo --live`` commands.
 
-:func:`add_parsers` and :func:`add_live_options` extend the CLI's parser (imports stay light);
-:func:`main` runs whichever of the three was asked for.
+:func:`add_service_parsers` and :func:`add_live_options` extend the CLI's parser (imports stay
+light); :func:`run_service_command` runs whichever of the three was asked for. What the user came
+for (the dashboard address, the replay's result) is printed to stdout; progress is logged.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import math
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
+log = logging.getLogger(__name__)
 
-def add_parsers(sub: Any) -> None:
+
+def add_service_parsers(sub: Any) -> None:
     """The ``serve`` and ``replay`` subcommands (``fusetrack.cli`` calls this)."""
     serve = sub.add_parser("serve", help="run a live fusion node (HTTP/WebSocket + UDP)")
     serve.add_argument("--config", type=Path, required=True, help="network YAML")
@@ -58,7 +61,7 @@ def add_live_options(demo: argparse.ArgumentParser) -> None:
     )
 
 
-def main(args: argparse.Namespace) -> int:
+def run_service_command(args: argparse.Namespace) -> int:
     """Run ``serve``, ``replay`` or ``demo --live``; the caller maps FusetrackError to exit 2."""
     from .config import load_config
 
@@ -81,7 +84,13 @@ def _replay(args: argparse.Namespace, cfg: Any) -> int:
         readings = SCENARIOS[args.source](cfg, seed=args.seed, duration=args.duration).readings
     else:
         readings = load_recording(args.source)
-    print(f"replaying {len(readings)} readings from {args.source} to {args.to} at {args.speed}x")
+    log.info(
+        "replaying %d readings from %s to %s at %gx",
+        len(readings),
+        args.source,
+        args.to,
+        args.speed,
+    )
     out = replay(
         readings,
         cfg,
@@ -106,7 +115,7 @@ def _live_demo(args: argparse.Namespace) -> int:
         assert running.udp is not None
         host, port = running.udp
         print(f"dashboard: {running.url}/", flush=True)
-        print(f"replaying the {name} scenario over udp://{host}:{port} at {args.speed}x", flush=True)  # fmt: skip
+        log.info("replaying the %s scenario over udp://%s:%d at %gx", name, host, port, args.speed)
         out = replay(scenario.readings, cfg, f"udp://{host}:{port}", speed=args.speed)
         last = math.floor(scenario.truth_times[-1] * cfg.fusion.rate_hz + 1e-9)
         deadline = time.monotonic() + cfg.fusion.lag + (cfg.fusion.idle_flush or 0.0) + 2.0
@@ -128,10 +137,10 @@ def _live_demo(args: argparse.Namespace) -> int:
         )
         if args.exit_after_replay:
             return 0
-        print("serving until Ctrl-C", flush=True)
+        log.info("serving until Ctrl-C")
         try:
             while True:
                 time.sleep(3600)
         except KeyboardInterrupt:
-            print("", file=sys.stderr)
+            log.info("interrupted: the node stops")
     return 0

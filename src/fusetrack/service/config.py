@@ -16,11 +16,12 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic_core import PydanticCustomError
 
 from ..core import ConfigError, Gaussian, invalid
 from ..motion import ConstantVelocity, CoordinatedTurnRate
@@ -49,6 +50,23 @@ a bound on the cells keeps a config from asking for gigabytes."""
 
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known_keys(cls, data: Any) -> Any:
+        """An unknown key is refused with the section's valid keys (``NAME_deg`` stands for an
+        angle ``NAME``)."""
+        if isinstance(data, dict):
+            valid = list(cls.model_fields)
+            for key in data:
+                name = key[: -len("_deg")] if isinstance(key, str) and key.endswith("_deg") else key
+                if name not in valid:
+                    raise PydanticCustomError(
+                        "unknown_key",
+                        "unknown key {key}: valid keys are {valid}",
+                        {"key": key, "valid": ", ".join(valid)},
+                    )
+        return data
 
 
 def _degrees(data: Any, names: tuple[str, ...]) -> Any:
@@ -245,13 +263,131 @@ class GridConfig(_Section):
     max_speed: float = Field(default=20.0, gt=0.0, description="m/s, clips the grid's velocity")
 
 
-class AssociationConfig(_Section):
-    """Several targets (``method: mcmcda``): each tick's position detections -- position fixes,
-    range-bearing plots converted to positions, and with the grid tracker the peaks of the
-    tick's fused likelihood -- are associated by online MCMCDA (Oh et al. 2009, as Kushwaha 2010
-    uses it); each track is published with its own id."""
+class SingleTarget(_Section):
+    """One target (``method: none``, the default): the configured filter is a one-track tracker
+    that publishes its estimate every tick."""
 
-    method: Literal["none", "mcmcda"] = "none"
+    method: Literal["none"] = "none"
+
+
+PerSensor = float | dict[str, float]
+"""One number for every sensor, or ``sensor id -> number`` naming every sensor."""
+
+
+class ScanTrackerAssociation(_Section):
+    """What every scan-by-scan multi-target tracker (``gnn``, ``jpda``, ``mht``) shares: the
+    :class:`~fusetrack.tracking.MultiTargetTracker` on the configured filter and sensors, one
+    scan per tick (every reading of the tick, at the tick time). A reading of a position fix or
+    a range-bearing plot that no track takes starts a tentative track (its position from the
+    reading, the rest from ``prior_mean``/``prior_std``); bearings, ranges, DOAs and image
+    positions update tracks but start none."""
+
+    p_detect: PerSensor = Field(
+        default=0.9, description="P_D in (0, 1] of a target in a tick; or per sensor id"
+    )
+    clutter_density: PerSensor = Field(
+        default=1e-4,
+        description="false readings per tick per unit of a sensor's measurement space (m^2 "
+        "for a 2-D position fix, m rad for a range-bearing plot, rad for a bearing); or per "
+        "sensor id",
+    )
+    gate_probability: float = Field(
+        default=0.999, gt=0.0, le=1.0, description="P_G: the share of a target's readings gated"
+    )
+    survival_probability: float = Field(
+        default=0.99, gt=0.0, le=1.0, description="P_S from one tick to the next (existence)"
+    )
+    confirm_m: int = Field(default=2, ge=1, description="confirm a track detected in M ...")
+    confirm_n: int = Field(default=3, ge=1, description="... of its first N ticks (M-of-N)")
+    delete_misses: int = Field(
+        default=5, ge=1, description="end a confirmed track after this many missed ticks in a row"
+    )
+
+    @model_validator(mode="after")
+    def _m_of_n(self) -> ScanTrackerAssociation:
+        if self.confirm_m > self.confirm_n:
+            raise ValueError(
+                f"confirm_m={self.confirm_m} must be at most confirm_n={self.confirm_n}"
+            )
+        for name in ("p_detect", "clutter_density"):
+            values = getattr(self, name)
+            values = values.values() if isinstance(values, dict) else [values]
+            hi = 1.0 if name == "p_detect" else math.inf
+            if not all(0.0 < v <= hi and math.isfinite(v) for v in values):
+                raise ValueError(f"{name} must be in (0, {hi:g}] (per sensor too)")
+        return self
+
+
+class GNNAssociation(ScanTrackerAssociation):
+    """Global nearest neighbour: the most likely joint assignment of each tick's readings
+    (Blackman & Popoli 1999, Ch. 6; :class:`~fusetrack.association.GlobalNearestNeighbour`)."""
+
+    method: Literal["gnn"]
+
+
+class JPDAAssociation(ScanTrackerAssociation):
+    """Joint probabilistic data association (Fortmann, Bar-Shalom & Scheffe 1983;
+    :class:`~fusetrack.association.JointProbabilisticDataAssociation`): each track updated with
+    the probability-weighted mix of its gated readings; exact up to ``max_exact_events`` joint
+    events per cluster, loopy belief propagation above."""
+
+    method: Literal["jpda"]
+    max_exact_events: int = Field(default=10_000, ge=0)
+    unassociated_below: float = Field(
+        default=0.5,
+        gt=0.0,
+        le=1.0,
+        description="a reading less likely than this to be any track's may start a track",
+    )
+
+
+class MHTAssociation(ScanTrackerAssociation):
+    """Track-oriented MHT (Blackman 2004; :class:`~fusetrack.association.TrackOrientedMHT`) as
+    the tracker's per-tick associator: each track keeps its ``max_hypotheses`` best children of
+    the tick, weighted."""
+
+    method: Literal["mht"]
+    max_hypotheses: int = Field(default=20, ge=1)
+
+
+class PHDAssociation(_Section):
+    """The Gaussian-mixture PHD filter (Vo & Ma 2006; :class:`~fusetrack.filters.GMPHDFilter`,
+    extended-Kalman form on the configured motion and sensors), one scan per tick. New targets
+    are born anywhere in ``area``: ``birth_cells`` x ``birth_cells`` Gaussian components of
+    total weight ``birth_weight`` (expected births per tick), velocities (and any other state
+    entry) from ``prior_mean``/``prior_std``. Tracks are the components of weight above
+    ``extract_threshold``, with their labels as ids (Panta, Clark & Vo 2009)."""
+
+    method: Literal["phd"]
+    p_detect: float = Field(default=0.9, gt=0.0, le=1.0)
+    clutter_density: PerSensor = Field(
+        default=1e-4, description="false readings per tick per unit measurement space"
+    )
+    survival_probability: float = Field(default=0.99, ge=0.0, le=1.0)
+    birth_weight: float = Field(default=0.1, gt=0.0, description="expected births per tick")
+    birth_cells: int = Field(default=4, ge=1, le=50)
+    extract_threshold: float = Field(default=0.5, ge=0.0)
+    truncation_threshold: float = Field(default=1e-5, ge=0.0)
+    merge_threshold: float = Field(default=4.0, ge=0.0)
+    max_components: int = Field(default=100, ge=1)
+
+    @model_validator(mode="after")
+    def _clutter(self) -> PHDAssociation:
+        c = self.clutter_density
+        if not all(
+            v > 0 and math.isfinite(v) for v in (c.values() if isinstance(c, dict) else [c])
+        ):
+            raise ValueError("clutter_density must be > 0 (per sensor too)")
+        return self
+
+
+class MCMCDAAssociation(_Section):
+    """Online MCMCDA (Oh et al. 2009, as Kushwaha 2010 uses it) on each tick's position
+    detections: position fixes, range-bearing plots converted to positions, and with the grid
+    tracker the peaks of the tick's fused likelihood; ``tracker.filter`` is used only for
+    ``grid``."""
+
+    method: Literal["mcmcda"]
     n_mc: int = Field(default=300, ge=1, le=100_000)
     window: int = Field(default=8, ge=2, le=1000)
     max_gap: int = Field(default=3, ge=1)
@@ -262,6 +398,22 @@ class AssociationConfig(_Section):
     false_alarm_rate: float = Field(default=0.1, gt=0.0, description="per tick, whole area")
     obs_std: float = Field(default=1.0, gt=0.0, description="m")
     accel_std: float = Field(default=2.0, gt=0.0, description="m/s^2")
+
+
+AssociationConfig = Annotated[
+    SingleTarget
+    | GNNAssociation
+    | JPDAAssociation
+    | MHTAssociation
+    | PHDAssociation
+    | MCMCDAAssociation,
+    Field(discriminator="method"),
+]
+"""``tracker.association``: one target (``none``) or several (``gnn``, ``jpda``, ``mht``,
+``phd``, ``mcmcda``), each method with its own fields."""
+
+ASSOCIATION_METHODS: tuple[str, ...] = ("none", "gnn", "jpda", "mht", "phd", "mcmcda")
+MULTI_TARGET_METHODS: tuple[str, ...] = ASSOCIATION_METHODS[1:]
 
 
 class TrackerConfig(_Section):
@@ -279,7 +431,16 @@ class TrackerConfig(_Section):
     prior_mean: list[float]
     prior_std: list[float]
     grid: GridConfig = GridConfig()
-    association: AssociationConfig = AssociationConfig()
+    association: AssociationConfig = SingleTarget()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _single_by_default(cls, data: Any) -> Any:
+        """An ``association`` section without ``method`` is the single-target one."""
+        if isinstance(data, dict) and isinstance(data.get("association"), dict):
+            if "method" not in data["association"]:
+                data = {**data, "association": {"method": "none", **data["association"]}}
+        return data
 
     @model_validator(mode="after")
     def _prior(self) -> TrackerConfig:
@@ -384,10 +545,7 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
     try:
         cfg = NetworkConfig.model_validate(data)
     except ValidationError as err:
-        first = err.errors()[0]
-        where = ".".join(str(p) for p in first["loc"]) or "config"
-        shown = first.get("input")
-        raise ConfigError(f"{source}: " + invalid(where, shown, first["msg"])) from None
+        raise ConfigError(f"{source}: " + _first_error(err)) from None
     cfg.keys()  # keys are checked now, not at the first message
     try:
         models = cfg.sensor_models()
@@ -400,7 +558,7 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
             f"{source}: "
             + invalid("tracker.prior_mean", cfg.tracker.prior_mean, f"{expect} entries")
         )
-    if cfg.tracker.filter == "grid" or cfg.tracker.association.method == "mcmcda":
+    if cfg.tracker.filter == "grid" or cfg.tracker.association.method != "none":
         x0, x1, y0, y1 = cfg.area
         cell = cfg.tracker.grid.cell
         cells = round((x1 - x0) / cell) * round((y1 - y0) / cell)
@@ -427,18 +585,9 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
                 "grid tracker fuses",
             )
         )
-    if cfg.tracker.association.method == "mcmcda" and cfg.tracker.filter != "grid":
-        localising = [s.id for s in cfg.sensors if s.kind in ("position_fix", "range_bearing")]
-        if not localising:
-            raise ConfigError(
-                f"{source}: "
-                + invalid(
-                    "tracker.association",
-                    "mcmcda",
-                    "position detections: position_fix or range_bearing sensors, or the grid "
-                    "tracker (whose fused likelihood gives them)",
-                )
-            )
+    problem = _association_problem(cfg)
+    if problem is not None:
+        raise ConfigError(f"{source}: " + invalid(*problem))
     motion = cfg.tracker.motion.build()
     for sid, model in models.items():  # each sensor must read positions of the tracker's state
         idx = tuple(getattr(model, "_idx", ()) or model.position_index)
@@ -449,6 +598,67 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
                 f"({cfg.tracker.motion.model}, {expect} entries)"
             )
     return cfg
+
+
+def _first_error(err: ValidationError) -> str:
+    """The first validation error as ``field=value is invalid: expected ...``; an unknown key or
+    association method lists the valid ones."""
+    first = err.errors()[0]
+    where = ".".join(str(p) for p in first["loc"]) or "config"
+    shown, expected = first.get("input"), first["msg"]
+    ctx = first.get("ctx") or {}
+    if first["type"] == "unknown_key":
+        key = ctx["key"]
+        where = f"{where}.{key}" if first["loc"] else str(key)
+        shown = shown[key] if isinstance(shown, dict) else shown
+        expected = f"one of the keys {ctx['valid']} (unknown key)"
+    elif first["type"] in ("union_tag_invalid", "union_tag_not_found") and where.endswith(
+        "association"
+    ):
+        where, shown = f"{where}.method", ctx.get("tag")
+        expected = f"one of {', '.join(ASSOCIATION_METHODS)}"
+    return invalid(where, shown, expected)
+
+
+def _association_problem(cfg: NetworkConfig) -> tuple[str, Any, str] | None:
+    """``(field, value, what is valid)`` when ``tracker.association`` does not fit the rest of
+    the network, else None."""
+    a, filt = cfg.tracker.association, cfg.tracker.filter
+    if a.method == "none":
+        return None
+    if cfg.fusion.alignment == "closest":
+        return (
+            "fusion.alignment",
+            "closest",
+            f"'all' with association {a.method!r} (closest keeps one reading per sensor per "
+            "tick: one target's)",
+        )
+    ids = [s.id for s in cfg.sensors]
+    for name in ("p_detect", "clutter_density"):
+        value = getattr(a, name, None)
+        if isinstance(value, dict) and sorted(value) != sorted(ids):
+            return f"tracker.association.{name}", value, f"one entry per sensor {ids}"
+    localising = [s.id for s in cfg.sensors if s.kind in ("position_fix", "range_bearing")]
+    if a.method == "mcmcda":
+        if localising or filt == "grid":
+            return None
+        return (
+            "tracker.association.method",
+            "mcmcda",
+            "position detections: position_fix or range_bearing sensors, or the grid "
+            "tracker (whose fused likelihood gives them)",
+        )
+    if filt == "grid" or (a.method == "phd" and filt != "ekf"):
+        valid = "ekf (phd runs its own Gaussian mixture)" if a.method == "phd" else "ekf, ukf or pf"
+        return "tracker.filter", filt, f"{valid} with association {a.method!r}"
+    if not localising and a.method != "phd":
+        return (
+            "tracker.association.method",
+            a.method,
+            "sensors that start tracks (position_fix or range_bearing): bearings, ranges and "
+            "image positions only update them",
+        )
+    return None
 
 
 def load_config(path: str | Path) -> NetworkConfig:

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import logging
 import socket
 import threading
 import time
@@ -16,6 +17,8 @@ from .config import NetworkConfig
 from .log import DurableLog
 from .node import FusionNode
 from .udp import udp_socket
+
+log = logging.getLogger(__name__)
 
 
 def build_node(cfg: NetworkConfig, log_path: str | Path | None = None) -> FusionNode:
@@ -96,11 +99,11 @@ def serve(
     udp = udp_socket(host, udp_port) if udp_port is not None else None
     app = create_app(node, udp)
     where = f"http://{host}:{http.getsockname()[1]}/"
-    print(f"fusion node: dashboard {where}", flush=True)
+    print(f"fusion node: dashboard {where}", flush=True)  # the address the user opens: stdout
     if udp is not None:
-        print(f"fusion node: UDP udp://{host}:{udp.getsockname()[1]}", flush=True)
-    if node.resumed_ticks:
-        print(f"fusion node: resumed {node.resumed_ticks} ticks from {node.log.path}", flush=True)  # type: ignore[union-attr]
+        log.info("fusion node: listening for UDP on udp://%s:%d", host, udp.getsockname()[1])
+    if node.resumed_ticks and node.log is not None:
+        log.info("fusion node: resumed %d ticks from %s", node.resumed_ticks, node.log.path)
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning", ws="websockets-sansio"))
     try:
         server.run(sockets=[http])

@@ -39,8 +39,8 @@ import pandas as pd
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from ..core.errors import ConfigError, FusetrackError, MeasurementError, invalid
-from ..evaluation.options import load_yaml
+from ..core import ConfigError, FusetrackError, MeasurementError, invalid
+from ..evaluation import load_yaml
 from .video_tracker import FrameResult, TrackerConfig, VideoRadioTracker
 
 REQUIRED_COLUMNS = ("time", "tag", "x", "y")
@@ -339,7 +339,7 @@ def _track_and_annotate(
     import cv2
     from tqdm import tqdm
 
-    from ..sensors.camera_geometry import apply_homography
+    from ..sensors import apply_homography
 
     info, fps, n_bg, cfg, other_arr = inp.info, inp.fps, inp.n_bg, inp.cfg, inp.other_arr
     writer = cv2.VideoWriter(
@@ -472,7 +472,7 @@ def _floorplan(path: Path, df: pd.DataFrame, radio: pd.DataFrame) -> None:
     plt.close(fig)
 
 
-def main(args: Any) -> int:
+def run_track_video_command(args: Any) -> int:
     drop = None
     if args.drop_frames:
         try:
@@ -491,11 +491,11 @@ def main(args: Any) -> int:
         progress=False if args.no_progress or getattr(args, "quiet", 0) else None,
         drop_frames=drop,
     )
-    print(
+    print(  # the command's result, on stdout
         f"track-video: {summary['tracked_frames']} frames tracked, {summary['visual_updates']} visual updates, "
         f"{summary['occluded_frames']} occluded; outputs in {args.out}"
     )
     return 0
 
 
-__all__ = ["InputError", "main", "track_video"]
+__all__ = ["InputError", "run_track_video_command", "track_video"]

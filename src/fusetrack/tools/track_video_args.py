@@ -1,4 +1,4 @@
-"""The ``fusetrack track-video`` arguments (kept apart so ``fusetrack list`` stays light)."""
+"""The ``fusetrack track-video`` arguments, apart from the chain that runs them."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 
-def add_parser(sub: Any) -> None:
+def add_track_video_parser(sub: Any) -> None:
     """The ``track-video`` subcommand (``fusetrack.cli`` calls this)."""
     p = sub.add_parser(
         "track-video", help="track a tagged person in a video file with its radio-tag log"

@@ -1,5 +1,10 @@
 """Multi-target tracking assembled from parts: a filter per track, an associator, an initiator
-and a deleter, pure (``state = tracker.step(state, time, measurements, rng)``)."""
+and a deleter, pure (``state = tracker.step(state, time, measurements, rng)``):
+:class:`MultiTargetTracker` (GNN, JPDA, any single-scan associator), :class:`MHTTracker`
+(track-oriented MHT, a belief per hypothesis leaf), :class:`MCMCDATracker` (online MCMCDA on
+position reports), :class:`PHDTracker` (a GM-PHD intensity's labelled components) and
+:class:`SingleTargetTracker` (any filter as a one-track tracker), all behind one interface
+(:class:`Tracker`: ``initial_state / step``)."""
 
 from .deleters import AnyOf, CovarianceDeleter, Deleter, ExistenceDeleter, MissedCountDeleter
 from .existence import predict_existence, update_existence
@@ -9,9 +14,14 @@ from .initiators import (
     MofNInitiator,
     SinglePointInitiator,
 )
+from .mcmcda_tracker import MCMCDATracker, MCMCDATrackerState
+from .mht_tracker import MHTTracker, MHTTrackerState
 from .mixing import combine_hypotheses
-from .scoring import ScoredScan, gate_threshold, mahalanobis_squared, score_scan
-from .state import LiveTrack, TrackerState
+from .phd_initiator import PHDBirthState, PHDInitiator
+from .phd_tracker import PHDTracker, PHDTrackerState
+from .protocol import Tracker, TrackView, belief_summary
+from .single_target import SingleTargetState, SingleTargetTracker
+from .state import LiveTrack, TrackerState, TrackerStats
 from .tracker import MultiTargetTracker
 
 __all__ = [
@@ -22,16 +32,26 @@ __all__ = [
     "Initiator",
     "InverseMeasurementPrior",
     "LiveTrack",
+    "MCMCDATracker",
+    "MCMCDATrackerState",
+    "MHTTracker",
+    "MHTTrackerState",
     "MissedCountDeleter",
     "MofNInitiator",
     "MultiTargetTracker",
-    "ScoredScan",
+    "PHDBirthState",
+    "PHDInitiator",
+    "PHDTracker",
+    "PHDTrackerState",
     "SinglePointInitiator",
+    "SingleTargetState",
+    "SingleTargetTracker",
+    "TrackView",
+    "Tracker",
     "TrackerState",
+    "TrackerStats",
+    "belief_summary",
     "combine_hypotheses",
-    "gate_threshold",
-    "mahalanobis_squared",
     "predict_existence",
-    "score_scan",
     "update_existence",
 ]

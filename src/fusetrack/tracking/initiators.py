@@ -11,6 +11,11 @@ every scan on each tentative track: ``"confirmed"``, ``"tentative"`` or ``"dropp
   first ``n`` scans (its birth scan counts as one), dropped as soon as that can no longer happen.
 * :class:`SinglePointInitiator` -- every unassociated measurement starts a confirmed track
   (M-of-N with ``m = n = 1``); leave the rest to the deleters.
+* :class:`~fusetrack.tracking.PHDInitiator` -- a *scan-level* initiator: instead of
+  ``birth(measurement)`` per measurement it has ``initial_state()`` and ``births(state, time,
+  sensor_id, measurements, rng) -> (state, [(belief, measurement index or None)])``, sees one
+  sensor's leftovers of a scan at once and keeps its own state (a GM-PHD intensity) in the
+  tracker's state (:mod:`.phd_initiator`).
 
 The belief of a new track comes from ``prior_from(measurement)``: any function, or
 :class:`InverseMeasurementPrior`, which inverts a linear sensor (a position fix, a

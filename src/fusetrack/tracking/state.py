@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 
@@ -34,14 +34,50 @@ class LiveTrack:
     probabilities: tuple[float, ...] = ()
 
 
+@dataclass(frozen=True)
+class TrackerStats:
+    """What a tracker did since its initial state (counts, carried in the state so that the
+    tracker stays pure).
+
+    ``scans`` processed, of which ``empty_scans`` without a usable measurement; ``measurements``
+    received; ``skipped_nonfinite``: measurements left out for a NaN or infinite value or
+    covariance (a sensor that saw nothing: never a track's miss or loss by itself);
+    ``skipped_unknown_sensor``: measurements of sensors the tracker does not know, left out
+    when it was built with ``unknown_sensors="skip"``; ``births`` tentative tracks started,
+    ``confirmed`` tracks confirmed, ``dropped`` tentative tracks dropped, ``deleted`` confirmed
+    tracks deleted.
+    """
+
+    scans: int = 0
+    empty_scans: int = 0
+    measurements: int = 0
+    skipped_nonfinite: int = 0
+    skipped_unknown_sensor: int = 0
+    births: int = 0
+    confirmed: int = 0
+    dropped: int = 0
+    deleted: int = 0
+
+    def add(self, **counts: int) -> TrackerStats:
+        """These stats with ``counts`` added (``stats.add(scans=1, births=2)``)."""
+        return replace(self, **{k: getattr(self, k) + int(v) for k, v in counts.items()})
+
+    def as_dict(self) -> dict[str, int]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
 @dataclass(frozen=True, eq=False)
 class TrackerState:
     """The tracker's state after a scan at ``time`` (None before the first): the live tracks,
-    tentative and confirmed, in id order, and the id the next new track will take."""
+    tentative and confirmed, in id order, the id the next new track will take, the counters
+    ``stats`` and ``initiator_state``, what a scan-level initiator carries between scans (e.g.
+    :class:`~fusetrack.tracking.PHDInitiator`'s intensity; None for the others)."""
 
     tracks: tuple[LiveTrack, ...] = ()
     time: float | None = None
     next_id: int = 0
+    stats: TrackerStats = TrackerStats()
+    initiator_state: Any = None
 
     @property
     def confirmed(self) -> tuple[LiveTrack, ...]:

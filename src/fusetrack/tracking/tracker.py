@@ -8,20 +8,33 @@ measurement per sensor, but may give one to each):
 1. every live track is predicted to the scan time (``filter.predict``), its existence with
    ``P_S`` (:mod:`.existence`);
 2. the confirmed tracks are scored against the sensor's measurements with the tracks' own
-   filter (:func:`.scoring.score_scan`: ``log P_D p(z | track)`` behind a Mahalanobis gate) and
-   the associator turns the scores into weighted hypotheses (:class:`~fusetrack.association.
-   Associator`: any of them plugs in, hard or soft); each track's belief becomes the posterior
-   of a probability-1 hypothesis, the prediction when missed, or the PDA combination of several
-   (:mod:`.mixing`), and its existence is updated (IPDA);
+   filter (:func:`~fusetrack.association.scan_likelihoods`: ``log P_D p(z | track)`` behind a
+   Mahalanobis gate) and the associator turns the scores of the gated block (the tracks with a
+   measurement in their gate, the measurements in some gate; the others are missed or left
+   unassociated, which changes no joint event's odds) into weighted hypotheses
+   (:class:`~fusetrack.association.Associator`: GNN, JPDA or any other single-scan one, hard
+   or soft); each track's belief becomes the posterior of a probability-1 hypothesis, the
+   prediction when missed, or the PDA combination of several (:mod:`.mixing`), and its
+   existence is updated (IPDA);
 3. the tentative tracks are scored and associated the same way against what the confirmed ones
    left, so a track that is not yet confirmed never steals a confirmed track's measurement;
-4. each measurement still left may start a tentative track (``initiator.birth``).
+4. the measurements still left may start tentative tracks (``initiator.birth`` for each, or a
+   scan-level initiator's ``births``, e.g. :class:`~fusetrack.tracking.PHDInitiator`).
 
 For the Kalman family the predictions of all tracks, and the updates of all gated pairs of a
-sensor, are one batched filter call each (:mod:`.batch`).
+sensor, are one batched filter call each (:mod:`fusetrack.association.batch`), and the gate of
+all pairs a few array operations, so a scan of thousands of false alarms stays cheap.
 
-After the scan every track counts a hit or a miss; the initiator confirms or drops tentative
-tracks (M-of-N), the deleter ends confirmed ones. Everything lives in a :class:`TrackerState`.
+After the scan every track counts a hit or a miss (none when no sensor looked); the initiator
+confirms or drops tentative tracks (M-of-N), the deleter ends confirmed ones. Everything lives in
+a :class:`TrackerState`, with :class:`TrackerStats` counters. Bad input is a clear error before
+any work (an unknown sensor by default, a wrong size, a scan before the last one: the message
+names both times) or a counted skip (NaN reports; unknown sensors with
+``unknown_sensors="skip"``), never a crash or a silently lost track.
+
+Track-oriented MHT needs a belief per hypothesis leaf: :class:`~fusetrack.tracking.MHTTracker`;
+online MCMCDA on position reports: :class:`~fusetrack.tracking.MCMCDATracker`. Both have the
+same ``initial_state / step / run`` interface.
 
 Example: two targets in a 100 m square, a position sensor, one false alarm per scan; tracks
 are confirmed when detected in 3 of their first 4 scans::
@@ -35,20 +48,9 @@ are confirmed when detected in 3 of their first 4 scans::
     ...     MofNInitiator, MultiTargetTracker)
     >>> tag = PositionFix("tag", cov=0.25 * np.eye(2))
     >>> kf = KalmanFilter(ConstantVelocity(ndim=2, q=0.1), [tag])
-    >>> from fusetrack.association import Association, SingleHypothesis
-    >>> class Greedy:  # any Associator plugs in; this one: best pairs first, each used once
-    ...     def associate(self, scores, rng=None):
-    ...         gain = scores.log_likelihood - scores.log_clutter - scores.log_missed[:, None]
-    ...         hyp, taken = {}, set()
-    ...         for k, j in zip(*np.unravel_index(np.argsort(-gain, None), gain.shape)):
-    ...             i = scores.track_ids[k]
-    ...             if gain[k, j] > 0 and i not in hyp and j not in taken:
-    ...                 hyp[i] = (SingleHypothesis(i, int(j)),)
-    ...                 taken.add(int(j))
-    ...         rest = tuple(j for j in range(gain.shape[1]) if j not in taken)
-    ...         return Association(hyp, rest)  # tracks not in hyp: missed
+    >>> from fusetrack.association import GlobalNearestNeighbour
     >>> tracker = MultiTargetTracker(
-    ...     kf, [tag], Greedy(),
+    ...     kf, [tag], GlobalNearestNeighbour(),
     ...     initiator=MofNInitiator(3, 4, InverseMeasurementPrior(
     ...         [tag], Gaussian(np.zeros(4), np.diag([0, 0, 25.0, 25.0])))),
     ...     deleter=MissedCountDeleter(3), p_detect=0.9, clutter_density=1e-4)
@@ -78,7 +80,16 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..association import Association, Associator, SingleHypothesis, hypotheses_of
+from ..association import (
+    Association,
+    Associator,
+    ScanLikelihoods,
+    SingleHypothesis,
+    TrackOrientedMHT,
+    hypotheses_of,
+    predict_many,
+    scan_likelihoods,
+)
 from ..core import (
     ConfigError,
     Gaussian,
@@ -93,13 +104,11 @@ from ..core import (
     order_by_time,
 )
 from ..filters import as_sensor_map, validate_measurement
-from .batch import predict_many
 from .deleters import Deleter
 from .existence import predict_existence, update_existence
 from .initiators import Initiator
 from .mixing import combine_hypotheses
-from .scoring import ScoredScan, score_scan
-from .state import LiveTrack, TrackerState
+from .state import LiveTrack, TrackerState, TrackerStats
 
 TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
 
@@ -154,6 +163,20 @@ def _check_association(associator: Any, association: Association, n: int) -> Non
         )
 
 
+def _usable(m: Measurement) -> bool:
+    """False when the value or its own covariance has a NaN or infinite entry."""
+    cov = m.covariance
+    return m.is_finite and (cov is None or bool(np.all(np.isfinite(cov))))
+
+
+@dataclass
+class _Births:
+    """What the births of one scan advance: the next track id and the initiator's state."""
+
+    next_id: int
+    initiator_state: Any
+
+
 @dataclass
 class _ScanRecord:
     """What one scan did to one track: whether it was detected, with which measurements."""
@@ -174,7 +197,10 @@ class MultiTargetTracker:
         the sensor models by ``sensor_id`` (mapping or sequence); None: the filter's own
         ``filter.sensors``. Each measurement is gated with its own sensor.
     associator:
-        any :class:`~fusetrack.association.Associator` (``associate(scores, rng)``).
+        any :class:`~fusetrack.association.Associator` (``associate(scores, rng)``): GNN, JPDA;
+        a :class:`~fusetrack.association.TrackOrientedMHT` makes this tracker an
+        :class:`~fusetrack.tracking.MHTTracker` (the same interface, a belief per hypothesis
+        leaf).
     initiator:
         an :class:`~fusetrack.tracking.Initiator` (:class:`MofNInitiator`, ...).
     deleter:
@@ -189,7 +215,22 @@ class MultiTargetTracker:
     survival_probability:
         ``P_S`` in ``(0, 1]``: a target's probability of surviving from one scan to the next,
         for the existence probability only.
+    unknown_sensors:
+        ``"raise"`` (default): a measurement of a sensor not in ``sensors`` raises
+        :class:`~fusetrack.core.UnknownSensorError` before any work; ``"skip"``: it is left out
+        and counted in ``state.stats.skipped_unknown_sensor`` (a live feed with other sensors).
     """
+
+    def __new__(cls, *args: Any, **kw: Any) -> MultiTargetTracker:
+        """With a :class:`~fusetrack.association.TrackOrientedMHT` as ``associator`` the
+        tracker is an :class:`~fusetrack.tracking.MHTTracker` (MHT needs a belief per
+        hypothesis leaf), built with the same arguments."""
+        associator = args[2] if len(args) > 2 else kw.get("associator")
+        if cls is MultiTargetTracker and isinstance(associator, TrackOrientedMHT):
+            from .mht_tracker import MHTTracker  # here: mht_tracker builds on this module
+
+            return super().__new__(MHTTracker)
+        return super().__new__(cls)
 
     def __init__(
         self,
@@ -203,6 +244,7 @@ class MultiTargetTracker:
         gate_probability: float = 0.99,
         *,
         survival_probability: float = 0.99,
+        unknown_sensors: Literal["raise", "skip"] = "raise",
     ) -> None:
         _require(
             filter, "filter", ("predict", "update", "update_with_likelihood"), "a LikelihoodFilter"
@@ -241,6 +283,9 @@ class MultiTargetTracker:
         self.birth_existence = _in_range(
             "initiator.existence", getattr(initiator, "existence", None), 0.0, 1.0
         )
+        if unknown_sensors not in ("raise", "skip"):
+            raise ConfigError(invalid("unknown_sensors", unknown_sensors, "'raise' or 'skip'"))
+        self.unknown_sensors = unknown_sensors
 
     def __repr__(self) -> str:
         return (
@@ -248,25 +293,36 @@ class MultiTargetTracker:
             f"associator={self.associator!r}, initiator={self.initiator!r}, deleter={self.deleter!r})"
         )
 
-    @staticmethod
-    def initial_state() -> TrackerState:
-        """No tracks, no scan yet."""
-        return TrackerState()
+    def initial_state(self) -> TrackerState:
+        """No tracks, no scan yet (and a scan-level initiator's ``initial_state()``)."""
+        start = getattr(self.initiator, "initial_state", None)
+        return TrackerState(initiator_state=start() if callable(start) else None)
 
     # -- one scan ------------------------------------------------------------------------------
 
-    def _check_measurements(self, measurements: Iterable[Measurement]) -> None:
-        """Unknown sensors, wrong sizes and batched values raise :class:`MeasurementError`."""
+    def _known(self, measurements: Iterable[Measurement]) -> list[Measurement]:
+        """The measurements of known sensors: with ``unknown_sensors="raise"`` an unknown one
+        raises :class:`~fusetrack.core.UnknownSensorError`, with ``"skip"`` it is left out."""
+        out = []
         for m in measurements:
             if not isinstance(m, Measurement):
                 raise MeasurementError(invalid("measurements", m, "Measurement objects"))
+            if m.sensor_id in self.sensors or self.unknown_sensors == "raise":
+                out.append(m)
+        return out
+
+    def _check_measurements(self, measurements: Iterable[Measurement]) -> None:
+        """Unknown sensors (unless skipped), wrong sizes and non-vector values raise
+        :class:`MeasurementError`."""
+        for m in self._known(measurements):
             validate_measurement(m, self.sensors)
-            if isinstance(m.value, np.ndarray) and m.value.ndim != 1:
+            if not isinstance(m.value, np.ndarray) or m.value.ndim != 1:
                 raise MeasurementError(
                     invalid(
                         f"value.shape (sensor {m.sensor_id!r}, time={m.time})",
-                        m.value.shape,
-                        "(m,): one report (the tracker takes no batched Monte Carlo runs)",
+                        getattr(m.value, "shape", type(m.value).__name__),
+                        "(m,): one report, a vector (the tracker takes no batched Monte Carlo"
+                        " runs, and gates every report)",
                     )
                 )
 
@@ -283,9 +339,12 @@ class MultiTargetTracker:
             t = float(time)
         except (TypeError, ValueError):
             raise MeasurementError(invalid("time", time, "a finite number (seconds)")) from None
-        if not math.isfinite(t) or (state.time is not None and t < state.time - TIME_TOLERANCE):
+        if not math.isfinite(t):
+            raise MeasurementError(invalid("time", time, "a finite number (seconds)"))
+        if state.time is not None and t < state.time - TIME_TOLERANCE:
             raise MeasurementError(
-                invalid("time", time, f"a finite time >= the last scan's time {state.time}")
+                f"scan time={t} comes before the last scan's time={state.time}: scans must not go "
+                "back in time (run(..., order='reorder') sorts a recording)"
             )
         self._check_measurements(measurements)
         for sid in scanned or ():
@@ -299,6 +358,34 @@ class MultiTargetTracker:
             )
         return t
 
+    def _screen(
+        self,
+        stats: TrackerStats,
+        measurements: Sequence[Measurement],
+        scanned: Collection[str] | None,
+    ) -> tuple[list[int], list[str], TrackerStats]:
+        """The usable measurements (indices), the sensors that looked, in processing order, and
+        the stats with this scan counted. A measurement with a NaN or infinite value or
+        covariance is skipped and counted; its sensor counts as having looked only when it is in
+        ``scanned`` or sent a usable measurement too (a corrupt report is no evidence of a miss)."""
+        unknown = sum(m.sensor_id not in self.sensors for m in measurements)
+        usable = [
+            j for j, m in enumerate(measurements) if m.sensor_id in self.sensors and _usable(m)
+        ]
+        skipped = len(measurements) - unknown - len(usable)
+        reporting = list(dict.fromkeys(measurements[j].sensor_id for j in usable))
+        silent = {m.sensor_id for m in measurements} - set(reporting)
+        rest = [s for s in self.sensors if s not in silent] if scanned is None else scanned
+        order = reporting + [s for s in self.sensors if s in rest and s not in reporting]
+        stats = stats.add(
+            scans=1,
+            empty_scans=not usable,
+            measurements=len(measurements),
+            skipped_nonfinite=skipped,
+            skipped_unknown_sensor=unknown,
+        )
+        return usable, order, stats
+
     def step(
         self,
         state: TrackerState,
@@ -311,53 +398,66 @@ class MultiTargetTracker:
         """The state after the scan at ``time`` with ``measurements`` (module docstring).
 
         ``scanned``: the sensors that looked in this scan, default all (a sensor that looked
-        and reported nothing misses every track). Sensors with measurements always count; they
-        are processed in the order of their first measurement, then the silent ones.
-        Measurements with NaN or infinite values are left out. Raises before any work on an
-        unknown sensor, a value of the wrong size, or a time before the last scan's.
+        and reported nothing misses every track). Sensors with usable measurements always
+        count; they are processed in the order of their first measurement, then the silent
+        ones. Measurements with NaN or infinite values are skipped and counted in
+        ``state.stats`` (a sensor that sent only such reports did not look); so are those of
+        unknown sensors when the tracker was built with ``unknown_sensors="skip"``. Raises
+        before any work on an unknown sensor (by default), a value of the wrong size, or a time
+        before the last scan's (the message names both times).
         """
         t = self._check_scan(state, time, measurements, rng, scanned)
+        usable, order, stats = self._screen(state.stats, measurements, scanned)
         tracks = {tr.id: tr for tr in self._predict(state.tracks, t, rng)}
         records = {i: _ScanRecord() for i in tracks}
-        next_id = state.next_id
-        for sid in self._scan_order(measurements, scanned):
-            cols = [j for j, m in enumerate(measurements) if m.sensor_id == sid and m.is_finite]
+        births = _Births(state.next_id, state.initiator_state)
+        for sid in order:
+            cols = [j for j in usable if measurements[j].sensor_id == sid]
             for confirmed in (True, False):
                 ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
                 cols = self._associate(tracks, records, ids, measurements, cols, sid, rng)
-            for j in cols:
-                born = self._birth(next_id, t, measurements[j], rng)
-                if born is not None:
-                    tracks[next_id] = born
-                    records[next_id] = _ScanRecord(True, [(j, 1.0)])
-                    next_id += 1
+            for tr, j in self._births(births, t, sid, [measurements[j] for j in cols], rng):
+                tracks[tr.id] = tr
+                records[tr.id] = _ScanRecord(True, [] if j is None else [(cols[j], 1.0)])
+        stats = stats.add(births=births.next_id - state.next_id)
+        survivors, stats = self._settle(tracks, records, t, state.next_id, bool(order), stats)
+        return TrackerState(survivors, t, births.next_id, stats, births.initiator_state)
+
+    def _settle(
+        self,
+        tracks: Mapping[int, LiveTrack],
+        records: Mapping[int, _ScanRecord],
+        time: float,
+        first_new: int,
+        looked: bool,
+        stats: TrackerStats,
+    ) -> tuple[tuple[LiveTrack, ...], TrackerStats]:
+        """After a scan: count each track's hit or miss (none when no sensor looked), confirm or
+        drop tentative tracks (``initiator.status``), delete confirmed ones (``deleter``)."""
         survivors = []
         for i, tr in tracks.items():
-            tr = self._count(tr, records[i], t, newborn=i >= state.next_id)
+            if looked or i >= first_new:
+                tr = self._count(tr, records[i], time, newborn=i >= first_new)
+            else:  # no sensor looked: neither hit nor miss, and no measurement this scan
+                tr = replace(tr, measurements=(), probabilities=())
             if not tr.confirmed:
                 status = self.initiator.status(tr)
                 if status == "dropped":
+                    stats = stats.add(dropped=1)
                     continue
                 tr = replace(tr, confirmed=status == "confirmed")
+                stats = stats.add(confirmed=tr.confirmed)
             if tr.confirmed and self.deleter.should_delete(tr):
+                stats = stats.add(deleted=1)
                 continue
             survivors.append(tr)
-        return TrackerState(tuple(survivors), t, next_id)
-
-    def _scan_order(
-        self, measurements: Sequence[Measurement], scanned: Collection[str] | None
-    ) -> list[str]:
-        """The sensors of the scan: those with measurements (in order of first appearance), then
-        the others that looked."""
-        order = list(dict.fromkeys(m.sensor_id for m in measurements))
-        rest = self.sensors if scanned is None else scanned
-        return order + [s for s in self.sensors if s in rest and s not in order]
+        return tuple(survivors), stats
 
     def _predict(
         self, tracks: Sequence[LiveTrack], time: float, rng: np.random.Generator | None
     ) -> list[LiveTrack]:
-        """The tracks predicted to ``time`` (those of one time in one batched call, :mod:`.batch`),
-        their existence with ``P_S``."""
+        """The tracks predicted to ``time`` (those of one time in one batched call,
+        :func:`~fusetrack.association.predict_many`), their existence with ``P_S``."""
         out = list(tracks)
         due: dict[float, list[int]] = {}
         for k, tr in enumerate(tracks):
@@ -374,16 +474,37 @@ class MultiTargetTracker:
                 )
         return out
 
-    def _birth(
-        self, track_id: int, time: float, measurement: Measurement, rng: np.random.Generator | None
-    ) -> LiveTrack | None:
-        belief = self.initiator.birth(measurement)
-        if belief is None:
-            return None
-        initialize = getattr(self.filter, "initialize", None)
-        if isinstance(belief, Gaussian) and callable(initialize):
-            belief = initialize(belief, rng)
-        return LiveTrack(track_id, belief, time, time, time, existence=self.birth_existence)
+    def _births(
+        self,
+        births: _Births,
+        time: float,
+        sensor_id: str,
+        leftover: Sequence[Measurement],
+        rng: np.random.Generator | None,
+    ) -> list[tuple[LiveTrack, int | None]]:
+        """New tentative tracks from one sensor's ``leftover`` measurements, with the index of
+        the measurement each used (None: none in particular); ``births`` advances. A
+        scan-level initiator (with ``births(state, time, sensor_id, measurements, rng)``, e.g.
+        :class:`~fusetrack.tracking.PHDInitiator`) sees them all at once, any other each
+        alone (``initiator.birth(measurement)``)."""
+        scan_level = getattr(self.initiator, "births", None)
+        if callable(scan_level):
+            births.initiator_state, started = scan_level(
+                births.initiator_state, time, sensor_id, leftover, rng
+            )
+        else:
+            started = [(self.initiator.birth(m), j) for j, m in enumerate(leftover)]
+        out = []
+        for belief, j in started:
+            if belief is None:
+                continue
+            initialize = getattr(self.filter, "initialize", None)
+            if isinstance(belief, Gaussian) and callable(initialize):
+                belief = initialize(belief, rng)
+            track = LiveTrack(births.next_id, belief, time, time, time)
+            out.append((replace(track, existence=self.birth_existence), j))
+            births.next_id += 1
+        return out
 
     def _associate(
         self,
@@ -400,25 +521,13 @@ class MultiTargetTracker:
         if not ids:
             return cols
         p_d = self.p_detect[sensor_id]
-        predictions = [tracks[i].belief for i in ids]
         chosen = [measurements[j] for j in cols]
-        scored = score_scan(
-            self.filter,
-            self.sensors,
-            ids,
-            predictions,
-            chosen,
-            p_detect=p_d,
-            clutter_density=self.clutter_density[sensor_id],
-            gate_probability=self.gate_probability,
-            rng=rng,
-        )
-        association = self.associator.associate(scored.scores, rng) if chosen else Association({})
-        _check_association(self.associator, association, len(chosen))
+        scores, posteriors = self._score(ids, [tracks[i].belief for i in ids], chosen, p_d, rng)
+        association = self._associate_gated(scores, rng)
         for row, i in enumerate(ids):
             hyps = [h for h in hypotheses_of(association, i) if h.probability > 0]
             hyps = hyps or [SingleHypothesis(i, None, 1.0)]  # no weight anywhere: missed
-            tracks[i] = self._apply(tracks[i], row, hyps, scored, chosen, p_d, rng)
+            tracks[i] = self._apply(tracks[i], row, hyps, scores, posteriors, chosen, p_d, rng)
             total = sum(h.probability for h in hyps)
             used = [
                 (cols[h.measurement], h.probability / total)
@@ -427,14 +536,72 @@ class MultiTargetTracker:
             ]
             records[i].used.extend(used)
             records[i].detected |= sum(p for _, p in used) >= 0.5
-        return [cols[k] for k in association.unassociated] if chosen else cols
+        return [cols[k] for k in association.unassociated]
+
+    def _associate_gated(
+        self, scores: ScanLikelihoods, rng: np.random.Generator | None
+    ) -> Association:
+        """The associator on the gated block only: the tracks with a measurement in their gate
+        against the measurements in some gate. The others drop out of every joint event's
+        score as constant factors (a track without a gated measurement is missed, a measurement
+        in no gate is clutter; Bar-Shalom, Daum & Huang 2009's validation matrix), so the
+        answer is the same, and a scan of thousands of false alarms far from the tracks costs
+        the associator nothing."""
+        gated = np.isfinite(scores.log_likelihood)
+        rows = np.flatnonzero(gated.any(axis=1))
+        cols = np.flatnonzero(gated.any(axis=0))
+        m = scores.shape[1]
+        if not rows.size:
+            return Association({}, tuple(range(m)))
+        block = ScanLikelihoods(
+            tuple(scores.track_ids[r] for r in rows),
+            scores.log_likelihood[np.ix_(rows, cols)],
+            scores.log_missed[rows],
+            scores.log_clutter[cols],
+        )
+        inner = self.associator.associate(block, rng)
+        _check_association(self.associator, inner, cols.size)
+        hypotheses = {
+            i: tuple(
+                h if h.measurement is None else replace(h, measurement=int(cols[h.measurement]))
+                for h in hs
+            )
+            for i, hs in inner.hypotheses.items()
+        }
+        in_no_gate = set(range(m)) - set(cols.tolist())
+        left = sorted(in_no_gate | {int(cols[k]) for k in inner.unassociated})
+        return Association(hypotheses, tuple(left), inner.info)
+
+    def _score(
+        self,
+        ids: Sequence[int],
+        beliefs: Sequence[Any],
+        chosen: Sequence[Measurement],
+        p_detect: float,
+        rng: np.random.Generator | None,
+    ) -> tuple[ScanLikelihoods, dict[tuple[int, int], Any]]:
+        """:func:`~fusetrack.association.scan_likelihoods` of ``beliefs`` (rows ``ids``) against
+        one sensor's measurements ``chosen``, with the gated pairs' posteriors."""
+        return scan_likelihoods(
+            ids,
+            beliefs,
+            chosen,
+            self.sensors,
+            self.filter,
+            p_detect,
+            self.clutter_density,
+            self.gate_probability,
+            rng,
+            keep_posteriors=True,
+        )
 
     def _apply(
         self,
         track: LiveTrack,
         row: int,
         hyps: Sequence[SingleHypothesis],
-        scored: ScoredScan,
+        scores: ScanLikelihoods,
+        posteriors: Mapping[tuple[int, int], Any],
         chosen: Sequence[Measurement],
         p_detect: float,
         rng: np.random.Generator | None,
@@ -448,13 +615,11 @@ class MultiTargetTracker:
             if k is None:
                 beliefs.append(track.belief)
                 continue
-            post = scored.posteriors.get((row, k))
+            post = posteriors.get((row, k))
             if post is None:  # the associator chose a pair outside the gate
                 post = self.filter.update(track.belief, [chosen[k]], rng)
             beliefs.append(post)
-            log_ratios.append(
-                float(scored.scores.log_likelihood[row, k] - scored.scores.log_clutter[k])
-            )
+            log_ratios.append(float(scores.log_likelihood[row, k] - scores.log_clutter[k]))
         return replace(
             track,
             belief=combine_hypotheses(beliefs, [h.probability for h in hyps]),
@@ -507,8 +672,21 @@ class MultiTargetTracker:
         ``"measurements"`` (per scan, the indices into ``measurements`` the track used),
         ``"probabilities"`` (their association probabilities), ``"existence"`` ``(T,)``,
         ``"confirmed"`` ``(T,)`` bool, and ``"deleted"`` (the time of the first scan without it,
-        or None when it was alive at the end).
+        or None when it was alive at the end). :meth:`run_with_state` also returns the final
+        state (its ``stats``). Out-of-order timestamps raise (naming both times) unless
+        ``order="reorder"``.
         """
+        return self.run_with_state(measurements, rng, times=times, order=order)[0]
+
+    def run_with_state(
+        self,
+        measurements: Iterable[Measurement | tuple[Any, ...]],
+        rng: np.random.Generator | None = None,
+        *,
+        times: ArrayLike | None = None,
+        order: Literal["reject", "reorder"] = "reject",
+    ) -> tuple[list[Track], TrackerState]:
+        """:meth:`run`, and the state after the last scan (``state.stats``: what was skipped)."""
         ms = as_measurements(measurements)
         if order not in ("reject", "reorder"):
             raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
@@ -534,7 +712,8 @@ class MultiTargetTracker:
                 else:  # a tentative track dropped: never reported
                     del history[i]
             alive = now
-        return [h.track(i) for i, h in sorted(history.items()) if any(h.confirmed)]
+        tracks = [h.track(i) for i, h in sorted(history.items()) if any(h.confirmed)]
+        return tracks, state
 
     @staticmethod
     def _scans(

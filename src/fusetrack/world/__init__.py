@@ -1,4 +1,4 @@
-"""fusetrack.world (see DESIGN.md)."""
+"""Simulated worlds: rooms, occluders, walkers and targets, sound and clocks, rendered video."""
 
 from .acoustics import harmonic_engine as harmonic_engine
 from .acoustics import pink_noise as pink_noise

@@ -521,6 +521,42 @@ def _inclusion_exclusion(
     return min(max(total, 0.0), 1.0)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _edges_clear(px, py, rx, ry, cx, cy, edge_a, edge_b):  # pragma: no cover - jit
+    """True when the segment camera ``(cx, cy)`` -> particle ``(px, py)`` (``r = p - c``)
+    crosses no edge (walls of a non-convex room, static occluders)."""
+    for e in range(edge_a.shape[0]):
+        ax, ay = edge_a[e, 0], edge_a[e, 1]
+        ex, ey = edge_b[e, 0] - ax, edge_b[e, 1] - ay
+        d1 = ex * (cy - ay) - ey * (cx - ax)
+        d2 = ex * (py - ay) - ey * (px - ax)
+        if d1 * d2 >= 0.0:
+            continue
+        d3 = rx * (ay - cy) - ry * (ax - cx)
+        d4 = rx * (edge_b[e, 1] - cy) - ry * (edge_b[e, 0] - cx)
+        if d3 * d4 < 0.0:
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def _prior_tables(x, cam_pos, occ_mu, occ_cov, half, mode):  # pragma: no cover - jit
+    """Per-occluder precisions, the occluders each camera cannot skip and the per-(camera,
+    occluder) offsets of the Gaussian priors (mode 2); zeros otherwise."""
+    K, M = cam_pos.shape[0], occ_mu.shape[0]
+    if mode == 2:
+        p11, p12, p22, iso, inv_sd, reach = _occluder_precisions(occ_cov)
+        use, n_use = _cull_occluders(x, cam_pos, occ_mu, occ_cov, half)
+        m1, m2, pm1, pm2 = _camera_offsets(cam_pos, occ_mu, p11, p12, p22)
+        return p11, p12, p22, iso, inv_sd, reach, use, n_use, m1, m2, pm1, pm2
+    z, zk = np.zeros(M), np.zeros((K, M))
+    return (
+        z, z.copy(), z.copy(), np.zeros(M, dtype=np.bool_), z.copy(), z.copy(),
+        np.zeros((K, M), dtype=np.int64), np.zeros(K, dtype=np.int64),
+        zk, zk.copy(), zk.copy(), zk.copy(),
+    )  # fmt: skip
+
+
 @numba.njit(cache=True, nogil=True)
 def camera_likelihood_kernel(
     x: np.ndarray,
@@ -556,19 +592,10 @@ def camera_likelihood_kernel(
     half = 0.5 * diameter
     cy_ = np.cos(cam_yaw)
     sy_ = np.sin(cam_yaw)
-    eta = np.empty(K, dtype=np.bool_)
-    for i in range(K):
-        eta[i] = not math.isnan(z[i])
-    # per-occluder precision, culled occluders and per-(camera, occluder) offsets (mode 2)
-    p11, p12, p22, inv_sd, reach = np.zeros(M), np.zeros(M), np.zeros(M), np.zeros(M), np.zeros(M)
-    iso = np.zeros(M, dtype=np.bool_)
-    m1, m2, pm1, pm2 = np.zeros((K, M)), np.zeros((K, M)), np.zeros((K, M)), np.zeros((K, M))
-    use = np.zeros((K, M), dtype=np.int64)
-    n_use = np.zeros(K, dtype=np.int64)
-    if mode == 2:
-        p11, p12, p22, iso, inv_sd, reach = _occluder_precisions(occ_cov)
-        use, n_use = _cull_occluders(x, cam_pos, occ_mu, occ_cov, half)
-        m1, m2, pm1, pm2 = _camera_offsets(cam_pos, occ_mu, p11, p12, p22)
+    eta = ~np.isnan(z)  # the cameras that saw the object
+    p11, p12, p22, iso, inv_sd, reach, use, n_use, m1, m2, pm1, pm2 = _prior_tables(
+        x, cam_pos, occ_mu, occ_cov, half, mode
+    )
     assigned = np.empty(K, dtype=np.bool_)
     q = np.zeros((K, M))
     s_v = np.empty(M)
@@ -586,18 +613,7 @@ def camera_likelihood_kernel(
             h = -sy_[i] * rx + cy_[i] * ry
             ok = d > 0.0 and abs(h) <= cam_tan_half[i] * d and not in_static[l]
             if ok:
-                for e in range(edge_a.shape[0]):  # walls of a non-convex room, static occluders
-                    ax, ay = edge_a[e, 0], edge_a[e, 1]
-                    ex, ey = edge_b[e, 0] - ax, edge_b[e, 1] - ay
-                    d1 = ex * (cam_pos[i, 1] - ay) - ey * (cam_pos[i, 0] - ax)
-                    d2 = ex * (py - ay) - ey * (px - ax)
-                    if d1 * d2 >= 0.0:
-                        continue
-                    d3 = rx * (ay - cam_pos[i, 1]) - ry * (ax - cam_pos[i, 0])
-                    d4 = rx * (edge_b[e, 1] - cam_pos[i, 1]) - ry * (edge_b[e, 0] - cam_pos[i, 0])
-                    if d3 * d4 < 0.0:
-                        ok = False
-                        break
+                ok = _edges_clear(px, py, rx, ry, cam_pos[i, 0], cam_pos[i, 1], edge_a, edge_b)
             assigned[i] = ok
             if eta[i]:
                 if not ok:

@@ -14,7 +14,7 @@ from typing import Any
 
 import pandas as pd
 
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext
 from .common import Timed, curve_plot, fmt, md, mean_std, room_plot, sizes, timed_monte_carlo
 from .scenes import square_scene
 from .simulation import DEFAULTS, run_tracking, simulate_world

@@ -19,10 +19,8 @@ import pandas as pd
 from matplotlib.patches import Circle, Polygon, Wedge
 from pydantic import Field
 
-from ...core.errors import ConfigError, invalid
-from ...evaluation import plots
-from ...evaluation.options import ExperimentOptions
-from ...evaluation.report import RunContext
+from ...core import ConfigError, invalid
+from ...evaluation import ExperimentOptions, RunContext, plots
 from .scenes import Scene
 
 PAPER = "Ercan, El Gamal, Guibas 2013, ACM TOSN 9(2) 16"

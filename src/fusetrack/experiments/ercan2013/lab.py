@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext
 from .common import SizeOptions, curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
 from .scenes import lab_scene
 from .simulation import run_tracking, simulate_world

@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext, run_seed
 from .cameras import SIGMA_PSI
 from .common import curve_plot, md, mean_std, smoke
 from .simulation import run_tracking

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation.report import Claim, Outcome, RunContext
+from ...evaluation import Claim, Outcome, RunContext
 from .common import curve_plot, fmt, md, mean_std, sizes
 from .simulation import DEFAULTS, run_tracking
 

@@ -21,13 +21,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...world.geometry import segment_point_distance
-from ...world.occlusion import (
+from ...evaluation import Claim, Outcome, RunContext
+from ...world import (
     OccluderPriors,
     occlusion_probability,
     occlusion_probability_eq7,
     pattern_probability,
+    segment_point_distance,
 )
 from .common import fmt, md, smoke
 

@@ -28,8 +28,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...world.occluder_priors import PRIOR_FILTERS
+from ...evaluation import Claim, Outcome, RunContext
+from ...world import PRIOR_FILTERS
 from .common import curve_plot, fmt, md, mean_std, sizes
 from .simulation import run_tracking
 

@@ -15,13 +15,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from ...core.errors import ConfigError, invalid
-from ...evaluation.options import load_yaml, parse_options
-from ...sensors.perspective_camera import CameraArray, ring_of_cameras
-from ...world.geometry import Array, rectangle
-from ...world.room import Room, l_shaped_room, square_room
+from ...core import ConfigError, invalid
+from ...evaluation import load_yaml, parse_options
+from ...sensors import CameraArray, ring_of_cameras
+from ...world import Room, l_shaped_room, rectangle, square_room
+
+Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

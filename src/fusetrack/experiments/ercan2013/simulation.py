@@ -29,10 +29,9 @@ from typing import Any
 
 import numpy as np
 
-from ...core.errors import ConfigError, invalid
-from ...core.measurement import Measurement
-from ...filters.waypoint_asir import WaypointASIR
-from ...management.camera_selection import (
+from ...core import ConfigError, Measurement, invalid
+from ...filters import WaypointASIR
+from ...management import (
     SELECTION_METHODS,
     SelectionMoments,
     brute_force_selection,
@@ -43,23 +42,23 @@ from ...management.camera_selection import (
     selection_moments,
     subset_mse,
 )
-from ...motion.waypoint_regime import WaypointRegimeDynamics
-from ...sensors.occlusion_aware_camera import (
+from ...motion import WaypointRegimeDynamics
+from ...sensors import (
     CameraNetworkReport,
     OcclusionAwareCameraSensor,
     OcclusionAwareLikelihood,
 )
-from ...world.geometry import Array
-from ...world.occluder_priors import (
+from ...world import (
     PRIOR_FILTERS,
+    OccluderPriors,
     RandomWalkPriorFilter,
+    WaypointWalkers,
+    disks_block,
     prior_nees,
     prior_track,
     rmse_per_coordinate,
 )
-from ...world.occlusion import OccluderPriors, disks_block
-from ...world.walkers import WaypointWalkers
-from .scenes import Scene, get_scene
+from .scenes import Array, Scene, get_scene
 
 DEFAULTS: dict[str, Any] = {
     "scene": "square",

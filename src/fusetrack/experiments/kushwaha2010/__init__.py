@@ -2,3 +2,7 @@
 
 Scenarios, constants and experiments of the paper; uses the library and is never imported by it.
 """
+
+from .scene import DT, default_layout
+
+__all__ = ["DT", "default_layout"]

@@ -21,8 +21,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from ...evaluation import Claim, Outcome, RunContext
 from ...evaluation.plots import save
-from ...evaluation.report import Claim, Outcome, RunContext
 from ...sensors import NferTagSimulator, fit_position_fix
 
 POINTS = ("A", "B", "C", "D", "E", "F")

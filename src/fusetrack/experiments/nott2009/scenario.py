@@ -26,8 +26,14 @@ import numpy as np
 from ...core import Gaussian, Measurement
 from ...filters import ExtendedKalmanFilter, KalmanFilter, run_filter
 from ...motion import WalkingPerson, WalkingPersonCA
-from ...sensors import HomographyCamera, PositionFix, StackedSensor
-from ...sensors.camera_geometry import back_project, default_camera, ground_homography
+from ...sensors import (
+    HomographyCamera,
+    PositionFix,
+    StackedSensor,
+    back_project,
+    default_camera,
+    ground_homography,
+)
 
 METHODS = ("B1", "B2", "B3", "B4", "B5", "J")
 METHOD_NAMES = {

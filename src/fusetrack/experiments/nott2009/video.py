@@ -31,11 +31,13 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian, Measurement
+from ...evaluation import Claim, Outcome, RunContext
 from ...evaluation.plots import save
-from ...evaluation.report import Claim, Outcome, RunContext
 from ...filters import ExtendedKalmanFilter
 from ...motion import WalkingPerson
-from ...perception.video import (
+from ...perception import (
+    FOREGROUND,
+    SHADOW,
     DegenerateGeometryError,
     HorprasertModel,
     Mog2Subtractor,
@@ -45,17 +47,18 @@ from ...perception.video import (
     largest_blob,
     reprojection_errors,
 )
-from ...perception.video.horprasert import FOREGROUND, SHADOW
-from ...sensors import HomographyCamera, NferTagSimulator, PositionFix
-from ...sensors.camera_geometry import (
+from ...sensors import (
+    HomographyCamera,
+    NferTagSimulator,
+    PositionFix,
     apply_homography,
     back_project,
     default_camera,
     ground_homography,
     plane_homography,
 )
-from ...tools.video_tracker import TrackerConfig, VideoRadioTracker
-from ...world.rendered_room import (
+from ...tools import TrackerConfig, VideoRadioTracker
+from ...world import (
     WALL,
     Person,
     RoomRenderer,
@@ -952,8 +955,7 @@ class _Tool:
 
 def _run_tool(ctx: RunContext) -> _Tool:
     """The command-line tool on a rendered recording written as real files (video, tag log, YAML)."""
-    from ...tools.synthetic_recording import write_recording
-    from ...tools.track_video import track_video
+    from ...tools import track_video, write_recording
 
     rec_dir = ctx.out_dir / "recording"
     rec = write_recording(
@@ -1218,7 +1220,7 @@ def _figure_first_frames(
 
 def _snapshot_figures(ctx: RunContext) -> list[str]:
     """Figs. 5.10-5.12 analogues, re-rendered from run 0's seed (cheap: a few frames)."""
-    from ...evaluation.montecarlo import run_seed
+    from ...evaluation import run_seed
 
     seed = run_seed(ctx.seed, 0)
     rng = np.random.default_rng(seed)

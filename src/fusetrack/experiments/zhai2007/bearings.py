@@ -20,10 +20,13 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters import ExtendedKalmanFilter, UnscentedKalmanFilter
-from ...filters.sis import ProposalParticleFilter
-from ...filters.sp_pekf import SPPEKFProposal
+from ...evaluation import Claim, Outcome, RunContext
+from ...filters import (
+    ExtendedKalmanFilter,
+    ProposalParticleFilter,
+    SPPEKFProposal,
+    UnscentedKalmanFilter,
+)
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
 from .common import timed_gaussian, timed_sis, track_rows

@@ -10,10 +10,11 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
-from ...core import Gaussian, Measurement, filter_step
-from ...core.resampling import systematic
-from ...filters.sis import Array
+from ...core import Gaussian, Measurement, filter_step, systematic
+
+Array = NDArray[np.float64]
 
 # compile the resampling kernel once per process, so that no filter's timing includes it
 systematic(np.full((1, 2), 0.5), np.random.default_rng(0))

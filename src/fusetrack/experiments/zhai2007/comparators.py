@@ -38,12 +38,9 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from ...core import Gaussian
-from ...core.models import MotionModel, SensorModel
-from ...filters.imm import InteractingMultipleModel
-from ...filters.sis import Array, ProposalParticleFilter
-from ...filters.unscented_proposal import UnscentedProposal
-from .common import timed_gaussian, timed_sis
+from ...core import Gaussian, MotionModel, SensorModel
+from ...filters import InteractingMultipleModel, ProposalParticleFilter, UnscentedProposal
+from .common import Array, timed_gaussian, timed_sis
 
 COMPARATORS = ("UPF", "IMM-EKF", "bootstrap equal time")
 Better = Literal["lower", "higher"]

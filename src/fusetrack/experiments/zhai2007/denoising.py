@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...perception.pf_dwt import (
+from ...evaluation import Claim, Outcome, RunContext
+from ...perception import (
     RasterParticleFilter,
     add_mixed_noise,
     isnr,

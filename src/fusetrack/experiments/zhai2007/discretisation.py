@@ -18,16 +18,17 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import plots
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters import ExtendedKalmanFilter
-from ...filters.grid_proposals import DiscretisationProposal
-from ...filters.imm import InteractingMultipleModel
-from ...filters.multiple_model import MultipleModelParticleFilter, PaddedModel
-from ...filters.sis import ProposalParticleFilter, sensor_measurements
-from ...motion import ConstantAcceleration, ConstantVelocity, CoordinatedTurn
-from ...motion.maneuver import ManeuverTurn
+from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...filters import (
+    DiscretisationProposal,
+    ExtendedKalmanFilter,
+    InteractingMultipleModel,
+    MultipleModelParticleFilter,
+    PaddedModel,
+    ProposalParticleFilter,
+    sensor_measurements,
+)
+from ...motion import ConstantAcceleration, ConstantVelocity, CoordinatedTurn, ManeuverTurn
 from ...sensors import Bearing, RangeBearing
 from . import galerkin as e13
 from .common import timed_gaussian, timed_mm, timed_sis, track_rows

@@ -11,8 +11,8 @@ from typing import Any
 
 import pandas as pd
 
-from ...evaluation.report import RunContext
-from ...filters.sis import ProposalParticleFilter
+from ...evaluation import RunContext
+from ...filters import ProposalParticleFilter
 from .comparators import (
     Comparison,
     Scenario,

@@ -17,11 +17,13 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters import ExtendedKalmanFilter, UnscentedKalmanFilter
-from ...filters.grid_proposals import GalerkinProposal
-from ...filters.sis import ProposalParticleFilter
+from ...evaluation import Claim, Outcome, RunContext, run_seed
+from ...filters import (
+    ExtendedKalmanFilter,
+    GalerkinProposal,
+    ProposalParticleFilter,
+    UnscentedKalmanFilter,
+)
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
 from .common import timed_gaussian, timed_sis, track_rows

@@ -18,13 +18,10 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import plots
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.mcmc_moves import IndependenceMove, MHPriorMove, RandomWalkMove
-from ...filters.sis import ProposalParticleFilter
-from ...motion.benchmark import ScalarBenchmark
-from ...sensors.power import Power
+from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...filters import IndependenceMove, MHPriorMove, ProposalParticleFilter, RandomWalkMove
+from ...motion import ScalarBenchmark
+from ...sensors import Power
 from . import scalar
 from .common import timed_sis
 from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators

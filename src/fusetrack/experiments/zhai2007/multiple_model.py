@@ -21,18 +21,15 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import plots
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.imm import InteractingMultipleModel
-from ...filters.multiple_model import (
+from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...filters import (
+    InteractingMultipleModel,
     MultipleModelParticleFilter,
+    ProposalParticleFilter,
     sample_regimes,
     stationary_distribution,
 )
-from ...filters.sis import ProposalParticleFilter
-from ...motion import ConstantVelocity
-from ...motion.maneuver import ManeuverTurn
+from ...motion import ConstantVelocity, ManeuverTurn
 from ...sensors import Bearing
 from .common import timed_gaussian, timed_mm, timed_sis, track_rows
 from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators

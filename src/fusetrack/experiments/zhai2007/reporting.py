@@ -10,8 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import plots
-from ...evaluation.report import Claim, RunContext
+from ...evaluation import Claim, RunContext, plots
 from .common import fmt_order, ordering_holds
 
 

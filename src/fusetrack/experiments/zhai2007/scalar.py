@@ -15,14 +15,15 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import plots
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters import ExtendedKalmanFilter, UnscentedKalmanFilter
-from ...filters.sis import ProposalParticleFilter
-from ...filters.sp_pekf import SPPEKFProposal
-from ...motion.benchmark import ScalarBenchmark
-from ...sensors.power import Power
+from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...filters import (
+    ExtendedKalmanFilter,
+    ProposalParticleFilter,
+    SPPEKFProposal,
+    UnscentedKalmanFilter,
+)
+from ...motion import ScalarBenchmark
+from ...sensors import Power
 from .common import fmt_order, timed_gaussian, timed_sis
 from .comparators import COMPARATORS, UPF_NOTE, Comparison, Scenario, run_comparators
 from .equal_time import EqualTime

@@ -21,14 +21,11 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation.montecarlo import run_seed
-from ...evaluation.report import Claim, Outcome, RunContext
-from ...filters.cpf_sp import CPFSPProposal
-from ...filters.sis import ProposalParticleFilter
-from ...management.intensity_activation import activation_radius, active_sensors, intensity_weights
+from ...evaluation import Claim, Outcome, RunContext, run_seed
+from ...filters import CPFSPProposal, ProposalParticleFilter
+from ...management import activation_radius, active_sensors, intensity_weights
 from ...motion import ConstantVelocity, CoordinatedTurn
-from ...sensors import Bearing
-from ...sensors.acoustic_intensity import AcousticIntensity
+from ...sensors import AcousticIntensity, Bearing
 from .common import run_steps, track_rows
 from .comparators import (
     COMPARATORS,

@@ -2,8 +2,9 @@
 
 A :class:`~fusetrack.filters.GaussianFilter` (Kalman, extended, unscented) runs a belief with
 leading batch axes ``(K, d)`` as ``K`` independent filters, in a handful of array operations
-instead of ``K`` Python calls. So the tracker predicts all its Gaussian tracks at once and
-updates all the gated (track, measurement) pairs of a sensor at once. Any other filter (or a
+instead of ``K`` Python calls. So a tracker predicts all its Gaussian tracks at once
+(:func:`predict_many`) and :func:`~fusetrack.association.scan_likelihoods` updates all the gated
+(track, measurement) pairs of a sensor at once (:func:`update_pairs`). Any other filter (or a
 subclass that overrides ``predict`` / ``update_with_likelihood``, which might not keep the
 batch semantics) goes one call per track; both give the same numbers (to rounding: the batched
 products may sum in another order).
@@ -17,12 +18,13 @@ from typing import Any
 import numpy as np
 
 from ..core import Gaussian, Measurement
-from ..filters import GaussianFilter
 
 
-def batches(filt: Any, beliefs: Sequence[Any]) -> bool:
+def batchable(filt: Any, beliefs: Sequence[Any]) -> bool:
     """True when ``filt`` is a Gaussian filter with its own batched ``predict`` and
     ``update_with_likelihood`` and every belief is one (unbatched) Gaussian."""
+    from ..filters import GaussianFilter  # here: importing filters is slow (Numba)
+
     kind = type(filt)
     return (
         isinstance(filt, GaussianFilter)
@@ -43,8 +45,8 @@ def _stack(beliefs: Sequence[Gaussian]) -> Gaussian:
 def predict_many(
     filt: Any, beliefs: Sequence[Any], dt: float, rng: np.random.Generator | None
 ) -> list[Any]:
-    """``[filt.predict(b, dt, rng) for b in beliefs]``, batched when :func:`batches`."""
-    if len(beliefs) > 1 and batches(filt, beliefs):
+    """``[filt.predict(b, dt, rng) for b in beliefs]``, batched when :func:`batchable`."""
+    if len(beliefs) > 1 and batchable(filt, beliefs):
         return _split(filt.predict(_stack(beliefs), dt, rng))
     return [filt.predict(b, dt, rng) for b in beliefs]
 
@@ -56,12 +58,12 @@ def update_pairs(
     rng: np.random.Generator | None,
 ) -> list[tuple[Any, float]]:
     """``filt.update_with_likelihood(beliefs[k], [measurements[k]], rng)`` for every ``k`` as
-    ``(posterior, log-likelihood)``. Batched when :func:`batches` and the measurements are
+    ``(posterior, log-likelihood)``. Batched when :func:`batchable` and the measurements are
     vectors of one sensor: their values stacked ``(K, m)``, their covariances too when any has
     its own (the others take the sensor's ``R`` at the belief's mean)."""
     same_sensor = len({m.sensor_id for m in measurements}) == 1
     vectors = all(isinstance(m.value, np.ndarray) and m.value.ndim == 1 for m in measurements)
-    if len(beliefs) < 2 or not (same_sensor and vectors and batches(filt, beliefs)):
+    if len(beliefs) < 2 or not (same_sensor and vectors and batchable(filt, beliefs)):
         out = []
         for b, m in zip(beliefs, measurements):
             post, ll = filt.update_with_likelihood(b, [m], rng)

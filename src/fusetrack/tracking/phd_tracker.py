@@ -1,0 +1,80 @@
+"""The GM-PHD filter as a tracker (Vo & Ma 2006): its labelled components above a weight
+threshold are the tracks, behind the tracker interface (:class:`~.protocol.Tracker`)."""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core import Gaussian, Measurement
+from ..filters import GMPHDFilter, PhdIntensity, extract_states
+from .protocol import TrackView
+
+
+@dataclass(frozen=True)
+class PHDTrackerState:
+    """The PHD intensity after the scan at ``time``, its tracks, and the public id of every
+    label ever extracted (ids count from 0 in order of first extraction)."""
+
+    intensity: PhdIntensity
+    time: float | None = None
+    confirmed: tuple[TrackView, ...] = ()
+    ids: Mapping[int, int] = field(default_factory=dict)
+
+
+class PHDTracker:
+    """The GM-PHD filter as a tracker: predict to the scan, update with the scan's readings
+    (every sensor in ``scanned``, default all, that sent nothing looked and saw nothing: a NaN
+    reading, the missed-detection term only), then the components of weight above
+    ``threshold`` are the tracks (Vo & Ma 2006, Table III). A label shared by several of them
+    stays with the heaviest; the others get fresh labels, kept from then on."""
+
+    def __init__(self, phd: GMPHDFilter, threshold: float = 0.5) -> None:
+        self.filter = phd
+        self.threshold = float(threshold)
+
+    def initial_state(self) -> PHDTrackerState:
+        return PHDTrackerState(PhdIntensity.empty(self.filter.motion.dim))
+
+    def step(
+        self,
+        state: PHDTrackerState,
+        time: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator | None = None,
+        *,
+        scanned: Collection[str] | None = None,
+    ) -> PHDTrackerState:
+        dt = 0.0 if state.time is None else max(0.0, time - state.time)
+        v = self.filter.predict(state.intensity, dt, rng)
+        heard = {m.sensor_id for m in measurements}
+        looked = self.filter.sensors if scanned is None else scanned
+        silent = [
+            Measurement(time, sid, np.full(int(getattr(s, "value_size", s.dim)), np.nan))
+            for sid, s in self.filter.sensors.items()
+            if sid in looked and sid not in heard
+        ]
+        v = _distinct_labels(self.filter.update(v, [*measurements, *silent], rng), self.threshold)
+        ids = dict(state.ids)
+        tracks: dict[int, TrackView] = {}
+        for label, mean, cov in extract_states(v, self.threshold):
+            ident = ids.setdefault(label, len(ids))
+            tracks.setdefault(ident, TrackView(ident, Gaussian(mean, cov)))
+        return PHDTrackerState(v, time, tuple(tracks[i] for i in sorted(tracks)), ids)
+
+
+def _distinct_labels(v: PhdIntensity, threshold: float) -> PhdIntensity:
+    """``v`` with a fresh label on every component above ``threshold`` whose label a heavier
+    one above it already has (two targets born of one birth component share its label)."""
+    labels, nxt, seen = v.labels.copy(), int(v.next_label), set()
+    for i in np.argsort(-v.weights, kind="stable"):
+        if v.weights[i] <= threshold:
+            break
+        if labels[i] in seen:
+            labels[i], nxt = nxt, nxt + 1
+        seen.add(int(labels[i]))
+    if nxt == v.next_label:
+        return v
+    return PhdIntensity(v.weights, v.means, v.covs, labels, nxt)
