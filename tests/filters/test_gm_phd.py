@@ -217,9 +217,22 @@ def test_merge_distance_uses_the_candidates_covariance():
     """Table II measures (m_i - m_j)^T P_i^-1 (m_i - m_j) with the candidate's P_i: a wide
     candidate 3 away (9 / 4 <= 4) merges into a narrow heaviest component (9 / 0.1 would not)."""
     v = PhdIntensity([0.6, 0.3], [[0.0], [3.0]], [[[0.1]], [[4.0]]])
-    assert prune_and_merge(v).n_components == 1
+    assert prune_and_merge(v, merge_rule="printed").n_components == 1
     w = PhdIntensity([0.3, 0.6], [[0.0], [3.0]], [[[0.1]], [[4.0]]])
-    assert prune_and_merge(w).n_components == 2  # now the narrow one is the candidate: 90 > 4
+    assert prune_and_merge(w, merge_rule="printed").n_components == 2  # narrow candidate: 90 > 4
+
+
+def test_mutual_merge_keeps_a_wide_component_off_a_narrow_target():
+    """The default rule also measures with the heaviest's P_j: the wide candidate of the case
+    above (9 / 4 <= 4 but 9 / 0.1 = 90 > 4) stays apart, so it cannot inflate the target; two
+    components within each other's spread (9 / 4 both ways) still merge."""
+    v = PhdIntensity([0.6, 0.3], [[0.0], [3.0]], [[[0.1]], [[4.0]]])
+    out = prune_and_merge(v)
+    assert out.n_components == 2 and out.covs[0, 0, 0] == 0.1
+    both_wide = PhdIntensity([0.6, 0.3], [[0.0], [3.0]], [[[4.0]], [[4.0]]])
+    assert prune_and_merge(both_wide).n_components == 1
+    with pytest.raises(ConfigError, match="merge_rule"):
+        prune_and_merge(v, merge_rule="loose")
 
 
 def test_extract_states_rounds_the_weights():

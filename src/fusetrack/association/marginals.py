@@ -21,7 +21,6 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import numpy as np
-from scipy.special import logsumexp
 
 from ..core import ConfigError, invalid
 from .base import Array
@@ -80,7 +79,8 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
     if not np.isfinite(log_p).any():
         beta[:, -1] = 1.0
         return beta
-    p = np.exp(log_p - logsumexp(log_p))
+    p = np.exp(log_p - log_p.max())  # finite max: some event is possible (checked above)
+    p /= p.sum()
     for i in range(t):
         beta[i] = np.bincount(events[:, i], weights=p, minlength=cols)
     return beta

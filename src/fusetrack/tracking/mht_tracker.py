@@ -141,7 +141,7 @@ class MHTTracker(MultiTargetTracker):
         if time - track.time <= TIME_TOLERANCE:
             return track
         existence = predict_existence(track.existence, self.survival_probability)
-        return replace(track, time=time, existence=existence)
+        return track.evolve(time=time, existence=existence)
 
     def _associate_leaves(
         self,
@@ -192,7 +192,7 @@ class MHTTracker(MultiTargetTracker):
                 )
             track = scan.families[family]
             existence = update_existence(track.existence, p_d * self.gate_probability, log_ratios)
-            scan.families[family] = replace(track, belief=beliefs[leaf.id], existence=existence)
+            scan.families[family] = track.evolve(belief=beliefs[leaf.id], existence=existence)
         return [cols[k] for k in association.unassociated]
 
 

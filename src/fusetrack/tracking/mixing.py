@@ -19,6 +19,7 @@ particle sets need not share their states, and a mixture would multiply the part
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -31,6 +32,11 @@ def combine_hypotheses(beliefs: Sequence[Any], probabilities: Sequence[float]) -
     """The belief of a track from its hypotheses' ``beliefs`` and ``probabilities`` (module
     docstring): the moment-matched Gaussian when all are Gaussian, else the most probable one.
     The probabilities are normalised; they must be finite, ``>= 0`` and not all 0."""
+    if len(beliefs) == 1 and len(probabilities) == 1:  # one certain hypothesis (GNN): as is
+        only = float(probabilities[0])
+        if not (math.isfinite(only) and only > 0):
+            raise ConfigError(invalid("probabilities", [only], "finite values >= 0, not all 0"))
+        return beliefs[0]
     p = np.asarray(probabilities, dtype=float)
     if len(beliefs) != p.size or p.size == 0:
         raise ConfigError(

@@ -33,6 +33,20 @@ class LiveTrack:
     measurements: tuple[int, ...] = ()
     probabilities: tuple[float, ...] = ()
 
+    def evolve(self, **changes: Any) -> LiveTrack:
+        """A copy with ``changes`` (``dataclasses.replace`` without its per-call overhead: a
+        tracker makes several per track and scan)."""
+        unknown = changes.keys() - _LIVE_TRACK_FIELDS
+        if unknown:
+            raise TypeError(f"LiveTrack has no field(s) {sorted(unknown)}")
+        new = object.__new__(LiveTrack)
+        new.__dict__.update(self.__dict__)
+        new.__dict__.update(changes)
+        return new
+
+
+_LIVE_TRACK_FIELDS = frozenset(f.name for f in fields(LiveTrack))
+
 
 @dataclass(frozen=True)
 class TrackerStats:

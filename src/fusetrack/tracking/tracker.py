@@ -439,13 +439,13 @@ class MultiTargetTracker:
             if looked or i >= first_new:
                 tr = self._count(tr, records[i], time, newborn=i >= first_new)
             else:  # no sensor looked: neither hit nor miss, and no measurement this scan
-                tr = replace(tr, measurements=(), probabilities=())
+                tr = tr.evolve(measurements=(), probabilities=())
             if not tr.confirmed:
                 status = self.initiator.status(tr)
                 if status == "dropped":
                     stats = stats.add(dropped=1)
                     continue
-                tr = replace(tr, confirmed=status == "confirmed")
+                tr = tr.evolve(confirmed=status == "confirmed")
                 stats = stats.add(confirmed=tr.confirmed)
             if tr.confirmed and self.deleter.should_delete(tr):
                 stats = stats.add(deleted=1)
@@ -466,8 +466,7 @@ class MultiTargetTracker:
         for t0, ks in due.items():
             beliefs = predict_many(self.filter, [tracks[k].belief for k in ks], time - t0, rng)
             for k, belief in zip(ks, beliefs):
-                out[k] = replace(
-                    tracks[k],
+                out[k] = tracks[k].evolve(
                     belief=belief,
                     time=time,
                     existence=predict_existence(tracks[k].existence, self.survival_probability),
@@ -502,7 +501,7 @@ class MultiTargetTracker:
             if isinstance(belief, Gaussian) and callable(initialize):
                 belief = initialize(belief, rng)
             track = LiveTrack(births.next_id, belief, time, time, time)
-            out.append((replace(track, existence=self.birth_existence), j))
+            out.append((track.evolve(existence=self.birth_existence), j))
             births.next_id += 1
         return out
 
@@ -620,8 +619,7 @@ class MultiTargetTracker:
                 post = self.filter.update(track.belief, [chosen[k]], rng)
             beliefs.append(post)
             log_ratios.append(float(scores.log_likelihood[row, k] - scores.log_clutter[k]))
-        return replace(
-            track,
+        return track.evolve(
             belief=combine_hypotheses(beliefs, [h.probability for h in hyps]),
             existence=update_existence(
                 track.existence, p_detect * self.gate_probability, log_ratios
@@ -634,10 +632,9 @@ class MultiTargetTracker:
         used = tuple(j for j, _ in record.used)
         probabilities = tuple(p for _, p in record.used)
         if newborn:
-            return replace(track, measurements=used, probabilities=probabilities)
+            return track.evolve(measurements=used, probabilities=probabilities)
         if record.detected:
-            return replace(
-                track,
+            return track.evolve(
                 scans=track.scans + 1,
                 hits=track.hits + 1,
                 misses=0,
@@ -645,8 +642,7 @@ class MultiTargetTracker:
                 measurements=used,
                 probabilities=probabilities,
             )
-        return replace(
-            track,
+        return track.evolve(
             scans=track.scans + 1,
             misses=track.misses + 1,
             measurements=used,
