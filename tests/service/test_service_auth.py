@@ -109,3 +109,15 @@ def test_node_accepts_counts_replays_and_forgeries(network):
     assert 'fusetrack_messages_rejected_total{reason="replay"} 1.0' in text
     assert 'fusetrack_messages_rejected_total{reason="bad_mac"} 1.0' in text
     assert 'fusetrack_messages_accepted_total{sensor="mic_west"} 1.0' in text
+
+
+def test_a_huge_sequence_jump_is_accepted_in_bounded_memory():
+    """Issue 18: a jump of 2**33 in a sensor's sequence number shifted the window's bitmap by the
+    jump (2.4 GiB); 10**17 raised MemoryError. The window now forgets what it jumped over."""
+    w = SequenceWindow()
+    assert w.accept(5) and w.accept(3)
+    for seq in (2**33, 1_764_000_000_000_000, 10**17):  # a microsecond clock, then 10**17
+        assert w.accept(seq)
+        assert w.bitmap.bit_length() <= w.size
+    assert not w.accept(1_764_000_000_000_000)  # older than the window now
+    assert w.accept(10**17 + 1) and not w.accept(10**17 + 1)

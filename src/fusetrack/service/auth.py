@@ -115,7 +115,10 @@ class SequenceWindow:
     def accept(self, seq: int) -> bool:
         if seq > self.highest:
             shift = seq - self.highest
-            self.bitmap = ((self.bitmap << shift) | 1) & ((1 << self.size) - 1)
+            # a jump past the window forgets it (shifting by the jump itself would build an
+            # integer of `shift` bits: a jump of 2**33 took 2.4 GiB, issue 18)
+            kept = self.bitmap << shift if shift < self.size else 0
+            self.bitmap = (kept | 1) & ((1 << self.size) - 1)
             self.highest = seq
             return True
         offset = self.highest - seq
