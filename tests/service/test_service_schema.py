@@ -177,3 +177,19 @@ def test_value_is_float_array():
         node="a", seq=0, sensor="b", time=0.0, reading=reading_from_vector("doa", [0.1, 0.2])
     )
     assert m.value().dtype == np.float64 and m.value().shape == (2,)
+
+
+@pytest.mark.parametrize(
+    "field, value", [("seq", "123"), ("seq", 2.0), ("time", "0.5"), ("bearing", "0.3")]
+)
+def test_numbers_as_strings_are_refused(field, value):
+    """Issue 18: ``"seq": "123"`` and ``"bearing": "0.3"`` were accepted although the schema says
+    integer / number."""
+    msg = {"node": "west", "seq": 1, "sensor": "mic_west", "time": 0.5,
+           "reading": {"kind": "bearing", "bearing": 0.3}}  # fmt: skip
+    if field == "bearing":
+        msg["reading"]["bearing"] = value
+    else:
+        msg[field] = value
+    with pytest.raises(SchemaRejection):
+        decode_messages(json.dumps(msg).encode(), "json")

@@ -40,9 +40,12 @@ MAX_DETECTION_CELLS = 4096
 
 
 class _Strict(BaseModel):
-    """Frozen, no unknown fields, no NaN or infinity anywhere."""
+    """Frozen, no unknown fields, no NaN or infinity anywhere, and strict types: a number must
+    be a JSON number, not a string of digits (``"seq": "123"`` and ``"bearing": "0.3"`` were
+    accepted although ``/schema`` says integer / number, issue 18); an integer field takes no
+    ``2.0``."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False, strict=True)
 
 
 class BearingReading(_Strict):
