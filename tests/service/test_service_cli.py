@@ -102,3 +102,22 @@ def test_wall_clock_ticks_follow_the_node_clock(network):
     assert states[0].readings == 1 and states[1].readings == 0
     assert np.isclose(states[0].time, start + 0.25)
     assert "fusetrack_tick_delay_seconds_count 3.0" in node.metrics_text().decode()
+
+
+def test_replay_refuses_bad_sources_and_a_dead_node_before_sending(tmp_path, capsys):
+    """Issue 18: a missing .sqlite was created empty ("sent 0 messages", exit 0); a bad .jsonl
+    line and a node that is not running ended in tracebacks."""
+    config = "examples/network.yaml"
+    missing = tmp_path / "missing.sqlite"
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text('{"node": "west", "seq": 1}\n{bad json\n')
+    to = "http://127.0.0.1:9"  # the discard port: nothing listens
+    assert main(["replay", str(missing), "--to", to, "--config", config]) == 2
+    assert not missing.exists()
+    assert main(["replay", str(bad), "--to", to, "--config", config]) == 2
+    assert main(["replay", "demo", "--to", to, "--config", config, "--duration", "1"]) == 2
+    err = capsys.readouterr().err
+    assert (
+        "an existing file" in err and "bad.jsonl line 1" in err and "running fusetrack node" in err
+    )
+    assert "Traceback" not in err

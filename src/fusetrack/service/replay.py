@@ -148,22 +148,38 @@ SCENARIOS: dict[str, Callable[..., Scenario]] = {
 def load_recording(path: str | Path) -> list[Recorded]:
     """Readings from a ``.jsonl`` recording or a node's ``.sqlite`` durable log, in time order."""
     p = Path(path)
+    if p.suffix not in (".sqlite", ".db", ".jsonl"):
+        raise ConfigError(invalid("recording", str(p), "a .jsonl recording or a .sqlite node log"))
+    if not p.is_file():  # opening a missing .sqlite would create an empty log (issue 18)
+        raise ConfigError(invalid("recording", str(p), "an existing file"))
     if p.suffix in (".sqlite", ".db"):
         log = DurableLog(p)
         msgs = [m for _, m in log.messages()]
         log.db.close()
-    elif p.suffix == ".jsonl":
-        msgs = []
-        for i, line in enumerate(p.read_text().splitlines()):
-            if line.strip():
-                data = json.loads(line)
-                data.setdefault("node", "recording")
-                data.setdefault("seq", i)
-                msgs.append(SensorMessage.model_validate(data))
     else:
-        raise ConfigError(invalid("recording", str(p), "a .jsonl recording or a .sqlite node log"))
+        msgs = [_recorded_message(p, i, line) for i, line in enumerate(p.read_text().splitlines())]
+        msgs = [m for m in msgs if m is not None]
     out = [Recorded(m.time, m.sensor, tuple(m.reading.vector())) for m in msgs]
     return sorted(out, key=lambda r: r.time)
+
+
+def _recorded_message(path: Path, i: int, line: str) -> SensorMessage | None:
+    """Line ``i`` of a ``.jsonl`` recording as a message (None for a blank line); a line that is
+    not a message raises :class:`ConfigError` naming the file and the line."""
+    if not line.strip():
+        return None
+    try:
+        data = json.loads(line)
+        if not isinstance(data, dict):
+            raise ValueError("not a JSON object")
+        data.setdefault("node", "recording")
+        data.setdefault("seq", i)
+        return SensorMessage.model_validate(data)
+    except ValueError as err:  # json.JSONDecodeError and pydantic.ValidationError are ValueErrors
+        reason = str(err).splitlines()[0]
+        raise ConfigError(
+            invalid(f"{path.name} line {i + 1}", line[:80], f"one sensor message ({reason})")
+        ) from None
 
 
 class _Senders:
@@ -223,7 +239,7 @@ class _Senders:
                     "Content-Type": ctype,
                 }
                 for attempt in range(20):
-                    resp = self.http.post("/ingest", content=body, headers=headers)
+                    resp = self._post(body, headers)
                     if resp.status_code != 503:
                         break
                     time.sleep(min(1.0, 0.05 * 2**attempt))  # back-pressure: wait and retry
@@ -236,6 +252,15 @@ class _Senders:
                         f"http_{resp.status_code}", 0
                     ) + len(ms)
             self.sent += len(ms)
+
+    def _post(self, body: bytes, headers: dict[str, str]) -> httpx.Response:
+        assert self.http is not None
+        try:
+            return self.http.post("/ingest", content=body, headers=headers)
+        except httpx.TransportError as err:
+            raise ConfigError(
+                invalid("--to", str(self.http.base_url), f"a running fusetrack node ({err})")
+            ) from None
 
     def close(self) -> None:
         if self.udp is not None:
