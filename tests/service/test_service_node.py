@@ -273,3 +273,14 @@ def test_a_tick_that_fails_predicts_only_and_is_counted(tmp_path, network):
     assert all(np.all(np.isfinite(s.state)) for s in states)
     _, offline = replay_log(network, node.log)  # the log says what was really fused
     assert [s.model_dump() for s in offline] == [s.model_dump() for s in states]
+
+
+def test_the_bearer_scheme_is_case_insensitive(network):
+    """Issue 18: ``Authorization: bearer <token>`` was refused; RFC 7235 makes the scheme name
+    case-insensitive. The token itself stays exact."""
+    node = FusionNode(network)
+    who, token = next(iter(node.tokens.items()))
+    for scheme in ("Bearer", "bearer", "BEARER"):
+        assert node.authorize(f"{scheme} {token}") == who
+    assert node.authorize(f"Bearer {token.upper()}") is None
+    assert node.authorize("Basic " + token) is None and node.authorize("Bearer") is None

@@ -208,10 +208,12 @@ class FusionNode:
         return [self.ingest_message(m, node) for m in messages]
 
     def authorize(self, header: str | None) -> str | None:
-        """The node an ``Authorization: Bearer ...`` header names, or None."""
-        if not header or not header.startswith("Bearer "):
+        """The node an ``Authorization: Bearer ...`` header names, or None (the scheme name is
+        case-insensitive, RFC 7235 §2.1: ``bearer`` was refused, issue 18)."""
+        scheme, _, token = (header or "").strip().partition(" ")
+        if scheme.lower() != "bearer" or not token.strip():
             return None
-        return node_of_token(header[len("Bearer ") :].strip(), self.tokens)
+        return node_of_token(token.strip(), self.tokens)
 
     def ingest_message(self, m: SensorMessage, node: str) -> Outcome:
         """Check one parsed message against the network and accept or refuse it."""
