@@ -284,3 +284,17 @@ def test_the_bearer_scheme_is_case_insensitive(network):
         assert node.authorize(f"{scheme} {token}") == who
     assert node.authorize(f"Bearer {token.upper()}") is None
     assert node.authorize("Basic " + token) is None and node.authorize("Bearer") is None
+
+
+def test_track_subscribers_are_capped(network):
+    """Issue 18: 300 unauthenticated /ws/tracks subscribers opened with no limit; now at most
+    ``limits.max_subscribers``, the rest counted as refused (the app closes them with 1013)."""
+    cfg = network.model_copy(
+        update={"limits": network.limits.model_copy(update={"max_subscribers": 2})}
+    )
+    node = FusionNode(cfg)
+    first, second = node.subscribe(), node.subscribe()
+    assert first is not None and second is not None
+    assert node.subscribe() is None and node.rejected["too_many_subscribers"] == 1
+    node.unsubscribe(first)
+    assert node.subscribe() is not None

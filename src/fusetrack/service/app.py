@@ -165,8 +165,11 @@ def _reading_routes(app: FastAPI, node: FusionNode) -> None:
 
     @app.websocket("/ws/tracks")
     async def ws_tracks(ws: WebSocket) -> None:
-        await ws.accept()
         q = node.subscribe()
+        if q is None:  # limits.max_subscribers: try again later (RFC 6455 close code 1013)
+            await ws.close(code=1013)
+            return
+        await ws.accept()
         try:
             hello = {"type": "hello", **node.tracks_view(), "area": node.cfg.area}
             await ws.send_json(hello)

@@ -490,6 +490,9 @@ class LimitsConfig(_Section):
     buffer_size: int = Field(default=256, ge=1, le=1_000_000)
     max_pending: int = Field(default=100_000, ge=1)
     history: int = Field(default=600, ge=1, le=1_000_000)
+    max_subscribers: int = Field(
+        default=64, ge=1, le=100_000, description="open /ws/tracks connections at most"
+    )
 
 
 class NetworkConfig(_Section):

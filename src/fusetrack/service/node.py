@@ -362,7 +362,12 @@ class FusionNode:
                 self.windows[node].restore(seq)
 
     # -- publication -------------------------------------------------------------------------
-    def subscribe(self) -> asyncio.Queue[str]:
+    def subscribe(self) -> asyncio.Queue[str] | None:
+        """A queue of published track messages, or None when ``limits.max_subscribers`` are
+        already open (unauthenticated readers could otherwise open any number, issue 18)."""
+        if len(self.subscribers) >= self.cfg.limits.max_subscribers:
+            self.reject("too_many_subscribers", "limits.max_subscribers reached")
+            return None
         q: asyncio.Queue[str] = asyncio.Queue(maxsize=64)
         self.subscribers.add(q)
         self.metrics.subscribers.set(len(self.subscribers))

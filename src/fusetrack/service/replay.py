@@ -157,8 +157,8 @@ def load_recording(path: str | Path) -> list[Recorded]:
         msgs = [m for _, m in log.messages()]
         log.db.close()
     else:
-        msgs = [_recorded_message(p, i, line) for i, line in enumerate(p.read_text().splitlines())]
-        msgs = [m for m in msgs if m is not None]
+        lines = enumerate(p.read_text().splitlines())
+        msgs = [m for i, line in lines if (m := _recorded_message(p, i, line)) is not None]
     out = [Recorded(m.time, m.sensor, tuple(m.reading.vector())) for m in msgs]
     return sorted(out, key=lambda r: r.time)
 
