@@ -121,3 +121,23 @@ def test_replay_refuses_bad_sources_and_a_dead_node_before_sending(tmp_path, cap
         "an existing file" in err and "bad.jsonl line 1" in err and "running fusetrack node" in err
     )
     assert "Traceback" not in err
+
+
+def test_websocket_frames_over_the_message_limit_are_refused_unbuffered(network):
+    """Issue 18: WebSocket ingest buffered frames up to uvicorn's 16 MiB before the node's
+    64 KiB message limit applied; the server now closes on a larger frame (1009, too big)."""
+    import pytest
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
+
+    from fusetrack.service.auth import bearer_token
+
+    node_id, key = next(iter(network.keys().items()))
+    with RunningNode(build_node(network)) as node:
+        url = node.url.replace("http://", "ws://") + "/ws/ingest"
+        headers = {"Authorization": f"Bearer {bearer_token(key)}"}
+        with connect(url, additional_headers=headers) as ws:
+            with pytest.raises(ConnectionClosed) as closed:
+                ws.send("x" * (network.limits.max_message_bytes + 1))
+                ws.recv(timeout=10)
+    assert closed.value.rcvd is not None and closed.value.rcvd.code == 1009

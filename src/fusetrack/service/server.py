@@ -8,6 +8,7 @@ import socket
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import uvicorn
 
@@ -41,6 +42,16 @@ def tcp_socket(host: str, port: int) -> socket.socket:
     return sock
 
 
+
+def uvicorn_options(node: FusionNode) -> dict[str, Any]:
+    """The HTTP server's settings: a WebSocket frame is refused above ``limits.max_message_bytes``
+    before it is buffered (uvicorn's default buffers 16 MiB first, issue 18)."""
+    return {
+        "log_level": "warning",
+        "ws": "websockets-sansio",
+        "ws_max_size": node.cfg.limits.max_message_bytes,
+    }
+
 class RunningNode:
     """A node served by uvicorn on its own thread; ``url`` and ``udp`` say where it listens."""
 
@@ -55,7 +66,7 @@ class RunningNode:
         self.http_sock = tcp_socket(host, http_port)
         self.udp_sock = udp_socket(host, udp_port) if udp_port is not None else None
         app = create_app(node, self.udp_sock)
-        config = uvicorn.Config(app, log_level="warning", lifespan="on", ws="websockets-sansio")
+        config = uvicorn.Config(app, lifespan="on", **uvicorn_options(node))
         self.server = uvicorn.Server(config)
         self.thread = threading.Thread(
             target=self.server.run, kwargs={"sockets": [self.http_sock]}, daemon=True
@@ -104,7 +115,7 @@ def serve(
         log.info("fusion node: listening for UDP on udp://%s:%d", host, udp.getsockname()[1])
     if node.resumed_ticks and node.log is not None:
         log.info("fusion node: resumed %d ticks from %s", node.resumed_ticks, node.log.path)
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", ws="websockets-sansio"))
+    server = uvicorn.Server(uvicorn.Config(app, **uvicorn_options(node)))
     try:
         server.run(sockets=[http])
     finally:
