@@ -132,7 +132,7 @@ def test_websocket_frames_over_the_message_limit_are_refused_unbuffered(network)
 
     from fusetrack.service.auth import bearer_token
 
-    node_id, key = next(iter(network.keys().items()))
+    key = next(iter(network.keys().values()))
     with RunningNode(build_node(network)) as node:
         url = node.url.replace("http://", "ws://") + "/ws/ingest"
         headers = {"Authorization": f"Bearer {bearer_token(key)}"}
