@@ -42,7 +42,6 @@ def tcp_socket(host: str, port: int) -> socket.socket:
     return sock
 
 
-
 def uvicorn_options(node: FusionNode) -> dict[str, Any]:
     """The HTTP server's settings: a WebSocket frame is refused above ``limits.max_message_bytes``
     before it is buffered (uvicorn's default buffers 16 MiB first, issue 18)."""
@@ -51,6 +50,7 @@ def uvicorn_options(node: FusionNode) -> dict[str, Any]:
         "ws": "websockets-sansio",
         "ws_max_size": node.cfg.limits.max_message_bytes,
     }
+
 
 class RunningNode:
     """A node served by uvicorn on its own thread; ``url`` and ``udp`` say where it listens."""
