@@ -4,6 +4,7 @@ replays to the same tracks; a restarted node resumes from it."""
 from __future__ import annotations
 
 import json
+import sqlite3
 
 import numpy as np
 import pytest
@@ -298,3 +299,33 @@ def test_track_subscribers_are_capped(network):
     assert node.subscribe() is None and node.rejected["too_many_subscribers"] == 1
     node.unsubscribe(first)
     assert node.subscribe() is not None
+
+
+def test_damaged_foreign_and_directory_logs_are_refused_with_a_way_out(tmp_path, network):
+    """Issue 18: a random-bytes, truncated, bad-JSON or foreign-config log, or a directory, ended
+    in raw tracebacks (DatabaseError, KeyError, ValidationError); a changed config resumed
+    silently. Each is now a ConfigError that names the log and says how to recover."""
+    junk = tmp_path / "junk.sqlite"
+    junk.write_bytes(np.random.default_rng(0).bytes(5000))
+    (tmp_path / "dir.sqlite").mkdir()
+    for path in (junk, tmp_path / "dir.sqlite"):
+        with pytest.raises(ConfigError, match="move it aside"):
+            DurableLog(path)
+    # a log written under one config, reopened under another (a sensor's noise changed)
+    path = tmp_path / "node.sqlite"
+    clock = [0.0]
+    node = FusionNode(network, wall=lambda: clock[0], log=DurableLog(path))
+    _feed(node, network, demo_scenario(network, seed=1, duration=4.0).readings)
+    clock[0] += 10.0
+    node.advance()
+    node.log.close()
+    sensors = [s.model_copy() for s in network.sensors]
+    sensors[0] = sensors[0].model_copy(update={"sigma": 2 * (sensors[0].sigma or 0.05)})
+    other = network.model_copy(update={"sensors": sensors})
+    with pytest.raises(ConfigError, match="written under this config"):
+        FusionNode(other, log=DurableLog(path))
+    # a row that no longer reads back (bad JSON in a logged message)
+    with sqlite3.connect(path) as db:
+        db.execute("UPDATE messages SET body = '{bad' WHERE rowid = 1")
+    with pytest.raises(ConfigError, match="rows read back"):
+        FusionNode(network, log=DurableLog(path))

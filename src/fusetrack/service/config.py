@@ -11,6 +11,7 @@ and what would be valid.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from collections.abc import Mapping
@@ -534,6 +535,12 @@ class NetworkConfig(_Section):
 
     def keys(self) -> dict[str, bytes]:
         return {n.id: n.secret() for n in self.nodes}
+
+    def fingerprint(self) -> str:
+        """SHA-256 of everything that decides the tracks (all but ``log`` and ``limits``): a
+        durable log records it and refuses to resume under another config."""
+        body = self.model_dump_json(exclude={"log", "limits"})
+        return hashlib.sha256(body.encode()).hexdigest()
 
     def tokens(self) -> dict[str, str]:
         return {node: bearer_token(key) for node, key in self.keys().items()}

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import ConfigError, invalid
 from .alignment import Reading
 from .config import NetworkConfig
 from .engine import Engine, build_engine
@@ -52,12 +53,41 @@ class DurableLog:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.db = sqlite3.connect(self.path, check_same_thread=False)
-        self.db.execute("PRAGMA journal_mode=WAL")
-        self.db.execute("PRAGMA synchronous=NORMAL")
-        self.db.executescript(_TABLES)
-        self.db.commit()
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.db = sqlite3.connect(self.path, check_same_thread=False, timeout=1.0)
+            self.db.execute("PRAGMA journal_mode=WAL")
+            self.db.execute("PRAGMA synchronous=NORMAL")
+            self.db.executescript(_TABLES)
+            self.db.commit()
+            self.db.execute("SELECT count(*) FROM messages").fetchone()
+        except (sqlite3.Error, OSError) as err:  # damaged, foreign, locked, a directory (issue 18)
+            raise ConfigError(
+                invalid(
+                    "log",
+                    str(self.path),
+                    "a fusetrack node log this node can open and write "
+                    f"({type(err).__name__}: {err}); if it is damaged, move it aside to start a "
+                    f"new log, or try `sqlite3 {self.path} .recover` to save what it holds",
+                )
+            ) from None
+
+    def check_config(self, fingerprint: str) -> None:
+        """Record the network config's fingerprint in a new log; refuse a log written under
+        another config (its sensors, keys or models differ: resuming would mix them)."""
+        logged = self.meta("config")
+        if logged is None:
+            self.set_meta("config", fingerprint)
+        elif logged != fingerprint:
+            raise ConfigError(
+                invalid(
+                    "log",
+                    str(self.path),
+                    f"a log written under this config (its fingerprint {logged[:12]} is not this "
+                    f"config's {fingerprint[:12]}): start with the config it was written with, "
+                    "or give a new log file",
+                )
+            )
 
     def next_id(self) -> int:
         row = self.db.execute("SELECT COALESCE(MAX(id), 0) FROM messages").fetchone()

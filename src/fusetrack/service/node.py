@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import sqlite3
 import time
 from collections import Counter, deque
 from collections.abc import Callable
@@ -31,6 +32,7 @@ import numpy as np
 from prometheus_client import CollectorRegistry, Gauge, Histogram, generate_latest
 from prometheus_client import Counter as PromCounter
 
+from ..core import ConfigError, invalid
 from .alignment import Aligner
 from .auth import Rejected, SequenceWindow, node_of_token, open_frame
 from .config import FUSED_KINDS, NetworkConfig
@@ -46,6 +48,7 @@ REJECTION_REASONS: tuple[str, ...] = (
     "unknown_node",
     "bad_mac",
     "unauthorized",
+    "too_many_subscribers",
     "malformed",
     "schema",
     "node_mismatch",
@@ -143,6 +146,7 @@ class FusionNode:
         if fusion.clock == "wall":
             start = math.floor(self.started * fusion.rate_hz) / fusion.rate_hz
         if log is not None:
+            log.check_config(cfg.fingerprint())
             logged = log.meta("start")
             if logged is None:
                 log.set_meta("start", repr(start))
@@ -343,8 +347,20 @@ class FusionNode:
 
     def resume(self, log: DurableLog) -> None:
         """Rebuild the state from the durable log: re-run its ticks, re-buffer unfused readings,
-        restore the replay windows."""
-        engine, states, last = replay_ticks(self.cfg, log)
+        restore the replay windows. A log whose rows do not read back (bad JSON, a message the
+        schema refuses, a tick naming a missing reading) is refused with a clear message."""
+        try:
+            engine, states, last = replay_ticks(self.cfg, log)
+        except (ValueError, KeyError, sqlite3.Error) as err:
+            reason = str(err).splitlines()[0] if str(err) else type(err).__name__
+            raise ConfigError(
+                invalid(
+                    "log",
+                    str(log.path),
+                    f"a log whose rows read back ({type(err).__name__}: {reason}); move it aside "
+                    "to start a new log",
+                )
+            ) from None
         if last:
             self.engine = engine
             self.history.extend(states)
