@@ -592,6 +592,7 @@ class MultiTargetTracker:
             self.gate_probability,
             rng,
             keep_posteriors=True,
+            validated=True,  # step: _check_measurements and _screen did it
         )
 
     def _apply(
