@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core import ConfigError, invalid
 from .base import Array
@@ -71,7 +72,7 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
     size: use on gated clusters); :class:`OverflowError` when there are more than ``limit``.
     When every event has probability zero, every track is missed."""
     t, cols = log_weights.shape
-    events = np.array(list(joint_events(log_weights, limit)), dtype=int).reshape(-1, t)
+    events = _events(log_weights, limit)
     beta = np.zeros((t, cols))
     if t == 0:
         return beta
@@ -84,6 +85,18 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
     for i in range(t):
         beta[i] = np.bincount(events[:, i], weights=p, minlength=cols)
     return beta
+
+
+def _events(log_weights: Array, limit: int | None) -> NDArray[np.int_]:
+    """:func:`joint_events` as an ``(n_events, T)`` array; a lone track's events (its gated
+    columns, then missed) directly, without the enumeration."""
+    t, cols = log_weights.shape
+    if t != 1:
+        return np.array(list(joint_events(log_weights, limit)), dtype=int).reshape(-1, t)
+    options = np.append(np.flatnonzero(np.isfinite(log_weights[0, :-1])), cols - 1)
+    if limit is not None and options.size > limit:
+        raise OverflowError(f"more than {limit} joint events")
+    return options.astype(int)[:, None]
 
 
 def belief_propagation_marginals(
