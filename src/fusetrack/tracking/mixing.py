@@ -42,14 +42,14 @@ def combine_hypotheses(beliefs: Sequence[Any], probabilities: Sequence[float]) -
         raise ConfigError(
             invalid("probabilities", p.tolist(), f"{len(beliefs)} values, one per belief (>= 1)")
         )
-    if not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
+    if not np.isfinite(p).all() or (p < 0).any() or p.sum() <= 0:
         raise ConfigError(invalid("probabilities", p.tolist(), "finite values >= 0, not all 0"))
     p = p / p.sum()
     best = int(np.argmax(p))
     if p[best] == 1.0 or not all(isinstance(b, Gaussian) for b in beliefs):
         return beliefs[best]
-    means = np.stack([b.mean for b in beliefs])  # (J, d)
-    covs = np.stack([b.cov for b in beliefs])  # (J, d, d)
+    means = np.array([b.mean for b in beliefs])  # (J, d)
+    covs = np.array([b.cov for b in beliefs])  # (J, d, d)
     mean = np.einsum("j,jd->d", p, means)
     spread = means - mean
     cov = np.einsum("j,jde->de", p, covs) + np.einsum("j,jd,je->de", p, spread, spread)

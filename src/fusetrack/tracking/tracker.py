@@ -74,7 +74,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
@@ -560,15 +560,18 @@ class MultiTargetTracker:
         )
         inner = self.associator.associate(block, rng)
         _check_association(self.associator, inner, cols.size)
+        col = cols.tolist()
         hypotheses = {
             i: tuple(
-                h if h.measurement is None else replace(h, measurement=int(cols[h.measurement]))
+                h
+                if h.measurement is None
+                else SingleHypothesis(h.track_id, col[h.measurement], h.probability)
                 for h in hs
             )
             for i, hs in inner.hypotheses.items()
         }
-        in_no_gate = set(range(m)) - set(cols.tolist())
-        left = sorted(in_no_gate | {int(cols[k]) for k in inner.unassociated})
+        in_no_gate = set(range(m)) - set(col)
+        left = sorted(in_no_gate | {col[k] for k in inner.unassociated})
         return Association(hypotheses, tuple(left), inner.info)
 
     def _score(
