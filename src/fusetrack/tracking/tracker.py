@@ -165,8 +165,10 @@ def _check_association(associator: Any, association: Association, n: int) -> Non
 
 def _usable(m: Measurement) -> bool:
     """False when the value or its own covariance has a NaN or infinite entry."""
-    cov = m.covariance
-    return m.is_finite and (cov is None or bool(np.all(np.isfinite(cov))))
+    cov, value = m.covariance, m.value
+    if isinstance(value, np.ndarray) and not np.isfinite(value).all():  # Measurement.is_finite
+        return False
+    return cov is None or bool(np.isfinite(cov).all())
 
 
 @dataclass
