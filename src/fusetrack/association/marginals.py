@@ -21,7 +21,6 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..core import ConfigError, invalid
 from .base import Array
@@ -72,7 +71,9 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
     size: use on gated clusters); :class:`OverflowError` when there are more than ``limit``.
     When every event has probability zero, every track is missed."""
     t, cols = log_weights.shape
-    events = _events(log_weights, limit)
+    if t == 1:
+        return _lone_track_marginals(log_weights[0], limit)
+    events = np.array(list(joint_events(log_weights, limit)), dtype=int).reshape(-1, t)
     beta = np.zeros((t, cols))
     if t == 0:
         return beta
@@ -87,16 +88,22 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
     return beta
 
 
-def _events(log_weights: Array, limit: int | None) -> NDArray[np.int_]:
-    """:func:`joint_events` as an ``(n_events, T)`` array; a lone track's events (its gated
-    columns, then missed) directly, without the enumeration."""
-    t, cols = log_weights.shape
-    if t != 1:
-        return np.array(list(joint_events(log_weights, limit)), dtype=int).reshape(-1, t)
-    options = np.append(np.flatnonzero(np.isfinite(log_weights[0, :-1])), cols - 1)
-    if limit is not None and options.size > limit:
+def _lone_track_marginals(log_weights: Array, limit: int | None) -> Array:
+    """:func:`exact_marginals` of one track, weights ``(M + 1,)``: its events are its gated
+    columns and missed, so its ``beta`` is their normalised weights (no enumeration)."""
+    cols = log_weights.size
+    events = np.append(np.flatnonzero(np.isfinite(log_weights[:-1])), cols - 1)
+    if limit is not None and events.size > limit:
         raise OverflowError(f"more than {limit} joint events")
-    return options.astype(int)[:, None]
+    beta = np.zeros((1, cols))
+    log_p = log_weights[events]
+    if not np.isfinite(log_p).any():
+        beta[0, -1] = 1.0
+        return beta
+    p = np.exp(log_p - log_p.max())
+    p /= p.sum()
+    beta[0, events] = p
+    return beta
 
 
 def belief_propagation_marginals(
