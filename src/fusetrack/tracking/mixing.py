@@ -42,9 +42,10 @@ def combine_hypotheses(beliefs: Sequence[Any], probabilities: Sequence[float]) -
         raise ConfigError(
             invalid("probabilities", p.tolist(), f"{len(beliefs)} values, one per belief (>= 1)")
         )
-    if not np.isfinite(p).all() or (p < 0).any() or p.sum() <= 0:
+    total = p.sum()
+    if not np.isfinite(p).all() or (p < 0).any() or total <= 0:
         raise ConfigError(invalid("probabilities", p.tolist(), "finite values >= 0, not all 0"))
-    p = p / p.sum()
+    p = p / total
     best = int(np.argmax(p))
     if p[best] == 1.0 or not all(isinstance(b, Gaussian) for b in beliefs):
         return beliefs[best]

@@ -437,6 +437,7 @@ class MultiTargetTracker:
         """After a scan: count each track's hit or miss (none when no sensor looked), confirm or
         drop tentative tracks (``initiator.status``), delete confirmed ones (``deleter``)."""
         survivors = []
+        dropped = confirmed = deleted = 0  # added to the stats once, after the loop
         for i, tr in tracks.items():
             if looked or i >= first_new:
                 tr = self._count(tr, records[i], time, newborn=i >= first_new)
@@ -445,14 +446,15 @@ class MultiTargetTracker:
             if not tr.confirmed:
                 status = self.initiator.status(tr)
                 if status == "dropped":
-                    stats = stats.add(dropped=1)
+                    dropped += 1
                     continue
                 tr = tr.evolve(confirmed=status == "confirmed")
-                stats = stats.add(confirmed=tr.confirmed)
+                confirmed += tr.confirmed
             if tr.confirmed and self.deleter.should_delete(tr):
-                stats = stats.add(deleted=1)
+                deleted += 1
                 continue
             survivors.append(tr)
+        stats = stats.add(dropped=dropped, confirmed=confirmed, deleted=deleted)
         return tuple(survivors), stats
 
     def _predict(
