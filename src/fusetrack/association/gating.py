@@ -192,13 +192,13 @@ def mahalanobis_squared(
     if not n_t or not n_m:
         return np.zeros((n_t, n_m))
     moments = [_moments(b) for b in beliefs]
-    means = np.stack([m for m, _ in moments])  # (T, d)
-    covs = np.stack([c for _, c in moments])  # (T, d, d)
+    means = np.array([m for m, _ in moments])  # (T, d) (np.stack without its overhead)
+    covs = np.array([c for _, c in moments])  # (T, d, d)
     h = np.asarray(sensor.jacobian(means), float)  # (T, m, d)
     z_pred = np.asarray(sensor.predict(means), float)  # (T, m)
     hph = h @ covs @ np.swapaxes(h, -1, -2)  # (T, m, m)
     r_sensor = np.broadcast_to(np.asarray(sensor.noise_cov(means), float), hph.shape)
-    values = np.stack([np.asarray(z.value, float) for z in measurements])  # (M, m)
+    values = np.array([np.asarray(z.value, float) for z in measurements])  # (M, m)
     s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
     y = np.asarray(sensor.residual(values[None, :, :], z_pred[:, None, :]), float)  # (T, M, m)
     try:
