@@ -43,7 +43,7 @@ def combine_hypotheses(beliefs: Sequence[Any], probabilities: Sequence[float]) -
             invalid("probabilities", p.tolist(), f"{len(beliefs)} values, one per belief (>= 1)")
         )
     total = p.sum()
-    if not np.isfinite(p).all() or (p < 0).any() or total <= 0:
+    if not (math.isfinite(total) and p.min() >= 0 and total > 0):  # inf/NaN: a non-finite sum
         raise ConfigError(invalid("probabilities", p.tolist(), "finite values >= 0, not all 0"))
     p = p / total
     best = int(np.argmax(p))
