@@ -24,9 +24,22 @@ def gate_clusters(gated: NDArray[np.bool_]) -> list[tuple[IntArray, IntArray]]:
     rows, cols = np.nonzero(gated)
     graph = coo_matrix((np.ones(rows.size), (rows, t + cols)), shape=(t + m, t + m))
     _, labels = connected_components(graph, directed=False)
-    clusters = []
-    for label in dict.fromkeys(labels[:t].tolist()):  # first-seen order of the tracks
-        tracks = np.flatnonzero(labels[:t] == label)
-        measurements = np.flatnonzero(labels[t:] == label)
-        clusters.append((tracks.astype(np.int64), measurements.astype(np.int64)))
-    return clusters
+    # every label's tracks and measurements in ascending order, in one sort
+    track_groups = _groups(labels[:t], t + m)
+    meas_groups = _groups(labels[t:], t + m)
+    empty = np.zeros(0, np.int64)
+    return [
+        (track_groups[label], meas_groups.get(label, empty))
+        for label in dict.fromkeys(labels[:t].tolist())  # first-seen order of the tracks
+    ]
+
+
+def _groups(labels: NDArray[np.int_], n_labels: int) -> dict[int, IntArray]:
+    """``{label: the ascending indices with that label}`` (labels in ``[0, n_labels)``)."""
+    order = np.argsort(labels, kind="stable").astype(np.int64)
+    counts = np.bincount(labels, minlength=n_labels)
+    present = np.flatnonzero(counts)
+    if not present.size:
+        return {}
+    parts = np.split(order, np.cumsum(counts[present])[:-1])
+    return dict(zip(present.tolist(), parts, strict=True))

@@ -192,13 +192,13 @@ def mahalanobis_squared(
     if not n_t or not n_m:
         return np.zeros((n_t, n_m))
     moments = [_moments(b) for b in beliefs]
-    means = np.stack([m for m, _ in moments])  # (T, d)
-    covs = np.stack([c for _, c in moments])  # (T, d, d)
+    means = np.array([m for m, _ in moments])  # (T, d) (np.stack without its overhead)
+    covs = np.array([c for _, c in moments])  # (T, d, d)
     h = np.asarray(sensor.jacobian(means), float)  # (T, m, d)
     z_pred = np.asarray(sensor.predict(means), float)  # (T, m)
     hph = h @ covs @ np.swapaxes(h, -1, -2)  # (T, m, m)
     r_sensor = np.broadcast_to(np.asarray(sensor.noise_cov(means), float), hph.shape)
-    values = np.stack([np.asarray(z.value, float) for z in measurements])  # (M, m)
+    values = np.array([np.asarray(z.value, float) for z in measurements])  # (M, m)
     s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
     y = np.asarray(sensor.residual(values[None, :, :], z_pred[:, None, :]), float)  # (T, M, m)
     try:
@@ -250,6 +250,7 @@ def scan_likelihoods(
     rng: np.random.Generator | None = None,
     *,
     keep_posteriors: Literal[False] = False,
+    validated: bool = False,
 ) -> ScanLikelihoods: ...
 
 
@@ -266,6 +267,7 @@ def scan_likelihoods(
     rng: np.random.Generator | None = None,
     *,
     keep_posteriors: Literal[True],
+    validated: bool = False,
 ) -> tuple[ScanLikelihoods, dict[tuple[int, int], Any]]: ...
 
 
@@ -281,6 +283,7 @@ def scan_likelihoods(
     rng: np.random.Generator | None = None,
     *,
     keep_posteriors: bool = False,
+    validated: bool = False,
 ) -> ScanLikelihoods | tuple[ScanLikelihoods, dict[tuple[int, int], Any]]:
     """The :class:`ScanLikelihoods` of one scan (and, with ``keep_posteriors``, the updates).
 
@@ -301,6 +304,9 @@ def scan_likelihoods(
     of track row ``i`` updated with measurement ``j`` alone, for every gated pair. A
     measurement from a sensor not in ``sensors`` raises
     :class:`~fusetrack.core.UnknownSensorError` (a :class:`MeasurementError`).
+    ``validated=True``: the caller has already checked every measurement (a vector value of a
+    known sensor, :func:`~fusetrack.filters.validate_measurement`) and passes only usable
+    (finite) ones, so they are not checked again.
     """
     from ..filters import as_sensor_map, validate_measurement  # here: importing filters is slow
 
@@ -310,17 +316,20 @@ def scan_likelihoods(
     pg = check_gate_probability(gate_probability)
     pd = _per_track("p_detect", p_detect, n)
     sensor_map = as_sensor_map(sensors)
-    for z in measurements:
-        _vector(z)
-    checked = [validate_measurement(z, sensor_map) for z in measurements]
+    if validated:
+        usable = [True] * len(measurements)
+    else:
+        for z in measurements:
+            _vector(z)
+        usable = [bool(validate_measurement(z, sensor_map).usable) for z in measurements]
     log_clutter = np.array(
         [math.log(_clutter_of(clutter_density, z.sensor_id)) for z in measurements]
     )
     ll = np.full((n, len(measurements)), -np.inf)
     posteriors: dict[tuple[int, int], Any] = {}
     by_sensor: dict[str, list[int]] = {}
-    for j, c in enumerate(checked):
-        if bool(c.usable):
+    for j, ok in enumerate(usable):
+        if ok:
             by_sensor.setdefault(measurements[j].sensor_id, []).append(j)
     for sid, cols in by_sensor.items():
         sensor = sensor_map[sid]

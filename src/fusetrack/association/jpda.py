@@ -21,6 +21,7 @@ small ``beta_ij``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -69,7 +70,11 @@ class JointProbabilisticDataAssociation:
         clusters = gate_clusters(gated_pairs(scores))
         approximated = 0
         for tracks, measurements in clusters:
-            block = np.ix_(tracks, np.append(measurements, m))
+            block: tuple[Any, ...]
+            if tracks.size == 1:  # most clusters: a lone track, indexed without np.ix_
+                block = (tracks[:1, None], [*measurements.tolist(), m])
+            else:
+                block = np.ix_(tracks, np.append(measurements, m))
             try:
                 beta[block] = exact_marginals(weights[block], self.max_exact_events)
             except OverflowError:

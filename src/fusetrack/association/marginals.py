@@ -71,6 +71,8 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
     size: use on gated clusters); :class:`OverflowError` when there are more than ``limit``.
     When every event has probability zero, every track is missed."""
     t, cols = log_weights.shape
+    if t == 1:
+        return _lone_track_marginals(log_weights[0], limit)
     events = np.array(list(joint_events(log_weights, limit)), dtype=int).reshape(-1, t)
     beta = np.zeros((t, cols))
     if t == 0:
@@ -83,6 +85,24 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
     p /= p.sum()
     for i in range(t):
         beta[i] = np.bincount(events[:, i], weights=p, minlength=cols)
+    return beta
+
+
+def _lone_track_marginals(log_weights: Array, limit: int | None) -> Array:
+    """:func:`exact_marginals` of one track, weights ``(M + 1,)``: its events are its gated
+    columns and missed, so its ``beta`` is their normalised weights (no enumeration)."""
+    cols = log_weights.size
+    events = np.append(np.flatnonzero(np.isfinite(log_weights[:-1])), cols - 1)
+    if limit is not None and events.size > limit:
+        raise OverflowError(f"more than {limit} joint events")
+    beta = np.zeros((1, cols))
+    log_p = log_weights[events]
+    if not np.isfinite(log_p).any():
+        beta[0, -1] = 1.0
+        return beta
+    p = np.exp(log_p - log_p.max())
+    p /= p.sum()
+    beta[0, events] = p
     return beta
 
 

@@ -36,8 +36,12 @@ def update_existence(
 ) -> float:
     """``r^+`` from ``r^-`` (module docstring); ``detection_gate = P_D P_G`` and
     ``log_likelihood_ratios`` the ``log l_j`` of the track's measurements this scan."""
-    ratios = np.exp(np.asarray(log_likelihood_ratios, dtype=float))
-    delta = detection_gate - float(ratios.sum())
+    total = (  # a missed track has none: skip the array
+        float(np.exp(np.asarray(log_likelihood_ratios, dtype=float)).sum())
+        if len(log_likelihood_ratios)
+        else 0.0
+    )
+    delta = detection_gate - total
     denominator = 1.0 - delta * existence
     if denominator <= 0.0:  # r^- = 1 and delta = 1: a certain target certainly missed
         return 0.0

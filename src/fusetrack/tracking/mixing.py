@@ -42,14 +42,15 @@ def combine_hypotheses(beliefs: Sequence[Any], probabilities: Sequence[float]) -
         raise ConfigError(
             invalid("probabilities", p.tolist(), f"{len(beliefs)} values, one per belief (>= 1)")
         )
-    if not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
+    total = p.sum()
+    if not (math.isfinite(total) and p.min() >= 0 and total > 0):  # inf/NaN: a non-finite sum
         raise ConfigError(invalid("probabilities", p.tolist(), "finite values >= 0, not all 0"))
-    p = p / p.sum()
+    p = p / total
     best = int(np.argmax(p))
     if p[best] == 1.0 or not all(isinstance(b, Gaussian) for b in beliefs):
         return beliefs[best]
-    means = np.stack([b.mean for b in beliefs])  # (J, d)
-    covs = np.stack([b.cov for b in beliefs])  # (J, d, d)
+    means = np.array([b.mean for b in beliefs])  # (J, d)
+    covs = np.array([b.cov for b in beliefs])  # (J, d, d)
     mean = np.einsum("j,jd->d", p, means)
     spread = means - mean
     cov = np.einsum("j,jde->de", p, covs) + np.einsum("j,jd,je->de", p, spread, spread)

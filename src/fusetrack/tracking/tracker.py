@@ -74,7 +74,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Iterable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
@@ -165,8 +165,10 @@ def _check_association(associator: Any, association: Association, n: int) -> Non
 
 def _usable(m: Measurement) -> bool:
     """False when the value or its own covariance has a NaN or infinite entry."""
-    cov = m.covariance
-    return m.is_finite and (cov is None or bool(np.all(np.isfinite(cov))))
+    cov, value = m.covariance, m.value
+    if isinstance(value, np.ndarray) and not np.isfinite(value).all():  # Measurement.is_finite
+        return False
+    return cov is None or bool(np.isfinite(cov).all())
 
 
 @dataclass
@@ -435,6 +437,7 @@ class MultiTargetTracker:
         """After a scan: count each track's hit or miss (none when no sensor looked), confirm or
         drop tentative tracks (``initiator.status``), delete confirmed ones (``deleter``)."""
         survivors = []
+        dropped = confirmed = deleted = 0  # added to the stats once, after the loop
         for i, tr in tracks.items():
             if looked or i >= first_new:
                 tr = self._count(tr, records[i], time, newborn=i >= first_new)
@@ -443,14 +446,15 @@ class MultiTargetTracker:
             if not tr.confirmed:
                 status = self.initiator.status(tr)
                 if status == "dropped":
-                    stats = stats.add(dropped=1)
+                    dropped += 1
                     continue
                 tr = tr.evolve(confirmed=status == "confirmed")
-                stats = stats.add(confirmed=tr.confirmed)
+                confirmed += tr.confirmed
             if tr.confirmed and self.deleter.should_delete(tr):
-                stats = stats.add(deleted=1)
+                deleted += 1
                 continue
             survivors.append(tr)
+        stats = stats.add(dropped=dropped, confirmed=confirmed, deleted=deleted)
         return tuple(survivors), stats
 
     def _predict(
@@ -560,15 +564,18 @@ class MultiTargetTracker:
         )
         inner = self.associator.associate(block, rng)
         _check_association(self.associator, inner, cols.size)
+        col = cols.tolist()
         hypotheses = {
             i: tuple(
-                h if h.measurement is None else replace(h, measurement=int(cols[h.measurement]))
+                h
+                if h.measurement is None
+                else SingleHypothesis(h.track_id, col[h.measurement], h.probability)
                 for h in hs
             )
             for i, hs in inner.hypotheses.items()
         }
-        in_no_gate = set(range(m)) - set(cols.tolist())
-        left = sorted(in_no_gate | {int(cols[k]) for k in inner.unassociated})
+        in_no_gate = set(range(m)) - set(col)
+        left = sorted(in_no_gate | {col[k] for k in inner.unassociated})
         return Association(hypotheses, tuple(left), inner.info)
 
     def _score(
@@ -592,6 +599,7 @@ class MultiTargetTracker:
             self.gate_probability,
             rng,
             keep_posteriors=True,
+            validated=True,  # step: _check_measurements and _screen did it
         )
 
     def _apply(
