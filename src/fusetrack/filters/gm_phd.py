@@ -443,17 +443,27 @@ class DetectionTerms(NamedTuple):
 
 
 def corrected_intensity(
-    prior: PhdIntensity, terms: DetectionTerms, missed: Array, detected: Array
+    prior: PhdIntensity,
+    terms: DetectionTerms,
+    missed: Array,
+    detected: Array,
+    above: float = -np.inf,
 ) -> PhdIntensity:
     """The updated mixture: the prior components with weights ``missed`` ``(J,)``, then one
     Kalman-updated copy per detection and component with weights ``detected`` ``(n, J)``;
-    every copy keeps its parent's label."""
+    every copy keeps its parent's label. Only the components with weight ``> above`` are
+    built (in the same order): the truncation of :func:`prune_and_merge` done early."""
     n, (j, d) = detected.shape[0], prior.means.shape
+    weights = np.concatenate([missed, detected.ravel()])
+    idx = np.flatnonzero(weights > above)
+    stays, moved = idx[idx < j], idx[idx >= j] - j
+    det, comp = np.divmod(moved, j)
+    covs = terms.covs[det if terms.covs.shape[0] > 1 else 0, comp]
     return PhdIntensity(
-        np.concatenate([missed, detected.ravel()]),
-        np.concatenate([prior.means, terms.means.reshape(n * j, d)]),
-        np.concatenate([prior.covs, np.broadcast_to(terms.covs, (n, j, d, d)).reshape(-1, d, d)]),
-        np.tile(prior.labels, n + 1),
+        weights[idx],
+        np.concatenate([prior.means[stays], terms.means.reshape(n * j, d)[moved]]),
+        np.concatenate([prior.covs[stays], covs.reshape(-1, d, d)]),
+        np.concatenate([prior.labels[stays], prior.labels[comp]]),
         prior.next_label,
     )
 
@@ -675,7 +685,9 @@ class GMPHDFilter:
         log_den = logsumexp(np.concatenate([terms.log_kappa[:, None], log_num], axis=1), axis=1)
         seen = np.isfinite(log_den)  # False: z is impossible under the model (weights 0)
         weights = np.exp(log_num - np.where(seen, log_den, 0.0)[:, None]) * seen[:, None]
-        posterior = corrected_intensity(prior, terms, (1.0 - terms.p_d) * prior.weights, weights)
+        missed = (1.0 - terms.p_d) * prior.weights
+        floor = self.prune_kw["truncation_threshold"]  # pruned next anyway
+        posterior = corrected_intensity(prior, terms, missed, weights, floor)
         expected = float(terms.p_d @ prior.weights) + self.clutter_rate[sid]  # Poisson scan
         return posterior, float(log_den.sum()) - expected
 
@@ -760,7 +772,7 @@ def _kalman_update(
     k = _t(kt)
     ikh = np.eye(d) - k @ h
     covs = _sym(ikh @ p @ _t(ikh) + k @ r @ kt)  # Joseph form (Bucy & Joseph 1968)
-    white = np.linalg.solve(chol, y[..., None])[..., 0]
+    white = (np.linalg.inv(chol) @ y[..., None])[..., 0]  # one inverse per component
     log_det = 2.0 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(-1)
     log_q = -0.5 * (np.sum(white * white, axis=-1) + log_det + m * _LOG_2PI)
     means = x[None] + (k @ y[..., None])[..., 0]
