@@ -284,11 +284,11 @@ def prune_and_merge(
     w, m, c, labels = kept
     if not len(w):
         return _merged(intensity, [])
-    inv = np.linalg.pinv(c, hermitian=True)
+    inv: Array = np.asarray(np.linalg.pinv(c, hermitian=True), dtype=float)
     group, heads = _merge_groups(w, m, inv, u, mutual)
-    total = np.bincount(group, weights=w)
-    mean = np.stack([np.bincount(group, weights=w * m[:, i]) for i in range(m.shape[1])], 1)
-    mean /= total[:, None]
+    total: Array = np.asarray(np.bincount(group, weights=w), dtype=float)
+    sums = np.stack([np.bincount(group, weights=w * m[:, i]) for i in range(m.shape[1])], 1)
+    mean: Array = np.asarray(sums, dtype=float) / total[:, None]
     r = m - mean[group]
     spread = w[:, None, None] * (c + r[:, :, None] * r[:, None, :])
     order = np.argsort(group, kind="stable")
