@@ -33,6 +33,7 @@ from fusetrack.filters import (
     extract_states,
     predict_cardinality,
     prune_and_merge,
+    prune_and_merge_reference,
     run_filter,
 )
 from fusetrack.motion import ConstantVelocity, CoordinatedTurnRate, LinearGaussianMotion
@@ -233,6 +234,35 @@ def test_mutual_merge_keeps_a_wide_component_off_a_narrow_target():
     assert prune_and_merge(both_wide).n_components == 1
     with pytest.raises(ConfigError, match="merge_rule"):
         prune_and_merge(v, merge_rule="loose")
+
+
+def _random_intensity(seed: int, j: int = 300, d: int = 4) -> PhdIntensity:
+    """Clusters of components with wide and narrow (some rank-deficient) covariances, tied
+    weights and weights below the truncation threshold."""
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(-50.0, 50.0, (j // 10, d))
+    means = centres[rng.integers(len(centres), size=j)] + rng.normal(0.0, 2.0, (j, d))
+    a = rng.normal(0.0, 1.0, (j, d, d)) * rng.choice([0.3, 1.0, 10.0], size=(j, 1, 1))
+    covs = a @ np.swapaxes(a, 1, 2) + 1e-3 * np.eye(d)
+    covs[:5] = np.diag([4.0, 4.0, 0.0, 0.0])  # singular: the pseudo-inverse
+    weights = rng.choice([1e-7, 0.01, 0.2, 0.5], size=j) * rng.uniform(0.5, 1.0, j)
+    weights[10:20] = 0.3  # ties: the first of equal weights is the heaviest
+    return PhdIntensity(weights, means, covs, rng.permutation(j) + 5)
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("rule", ["mutual", "printed"])
+@pytest.mark.parametrize("max_components", [10, 1000])
+def test_fast_prune_and_merge_equals_the_reference_loop(seed, rule, max_components):
+    v = _random_intensity(seed)
+    kw = {"merge_rule": rule, "max_components": max_components, "truncation_threshold": 1e-5}
+    fast, ref = prune_and_merge(v, **kw), prune_and_merge_reference(v, **kw)
+    assert ref.n_components < v.n_components - 10  # truncation and merging happened
+    assert fast.n_components == ref.n_components
+    assert fast.labels.tolist() == ref.labels.tolist() and fast.next_label == ref.next_label
+    for got, want in ((fast.weights, ref.weights), (fast.means, ref.means), (fast.covs, ref.covs)):
+        assert np.allclose(got, want, rtol=0.0, atol=1e-12 * max(1.0, np.abs(want).max()))
+    assert prune_and_merge(PhdIntensity.empty(3)).n_components == 0
 
 
 def test_extract_states_rounds_the_weights():

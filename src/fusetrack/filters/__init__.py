@@ -24,6 +24,7 @@ from .gm_phd import PhdIntensity as PhdIntensity
 from .gm_phd import SpawnComponent as SpawnComponent
 from .gm_phd import extract_states as extract_states
 from .gm_phd import prune_and_merge as prune_and_merge
+from .gm_phd import prune_and_merge_reference as prune_and_merge_reference
 from .grid import DirectionalGridBelief as DirectionalGridBelief
 from .grid import DirectionalMotion as DirectionalMotion
 from .grid import GridFilter as GridFilter

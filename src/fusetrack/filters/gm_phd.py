@@ -74,6 +74,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 from scipy.special import logsumexp
 
 from ..core import (
@@ -271,23 +272,90 @@ def prune_and_merge(
     any target it covers, is merged into it and inflates the target's covariance (the GOSPA of
     ``benchmarks/multitarget.py``: 25.7 vs 22.0 m). ``"mutual"`` (default) also requires
     ``(m_i - m_j)^T P_j^-1 (m_i - m_j) <= U``, so only components that each lie within the other's
-    spread are merged."""
-    t = check_positive("truncation_threshold", truncation_threshold, allow_zero=True)
-    u = check_positive("merge_threshold", merge_threshold, allow_zero=True)
-    if (
-        isinstance(max_components, bool)
-        or not isinstance(max_components, int)
-        or max_components < 1
-    ):
-        raise ConfigError(invalid("max_components", max_components, "an integer >= 1"))
-    keep = np.flatnonzero(intensity.weights > t)
-    w, m, c = intensity.weights[keep], intensity.means[keep], intensity.covs[keep]
-    labels = intensity.labels[keep]
-    if merge_rule not in MERGE_RULES:
-        raise ConfigError(invalid("merge_rule", merge_rule, f"one of {MERGE_RULES}"))
-    mutual = merge_rule == "mutual"
-    inv = np.linalg.pinv(c, hermitian=True) if len(keep) else c
-    left = np.ones(len(keep), dtype=bool)
+    spread are merged.
+
+    The Mahalanobis tests are evaluated only on the pairs a k-d tree finds within the bound
+    ``|m_i - m_j|^2 <= U / lambda_min(P_i^-1)`` (necessary under both rules), and the groups are
+    moment-matched in one pass; :func:`prune_and_merge_reference` is the plain loop of Table II
+    it equals."""
+    u, mutual, kept = _pruned(
+        intensity, truncation_threshold, merge_threshold, max_components, merge_rule
+    )
+    w, m, c, labels = kept
+    if not len(w):
+        return _merged(intensity, [])
+    inv: Array = np.asarray(np.linalg.pinv(c, hermitian=True), dtype=float)
+    group, heads = _merge_groups(w, m, inv, u, mutual)
+    total: Array = np.asarray(np.bincount(group, weights=w), dtype=float)
+    sums = np.stack([np.bincount(group, weights=w * m[:, i]) for i in range(m.shape[1])], 1)
+    mean: Array = np.asarray(sums, dtype=float) / total[:, None]
+    r = m - mean[group]
+    spread = w[:, None, None] * (c + r[:, :, None] * r[:, None, :])
+    order = np.argsort(group, kind="stable")
+    starts = np.searchsorted(group[order], np.arange(len(heads)))
+    cov = np.add.reduceat(spread[order], starts, axis=0) / total[:, None, None]
+    ranked = np.argsort(-total, kind="stable")[:max_components]
+    return PhdIntensity(
+        total[ranked], mean[ranked], _sym(cov[ranked]), labels[heads][ranked], intensity.next_label
+    )
+
+
+def _merge_groups(
+    w: Array, m: Array, inv: Array, u: float, mutual: bool
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Table II's grouping: every component's group number (``(J,)``, numbered in the order
+    the groups are formed) and each group's heaviest component (``(G,)``)."""
+    near = _within_threshold(m, inv, u, mutual)
+    group = np.full(len(w), -1, dtype=np.intp)
+    heads: list[int] = []
+    for j in np.argsort(-w, kind="stable"):  # argmax picks the first of equal weights too
+        if group[j] >= 0:
+            continue
+        members = near[j]
+        group[members[group[members] < 0]] = len(heads)
+        group[j] = len(heads)
+        heads.append(int(j))
+    return group, np.array(heads, dtype=np.intp)
+
+
+def _within_threshold(m: Array, inv: Array, u: float, mutual: bool) -> list[NDArray[np.intp]]:
+    """For every component ``j`` the components ``i`` that pass the merge test with ``j`` as
+    the heaviest. ``(m_i - m_j)^T P_i^-1 (m_i - m_j) >= lambda_min(P_i^-1) |m_i - m_j|^2``, so
+    only the pairs a k-d tree finds within ``sqrt(U / lambda_min)`` of ``m_i`` are tested."""
+    lam = np.linalg.eigvalsh(inv)[:, 0]
+    span = float(np.sqrt(np.sum((m.max(0) - m.min(0)) ** 2)))
+    with np.errstate(divide="ignore"):
+        radius = np.sqrt(u / np.maximum(lam, 0.0)) * (1.0 + 1e-6) + 1e-9 * (1.0 + span)
+    radius = np.minimum(radius, 2.0 * span + 1.0)  # no bound: every component
+    found = cKDTree(m).query_ball_point(m, radius)
+    cand = np.fromiter((i for lst in found for i in lst), dtype=np.intp)
+    own = np.repeat(np.arange(len(m)), [len(lst) for lst in found])  # the i of each pair
+    diff = m[own] - m[cand]  # m_i - m_j with j = cand
+    maha = np.einsum("ki,kij,kj->k", diff, inv[own], diff)
+    if mutual:
+        maha = np.maximum(maha, np.einsum("ki,kij,kj->k", diff, inv[cand], diff))
+    ok = maha <= u
+    own, cand = own[ok], cand[ok]
+    by_head = np.argsort(cand, kind="stable")
+    bounds = np.searchsorted(cand[by_head], np.arange(len(m) + 1))
+    members = own[by_head]
+    return [members[bounds[k] : bounds[k + 1]] for k in range(len(m))]
+
+
+def prune_and_merge_reference(
+    intensity: PhdIntensity,
+    truncation_threshold: float = 1e-5,
+    merge_threshold: float = 4.0,
+    max_components: int = 100,
+    merge_rule: str = "mutual",
+) -> PhdIntensity:
+    """:func:`prune_and_merge` as the plain loop of Vo & Ma Table II (every group tests every
+    remaining component); kept to check the fast version against."""
+    u, mutual, (w, m, c, labels) = _pruned(
+        intensity, truncation_threshold, merge_threshold, max_components, merge_rule
+    )
+    inv = np.linalg.pinv(c, hermitian=True) if len(w) else c
+    left = np.ones(len(w), dtype=bool)
     out: list[tuple[float, Array, Array, int]] = []
     while left.any():
         j = int(np.flatnonzero(left)[np.argmax(w[left])])
@@ -305,7 +373,33 @@ def prune_and_merge(
         out.append((total, mean, _sym(cov), int(labels[j])))
         left &= ~group
     out.sort(key=lambda comp: -comp[0])
-    out = out[:max_components]
+    return _merged(intensity, out[:max_components])
+
+
+def _pruned(
+    intensity: PhdIntensity,
+    truncation_threshold: float,
+    merge_threshold: float,
+    max_components: int,
+    merge_rule: str,
+) -> tuple[float, bool, tuple[Array, Array, Array, Labels]]:
+    """The checked ``U``, whether the rule is mutual, and the components with ``w > T``."""
+    t = check_positive("truncation_threshold", truncation_threshold, allow_zero=True)
+    u = check_positive("merge_threshold", merge_threshold, allow_zero=True)
+    if (
+        isinstance(max_components, bool)
+        or not isinstance(max_components, int)
+        or max_components < 1
+    ):
+        raise ConfigError(invalid("max_components", max_components, "an integer >= 1"))
+    if merge_rule not in MERGE_RULES:
+        raise ConfigError(invalid("merge_rule", merge_rule, f"one of {MERGE_RULES}"))
+    keep = np.flatnonzero(intensity.weights > t)
+    kept = intensity.weights[keep], intensity.means[keep], intensity.covs[keep]
+    return u, merge_rule == "mutual", (*kept, intensity.labels[keep])
+
+
+def _merged(intensity: PhdIntensity, out: list[tuple[float, Array, Array, int]]) -> PhdIntensity:
     d = intensity.dim
     return PhdIntensity(
         np.array([o[0] for o in out]),
@@ -349,17 +443,27 @@ class DetectionTerms(NamedTuple):
 
 
 def corrected_intensity(
-    prior: PhdIntensity, terms: DetectionTerms, missed: Array, detected: Array
+    prior: PhdIntensity,
+    terms: DetectionTerms,
+    missed: Array,
+    detected: Array,
+    above: float = -np.inf,
 ) -> PhdIntensity:
     """The updated mixture: the prior components with weights ``missed`` ``(J,)``, then one
     Kalman-updated copy per detection and component with weights ``detected`` ``(n, J)``;
-    every copy keeps its parent's label."""
+    every copy keeps its parent's label. Only the components with weight ``> above`` are
+    built (in the same order): the truncation of :func:`prune_and_merge` done early."""
     n, (j, d) = detected.shape[0], prior.means.shape
+    weights = np.concatenate([missed, detected.ravel()])
+    idx = np.flatnonzero(weights > above)
+    stays, moved = idx[idx < j], idx[idx >= j] - j
+    det, comp = np.divmod(moved, j)
+    covs = terms.covs[det if terms.covs.shape[0] > 1 else 0, comp]
     return PhdIntensity(
-        np.concatenate([missed, detected.ravel()]),
-        np.concatenate([prior.means, terms.means.reshape(n * j, d)]),
-        np.concatenate([prior.covs, np.broadcast_to(terms.covs, (n, j, d, d)).reshape(-1, d, d)]),
-        np.tile(prior.labels, n + 1),
+        weights[idx],
+        np.concatenate([prior.means[stays], terms.means.reshape(n * j, d)[moved]]),
+        np.concatenate([prior.covs[stays], covs.reshape(-1, d, d)]),
+        np.concatenate([prior.labels[stays], prior.labels[comp]]),
         prior.next_label,
     )
 
@@ -581,7 +685,9 @@ class GMPHDFilter:
         log_den = logsumexp(np.concatenate([terms.log_kappa[:, None], log_num], axis=1), axis=1)
         seen = np.isfinite(log_den)  # False: z is impossible under the model (weights 0)
         weights = np.exp(log_num - np.where(seen, log_den, 0.0)[:, None]) * seen[:, None]
-        posterior = corrected_intensity(prior, terms, (1.0 - terms.p_d) * prior.weights, weights)
+        missed = (1.0 - terms.p_d) * prior.weights
+        floor = self.prune_kw["truncation_threshold"]  # pruned next anyway
+        posterior = corrected_intensity(prior, terms, missed, weights, floor)
         expected = float(terms.p_d @ prior.weights) + self.clutter_rate[sid]  # Poisson scan
         return posterior, float(log_den.sum()) - expected
 
@@ -666,7 +772,7 @@ def _kalman_update(
     k = _t(kt)
     ikh = np.eye(d) - k @ h
     covs = _sym(ikh @ p @ _t(ikh) + k @ r @ kt)  # Joseph form (Bucy & Joseph 1968)
-    white = np.linalg.solve(chol, y[..., None])[..., 0]
+    white = (np.linalg.inv(chol) @ y[..., None])[..., 0]  # one inverse per component
     log_det = 2.0 * np.log(np.diagonal(chol, axis1=-2, axis2=-1)).sum(-1)
     log_q = -0.5 * (np.sum(white * white, axis=-1) + log_det + m * _LOG_2PI)
     means = x[None] + (k @ y[..., None])[..., 0]
