@@ -201,6 +201,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except FusetrackError as err:
         print(f"fusetrack: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: a one-line note and the shell's 128 + SIGINT, no traceback
+        print(f"fusetrack: interrupted ({args.command})", file=sys.stderr)
+        return 130
     finally:
         logging.getLogger("fusetrack").removeHandler(handler)
         logging.getLogger("fusetrack").setLevel(previous)

@@ -198,3 +198,17 @@ def test_out_under_a_file_fails_before_any_work(tmp_path, capsys, monkeypatch):
     assert code == 2 and not ran
     err = capsys.readouterr().err
     assert "--out" in err and "is not a directory" in err and "Traceback" not in err
+
+
+def test_ctrl_c_ends_any_command_without_a_traceback(capsys, monkeypatch):
+    """Issue 18: Ctrl-C on a busy ``serve`` printed a KeyboardInterrupt traceback; any command
+    interrupted now exits 130 with one line."""
+    import fusetrack.cli as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_dispatch", interrupted)
+    assert cli.main(["list"]) == 130
+    err = capsys.readouterr().err
+    assert err.strip() == "fusetrack: interrupted (list)"
