@@ -13,7 +13,6 @@ recovers from degeneracy and resamples through here (or, batched, through the sa
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,23 +39,8 @@ class ParticleWeights:
     degenerate: NDArray[np.bool_]
 
     @property
-    def n(self) -> int:
-        return int(self.weights.shape[-1])
-
-    @property
     def any_degenerate(self) -> bool:
         return bool(np.any(self.degenerate))
-
-    @property
-    def log_mean(self) -> Array:
-        """``log (1/N) sum_i exp(log_w_i)``: the log-evidence of a likelihood weighting of
-        equally weighted particles (the bootstrap filter's ``log p(z_k | z_1:k-1)``)."""
-        return np.asarray(self.log_sum - math.log(self.n))
-
-    def mean(self, states: ArrayLike) -> Array:
-        """The weighted mean of ``states`` ``(..., N, d)``: ``(..., d)``."""
-        x = np.asarray(states, dtype=float)
-        return np.asarray(np.einsum("...n,...nd->...d", self.weights, x))
 
 
 def particle_weights(log_weights: ArrayLike) -> ParticleWeights:
