@@ -237,10 +237,12 @@ def bootstrap_log_likelihoods(
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _kalman(mean0, cov0, F, Q, step_dt, WH, Wz, c):  # pragma: no cover - jit
+    """The prediction-error decomposition on whitened rows (``R = I``; Joseph-form update)."""
+    if mean0.shape[0] == 1 and Wz.shape[1] == 1:
+        return _kalman_scalar(mean0[0], cov0[0, 0], F, Q, step_dt, WH, Wz, c)
     m = mean0.copy()
     P = cov0.copy()
-    rows = Wz.shape[1]
-    eye = np.eye(rows)
+    eye = np.eye(Wz.shape[1])
     total = 0.0
     for k in range(step_dt.shape[0]):
         u = step_dt[k]
@@ -257,7 +259,28 @@ def _kalman(mean0, cov0, F, Q, step_dt, WH, Wz, c):  # pragma: no cover - jit
         K = np.linalg.solve(S, PHt.T).T
         m = m + K @ y
         IKH = np.eye(m.shape[0]) - K @ H
-        P = IKH @ P @ IKH.T + K @ K.T  # Joseph form (whitened: R = I)
+        P = IKH @ P @ IKH.T + K @ K.T
+    return total
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _kalman_scalar(m, P, F, Q, step_dt, WH, Wz, c):  # pragma: no cover - jit
+    """:func:`_kalman` for a scalar state and one row, without small-matrix allocations."""
+    total = 0.0
+    for k in range(step_dt.shape[0]):
+        u = step_dt[k]
+        if u >= 0:
+            f = F[u, 0, 0]
+            m = f * m
+            P = f * P * f + Q[u, 0, 0]
+        h = WH[k, 0, 0]
+        S = h * P * h + 1.0
+        y = Wz[k, 0] - h * m
+        total += c[k] - 0.5 * (math.log(S) + y * y / S)
+        K = P * h / S
+        m += K * y
+        a = 1.0 - K * h
+        P = a * P * a + K * K
     return total
 
 

@@ -14,9 +14,13 @@ Which likelihood:
 * a particle filter gives an estimate. Every evaluation draws from a fresh generator with the
   same seed (common random numbers), so the objective is a fixed function of ``theta``; it is
   still piecewise-continuous (resampling jumps when a cumulative weight crosses a uniform), so
-  the search is derivative-free (``Nelder-Mead``) and the Hessian is taken with a wider step
-  (``0.05`` by default) that averages over the jumps. For a linear-Gaussian model prefer the
-  Kalman filter: the same model, the exact answer, and ~100x cheaper per evaluation.
+  the search is derivative-free (``Nelder-Mead`` from a simplex of side ``0.5``, wide enough
+  not to sit inside one piece) and the Hessian is taken with a wider step (``0.25`` by default)
+  that averages over the jumps. The standard errors are then rough: the jumps add
+  curvature (on the test model, T = 300, N = 500, they came out about half the exact fit's),
+  while the estimate itself landed within 0.6 of the exact fit's standard errors. For a
+  linear-Gaussian model prefer the Kalman filter: the same model, the exact answer, and ~100x
+  cheaper per evaluation.
 
 >>> import numpy as np
 >>> from fusetrack.core import Gaussian, Measurement
@@ -114,7 +118,8 @@ def maximum_likelihood(
     ``seed``: the common random numbers of a particle filter's estimate; ``method``: SciPy's
     (default ``L-BFGS-B`` for an exact likelihood, ``Nelder-Mead`` for an estimate);
     ``hessian_step``: the finite-difference step of the information (default ``1e-3`` exact,
-    ``0.05`` estimated); ``options``: passed to :func:`scipy.optimize.minimize`.
+    ``0.25`` estimated); ``options``: passed to :func:`scipy.optimize.minimize` (for
+    ``Nelder-Mead`` the default ``initial_simplex`` is ``theta0`` and ``theta0 + 0.5 e_i``).
     """
     theta_start = np.array(theta0, dtype=float)
     if theta_start.ndim != 1 or theta_start.size == 0 or not np.all(np.isfinite(theta_start)):
@@ -130,14 +135,16 @@ def maximum_likelihood(
 
     if loglik(theta_start) <= -1e300:
         raise ConfigError(invalid("theta0", theta0, "a start with a finite log-likelihood"))
-    result = minimize(
-        lambda th: -loglik(th),
-        theta_start,
-        method=method or ("Nelder-Mead" if random else "L-BFGS-B"),
-        options=options,
-    )
+    method = method or ("Nelder-Mead" if random else "L-BFGS-B")
+    opts = dict(options or {})
+    if method == "Nelder-Mead":
+        opts.setdefault(
+            "initial_simplex",
+            theta_start + np.vstack([0 * theta_start, 0.5 * np.eye(theta_start.size)]),
+        )
+    result = minimize(lambda th: -loglik(th), theta_start, method=method, options=opts)
     theta = np.asarray(result.x, dtype=float)
-    info = observed_information(loglik, theta, hessian_step or (0.05 if random else 1e-3))
+    info = observed_information(loglik, theta, hessian_step or (0.25 if random else 1e-3))
     try:
         cov = np.linalg.inv(info)
     except np.linalg.LinAlgError:

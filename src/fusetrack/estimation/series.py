@@ -44,12 +44,13 @@ __all__ = ["LinearGaussianArrays", "Series", "linear_gaussian_arrays", "prepare_
 
 @dataclass(frozen=True, eq=False)
 class _SensorRows:
-    """Where one sensor's reports go: their steps ``(K,)``, first rows ``(K,)`` and values
-    ``(K, m)``."""
+    """Where one sensor's reports go: their steps ``(K,)``, first rows ``(K,)``, values
+    ``(K, m)`` and how many it makes at each step ``(T,)``."""
 
     steps: NDArray[np.intp]
     rows: NDArray[np.intp]
     values: Array
+    per_step: Array
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,7 +58,9 @@ class Series:
     """Time-ordered measurements grouped into filter steps (see the module docstring).
 
     ``measurements`` in time order; ``t0`` the prior's time (None: the first step's);
-    ``dts`` ``(T,)`` the interval predicted over before step ``k`` (0: no prediction);
+    ``dts`` ``(T,)`` the interval predicted over before step ``k`` (0: no prediction), the
+    distinct positive ones ``moving_dts`` ``(U,)`` and ``step_dt`` ``(T,)`` the index of step
+    ``k``'s among them (-1: no prediction);
     ``layout`` per sensor id the rows of its reports and ``n_rows`` the longest stacked vector,
     or None when some report is not a finite vector without its own covariance (then only the
     generic filter loop applies).
@@ -66,6 +69,8 @@ class Series:
     measurements: tuple[Measurement, ...]
     t0: float | None
     dts: Array
+    moving_dts: Array
+    step_dt: NDArray[np.intp]
     layout: Mapping[str, _SensorRows] | None
     n_rows: int
 
@@ -123,7 +128,10 @@ def _layout(groups: list[tuple[float, list[Measurement]]]) -> tuple[dict[str, _S
         width = max(width, row)
     layout = {
         sid: _SensorRows(
-            np.array(s, dtype=np.intp), np.array(r, dtype=np.intp), np.stack(v).astype(float)
+            np.array(s, dtype=np.intp),
+            np.array(r, dtype=np.intp),
+            np.stack(v).astype(float),
+            np.bincount(s, minlength=len(groups)).astype(float),
         )
         for sid, (s, r, v) in by_sensor.items()
     }
@@ -157,7 +165,10 @@ def prepare_series(
         layout, width = _layout(groups)
     except _NotPlain:
         layout, width = None, 0
-    return Series(tuple(ms), None if t0 is None else float(t0), dts, layout, width)
+    moving, step_dt = np.unique(dts[dts > 0], return_inverse=True)
+    index = np.full(dts.size, -1, dtype=np.intp)
+    index[dts > 0] = step_dt
+    return Series(tuple(ms), None if t0 is None else float(t0), dts, moving, index, layout, width)
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,23 +191,19 @@ class LinearGaussianArrays:
     cov0: Array
 
 
-def _transitions(motion: Any, dts: Array, d: int) -> tuple[Array, Array, NDArray[np.intp]] | None:
-    """``(F, G, step_dt)`` for the distinct ``dt > 0`` of the series, or None."""
+def _transitions(motion: Any, dts: Array, d: int) -> tuple[Array, Array] | None:
+    """``(F, G)`` ``(U, d, d)`` of ``motion`` at each of ``dts``, or None."""
     offer = getattr(motion, "fused_transition", None)
     if not callable(offer):
         return None
-    distinct, index = np.unique(dts, return_inverse=True)
-    moving = distinct > 0
-    F = np.empty((int(moving.sum()), d, d))
+    F = np.empty((dts.size, d, d))
     G = np.empty_like(F)
-    for u, dt in enumerate(distinct[moving]):
+    for u, dt in enumerate(dts):
         fg = offer(float(dt))
         if fg is None:
             return None
         F[u], G[u] = fg
-    step_dt = np.asarray(index - (0 if moving.all() else 1), dtype=np.intp)
-    step_dt[dts <= 0] = -1
-    return F, G, step_dt
+    return F, G
 
 
 def linear_gaussian_arrays(
@@ -209,7 +216,7 @@ def linear_gaussian_arrays(
     d = int(getattr(motion, "dim", -1))
     if series.layout is None or mean0.shape != (d,):
         return None
-    tr = _transitions(motion, series.dts, d)
+    tr = _transitions(motion, series.moving_dts, d)
     if tr is None:
         return None
     T, M = series.n_steps, series.n_rows
@@ -232,6 +239,6 @@ def linear_gaussian_arrays(
             WH[rows.steps, rows.rows + j] = wh[j]
             Wz[rows.steps, rows.rows + j] = wz[:, j]
         const = -0.5 * (m * math.log(2.0 * math.pi)) - float(np.log(np.diag(chol)).sum())
-        np.add.at(c, rows.steps, const)
+        c += const * rows.per_step
     cov0 = np.asarray(prior.cov, dtype=float)
-    return LinearGaussianArrays(tr[0], tr[1], tr[2], WH, Wz, c, mean0, cov0)
+    return LinearGaussianArrays(tr[0], tr[1], series.step_dt, WH, Wz, c, mean0, cov0)
