@@ -28,7 +28,10 @@ element (the same arithmetic).
 Reported per library: milliseconds per PMMH iteration (one likelihood estimate each) in wall
 time (``time.perf_counter``) and CPU time of all threads (``time.process_time``), the
 acceptance rate, and the posterior means of ``q`` and ``r`` after a 20 % burn-in (each run's
-own Monte Carlo error: they agree within it, not bit for bit). BLAS is limited to one thread;
+own Monte Carlo error, from batch means: each library's posterior means of ``log q`` and
+``log r`` are compared with the limit reference's within 3 combined errors, the
+``agrees_with_limit_reference`` field; fusetrack and the limit reference draw the same numbers
+in the same order and give the same chain). BLAS is limited to one thread;
 Numba runs one chain serially. JIT compilation is excluded (a 5-iteration warm-up run first).
 ``--json``: one JSON object per library (with date, machine, load and versions).
 """
@@ -250,6 +253,8 @@ def _timed(run: Callable[[int], tuple[np.ndarray, float]], iterations: int) -> d
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     kept = chain[1 + int(BURN_FRACTION * iterations) :]
     q, r = np.exp(kept).mean(axis=0)
+    k = kept.shape[0] // 10  # batch means: the Monte Carlo error of a correlated chain's mean
+    se = kept[: 10 * k].reshape(10, k, 2).mean(axis=1).std(axis=0, ddof=1) / math.sqrt(10)
     return {
         "ms_per_iteration_wall": 1e3 * wall / iterations,
         "ms_per_iteration_cpu": 1e3 * cpu / iterations,
@@ -258,7 +263,18 @@ def _timed(run: Callable[[int], tuple[np.ndarray, float]], iterations: int) -> d
         "posterior_mean_r": float(r),
         "posterior_mean_log_q": float(kept[:, 0].mean()),
         "posterior_mean_log_r": float(kept[:, 1].mean()),
+        "mc_se_log_q": float(se[0]),
+        "mc_se_log_r": float(se[1]),
     }
+
+
+def agrees(a: dict[str, Any], b: dict[str, Any]) -> bool:
+    """Posterior means of ``log q`` and ``log r`` within 3 combined Monte Carlo errors."""
+    return all(
+        abs(a[f"posterior_mean_log_{p}"] - b[f"posterior_mean_log_{p}"])
+        < 3 * math.hypot(a[f"mc_se_log_{p}"], b[f"mc_se_log_{p}"])
+        for p in ("q", "r")
+    )
 
 
 RUNNERS = {
@@ -300,25 +316,28 @@ def main() -> None:
         "iterations": args.iterations,
         "step": STEP,
     }
-    results = {}
+    results: dict[str, dict[str, Any]] = {}
     with threadpool_limits(1):
         for lib in args.libs:
             results[lib] = RUNNERS[lib](y, args.iterations, args.seed)
-            if args.json:
-                print(json.dumps({**context, "library": lib, **results[lib]}), flush=True)
+    ref_res = results.get("limit_reference")
+    for res in results.values():
+        res["agrees_with_limit_reference"] = None if ref_res is None else agrees(res, ref_res)
     if args.json:
+        for lib, res in results.items():
+            print(json.dumps({**context, "library": lib, **res}))
         return
     ref = results.get("limit_reference", {}).get("ms_per_iteration_cpu")
     print(f"PMMH, T={T_STEPS}, N={N_PARTICLES}, {args.iterations} iterations, load "
           f"{context['load_1min']:.1f} on {context['machine']}")  # fmt: skip
     print(f"{'library':<16}{'ms/it wall':>11}{'ms/it cpu':>11}{'x ref cpu':>10}{'accept':>8}"
-          f"{'E[q]':>8}{'E[r]':>8}")  # fmt: skip
+          f"{'E[q]':>8}{'E[r]':>8}  posterior agrees (3 MC se)")  # fmt: skip
     for lib, res in results.items():
         ratio = res["ms_per_iteration_cpu"] / ref if ref else math.nan
         print(
             f"{lib:<16}{res['ms_per_iteration_wall']:>11.3f}{res['ms_per_iteration_cpu']:>11.3f}"
             f"{ratio:>10.2f}{res['acceptance_rate']:>8.3f}{res['posterior_mean_q']:>8.3f}"
-            f"{res['posterior_mean_r']:>8.3f}"
+            f"{res['posterior_mean_r']:>8.3f}  {res['agrees_with_limit_reference']}"
         )
 
 

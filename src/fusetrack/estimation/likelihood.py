@@ -50,7 +50,7 @@ __all__ = ["LogLikelihood", "log_likelihood"]
 def _sqrt_factor(cov: Array) -> Array:
     """``D D^T = cov``: Cholesky, or ``V sqrt(S)`` for a singular ``cov`` (as the filter)."""
     try:
-        return np.linalg.cholesky(cov)
+        return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
     except np.linalg.LinAlgError:
         s, v = np.linalg.eigh(0.5 * (cov + cov.T))
         return np.asarray(v * np.sqrt(np.clip(s, 0.0, None)), dtype=float)

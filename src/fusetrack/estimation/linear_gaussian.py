@@ -193,7 +193,7 @@ def _runs_py(handles, mean0, L0, F, G, step_dt, WH, Wz, c, n, ess_frac, min_log_
         )  # fmt: skip
 
 
-def _serial_twin(py):  # type: ignore[no-untyped-def]
+def _serial_twin(py: types.FunctionType) -> types.FunctionType:
     """A renamed copy of ``py`` (Numba's disk cache is keyed by the qualified name)."""
     twin = types.FunctionType(py.__code__, py.__globals__, py.__name__ + "_serial")
     twin.__qualname__ = py.__qualname__ + "_serial"

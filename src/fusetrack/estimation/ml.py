@@ -146,7 +146,7 @@ def maximum_likelihood(
     theta = np.asarray(result.x, dtype=float)
     info = observed_information(loglik, theta, hessian_step or (0.25 if random else 1e-3))
     try:
-        cov = np.linalg.inv(info)
+        cov = np.asarray(np.linalg.inv(info), dtype=np.float64)
     except np.linalg.LinAlgError:
         cov = np.full(info.shape, np.nan)
     se = np.sqrt(np.where(np.diag(cov) > 0, np.diag(cov), np.nan))
