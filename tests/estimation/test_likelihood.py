@@ -9,7 +9,13 @@ import numpy as np
 import pytest
 from _estimation_models import THETA, kalman_model, particle_model, parts, simulate
 
-from fusetrack.core import ConfigError, Gaussian, Measurement, MeasurementError
+from fusetrack.core import (
+    ConfigError,
+    DegenerateWeightsWarning,
+    Gaussian,
+    Measurement,
+    MeasurementError,
+)
 from fusetrack.estimation import LogLikelihood, log_likelihood
 from fusetrack.filters import (
     BootstrapFilter,
@@ -137,3 +143,17 @@ def test_bad_input_is_reported_before_any_work():
         LogLikelihood([])
     with pytest.raises(ConfigError, match="rngs"):
         LogLikelihood(ZS).many([(pf, prior)] * 2, [np.random.default_rng(0)])
+
+
+@pytest.mark.parametrize("step", [0, 40])
+def test_a_degenerate_step_is_kept_as_the_filter_keeps_it(step):
+    """An outlier no particle explains (evidence far below -708): the filter keeps the weights
+    it had and adds the evidence estimate; the kernel does the same."""
+    zs = list(ZS)
+    zs[step] = Measurement(zs[step].time, "y", [1e3])
+    pf, prior = particle_model(300)(THETA)
+    fast = LogLikelihood(zs)(pf, prior, np.random.default_rng(2))
+    with pytest.warns(DegenerateWeightsWarning):
+        slow = _run_filter_ll(pf, prior, zs, np.random.default_rng(2))
+    assert fast < -1e5
+    assert fast == pytest.approx(slow, rel=1e-12)
