@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import math
 import types
+from collections.abc import Callable
+from typing import Any
 
 import numba
 import numpy as np
@@ -193,7 +195,7 @@ def _runs_py(handles, mean0, L0, F, G, step_dt, WH, Wz, c, n, ess_frac, min_log_
         )  # fmt: skip
 
 
-def _serial_twin(py: types.FunctionType) -> types.FunctionType:
+def _serial_twin(py: Callable[..., Any]) -> types.FunctionType:
     """A renamed copy of ``py`` (Numba's disk cache is keyed by the qualified name)."""
     twin = types.FunctionType(py.__code__, py.__globals__, py.__name__ + "_serial")
     twin.__qualname__ = py.__qualname__ + "_serial"
