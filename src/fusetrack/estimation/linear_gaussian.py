@@ -46,68 +46,82 @@ __all__ = ["bootstrap_log_likelihoods", "kalman_log_likelihood"]
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _advance(bg, x, xn, i, j, F, G, eps):  # pragma: no cover - jit
-    """``xn_i = F x_j + G eps`` with ``d`` fresh normals (each component summed as the
-    filter's fused step sums it: the same bits)."""
-    d = x.shape[1]
+def _propagate(bg, x, xn, anc, gather, F, G, eps):  # pragma: no cover - jit
+    """``xn[:, i] = F x[:, a_i] + G eps_i`` on columns ``(d, N)`` (``a_i = i`` unless
+    ``gather``): the normals drawn particle by particle (the filter's order), then one
+    vectorised pass per ``(a, b)``, each component summed in the filter's order (same bits)."""
+    d, n = x.shape
+    for i in range(n):
+        for a in range(d):
+            eps[a, i] = random_standard_normal(bg)
     for a in range(d):
-        eps[a] = random_standard_normal(bg)
-    for a in range(d):
-        m = 0.0
+        row = xn[a]
+        row[:] = 0.0
         for b in range(d):
-            m += F[a, b] * x[j, b] + G[a, b] * eps[b]
-        xn[i, a] = m
+            f = F[a, b]
+            g = G[a, b]
+            xb = x[b]
+            eb = eps[b]
+            if gather:
+                for i in range(n):
+                    row[i] += f * xb[anc[i]] + g * eb[i]
+            else:
+                for i in range(n):
+                    row[i] += f * xb[i] + g * eb[i]
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _log_lik(x, i, WH, Wz, c):  # pragma: no cover - jit
-    """``c - |Wz - WH x_i|^2 / 2``."""
-    q = 0.0
+def _weigh(x, lw, uniform, shift, WH, Wz, c, v, res):  # pragma: no cover - jit
+    """``v_i = log w_i + c - |Wz - WH x_i|^2 / 2`` on columns ``(d, N)`` (``log w_i = -shift``
+    if ``uniform``, else ``lw_i - shift``), one vectorised pass per ``(row, b)``; ``max v``."""
+    d, n = x.shape
+    v[:] = 0.0
     for r in range(Wz.shape[0]):
-        e = Wz[r]
-        for b in range(x.shape[1]):
-            e -= WH[r, b] * x[i, b]
-        q += e * e
-    return c - 0.5 * q
-
-
-@numba.njit(cache=True, inline="always", error_model="numpy")
-def _step(bg, x, xn, anc, mode, F, G, eps, lw, shift, WH, Wz, c, v):  # pragma: no cover - jit
-    """One pass over the particles: (``mode`` 0: no prediction, 1: propagate, 2: propagate the
-    ancestors ``anc``) then ``v_i = log w_i + log p(z | x_i)`` with ``log w_i = lw_i - shift``
-    (uniform ``-shift`` after resampling). Returns ``max_i v_i``; the states end in ``xn``
-    (``x`` when ``mode`` is 0)."""
-    if x.shape[1] == 1 and Wz.shape[0] == 1:
-        return _step_scalar(bg, x, xn, anc, mode, F, G, lw, shift, WH, Wz, c, v)
-    n = x.shape[0]
+        res[:] = Wz[r]
+        for b in range(d):
+            h = WH[r, b]
+            xb = x[b]
+            for i in range(n):
+                res[i] -= h * xb[i]
+        for i in range(n):
+            v[i] += res[i] * res[i]
     top = -np.inf
     for i in range(n):
-        if mode == 0:
-            lwi = lw[i] - shift
-            vi = lwi + _log_lik(x, i, WH, Wz, c)
-        else:
-            _advance(bg, x, xn, i, anc[i] if mode == 2 else i, F, G, eps)
-            lwi = -shift if mode == 2 else lw[i] - shift
-            vi = lwi + _log_lik(xn, i, WH, Wz, c)
+        vi = (-shift if uniform else lw[i] - shift) + (c - 0.5 * v[i])
         v[i] = vi
         top = max(top, vi)
     return top
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
+def _step(bg, x, xn, anc, mode, F, G, eps, lw, shift, WH, Wz, c, v, res):
+    # pragma: no cover - jit
+    """One step on columns ``(d, N)``: (``mode`` 0: no prediction, 1: propagate, 2: propagate
+    the ancestors ``anc``) then ``v_i = log w_i + log p(z | x_i)`` with ``log w_i = lw_i -
+    shift`` (uniform ``-shift`` after resampling). Returns ``max_i v_i``; the states end in
+    ``xn`` (``x`` when ``mode`` is 0)."""
+    if x.shape[0] == 1 and Wz.shape[0] == 1:
+        return _step_scalar(bg, x, xn, anc, mode, F, G, lw, shift, WH, Wz, c, v)
+    if mode == 0:
+        return _weigh(x, lw, False, shift, WH, Wz, c, v, res)
+    _propagate(bg, x, xn, anc, mode == 2, F, G, eps)
+    return _weigh(xn, lw, mode == 2, shift, WH, Wz, c, v, res)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
 def _step_scalar(bg, x, xn, anc, mode, F, G, lw, shift, WH, Wz, c, v):  # pragma: no cover - jit
-    """:func:`_step` for a scalar state and one measurement row, with the model's numbers in
-    registers (the generic loops over ``d`` and the rows cost ~15 ns per particle; the same
-    arithmetic, the same bits)."""
-    n = x.shape[0]
+    """:func:`_step` for a scalar state and one measurement row in one fused pass, the model's
+    numbers in registers (the same arithmetic and bits; ~1.5 ms less per likelihood at
+    T = 100, N = 1000 than the passes of the general case)."""
+    n = x.shape[1]
     f, g, h, z = F[0, 0], G[0, 0], WH[0, 0], Wz[0]
     top = -np.inf
     for i in range(n):
         if mode == 0:
-            xi = x[i, 0]
+            xi = x[0, i]
         else:
-            xi = f * x[anc[i] if mode == 2 else i, 0] + g * random_standard_normal(bg)
-            xn[i, 0] = xi
+            xi = f * x[0, anc[i] if mode == 2 else i] + g * random_standard_normal(bg)
+            xn[0, i] = xi
         e = z - h * xi
         vi = (-shift if mode == 2 else lw[i] - shift) + (c - 0.5 * (e * e))
         v[i] = vi
@@ -136,20 +150,21 @@ def _one_run(handle, mean0, L0, F, G, step_dt, WH, Wz, c, n, ess_frac, min_log_e
     exponentials, unnormalised: systematic resampling normalises)."""
     bg = bitgen_from_handle(handle)
     d = mean0.shape[0]
-    x = np.empty((n, d))
-    xn = np.empty((n, d))
-    eps = np.empty(d)
+    x = np.empty((d, n))  # particles as columns: the passes over them vectorise
+    xn = np.empty((d, n))
+    eps = np.empty((d, n))
     for i in range(n):  # the prior: standard_normal((n, d)) @ L0.T + mean0
         for a in range(d):
-            eps[a] = random_standard_normal(bg)
+            eps[a, 0] = random_standard_normal(bg)
         for a in range(d):
             s = 0.0
             for b in range(d):
-                s += eps[b] * L0[a, b]
-            x[i, a] = s + mean0[a]
+                s += eps[b, 0] * L0[a, b]
+            x[a, i] = s + mean0[a]
     log_n = math.log(n)
     lw = np.zeros(n)
     v = np.empty(n)
+    res = np.empty(n)
     e = np.ones(n)
     anc = np.empty(n, dtype=np.intp)
     counts = np.empty(n + 1, dtype=np.intp)
@@ -165,7 +180,7 @@ def _one_run(handle, mean0, L0, F, G, step_dt, WH, Wz, c, n, ess_frac, min_log_e
                 mode = 2
                 systematic_row(e, next_double(bg), anc, counts)
                 shift = log_n
-        top = _step(bg, x, xn, anc, mode, F[u], G[u], eps, lw, shift, WH[k], Wz[k], c[k], v)
+        top = _step(bg, x, xn, anc, mode, F[u], G[u], eps, lw, shift, WH[k], Wz[k], c[k], v, res)
         if mode:
             x, xn = xn, x
         s, s2 = _exp_sums(v, top, e) if top > -np.inf else (0.0, 0.0)
