@@ -42,7 +42,7 @@ from .linear_gaussian import bootstrap_log_likelihoods, kalman_log_likelihood
 from .series import LinearGaussianArrays, Series, linear_gaussian_arrays, prepare_series
 
 Array = NDArray[np.float64]
-Path = Literal["bootstrap kernel", "kalman kernel", "run_filter"]
+Route = Literal["bootstrap kernel", "kalman kernel", "run_filter"]
 
 __all__ = ["LogLikelihood", "log_likelihood"]
 
@@ -87,15 +87,15 @@ class LogLikelihood:
             return None
         return linear_gaussian_arrays(filt.motion, filt.sensors, prior, self.series)
 
-    def path(self, filt: Filter[Any], prior: Any) -> Path:
+    def path(self, filt: Filter[Any], prior: Any) -> Route:
         """Which evaluation ``filt`` and ``prior`` get: a whole-run kernel or the generic loop."""
         return self._route(filt, prior)[0]
 
-    def _route(self, filt: Any, prior: Any) -> tuple[Path, LinearGaussianArrays | None]:
+    def _route(self, filt: Any, prior: Any) -> tuple[Route, LinearGaussianArrays | None]:
         if type(filt) is KalmanFilter or _bootstrap_eligible(filt):
             arrays = self._arrays(filt, prior)
             if arrays is not None:
-                kind: Path = "kalman kernel" if type(filt) is KalmanFilter else "bootstrap kernel"
+                kind: Route = "kalman kernel" if type(filt) is KalmanFilter else "bootstrap kernel"
                 return kind, arrays
         return "run_filter", None
 
@@ -131,15 +131,20 @@ class LogLikelihood:
             raise ConfigError(invalid("rngs", f"{len(rngs)} generators", f"{len(models)}"))
         routes = [self._route(f, p) for f, p in models]
         out = np.empty(len(models))
-        batch = [i for i, (kind, _) in enumerate(routes) if kind == "bootstrap kernel"]
-        if batch and rngs is None:
+        groups: dict[tuple[Any, ...], list[int]] = {}  # one kernel call per group
+        for i, (kind, arrays) in enumerate(routes):
+            if kind == "bootstrap kernel":
+                assert arrays is not None
+                key = (*self._pf_settings(models[i][0]), arrays.mean0.shape, arrays.Wz.shape)
+                groups.setdefault(key, []).append(i)
+        if groups and rngs is None:
             raise ConfigError(invalid("rng", None, "a numpy Generator for a particle filter"))
-        settings = {self._pf_settings(models[i][0]) for i in batch}
-        if len(settings) > 1:  # different particle counts: one call each
-            for i in batch:
-                out[i] = self._bootstrap([i], models, routes, rngs, threads)[0]
-        elif batch:
-            out[batch] = self._bootstrap(batch, models, routes, rngs, threads)
+        for key, batch in groups.items():
+            assert rngs is not None
+            arrays_of = [routes[i][1] for i in batch]
+            out[batch] = self._bootstrap(
+                [a for a in arrays_of if a is not None], [rngs[i] for i in batch], key[:3], threads
+            )
         for i, (kind, arrays) in enumerate(routes):
             if kind == "kalman kernel":
                 assert arrays is not None
@@ -157,24 +162,20 @@ class LogLikelihood:
 
     def _bootstrap(
         self,
-        batch: list[int],
-        models: Sequence[tuple[Filter[Any], Any]],
-        routes: list[tuple[Path, LinearGaussianArrays | None]],
-        rngs: Sequence[np.random.Generator] | None,
+        arrays: list[LinearGaussianArrays],
+        rngs: list[np.random.Generator],
+        settings: tuple[int, float, float],
         threads: bool,
     ) -> Array:
-        assert rngs is not None
-        arrays = [routes[i][1] for i in batch]
-        streams = self._streams_of([rngs[i] for i in batch])
-        n, ess, mle = self._pf_settings(models[batch[0]][0])
+        """One kernel call for bootstrap filters of the same settings and shapes."""
 
         def stack(name: str) -> Array:
             return np.ascontiguousarray(np.stack([getattr(a, name) for a in arrays]))
 
-        L0 = np.stack([_sqrt_factor(a.cov0) for a in arrays if a is not None])
+        L0 = np.stack([_sqrt_factor(a.cov0) for a in arrays])
         return bootstrap_log_likelihoods(
-            streams, stack("mean0"), L0, stack("F"), stack("G"), arrays[0].step_dt,  # type: ignore[union-attr]
-            stack("WH"), stack("Wz"), stack("c"), n, ess, mle, threads,
+            self._streams_of(rngs), stack("mean0"), L0, stack("F"), stack("G"),
+            arrays[0].step_dt, stack("WH"), stack("Wz"), stack("c"), *settings, threads,
         )  # fmt: skip
 
     def _generic(self, filt: Filter[Any], prior: Any, rng: np.random.Generator | None) -> float:
