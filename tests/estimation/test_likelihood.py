@@ -56,9 +56,12 @@ def test_kalman_by_hand():
     )
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_bootstrap_kernel_draws_what_the_filter_draws(seed):
-    pf, prior = particle_model(300)(THETA)
+@pytest.mark.parametrize(("seed", "ess"), [(0, 1.0), (1, 1.0), (2, 0.5), (3, 0.0)])
+def test_bootstrap_kernel_draws_what_the_filter_draws(seed, ess):
+    """The same estimate for a seed, whether every step resamples (ESS threshold 1), some do
+    (0.5: weights carried over between resamplings) or none (0)."""
+    motion, sensor, prior = parts(THETA)
+    pf = BootstrapFilter(motion, [sensor], n_particles=300, ess_threshold=ess)
     ev = LogLikelihood(ZS, t0=-1.0)
     assert ev.path(pf, prior) == "bootstrap kernel"
     fast = ev(pf, prior, np.random.default_rng(seed))

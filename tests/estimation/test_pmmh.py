@@ -8,7 +8,7 @@ import pytest
 from _estimation_models import THETA, kalman_model, log_prior, particle_model, simulate
 
 from fusetrack.core import ConfigError
-from fusetrack.estimation import LogLikelihood, pmmh, prepare_series
+from fusetrack.estimation import LogLikelihood, pmmh, prepare_series, proposal_covariance
 
 SERIES = prepare_series(simulate(100, seed=11))
 
@@ -118,3 +118,12 @@ def test_bad_input_names_the_field(kwargs, field):
     args.update(kwargs)
     with pytest.raises(ConfigError, match=field):
         pmmh(**args)
+
+
+def test_proposal_covariance_forms():
+    assert np.array_equal(proposal_covariance(0.5, 2), 0.25 * np.eye(2))
+    assert np.allclose(proposal_covariance([0.1, 2.0], 2), np.diag([0.01, 4.0]), rtol=1e-15)
+    cov = np.array([[1.0, 0.3], [0.3, 0.5]])
+    assert np.array_equal(proposal_covariance(cov, 2), cov)
+    with pytest.raises(ConfigError, match="scale"):
+        proposal_covariance([[1.0, 2.0], [2.0, 1.0]], 2)  # not positive definite
