@@ -93,6 +93,16 @@ def test_kernels_on_several_sensors_and_irregular_steps():
     assert fast == pytest.approx(_run_filter_ll(pf, prior, ms, np.random.default_rng(7)), abs=1e-9)
 
 
+def test_a_single_step_series():
+    """Two reports at one time, no prediction: the prior weighed by both."""
+    zs = [Measurement(2.0, "y", [0.3]), Measurement(2.0, "y", [-0.1])]
+    (kf, prior), (pf, _) = kalman_model(THETA), particle_model(200)(THETA)
+    ev = LogLikelihood(zs)
+    assert ev(kf, prior) == pytest.approx(_run_filter_ll(kf, prior, zs), rel=1e-12)
+    fast = ev(pf, prior, np.random.default_rng(0))
+    assert fast == pytest.approx(_run_filter_ll(pf, prior, zs, np.random.default_rng(0)), abs=1e-12)
+
+
 def test_other_filters_take_the_generic_loop():
     motion, sensor, prior = parts(THETA)
     for filt in (

@@ -175,7 +175,8 @@ def prepare_series(
 class LinearGaussianArrays:
     """A linear-Gaussian model on a series, as the whole-run kernels read it.
 
-    ``F``, ``G`` ``(U, d, d)``: the transition and noise factor for each distinct ``dt``;
+    ``F``, ``G`` ``(U, d, d)``: the transition and noise factor for each distinct ``dt``
+    (``U >= 1``: zeros when no step predicts);
     ``step_dt`` ``(T,)`` which of them step ``k`` predicts with (-1: no prediction);
     ``WH`` ``(T, M, d)``, ``Wz`` ``(T, M)``, ``c`` ``(T,)``: the whitened rows and constants
     (module docstring); ``mean0`` ``(d,)``, ``cov0`` ``(d, d)``: the prior.
@@ -196,8 +197,8 @@ def _transitions(motion: Any, dts: Array, d: int) -> tuple[Array, Array] | None:
     offer = getattr(motion, "fused_transition", None)
     if not callable(offer):
         return None
-    F = np.empty((dts.size, d, d))
-    G = np.empty_like(F)
+    F = np.zeros((max(dts.size, 1), d, d))  # one unused entry when nothing is predicted
+    G = np.zeros_like(F)
     for u, dt in enumerate(dts):
         fg = offer(float(dt))
         if fg is None:
