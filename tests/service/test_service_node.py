@@ -194,6 +194,7 @@ def test_example_config_is_the_demo_network():
         (lambda d: d["fusion"].update(rate_hz=0), "rate_hz"),
         (lambda d: d["tracker"].update(prior_mean=[0, 0]), "prior"),
         (lambda d: d["tracker"].update(filter="kalman9000"), "filter"),
+        (lambda d: d.setdefault("limits", {}).update(auth_failure_burst=0), "auth_failure_burst"),
     ],
 )
 def test_bad_configs_name_the_field(network, change, field):

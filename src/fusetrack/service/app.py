@@ -11,8 +11,9 @@ Reading (no key needed; the dashboard uses only these):
 Writing (``Authorization: Bearer <node token>``; see :func:`.auth.bearer_token`):
 
 * ``POST /ingest`` a message or a batch, ``application/json`` or ``application/msgpack``;
-  answers each message's outcome. 401 without a valid token, 413 when too large, 400 when
-  nothing parses, 503 (``Retry-After``) when the node is overloaded;
+  answers each message's outcome. 401 without a valid token (429 once the client's address
+  has failed ``limits.auth_failure_burst`` times), 413 when too large, 400 when nothing
+  parses, 503 (``Retry-After``) when the node is overloaded;
 * ``WS /ws/ingest`` the same per frame (text: JSON, binary: MessagePack).
 
 The lifespan runs the tick loop and, when given a socket, the UDP listener (:mod:`.udp`).
@@ -208,8 +209,13 @@ def _ingest_routes(app: FastAPI, node: FusionNode) -> None:
     )
     async def ingest(request: Request) -> JSONResponse:
         who = node.authorize(request.headers.get("authorization"))
-        if who is None:
-            node.reject("unauthorized", "missing or unknown bearer token")
+        if who is None:  # refused before the body is read
+            source = request.client.host if request.client else None
+            refused = node.refuse_unauthenticated(
+                source, "unauthorized", "missing or unknown bearer token"
+            )
+            if refused.reason == "rate_limited":
+                return JSONResponse({"error": refused.detail}, 429, {"Retry-After": "1"})
             return JSONResponse(
                 {"error": "unauthorized: a node's bearer token is needed"},
                 401,
@@ -229,8 +235,11 @@ def _ingest_routes(app: FastAPI, node: FusionNode) -> None:
     async def ws_ingest(ws: WebSocket) -> None:
         who = node.authorize(ws.headers.get("authorization"))
         if who is None:
-            node.reject("unauthorized", "missing or unknown bearer token (WebSocket)")
-            await ws.close(code=1008, reason="unauthorized")
+            source = ws.client.host if ws.client else None
+            refused = node.refuse_unauthenticated(
+                source, "unauthorized", "missing or unknown bearer token (WebSocket)"
+            )
+            await ws.close(code=1008, reason=refused.reason)
             return
         await ws.accept()
         try:

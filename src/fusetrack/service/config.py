@@ -494,6 +494,16 @@ class LimitsConfig(_Section):
     max_subscribers: int = Field(
         default=64, ge=1, le=100_000, description="open /ws/tracks connections at most"
     )
+    auth_failure_burst: int = Field(
+        default=100,
+        ge=1,
+        le=1_000_000,
+        description="authentication failures one source address may make before its messages "
+        "are dropped unchecked (UDP) or answered 429 (HTTP)",
+    )
+    auth_failures_per_second: float = Field(
+        default=10.0, gt=0.0, le=1e6, description="refill rate of a source's failures"
+    )
 
 
 class NetworkConfig(_Section):

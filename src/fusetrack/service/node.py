@@ -3,8 +3,10 @@
 What happens to a message (:meth:`FusionNode.ingest_frame` for UDP, :meth:`ingest_payload` for
 HTTP/WebSocket after the bearer token named the node):
 
-1. authenticated (UDP: the frame's HMAC, :mod:`.auth`), size-checked, parsed and validated
-   against the schema (:mod:`.schema`);
+1. a source address that has failed authentication too often (``limits.auth_failure_burst``,
+   refilled at ``auth_failures_per_second``) is dropped first, unchecked (``rate_limited``);
+   then authenticated (UDP: the frame's HMAC, :mod:`.auth`), size-checked, parsed and
+   validated against the schema (:mod:`.schema`);
 2. checked against the network: the message's node is the authenticated one, its sequence
    number is new (replays refused), the sensor exists, belongs to that node, is of the kind
    the message says, the value has the sensor's size, the time is not beyond the clock by more
@@ -34,7 +36,7 @@ from prometheus_client import Counter as PromCounter
 
 from ..core import ConfigError, invalid
 from .alignment import Aligner
-from .auth import Rejected, SequenceWindow, node_of_token, open_frame
+from .auth import FailureLimiter, Rejected, SequenceWindow, node_of_token, open_frame
 from .config import FUSED_KINDS, NetworkConfig
 from .engine import build_engine
 from .log import DurableLog, reading_of, replay_ticks
@@ -48,6 +50,7 @@ REJECTION_REASONS: tuple[str, ...] = (
     "unknown_node",
     "bad_mac",
     "unauthorized",
+    "rate_limited",
     "too_many_subscribers",
     "malformed",
     "schema",
@@ -63,6 +66,15 @@ REJECTION_REASONS: tuple[str, ...] = (
     "late",
     "overload",
 )
+
+UNAUTHENTICATED_REASONS: tuple[str, ...] = (
+    "bad_frame",
+    "unknown_node",
+    "bad_mac",
+    "unauthorized",
+    "rate_limited",
+)
+"""Refusals of messages no node's key vouches for (``/health``'s ``dropped_unauthenticated``)."""
 
 
 @dataclass(frozen=True)
@@ -95,8 +107,7 @@ class _Metrics:
         self.rejected = PromCounter(
             "fusetrack_messages_rejected", "refused messages", ["reason"], registry=r
         )
-        for reason in REJECTION_REASONS:
-            self.rejected.labels(reason)
+        self.rejected_by = {reason: self.rejected.labels(reason) for reason in REJECTION_REASONS}
         self.ticks = PromCounter("fusetrack_ticks", "fusion ticks published", registry=r)
         self.tick_seconds = Histogram(
             "fusetrack_tick_seconds",
@@ -140,6 +151,10 @@ class FusionNode:
         self.models = cfg.sensor_models()
         self.kinds = {s.id: s.kind for s in cfg.sensors}
         self.windows = {n: SequenceWindow() for n in self.keys}
+        self.limiter = FailureLimiter(
+            cfg.limits.auth_failures_per_second, cfg.limits.auth_failure_burst
+        )
+        self.udp_dropped: Callable[[], int | None] = lambda: None  # set by the UDP listener
         self.started = wall()
         fusion = cfg.fusion
         start = fusion.start
@@ -188,17 +203,32 @@ class FusionNode:
     # -- ingest ------------------------------------------------------------------------------
     def reject(self, reason: str, detail: str = "", seq: int | None = None) -> Outcome:
         self.rejected[reason] += 1
-        self.metrics.rejected.labels(reason).inc()
+        self.metrics.rejected_by[reason].inc()
         return Outcome(False, reason, detail, seq)
 
-    def ingest_frame(self, frame: bytes) -> list[Outcome]:
-        """A UDP datagram: a sealed frame of one message or a batch."""
+    def refuse_unauthenticated(self, source: object, reason: str, detail: str) -> Outcome:
+        """Refuse a message that failed authentication, charged to its source address: once the
+        source has spent ``limits.auth_failure_burst`` failures it is ``rate_limited``."""
+        if source is None:
+            return self.reject(reason, detail)
+        now = self.wall()
+        if self.limiter.blocked(source, now):
+            return self.reject("rate_limited", f"{source} failed authentication too often")
+        self.limiter.fail(source, now)
+        return self.reject(reason, detail)
+
+    def ingest_frame(self, frame: bytes, source: object = None) -> list[Outcome]:
+        """A UDP datagram from ``source`` (the sender's address): a sealed frame of one message
+        or a batch. A source that failed authentication too often is dropped before the frame's
+        HMAC is computed (issue 18: a flood of forged frames starved the legitimate ones)."""
+        if source is not None and self.limiter.blocked(source, self.wall()):
+            return [self.reject("rate_limited", f"{source} failed authentication too often")]
         if len(frame) > self.cfg.limits.max_message_bytes:
-            return [self.reject("oversized", f"{len(frame)} bytes")]
+            return [self.refuse_unauthenticated(source, "oversized", f"{len(frame)} bytes")]
         try:
             node, encoding, payload = open_frame(frame, self.keys)
         except Rejected as err:
-            return [self.reject(err.reason, err.detail)]
+            return [self.refuse_unauthenticated(source, err.reason, err.detail)]
         return self.ingest_payload(payload, encoding, node)
 
     def ingest_payload(self, payload: bytes, encoding: str, node: str) -> list[Outcome]:
@@ -473,6 +503,9 @@ class FusionNode:
             "silent_sensors": silent,
             "accepted": sum(self.accepted.values()),
             "rejected": dict(self.rejected),
+            "dropped_unauthenticated": sum(self.rejected[r] for r in UNAUTHENTICATED_REASONS),
+            "rate_limited": self.rejected["rate_limited"],
+            "udp_dropped": self.udp_dropped(),
             "buffered": self.aligner.pending,
             "superseded": self.aligner.superseded,
             "dropped": sum(b.dropped for b in self.aligner.buffers.values()),
