@@ -460,7 +460,9 @@ class FusionConfig(_Section):
     order (each at its own time, then predicts to the tick); ``closest`` fuses, per sensor, the
     one reading closest to the tick time (within half a period each side), as if taken at the
     tick. ``clock``: ``wall`` ticks on the node's clock (readings stamped in Unix seconds);
-    ``data`` ticks as the readings' own times advance (replays at any speed, simulations).
+    ``data`` ticks as the readings' own times advance (replays at any speed, simulations): the
+    ``clock_quorum``-th latest of the nodes' latest reading times, so that one node stamping
+    ahead cannot move everyone's clock (with fewer nodes heard, the heard ones set it).
     ``lag``: seconds the fusion waits behind the clock for late readings. ``start``: the time of
     the prior and of tick 0 (``data`` clock; the ``wall`` clock starts at the node's start).
     ``idle_flush``: with the ``data`` clock, the last ``lag`` seconds of a stream are fused once
@@ -473,6 +475,14 @@ class FusionConfig(_Section):
     lag: float = Field(default=0.5, ge=0.0, le=3600.0)
     start: float = 0.0
     max_future: float = Field(default=10.0, gt=0.0, description="s ahead of the clock allowed")
+    clock_quorum: int = Field(
+        default=2,
+        ge=1,
+        le=1000,
+        description="data clock: the clock is the clock_quorum-th latest of the nodes' latest "
+        "reading times (nodes heard within silent_after wall seconds), so no single node drags "
+        "it; 1: the latest reading's time",
+    )
     silent_after: float = Field(default=5.0, gt=0.0, description="s without readings: silent")
     idle_flush: float | None = Field(
         default=2.0,

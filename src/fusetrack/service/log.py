@@ -162,6 +162,11 @@ class DurableLog:
             for st in states:
                 yield st, ids
 
+    def node_times(self) -> dict[str, tuple[float, float]]:
+        """node -> (its latest reading's time, the wall time its latest reading was received)."""
+        rows = self.db.execute("SELECT node, MAX(time), MAX(received) FROM messages GROUP BY node")
+        return {str(n): (float(t), float(r)) for n, t, r in rows}
+
     def highest_seq(self) -> dict[str, int]:
         rows = self.db.execute("SELECT node, MAX(seq) FROM messages GROUP BY node")
         return {str(n): int(s) for n, s in rows}

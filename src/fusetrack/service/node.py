@@ -21,6 +21,7 @@ engine, logs and publishes each :class:`~.schema.TrackState`.
 from __future__ import annotations
 
 import asyncio
+import heapq
 import json
 import math
 import sqlite3
@@ -179,7 +180,10 @@ class FusionNode:
         self.engine = build_engine(cfg, start)
         self.single = cfg.tracker.association.method == "none"  # one track, every tick
         self.next_id = log.next_id() if log is not None else 1
-        self.watermark = -math.inf  # latest accepted reading time (data clock)
+        self.watermark = -math.inf  # latest accepted reading time, any node
+        self.node_time: dict[str, float] = {}  # each node's latest accepted reading time
+        self.node_heard: dict[str, float] = {}  # wall time of each node's latest acceptance
+        self.data_time = -math.inf  # the data clock (:meth:`update_data_clock`)
         self.accepted: Counter[str] = Counter()
         self.rejected: Counter[str] = Counter()
         self.last: dict[str, dict[str, Any]] = {}
@@ -197,8 +201,22 @@ class FusionNode:
 
     # -- clock -------------------------------------------------------------------------------
     def clock(self) -> float:
-        """The fusion clock: Unix time (``wall``) or the latest reading's time (``data``)."""
-        return self.wall() if self.cfg.fusion.clock == "wall" else self.watermark
+        """The fusion clock: Unix time (``wall``) or the data clock (:meth:`update_data_clock`)."""
+        return self.wall() if self.cfg.fusion.clock == "wall" else self.data_time
+
+    def update_data_clock(self) -> None:
+        """The data clock: the ``fusion.clock_quorum``-th latest of the nodes' latest reading
+        times, over the nodes heard within ``fusion.silent_after`` wall seconds (all heard nodes
+        when none is). No single node can drag it ahead of the others (issue 18: one batch
+        stamped ahead moved fusion time from 78 s to 3,048 s and every other sensor's readings
+        were then late); with fewer nodes heard than the quorum, the heard ones set it, so
+        quiet nodes never stall the fusion."""
+        now, quiet = self.wall(), self.cfg.fusion.silent_after
+        times = [t for n, t in self.node_time.items() if now - self.node_heard[n] <= quiet]
+        times = times or list(self.node_time.values())
+        if times:
+            q = min(self.cfg.fusion.clock_quorum, len(times))
+            self.data_time = heapq.nlargest(q, times)[-1]
 
     # -- ingest ------------------------------------------------------------------------------
     def reject(self, reason: str, detail: str = "", seq: int | None = None) -> Outcome:
@@ -316,6 +334,9 @@ class FusionNode:
             self.log.append_message(rid, m, now)
         self.aligner.push(reading_of(m, rid, value))
         self.watermark = max(self.watermark, m.time)
+        self.node_time[m.node] = max(self.node_time.get(m.node, -math.inf), m.time)
+        self.node_heard[m.node] = now
+        self.update_data_clock()
         self.accepted[m.sensor] += 1
         self.metrics.accepted_by[m.sensor].inc()
         self.recent_accepts.append(now)
@@ -341,13 +362,17 @@ class FusionNode:
     # -- fusion ------------------------------------------------------------------------------
     def advance(self, limit: int = MAX_TICKS_PER_ADVANCE) -> list[TrackState]:
         """Fire the ticks due by the clock (at most ``limit``); log and publish each state."""
+        if self.cfg.fusion.clock == "data":
+            self.update_data_clock()  # a node may have fallen quiet
         clock = self.clock()
         if not math.isfinite(clock):
             return []
         idle = self.cfg.fusion.idle_flush
         if self.cfg.fusion.clock == "data" and idle is not None and self.recent_accepts:
             if self.wall() - self.recent_accepts[-1] >= idle:
-                clock += self.aligner.lag  # the stream has paused: fuse what has come
+                # the stream has paused: fuse what has come (every node's, at most max_future
+                # ahead of the quorum clock each)
+                clock = max(clock, self.watermark) + self.aligner.lag
         states = []
         for k in self.aligner.due(clock, limit):
             t0 = time.perf_counter()
@@ -399,6 +424,9 @@ class FusionNode:
             self.latest_time = self.aligner.tick_time(last)
             self.resumed_ticks = last
         fused = {i for _, _, _, ids in log.tick_rows() for i in ids}
+        for node, (t, heard) in log.node_times().items():
+            self.node_time[node], self.node_heard[node] = t, heard
+        self.update_data_clock()
         for rid, m in log.messages():
             self.watermark = max(self.watermark, m.time)
             if rid not in fused and not self.aligner.is_late(m.time):
