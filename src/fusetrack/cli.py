@@ -1,5 +1,5 @@
-"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``
-and ``replay``; ``--version``, ``-v``/``-q`` (the ``logging`` level), ``run NAME --help`` (the
+"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``,
+``replay`` and ``log check|recover``; ``--version``, ``-v``/``-q`` (the ``logging`` level), ``run NAME --help`` (the
 experiment's own options)."""
 
 from __future__ import annotations
@@ -214,7 +214,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     from .evaluation import RunContext
     from .experiments import REGISTRY, run_experiment
 
-    if args.command in ("serve", "replay") or getattr(args, "live", False):
+    if args.command in ("serve", "replay", "log") or getattr(args, "live", False):
         from .service import run_service_command
 
         return run_service_command(args)

@@ -516,6 +516,17 @@ class LimitsConfig(_Section):
     )
 
 
+class LogConfig(_Section):
+    """The durable log (:mod:`.log`): ``path``, a SQLite file (relative to the config file), and
+    ``durability``: ``normal`` (SQLite ``synchronous=NORMAL`` in WAL mode: a killed process
+    loses no committed message, a power cut or OS crash may lose the last commits) or ``full``
+    (``synchronous=FULL``: every commit is on disk before it is acknowledged; slower writes).
+    ``log: PATH`` is short for ``log: {path: PATH}``."""
+
+    path: str | None = None
+    durability: Literal["normal", "full"] = "normal"
+
+
 class NetworkConfig(_Section):
     """The whole node: sensors, nodes and their keys, fusion, tracker, limits, durable log."""
 
@@ -526,7 +537,15 @@ class NetworkConfig(_Section):
     fusion: FusionConfig = FusionConfig()
     tracker: TrackerConfig
     limits: LimitsConfig = LimitsConfig()
-    log: str | None = Field(default=None, description="SQLite file of the durable log")
+    log: LogConfig = LogConfig()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _log_path(cls, data: Any) -> Any:
+        """``log: PATH`` (or null) is the log section with that path."""
+        if isinstance(data, dict) and (data.get("log") is None or isinstance(data["log"], str)):
+            data = {**data, "log": {"path": data.get("log")}}
+        return data
 
     @model_validator(mode="after")
     def _consistent(self) -> NetworkConfig:
@@ -703,6 +722,7 @@ def load_config(path: str | Path) -> NetworkConfig:
     if not isinstance(data, dict):
         raise ConfigError(invalid("config", str(p), "a YAML mapping"))
     cfg = parse_config(data, str(p))
-    if cfg.log is not None and not Path(cfg.log).is_absolute():
-        cfg = cfg.model_copy(update={"log": str(p.parent / cfg.log)})
+    if cfg.log.path is not None and not Path(cfg.log.path).is_absolute():
+        log = cfg.log.model_copy(update={"path": str(p.parent / cfg.log.path)})
+        cfg = cfg.model_copy(update={"log": log})
     return cfg

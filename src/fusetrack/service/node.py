@@ -413,7 +413,8 @@ class FusionNode:
                     "log",
                     str(log.path),
                     f"a log whose rows read back ({type(err).__name__}: {reason}); move it aside "
-                    "to start a new log",
+                    f"to start a new log, or `fusetrack log recover {log.path} --out NEW` to "
+                    "keep what reads back",
                 )
             ) from None
         if last:

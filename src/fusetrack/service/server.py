@@ -24,8 +24,8 @@ log = logging.getLogger(__name__)
 
 def build_node(cfg: NetworkConfig, log_path: str | Path | None = None) -> FusionNode:
     """A node for ``cfg``, resuming from its durable log when one is configured and exists."""
-    path = log_path if log_path is not None else cfg.log
-    return FusionNode(cfg, log=DurableLog(path) if path else None)
+    path = log_path if log_path is not None else cfg.log.path
+    return FusionNode(cfg, log=DurableLog(path, cfg.log.durability) if path else None)
 
 
 def tcp_socket(host: str, port: int) -> socket.socket:
