@@ -25,6 +25,8 @@ def add_service_parsers(sub: Any) -> None:
     serve.add_argument("--port", type=int, default=8000, help="HTTP/WebSocket port")
     serve.add_argument("--udp-port", type=int, default=9000, help="UDP port (-1: no UDP)")
     serve.add_argument("--log", type=Path, default=None, help="durable log (default: config's)")
+    serve.add_argument("--tls-cert", type=Path, default=None, help="TLS certificate (PEM)")
+    serve.add_argument("--tls-key", type=Path, default=None, help="its private key (PEM)")
 
     logs = sub.add_parser("log", help="check or recover a node's durable log (SQLite)")
     what = logs.add_subparsers(dest="log_command", required=True)
@@ -79,7 +81,7 @@ def run_service_command(args: argparse.Namespace) -> int:
 
         cfg = load_config(args.config)
         udp = None if args.udp_port < 0 else args.udp_port
-        serve(cfg, args.host, args.port, udp, args.log)
+        serve(cfg, args.host, args.port, udp, args.log, args.tls_cert, args.tls_key)
         return 0
     if args.command == "replay":
         return _replay(args, load_config(args.config))

@@ -17,7 +17,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 import yaml
@@ -215,30 +215,45 @@ class DetectionFunctionSensor:
         return (0, 1)
 
 
-class NodeConfig(_Section):
-    """A sensor node: its id, its key (inline, or the name of an environment variable holding
-    it) and the sensors it may report for."""
+class _KeyHolder(_Section):
+    """An id with a key, inline or the name of an environment variable holding it."""
 
     id: str = Field(pattern=_NAME)
     key: str | None = None
     key_env: str | None = None
-    sensors: list[str] = Field(min_length=1)
+
+    _section: ClassVar[str] = "nodes"
 
     def secret(self) -> bytes:
-        """The node's key as bytes (at least 16)."""
+        """The key as bytes (at least 16)."""
+        where = f"{self._section}[{self.id}]"
         if (self.key is None) == (self.key_env is None):
-            raise ConfigError(invalid(f"nodes[{self.id}].key", self.key, "key or key_env, one"))
+            raise ConfigError(invalid(f"{where}.key", self.key, "key or key_env, one"))
         raw = self.key if self.key is not None else os.environ.get(str(self.key_env))
         if raw is None:
             raise ConfigError(
-                invalid(f"nodes[{self.id}].key_env", self.key_env, "a set environment variable")
+                invalid(f"{where}.key_env", self.key_env, "a set environment variable")
             )
         key = raw.encode()
         if len(key) < MIN_KEY_BYTES:
             raise ConfigError(
-                invalid(f"nodes[{self.id}].key", "<hidden>", f"at least {MIN_KEY_BYTES} bytes")
+                invalid(f"{where}.key", "<hidden>", f"at least {MIN_KEY_BYTES} bytes")
             )
         return key
+
+
+class NodeConfig(_KeyHolder):
+    """A sensor node: its id, its key (``key`` or ``key_env``) and the sensors it may report
+    for. Its bearer token (:func:`.auth.bearer_token`) may post readings and read."""
+
+    sensors: list[str] = Field(min_length=1)
+
+
+class ReaderConfig(_KeyHolder):
+    """A reader (a dashboard, a client of ``/tracks``): its bearer token may read and subscribe
+    but never post readings. Once any reader is configured, reading needs a token."""
+
+    _section: ClassVar[str] = "readers"
 
 
 class MotionConfig(_Section):
@@ -534,6 +549,9 @@ class NetworkConfig(_Section):
     area: list[float] = Field(default=[0.0, 100.0, 0.0, 100.0], min_length=4, max_length=4)
     sensors: list[SensorConfig] = Field(min_length=1)
     nodes: list[NodeConfig] = Field(min_length=1)
+    readers: list[ReaderConfig] = Field(
+        default=[], description="read-only tokens; when given, reading needs a token"
+    )
     fusion: FusionConfig = FusionConfig()
     tracker: TrackerConfig
     limits: LimitsConfig = LimitsConfig()
@@ -576,13 +594,18 @@ class NetworkConfig(_Section):
         return {n.id: n.secret() for n in self.nodes}
 
     def fingerprint(self) -> str:
-        """SHA-256 of everything that decides the tracks (all but ``log`` and ``limits``): a
+        """SHA-256 of everything that decides the tracks (all but ``log``, ``limits`` and
+        ``readers``): a
         durable log records it and refuses to resume under another config."""
-        body = self.model_dump_json(exclude={"log", "limits"})
+        body = self.model_dump_json(exclude={"log", "limits", "readers"})
         return hashlib.sha256(body.encode()).hexdigest()
 
     def tokens(self) -> dict[str, str]:
         return {node: bearer_token(key) for node, key in self.keys().items()}
+
+    def read_tokens(self) -> dict[str, str]:
+        """reader id -> its bearer token (read only)."""
+        return {r.id: bearer_token(r.secret()) for r in self.readers}
 
     def owner(self) -> dict[str, str]:
         """sensor id -> the node allowed to report it."""
@@ -595,7 +618,14 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
         cfg = NetworkConfig.model_validate(data)
     except ValidationError as err:
         raise ConfigError(f"{source}: " + _first_error(err)) from None
-    cfg.keys()  # keys are checked now, not at the first message
+    keys = cfg.keys()  # keys are checked now, not at the first message
+    shared = [r.id for r in cfg.readers if r.secret() in keys.values() or r.id in keys]
+    readers = [r.id for r in cfg.readers]
+    if shared or len(set(readers)) != len(readers):
+        raise ConfigError(
+            f"{source}: "
+            + invalid("readers", readers, "ids and keys of their own (not a node's, unique)")
+        )
     try:
         models = cfg.sensor_models()
     except ConfigError as err:

@@ -52,6 +52,7 @@ REJECTION_REASONS: tuple[str, ...] = (
     "bad_mac",
     "unauthorized",
     "rate_limited",
+    "unauthorized_read",
     "too_many_subscribers",
     "malformed",
     "schema",
@@ -148,6 +149,7 @@ class FusionNode:
         self.wall = wall
         self.keys = cfg.keys()
         self.tokens = cfg.tokens()
+        self.read_tokens = cfg.read_tokens()
         self.owner = cfg.owner()
         self.models = cfg.sensor_models()
         self.kinds = {s.id: s.kind for s in cfg.sensors}
@@ -262,10 +264,21 @@ class FusionNode:
     def authorize(self, header: str | None) -> str | None:
         """The node an ``Authorization: Bearer ...`` header names, or None (the scheme name is
         case-insensitive, RFC 7235 §2.1: ``bearer`` was refused, issue 18)."""
-        scheme, _, token = (header or "").strip().partition(" ")
-        if scheme.lower() != "bearer" or not token.strip():
-            return None
-        return node_of_token(token.strip(), self.tokens)
+        token = _bearer(header)
+        return None if token is None else node_of_token(token, self.tokens)
+
+    def may_read(self, header: str | None, token: str | None = None) -> bool:
+        """Whether a reader may read tracks, sensors, health and metrics: always, unless the
+        config names ``readers``; then a reader's or a node's bearer token is needed, in the
+        ``Authorization`` header or as ``token`` (``?token=``: the dashboard, browsers'
+        WebSockets). A refusal is counted as ``unauthorized_read``."""
+        if not self.read_tokens:
+            return True
+        token = token or _bearer(header)
+        if token and (node_of_token(token, self.read_tokens) or node_of_token(token, self.tokens)):
+            return True
+        self.reject("unauthorized_read", "missing or unknown reader token")
+        return False
 
     def ingest_message(self, m: SensorMessage, node: str) -> Outcome:
         """Check one parsed message against the network and accept or refuse it."""
@@ -552,6 +565,14 @@ class FusionNode:
             self.metrics.age.labels(s).set(math.inf if last is None else now - last["received"])
         self.metrics.buffered.set(self.aligner.pending)
         return bytes(generate_latest(self.metrics.registry))
+
+
+def _bearer(header: str | None) -> str | None:
+    """The token of an ``Authorization: Bearer <token>`` header (any case of the scheme)."""
+    scheme, _, token = (header or "").strip().partition(" ")
+    if scheme.lower() != "bearer" or not token.strip():
+        return None
+    return token.strip()
 
 
 def _valid_covariance(c: list[list[float]], dim: int) -> bool:
