@@ -53,7 +53,7 @@ def uvicorn_options(node: FusionNode) -> dict[str, Any]:
     }
 
 
-def tls_options(cert: str | Path | None, key: str | Path | None) -> dict[str, str]:
+def tls_options(cert: str | Path | None, key: str | Path | None) -> dict[str, Any]:
     """uvicorn's TLS settings for ``--tls-cert``/``--tls-key`` (both or neither), checked by
     loading them before the node starts: HTTPS and WSS instead of HTTP and WS (UDP frames are
     authenticated by their HMAC but not encrypted)."""
@@ -84,7 +84,7 @@ class RunningNode:
         host: str = "127.0.0.1",
         http_port: int = 0,
         udp_port: int | None = 0,
-        tls: dict[str, str] | None = None,
+        tls: dict[str, Any] | None = None,
     ) -> None:
         """``tls``: :func:`tls_options` (HTTPS/WSS)."""
         self.node = node
