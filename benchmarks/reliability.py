@@ -29,7 +29,13 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests" / "reliability"))
 
-from reliability_harness import run_chaos, run_flood, run_fuzz, run_mutations  # noqa: E402
+from reliability_harness import (  # noqa: E402
+    run_chaos,
+    run_flood,
+    run_fuzz,
+    run_http_fuzz,
+    run_mutations,
+)
 
 from fusetrack.service.replay import demo_network  # noqa: E402
 
@@ -58,6 +64,7 @@ def _table(rows: list[tuple[str, Any]]) -> str:
 
 def report(args: argparse.Namespace, got: dict[str, Any]) -> str:
     fuzz, mut, chaos, flood = got["fuzz"], got["mutations"], got["chaos"], got["flood"]
+    http = got["http"]
     reasons: dict[str, int] = {}
     for run in (fuzz, mut):
         for reason, n in run["rejected"].items():
@@ -74,13 +81,15 @@ the CI suite `tests/reliability/` (under 60 s). Messages lost: **{lost}**.
 ## What is tested
 
 {TESTED}
-## Fuzzing: {fuzz["inputs"] + mut["inputs"]:,} generated inputs, 0 crashes
+## Fuzzing: {fuzz["inputs"] + mut["inputs"] + http["inputs"]:,} generated inputs, 0 crashes
 
 Each input went to one node (`FusionNode.ingest_payload` as posted by a node with a valid
 token, or `ingest_frame` in a UDP frame: sealed with the node's key, with a forged key, or with
 a flipped byte); for each, the run asserts that an outcome came back, that every refusal has
 one of the node's reasons and that the accepted and refused counters grew by exactly the
-outcomes. After the run the node still accepts a valid reading.
+outcomes. After the run the node still accepts a valid reading. Through the web application
+(`POST /ingest` and `/ws/ingest`, a valid token, mutated JSON and MessagePack): never a server
+error, one outcome per message in every answer, and the node counted exactly those outcomes.
 
 {
         _table(
@@ -93,7 +102,11 @@ outcomes. After the run the node still accepts a valid reading.
                     "byte-level mutations of valid JSON / MessagePack messages and batches",
                     f"{mut['inputs']:,} {mut['by_kind']}",
                 ),
-                ("accepted", fuzz["accepted"] + mut["accepted"]),
+                (
+                    "mutations through HTTP / WebSocket: HTTP statuses; outcomes = counted",
+                    f"{http['inputs']:,}: {http['statuses']}; {http['outcomes']:,} = {http['counted']:,}",
+                ),
+                ("accepted (node calls)", fuzz["accepted"] + mut["accepted"]),
                 ("refused, by reason", ", ".join(f"{k} {v:,}" for k, v in sorted(reasons.items()))),
                 (
                     "node still accepts a valid reading afterwards",
@@ -176,6 +189,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--examples", type=int, default=2000, help="hypothesis inputs")
     p.add_argument("--mutations", type=int, default=100_000, help="byte-level mutations")
+    p.add_argument("--http", type=int, default=5000, help="mutations via HTTP / WebSocket")
     p.add_argument("--kills", type=int, default=20)
     p.add_argument("--rate", type=float, default=1000.0, help="messages/s (chaos and flood)")
     p.add_argument("--flood", type=int, default=5000, help="legitimate readings in the flood")
@@ -188,6 +202,7 @@ def main() -> None:
     got: dict[str, Any] = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())}
     got["fuzz"] = run_fuzz(cfg, args.examples)
     got["mutations"] = run_mutations(cfg, args.mutations, seed=1)
+    got["http"] = run_http_fuzz(cfg, args.http, seed=1)
     with tempfile.TemporaryDirectory() as tmp:
         got["chaos"] = run_chaos(cfg, Path(tmp), args.kills, args.rate, seed=1)
     got["flood"] = run_flood(cfg, args.flood, args.factor, args.rate)

@@ -4,7 +4,8 @@
 * :func:`run_fuzz`: hypothesis-generated payloads (mutated valid messages and batches, any JSON
   or MessagePack value, raw bytes, sealed and forged UDP frames) into one node: nothing raises,
   every message gets an outcome and every refusal is counted; :func:`run_mutations` does the
-  same with byte-level mutations of valid encoded messages (cheap: for volume).
+  same with byte-level mutations of valid encoded messages (cheap: for volume), and
+  :func:`run_http_fuzz` through the web application's HTTP and WebSocket ingest.
 * :func:`run_chaos`: a node served by a forked process, fed over HTTP at a steady rate, killed
   with SIGKILL at random moments and restarted on its log: every acknowledged reading is in
   the log and replaying the log gives the published tracks.
@@ -253,6 +254,50 @@ def run_mutations(cfg: NetworkConfig, n: int, seed: int = 0) -> dict[str, Any]:
             outcomes = node.ingest_frame(frame, "10.0.0.1")
         _accounted(node, before, outcomes)
     return _summary(node, inputs)
+
+
+def run_http_fuzz(cfg: NetworkConfig, n: int, seed: int = 0) -> dict[str, Any]:
+    """``n`` mutated payloads through the web application (``POST /ingest`` and frames on
+    ``/ws/ingest``, JSON and MessagePack, with a valid token): never a server error, every
+    answer lists one outcome per message and the node's counters add up to the outcomes."""
+    from fastapi.testclient import TestClient
+
+    from fusetrack.service.app import create_app
+
+    rng = np.random.default_rng(seed)
+    node = FusionNode(cfg, wall=lambda: 0.0)
+    token = {"Authorization": f"Bearer {node.tokens['array-west']}"}
+    corpus = []
+    for i, (who, sensor, t, reading) in enumerate(readings(cfg, 200, seed)):
+        m = SensorMessage(node=who, seq=i + 1, sensor=sensor, time=t, reading=reading)
+        corpus += [(encode_message(m, "json"), "json"), (encode_message(m, "msgpack"), "msgpack")]
+    raw = [c for c, _ in corpus]
+    statuses = Counter[int]()
+    outcomes = 0
+    with (
+        TestClient(create_app(node)) as client,
+        client.websocket_connect("/ws/ingest", headers=token) as ws,
+    ):
+        for k in range(n):
+            data, encoding = corpus[int(rng.integers(len(corpus)))]
+            body = _mutate(data, rng, raw)
+            if k % 2:
+                ctype = "application/msgpack" if encoding == "msgpack" else "application/json"
+                r = client.post("/ingest", content=body, headers={**token, "Content-Type": ctype})
+                statuses[r.status_code] += 1
+                assert r.status_code in (200, 400, 413, 503), (r.status_code, body)
+                answer = r.json()
+            else:
+                if encoding == "msgpack":
+                    ws.send_bytes(body)
+                else:
+                    ws.send_text(body.decode(errors="replace"))
+                answer = ws.receive_json()
+            assert answer["accepted"] + answer["rejected"] == len(answer["results"]) >= 1
+            outcomes += len(answer["results"])
+    counted = sum(node.accepted.values()) + sum(node.rejected.values())
+    assert counted == outcomes, (counted, outcomes)
+    return {"inputs": n, "statuses": dict(statuses), "outcomes": outcomes, "counted": counted}
 
 
 # -- kill -9 and restart --------------------------------------------------------------------

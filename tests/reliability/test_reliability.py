@@ -5,7 +5,13 @@ from __future__ import annotations
 
 import os
 
-from reliability_harness import run_chaos, run_flood, run_fuzz, run_mutations
+from reliability_harness import (
+    run_chaos,
+    run_flood,
+    run_fuzz,
+    run_http_fuzz,
+    run_mutations,
+)
 
 
 def test_fuzzed_messages_never_crash_the_node_and_every_refusal_is_counted(network):
@@ -28,6 +34,14 @@ def test_byte_mutations_of_valid_messages_never_crash_the_node(network):
     assert got["accepted"] > 0  # some mutations leave a valid message
     for reason in ("malformed", "schema"):
         assert got["rejected"].get(reason, 0) > 0, reason
+
+
+def test_http_and_websocket_ingest_of_mutated_payloads_never_answer_500(network):
+    """400 mutated payloads posted to /ingest and sent on /ws/ingest (JSON and MessagePack):
+    only 200/400/413/503 answers, one outcome per message, all counted by the node."""
+    got = run_http_fuzz(network, n=400, seed=3)
+    assert got["counted"] == got["outcomes"] >= 400
+    assert set(got["statuses"]) <= {200, 400, 413, 503}
 
 
 def test_kill_9_loses_no_acknowledged_reading_and_the_log_replays(network, tmp_path):
