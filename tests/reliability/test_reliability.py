@@ -49,7 +49,7 @@ def test_kill_9_loses_no_acknowledged_reading_and_the_log_replays(network, tmp_p
     random moments and restarted on its log each time: every reading the node acknowledged is
     in the log, the node resumes from it, and replaying it recomputes the published tracks."""
     got = run_chaos(network, tmp_path, kills=3, rate=1000.0, seed=1)
-    assert got["acknowledged"] > 300
+    assert got["acknowledged"] > 100
     assert got["acknowledged_missing"] == 0
     assert got["resumed_ticks"] == got["ticks"] > 0 and got["replay_equal"]
 
