@@ -223,7 +223,8 @@ class FusionNode:
     # -- ingest ------------------------------------------------------------------------------
     def reject(self, reason: str, detail: str = "", seq: int | None = None) -> Outcome:
         self.rejected[reason] += 1
-        self.metrics.rejected_by[reason].inc()
+        counter = self.metrics.rejected_by.get(reason)  # looked up once per reason
+        (counter or self.metrics.rejected.labels(reason)).inc()
         return Outcome(False, reason, detail, seq)
 
     def refuse_unauthenticated(self, source: object, reason: str, detail: str) -> Outcome:
