@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -24,7 +25,7 @@ _LINESTYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "^", "D", "v", "x", "P", "*")
 
 
-def distinct_style(index: int, n_points: int) -> dict[str, object]:
+def distinct_style(index: int, n_points: int) -> dict[str, Any]:
     """Colour, line style and sparse markers of the ``index``-th curve: curves that lie on top
     of each other (filters that agree) stay distinguishable, also in grey-scale print."""
     return {
