@@ -2,10 +2,10 @@
 and a deleter, pure (``state = tracker.step(state, time, measurements, rng)``):
 :class:`MultiTargetTracker` (GNN, JPDA, any single-scan associator), :class:`MHTTracker`
 (track-oriented MHT, a belief per hypothesis leaf), :class:`MCMCDATracker` (online MCMCDA on
-position reports), :class:`PHDTracker` (a GM-PHD intensity's labelled components), :class:`PMBTracker` (the
-track-oriented Poisson multi-Bernoulli filter :class:`PMBFilter`, Williams 2015) and
-:class:`SingleTargetTracker` (any filter as a one-track tracker), all behind one interface
-(:class:`Tracker`: ``initial_state / step``)."""
+position reports), :class:`PHDTracker` (a GM-PHD intensity's labelled components),
+:class:`PMBTracker` (the track-oriented Poisson multi-Bernoulli filter :class:`PMBFilter`,
+Williams 2015) and :class:`SingleTargetTracker` (any filter as a one-track tracker), all behind
+one interface (:class:`Tracker`: ``initial_state / step``)."""
 
 from .deleters import AnyOf, CovarianceDeleter, Deleter, ExistenceDeleter, MissedCountDeleter
 from .existence import predict_existence, update_existence

@@ -1,21 +1,23 @@
 r"""The track-oriented Poisson multi-Bernoulli filter (TOMB/P) of Williams 2015, "Marginal
 multi-Bernoulli filters: RFS derivation of MHT, JIPDA and association-based MeMBer", IEEE Trans.
-AES 51(3), Sec. IV, with Gaussian single-target densities (Kalman, or EKF-linearised).
+AES 51(3) (arXiv:1203.2995), with Gaussian single-target densities (Kalman, or
+EKF-linearised).
 
 The multi-target density is a Poisson point process of the targets never detected (a labelled
 Gaussian-mixture intensity :class:`~fusetrack.filters.PhdIntensity`, as in the GM-PHD filter)
 times independent Bernoullis, one per potentially detected target (existence ``r_i``, density
 ``N(x; m_i, P_i)``): :class:`PMBDensity`.
 
-**Predict** (Williams Eqs. 25-28): the Poisson intensity is the GM-PHD prediction (``p_S w``,
+**Predict** (Williams' PMB prediction): the Poisson intensity is the GM-PHD prediction (``p_S w``,
 Kalman-predicted components, the birth intensity appended); every Bernoulli ``r_i <- p_S r_i``
 with its Gaussian predicted -- the GM-PHD prediction of a one-component "intensity" without
 births, so both reuse :meth:`~fusetrack.filters.GMPHDFilter.predict`.
 
-**Update** with one sensor's detections ``z_1..z_M`` (Williams Sec. IV-A, Eqs. 35-45)::
+**Update** with one sensor's detections ``z_1..z_M`` (Williams' PMB update and its TOMB/P
+algorithm)::
 
-    Bernoulli i missed       w_i0 = 1 - r_i P_D,      r = r_i (1 - P_D) / (1 - r_i P_D),  N(m_i, P_i)
-    Bernoulli i took z_j     w_ij = r_i P_D q_ij,     r = 1,  the Kalman update of N(m_i, P_i)
+    Bernoulli i missed       w_i0 = 1 - r_i P_D,  r = r_i (1 - P_D) / (1 - r_i P_D),  N(m_i, P_i)
+    Bernoulli i took z_j     w_ij = r_i P_D q_ij, r = 1,  the Kalman update of N(m_i, P_i)
     z_j not a track's        e_j  = kappa(z_j) + sum_c P_D w_c q_cj,
                              a new Bernoulli, r = (e_j - kappa(z_j)) / e_j, the Kalman-updated
                              Poisson components mixed with weights P_D w_c q_cj
@@ -32,9 +34,10 @@ Gaussian moment-matched, :func:`~fusetrack.tracking.combine_hypotheses`), the ne
 is scaled by ``1 - P_D`` then pruned and merged (Vo & Ma 2006, Table II). Bernoullis with
 existence below ``existence_threshold`` are dropped.
 
-Gating: a pair ``(i, j)`` enters only when ``(w_ij / e_j) / (w_ij / e_j + w_i0)`` -- a bound on
-its marginal ``beta_ij`` (swap ``z_j`` for the miss in any event) -- exceeds ``gate_probability_floor`` (at ``P_D = 1`` and ``r_i = 1`` the
-missed weight is 0 and every measurement is in the gate).
+Gating: a pair ``(i, j)`` enters only when ``(w_ij / e_j) / (w_ij / e_j + w_i0)`` -- a bound
+on its marginal ``beta_ij`` (swap ``z_j`` for the miss in any event) -- exceeds
+``gate_probability_floor`` (at ``P_D = 1`` and ``r_i = 1`` the missed weight is 0 and every
+measurement is in the gate).
 
 Several sensors in one scan are applied one after the other (exact for the PMB recursion up
 to its approximations). A non-finite measurement says the sensor looked and saw nothing: only
@@ -171,7 +174,9 @@ class PMBFilter:
             "gate_probability_floor", gate_probability_floor
         )
         self.association = JointProbabilisticDataAssociation(
-            max_exact_events=max_exact_events, bp_iterations=bp_iterations, bp_tolerance=bp_tolerance
+            max_exact_events=max_exact_events,
+            bp_iterations=bp_iterations,
+            bp_tolerance=bp_tolerance,
         )
 
     def __repr__(self) -> str:
@@ -186,7 +191,7 @@ class PMBFilter:
     def predict(
         self, belief: PMBDensity, dt: float, rng: np.random.Generator | None = None
     ) -> PMBDensity:
-        """Williams Eqs. 25-28 (module doc); ``rng`` is ignored."""
+        """The PMB prediction (module doc); ``rng`` is ignored."""
         self._check_belief(belief)
         return PMBDensity(
             self.undetected_filter.predict(belief.undetected, dt),
@@ -217,7 +222,7 @@ class PMBFilter:
         covariances: list[Array | None],
         time: float,
     ) -> PMBDensity:
-        """One sensor's update (Williams Sec. IV-A; module doc)."""
+        """One sensor's update (module doc)."""
         phd = self.undetected_filter
         tracks, poisson = prior.tracks, prior.undetected
         t_terms = phd.detection_terms(tracks, sid, values, covariances)
@@ -226,7 +231,9 @@ class PMBFilter:
             log_born = np.log(u_terms.p_d * poisson.weights)[None, :] + u_terms.log_q  # (M, C)
             log_hit = (np.log(t_terms.p_d * tracks.weights)[None, :] + t_terms.log_q).T  # (N, M)
             log_miss = np.log1p(-t_terms.p_d * tracks.weights)
-        log_new = logsumexp(log_born, axis=1) if poisson.n_components else np.full(len(values), -np.inf)
+        log_new = (
+            logsumexp(log_born, axis=1) if poisson.n_components else np.full(len(values), -np.inf)
+        )
         log_e = np.maximum(np.logaddexp(u_terms.log_kappa, log_new), _LOG_TINY)
         beta = self.marginals(log_hit, log_miss, log_e)
         posterior = _updated_tracks(tracks, t_terms, beta)
@@ -277,7 +284,7 @@ class PMBFilter:
 
 
 def _updated_tracks(tracks: PhdIntensity, terms: Any, beta: Array) -> PhdIntensity:
-    """Every Bernoulli as the moment-matched mixture of its hypotheses (Williams Eq. 41):
+    """Every Bernoulli as the moment-matched mixture of its hypotheses (Williams' TOMB):
     existence ``beta_i0 r_miss + sum_j beta_ij``."""
     n, d = tracks.means.shape
     r, p_d = tracks.weights, terms.p_d
@@ -305,8 +312,8 @@ def _new_tracks(
     poisson: PhdIntensity, terms: Any, log_born: Array, existence: Array, first_label: int
 ) -> PhdIntensity:
     """A Bernoulli per measurement ``z_j`` with existence ``existence[j]`` and the Poisson
-    components updated with ``z_j``, moment-matched with weights ``P_D w_c q_cj`` (Williams
-    Eq. 44), labelled ``first_label + j``; none for a measurement with existence 0."""
+    components updated with ``z_j``, moment-matched with weights ``P_D w_c q_cj``, labelled
+    ``first_label + j`` (one with existence 0 gets a placeholder density, dropped after)."""
     m, d = len(existence), poisson.dim
     means, covs = np.zeros((m, d)), np.tile(np.eye(d), (m, 1, 1))
     alive = existence > 0.0

@@ -75,7 +75,9 @@ class PMBTracker:
         for i in self.extracted(density):
             label = int(density.tracks.labels[i])
             ident = ids.setdefault(label, len(ids))
-            tracks.append(TrackView(ident, Gaussian(density.tracks.means[i], density.tracks.covs[i])))
+            tracks.append(
+                TrackView(ident, Gaussian(density.tracks.means[i], density.tracks.covs[i]))
+            )
         tracks.sort(key=lambda t: t.id)
         return PMBTrackerState(density, time, tuple(tracks), ids)
 
