@@ -168,6 +168,14 @@ def test_map_cardinality_of_independent_bernoullis():
     np.testing.assert_allclose(
         cardinality_distribution(np.array([0.5, 0.2])), [0.4, 0.5, 0.1]
     )  # (0.5 + 0.5x)(0.8 + 0.2x)
+    r = np.array([0.1, 0.45, 0.9, 0.45])
+    # (0.1 + 0.9x)(0.55 + 0.45x)^2(0.9 + 0.1x), expanded by hand
+    by_hand = [0.027225, 0.2926, 0.45135, 0.2106, 0.018225]
+    np.testing.assert_allclose(cardinality_distribution(r), by_hand, atol=1e-12)
+    density = PMBDensity(NOTHING, PhdIntensity(r, np.zeros((4, 4)), np.tile(np.eye(4), (4, 1, 1))))
+    pmb = PMBFilter(MOTION, [POS], NOTHING)
+    assert PMBTracker(pmb).extracted(density).tolist() == [2]  # r > 0.5
+    assert PMBTracker(pmb, extraction="map").extracted(density).tolist() == [2, 1]  # n = 2
 
 
 # (4) birth and death in clutter: cardinality, GOSPA against the GM-PHD tracker -----------------
