@@ -231,9 +231,12 @@ class PMBFilter:
             log_born = np.log(u_terms.p_d * poisson.weights)[None, :] + u_terms.log_q  # (M, C)
             log_hit = (np.log(t_terms.p_d * tracks.weights)[None, :] + t_terms.log_q).T  # (N, M)
             log_miss = np.log1p(-t_terms.p_d * tracks.weights)
-        log_new = (
-            logsumexp(log_born, axis=1) if poisson.n_components else np.full(len(values), -np.inf)
-        )
+        with np.errstate(divide="ignore"):  # all -inf: no Poisson component can see z_j
+            log_new = (
+                logsumexp(log_born, axis=1)
+                if poisson.n_components
+                else np.full(len(values), -np.inf)
+            )
         log_e = np.maximum(np.logaddexp(u_terms.log_kappa, log_new), _LOG_TINY)
         beta = self.marginals(log_hit, log_miss, log_e)
         posterior = _updated_tracks(tracks, t_terms, beta)
