@@ -247,9 +247,11 @@ def _tracking_one():
 def test_nan_reports_are_counted_and_skipped_unknown_sensors_raise_before_any_work():
     tr, state = _tracking_one()
     nan = Measurement(3.0, "pos", [np.nan, 50.0])
-    after = tr.step(state, 3.0, [nan, Measurement(3.0, "pos", [53.0, 50.0])])
+    after = tr.step(state, 3.0, [nan, Measurement(3.0, "pos", [54.0, 51.0])])
     assert tr.filter.stats.skipped_measurements == 1
-    assert [t.id for t in after.confirmed] == [0] and len(after.density.origins) <= 1 + 1
+    assert [t.id for t in after.confirmed] == [0]
+    predicted = tr.filter.predict(state.density, 1.0).tracks.means[0, :2]  # (52.8, 50.0)
+    assert np.all(after.confirmed[0].belief.mean[:2] - predicted > 0.5)  # z = (54, 51) was used
     missed = tr.step(state, 3.0, [nan])  # only a NaN: the sensor looked and saw nothing
     assert tr.filter.stats.skipped_measurements == 2
     assert [t.id for t in missed.confirmed] == [0]  # an existence of 1 survives a miss
