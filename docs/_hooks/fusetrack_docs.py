@@ -9,6 +9,9 @@ Nothing on the site is typed twice; at build time this hook
   ``fusetrack.cli.build_parser()``, and ``{{ experiments PREFIX }}`` into a table of the
   experiments whose names start with ``PREFIX``: title from the registry, the claims that hold
   from ``reports/NAME/summary.json``;
+* expands ``{{ readme_code "HEADING" }}`` into the first code block under that heading of
+  ``README.md`` (the commands are written once), and ``{{ figure NAME/FILE.png "caption" }}`` into
+  that figure of ``reports/`` or, while the report is missing, a note saying how to make it;
 * gives each API page's ``::: fusetrack.PACKAGE`` block (with no options of its own) the
   package's public names as ``members``: the packages re-export their names from submodules
   (``from .kalman import KalmanFilter as KalmanFilter``), which mkdocstrings lists only when
@@ -55,6 +58,14 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str
         lambda m: experiments_table(m.group(1), page.file.src_uri),
         markdown,
     )
+    markdown = re.sub(
+        r'\{\{ readme_code "([^"]+)" \}\}', lambda m: readme_code(m.group(1)), markdown
+    )
+    markdown = re.sub(
+        r'\{\{ figure ([\w./-]+) "([^"]+)" \}\}',
+        lambda m: figure(m.group(1), m.group(2), page.file.src_uri),
+        markdown,
+    )
     return re.sub(r"^::: (fusetrack\.\w+)\s*$(?!\n\s+options:)", _api_block, markdown, flags=re.M)
 
 
@@ -98,6 +109,34 @@ def _experiment_options() -> str:
     return "\n".join(parts)
 
 
+# --- README code and report figures ---------------------------------------------------------
+
+
+def readme_code(heading: str) -> str:
+    """The first fenced code block after the line ``heading`` in README.md, fences included."""
+    text = (ROOT / "README.md").read_text()
+    lines = text.splitlines()
+    if heading not in lines:
+        raise ValueError(f"README.md has no line {heading!r}")
+    rest = "\n".join(lines[lines.index(heading) + 1 :])
+    match = re.search(r"^```.*?^```$", rest, flags=re.M | re.S)
+    if match is None:
+        raise ValueError(f"README.md has no code block under {heading!r}")
+    return match.group(0)
+
+
+def figure(path: str, caption: str, page_uri: str) -> str:
+    """``reports/PATH`` as an image with its caption, or a note while the report is missing."""
+    name = path.split("/")[0]
+    if (ROOT / "reports" / path).exists():
+        up = "../" * page_uri.count("/")
+        return f"![{caption}]({up}reports/{path})\n\n*{caption}* ({name})"
+    return (
+        f'!!! note "Figure not yet in reports/"\n    {caption}: `reports/{path}` appears after the '
+        f"full-size run `fusetrack run {name} --out reports/{name}`."
+    )
+
+
 # --- experiments of one paper -----------------------------------------------------------------
 
 
@@ -108,7 +147,8 @@ def _verdict(name: str) -> tuple[str, str]:
     summary = json.loads(summary_path.read_text())
     claims = summary["claims"]
     held = sum(bool(c["holds"]) for c in claims)
-    return f"{held} of {len(claims)}", f"{summary['runs']} runs, {summary['seconds']:.0f} s"
+    runs = summary["runs"]
+    return f"{held} of {len(claims)}", f"{runs} run{'s' * (runs != 1)}, {summary['seconds']:.0f} s"
 
 
 def experiments_table(prefix: str, page_uri: str) -> str:
