@@ -93,7 +93,7 @@ def cli_reference() -> str:
     for name, (summary, sub) in _subcommands(parser).items():
         parts += [f"## fusetrack {name}", "", summary, "", "```text", _help(sub).rstrip(), "```"]
         parts.append("")
-    return "\n".join(parts + [_experiment_options()])
+    return "\n".join([*parts, _experiment_options()])
 
 
 def _experiment_options() -> str:
