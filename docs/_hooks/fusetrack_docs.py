@@ -34,8 +34,15 @@ ROOT = Path(__file__).resolve().parents[2]
 COPIED = {"reports": ("*.md", "*.png"), "benchmarks": ("*.md", "*.png")}
 HELP_WIDTH = 100
 
-if str(ROOT / "src") not in sys.path:  # document this tree's sources, not an installed copy
-    sys.path.insert(0, str(ROOT / "src"))
+
+def on_config(config: Any) -> Any:
+    """Import this tree's sources, not an installed copy (MkDocs restores ``sys.path`` after
+    loading a hook module, so this is done here)."""
+    if str(ROOT / "src") not in sys.path:
+        sys.path.insert(0, str(ROOT / "src"))
+    if "fusetrack" in sys.modules and not sys.modules["fusetrack"].__file__.startswith(str(ROOT)):
+        raise RuntimeError(f"fusetrack was imported from {sys.modules['fusetrack'].__file__}")
+    return config
 
 
 def on_files(files: Files, config: Any) -> Files:
