@@ -170,7 +170,8 @@ def experiments_table(prefix: str, page_uri: str) -> str:
         held, run = _verdict(name)
         report = ROOT / "reports" / name / "report.md"
         link = f"[`{name}`]({up}reports/{name}/report.md)" if report.exists() else f"`{name}`"
-        rows.append(f"| {link} | {info.title} | {held} | {run} |")
+        title = info.title.replace("|", "\\|")  # a bar inside a cell ends it
+        rows.append(f"| {link} | {title} | {held} | {run} |")
     if len(rows) == 2:
         raise ValueError(f"no experiment starts with {prefix!r}")
     return "\n".join(rows)
