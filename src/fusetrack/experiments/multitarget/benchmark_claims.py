@@ -155,7 +155,9 @@ def _diagnostic_claims(df: pd.DataFrame, opts: Options, k: float) -> list[Claim]
         and abs(pd_hat - opts.p_detect) <= k * pd_se
     )
     empty = {s: _empty_gospa(df, s, opts.gospa_c) for s in ("sparse", "dense", "crossing")}
-    worst = {s: max(values(df, s, t, "gospa").mean() for t in df.tracker.unique()) for s in empty}
+    worst = {
+        s: max(float(values(df, s, t, "gospa").mean()) for t in df.tracker.unique()) for s in empty
+    }
     return [
         _claim(
             "diagnostic",
