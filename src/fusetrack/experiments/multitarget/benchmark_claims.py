@@ -55,7 +55,7 @@ def summary_table(df: pd.DataFrame, metrics: tuple[str, ...] = METRICS) -> pd.Da
 
 
 def _claim(
-    kind: str, cid: str, statement: str, expected: str, ours: Any, tol: str, holds: bool
+    kind: str, cid: str, statement: str, expected: Any, ours: Any, tol: str, holds: bool
 ) -> Claim:
     return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds))
 

@@ -136,9 +136,10 @@ def simulate_births_and_deaths(setting: Setting, scans: int, rng: np.random.Gene
     """Poisson births from :func:`birth_intensity`, survival ``p_survive`` per scan, motion
     :func:`motion` (module docstring); at scan 0 Poisson(steady state) targets."""
     cv, birth = motion(), birth_intensity(setting.birth_rate)
-    times = np.arange(scans) * DT
-    rows: list[list[Array | None]] = []  # per target, its state per scan
-    born, alive = [], []
+    times = np.arange(scans, dtype=float) * DT
+    rows: list[Array] = []  # per target, its states (scans, 4), NaN while absent
+    born: list[int] = []
+    alive: list[int] = []
     for k in range(scans):
         for i in list(alive):
             if rng.random() >= setting.p_survive:
@@ -147,16 +148,12 @@ def simulate_births_and_deaths(setting: Setting, scans: int, rng: np.random.Gene
             rows[i][k] = cv.sample(rows[i][k - 1], DT, rng)
         mean = setting.birth_rate / (1 - setting.p_survive) if k == 0 else setting.birth_rate
         for x in _draw_births(birth, int(rng.poisson(mean)), rng):
-            rows.append([None] * scans)
+            rows.append(np.full((scans, 4), np.nan))
             rows[-1][k] = x
             born.append(k)
             alive.append(len(rows) - 1)
-    states = np.full((scans, len(rows), 4), np.nan)
-    for i, row in enumerate(rows):
-        for k, x in enumerate(row):
-            if x is not None:
-                states[k, i] = x
-    last = np.array([max(k for k, x in enumerate(r) if x is not None) for r in rows], dtype=int)
+    states = np.stack(rows, axis=1) if rows else np.full((scans, 0, 4), np.nan)
+    last = np.array([np.flatnonzero(np.isfinite(r[:, 0]))[-1] for r in rows], dtype=int)
     return World(times, states, np.array(born, dtype=int), last)
 
 
@@ -169,7 +166,7 @@ def simulate_crossing(pairs: int, scans: int, half_angle_deg: float = 10.0) -> W
     ``j`` (W, E, S, N of :func:`birth_intensity`) heading inwards at :data:`SPEED`, its two
     targets at ``+-half_angle_deg`` to the inward direction, so that they cross at mid-run."""
     scans = min(scans, CROSSING_SCANS)
-    times = np.arange(scans) * DT
+    times = np.arange(scans, dtype=float) * DT
     t_mid = times[-1] / 2
     states = np.full((scans, 2 * pairs, 4), np.nan)
     a = np.deg2rad(half_angle_deg)

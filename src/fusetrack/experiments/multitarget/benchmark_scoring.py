@@ -36,7 +36,9 @@ def benchmark_score(
     }
 
 
-def count_bias(estimated: Sequence[float], true: Sequence[float], settle: int) -> float:
+def count_bias(
+    estimated: Sequence[float], true: Sequence[float] | np.ndarray, settle: int
+) -> float:
     """Mean over the scans from ``settle`` on of (estimated - true number of targets)."""
     d = np.asarray(estimated, float)[settle:] - np.asarray(true, float)[settle:]
     return float(d.mean()) if d.size else float("nan")
