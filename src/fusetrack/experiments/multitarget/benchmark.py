@@ -6,7 +6,9 @@ One run (:func:`run_once`) simulates one configuration's world and reports
 (:mod:`.benchmark_scenario`), runs the trackers of :mod:`.benchmark_trackers` on the same reports
 and scores them (:mod:`.benchmark_scoring`, reusing ``multitarget-bearings``' scoring). The
 configurations: births and deaths in ``sparse`` and ``dense`` clutter, and a ``crossing`` of
-target pairs at a shallow angle (sparse clutter). :func:`run` repeats them, then builds the
+target pairs at a shallow angle (sparse clutter). A run's seed draws the targets first, so the
+sparse and dense runs of one seed share their world and differ only in the reports (common
+random numbers: the clutter comparison is paired). :func:`run` repeats them, then builds the
 claims (:mod:`.benchmark_claims`), figures (:mod:`.benchmark_figures`) and text
 (:mod:`.benchmark_text`).
 """

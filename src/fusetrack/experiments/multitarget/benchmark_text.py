@@ -38,7 +38,8 @@ q = 0.5 m²/s³). **sparse** and **dense**: targets are born by a Poisson proces
 axis (position sd {BIRTH_POS_STD:g} m, heading inwards at 10 m/s, velocity sd 2 m/s), so that
 many cross near the centre; each survives a scan with P_S = {opts.p_survive:g}; the first scan
 has Poisson({steady:g}) targets drawn the same way (the steady state). This is the PHD filter's
-own multi-target model. **crossing**: {opts.crossing_pairs} pairs of targets leave the entry
+own multi-target model; a run's sparse and dense configurations share their targets (the same
+seed) and differ in the reports only. **crossing**: {opts.crossing_pairs} pairs of targets leave the entry
 regions on straight lines at ±{opts.crossing_half_angle:g}° to the inward direction and cross at
 mid-run (at most 31 scans; no births or deaths).
 
@@ -128,6 +129,9 @@ CLEAR MOT:
   5 scans for GNN/JPDA/MHT; the PHD needs its weight above 0.5), so it is never 0.
 * MCMCDA sees the position reports only (half the information of the others) and its tracks
   are fixed-lag decisions; its numbers are not a like-for-like comparison.
+* The PHD's two sensors are applied one after the other (the iterated corrector, Mahler 2007
+  Sec. 10.6), an approximation of the multi-sensor PHD that depends on the sensor order: the
+  cardinality claim tests the filter as the library runs it, not the exact multi-sensor PHD.
 * Limits: one motion model, constant P_D, uniform clutter, the trackers know every model
   parameter; no spawning.
 """
