@@ -47,7 +47,7 @@ def test_quick_run_writes_report_claims_and_figures(tmp_path):
     for fig in FIGURES:
         assert (out / fig).stat().st_size > 0 and fig in report
     df = pd.read_parquet(out / "results.parquet")
-    assert set(df.tracker) == {"GNN", "JPDA", "MHT", "MCMCDA", "GM-PHD"}
+    assert set(df.tracker) == {"GNN", "JPDA", "MHT", "MCMCDA", "GM-PHD", "PMB"}
     assert set(df.scenario) == {"sparse", "dense", "crossing"}
     for col in ("gospa", "ospa2", "mota", "motp", "id_switches", "fragmentations"):
         assert col in df.columns

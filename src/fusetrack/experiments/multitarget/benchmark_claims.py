@@ -69,8 +69,20 @@ def _comparison_claims(df: pd.DataFrame, k: float) -> list[Claim]:
     jg = paired_difference(df, "dense", "JPDA", "GNN", "gospa")
     mj = paired_difference(df, "crossing", "MHT", "JPDA", "gospa")
     mj_id = paired_difference(df, "crossing", "MHT", "JPDA", "id_switches")
+    pp = paired_difference(df, "dense", "PMB", "GM-PHD", "gospa")
     tol = f"{k:g} SE of the paired difference"
     return [
+        _claim(
+            "beyond",
+            "pmb_not_worse_than_phd_dense",
+            "in dense clutter the PMB filter's GOSPA is at most the GM-PHD's: mean paired "
+            "difference PMB - GM-PHD <= k SE (a Bernoulli per track keeps each target's "
+            "existence and identity; the PHD's one intensity spreads them)",
+            "PMB - GM-PHD <= 0",
+            {"mean": pp[0], "se": pp[1]},
+            tol,
+            _at_most(pp, k),
+        ),
         _claim(
             "beyond",
             "jpda_not_worse_than_gnn_dense",

@@ -89,8 +89,11 @@ def tracks_figure(ctx: RunContext, res: RunResult, scenario: str) -> Path:
     over the truth (black; the radar ▲)."""
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, 3, figsize=(13, 8.6))
+    cols = (len(TRACKERS) + 2) // 2  # the reports' panel and one per tracker, two rows
+    fig, axes = plt.subplots(2, cols, figsize=(4.3 * cols, 8.6))
     panels = axes.ravel()
+    for ax in panels[len(TRACKERS) + 1 :]:
+        ax.set_visible(False)
     _draw_truth(panels[0], res)
     pos = [
         (m.value, o)

@@ -68,7 +68,11 @@ densities (library's public API only):
 * **GM-PHD**: `PHDTracker` over `GMPHDFilter` with the true birth intensity, both sensors
   (iterated corrector; extended-Kalman update for the radar); tracks are the labelled
   components of weight above 0.5; its estimated number of targets is the intensity's mass.
-  (GM-CPHD is not run: `PHDTracker` takes a `GMPHDFilter` only.)"""
+  (GM-CPHD is not run: `PHDTracker` takes a `GMPHDFilter` only.)
+* **PMB**: `PMBTracker` over `PMBFilter`, the track-oriented Poisson multi-Bernoulli filter
+  (Williams 2015; marginal associations by loopy belief propagation) with the GM-PHD's models,
+  birth intensity and initial intensity (its undetected-target Poisson part); tracks are the
+  Bernoullis with existence above 0.5."""
 
 
 def _metrics_text(opts: Options) -> str:
@@ -94,7 +98,7 @@ def report_text(
     mot = summary_table(df, MOT_METRICS)
     return f"""
 Beyond the papers (fusetrack issue 17): every multi-target tracker of the library (GNN, JPDA,
-MHT, MCMCDA, GM-PHD) on targets that are born and die, seen by a position sensor and a
+MHT, MCMCDA, GM-PHD, PMB) on targets that are born and die, seen by a position sensor and a
 range-bearing radar with missed detections and Poisson clutter. Verdict: {_verdict(claims)}
 
 {_setup_text(scans, opts)}

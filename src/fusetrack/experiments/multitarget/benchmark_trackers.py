@@ -18,6 +18,11 @@ its public API with the scenario's own models (:mod:`.benchmark_scenario`).
   intensity and the true initial intensity (:func:`phd_prior`), both sensors (iterated
   corrector); its tracks are the labelled components above
   0.5; the intensity's mass is its estimate of the number of targets.
+* ``PMB`` -- :class:`~fusetrack.tracking.PMBTracker` over the track-oriented Poisson
+  multi-Bernoulli filter (:class:`~fusetrack.tracking.PMBFilter`, Williams 2015; marginal
+  associations by loopy belief propagation) with the PHD's models, birth intensity and initial
+  intensity (as its undetected-target Poisson part); its tracks are the Bernoullis with
+  existence above 0.5, each keeping the identity of the report that created it.
 
 Every tracker knows the true ``P_D``, ``P_S``, clutter density and (PHD, MCMCDA) birth rate.
 """
@@ -48,6 +53,10 @@ from ...tracking import (
     MultiTargetTracker,
     PHDTracker,
     PHDTrackerState,
+    PMBDensity,
+    PMBFilter,
+    PMBTracker,
+    PMBTrackerState,
 )
 from .benchmark_scenario import (
     AREA,
@@ -62,7 +71,7 @@ from .benchmark_scenario import (
     sensors,
 )
 
-TRACKERS = ("GNN", "JPDA", "MHT", "MCMCDA", "GM-PHD")
+TRACKERS = ("GNN", "JPDA", "MHT", "MCMCDA", "GM-PHD", "PMB")
 VELOCITY_STD = SPEED  # prior std of a new track's velocity per axis (m/s)
 MAX_MISSES = 3
 CONFIRM_M, CONFIRM_N = 4, 5  # confirmed at 4 hits in the first 5 scans
@@ -158,6 +167,19 @@ def phd_tracker(setting: Setting) -> PHDTracker:
     return PHDTracker(phd, EXTRACT)
 
 
+def pmb_tracker(setting: Setting) -> PMBTracker:
+    """The PMB tracker of the module docstring (the PHD's models)."""
+    pmb = PMBFilter(
+        motion(),
+        sensors(setting.p_detect),
+        birth_intensity(setting.birth_rate),
+        survival_probability=setting.p_survive,
+        detection_probability=setting.p_detect,
+        clutter_intensity=_clutter_density(setting),
+    )
+    return PMBTracker(pmb, EXTRACT)
+
+
 def phd_prior(setting: Setting) -> PhdIntensity:
     """The PHD's intensity before the first scan: the first scan's targets are Poisson with
     the steady-state mean ``birth_rate / (1 - P_S)`` from the birth regions
@@ -215,5 +237,14 @@ def run_trackers(
         np.random.default_rng(seed + 4),
         lambda s: float(s.intensity.expected_count),
         PHDTrackerState(phd_prior(setting)),
+    )
+    prior = PMBDensity(phd_prior(setting), PhdIntensity.empty(4))
+    out["PMB"], _ = step_tracks(
+        pmb_tracker(setting),
+        zs,
+        times,
+        np.random.default_rng(seed + 5),
+        None,
+        PMBTrackerState(prior),
     )
     return out, count
