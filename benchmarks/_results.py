@@ -154,6 +154,16 @@ def timed(fn: Callable[[], object]) -> tuple[float, float]:
     return c.wall, c.cpu
 
 
+def repeat(fn: Callable[[], object], repeats: int, stat: str = "min") -> dict[str, float]:
+    """``{"wall": .., "cpu": ..}`` seconds of ``repeats`` calls of ``fn``, each clock's minimum
+    (``stat="min"``) or median (``"median"``) over the calls."""
+    import statistics
+
+    calls = [timed(fn) for _ in range(max(1, repeats))]
+    pick = min if stat == "min" else statistics.median
+    return {"wall": pick(c[0] for c in calls), "cpu": pick(c[1] for c in calls)}
+
+
 def ratio(num: float | None, den: float | None) -> float | None:
     """``num / den``, ``None`` when either is missing or ``den`` is 0."""
     if num is None or den is None or den == 0 or not math.isfinite(num * den):
