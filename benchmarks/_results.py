@@ -332,4 +332,7 @@ def load(path: Path) -> dict[str, Any]:
     doc = json.loads(text)
     if isinstance(doc, dict) and "results" in doc and "metadata" in doc:
         return doc
+    if isinstance(doc, dict) and isinstance(doc.get("metadata"), dict):  # service_load.py
+        meta = {"source": path.name, **doc["metadata"]}
+        return {"metadata": meta, "results": [{k: v for k, v in doc.items() if k != "metadata"}]}
     return {"metadata": {"source": path.name}, "results": doc if isinstance(doc, list) else [doc]}
