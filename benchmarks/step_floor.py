@@ -213,10 +213,11 @@ def measure(n: int, repeats: int, threaded: int = 2) -> dict[str, dict[str, floa
         np.exp(e, out=e)
 
     res: dict[str, dict[str, float]] = {}
-    for threads in (1, threaded):
+    for key, threads in (("serial", 1), ("threads", threaded)):
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-        kern = {name: pair[1 if threads > 1 else 0] for name, pair in _KERNELS.items()}
-        h = h4 if threads > 1 else h1
+        par = key == "threads"  # the threaded kernels and 4 child generators, on `threads`
+        kern = {name: pair[1 if par else 0] for name, pair in _KERNELS.items()}
+        h = h4 if par else h1
         calls: dict[str, Callable[[], object]] = {
             "normals": partial(kern["normals"], h, out),
             "propagate": partial(kern["propagate"], x, F, G, eps, out),
@@ -229,7 +230,6 @@ def measure(n: int, repeats: int, threaded: int = 2) -> dict[str, dict[str, floa
         for name, fn in calls.items():
             wall, cpu = _best(fn, repeats)
             row = res.setdefault(name, {})
-            key = "serial" if threads == 1 else "threads"
             row[key] = wall / n * 1e9
             row["cpu_" + key] = cpu / n * 1e9
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
@@ -262,7 +262,7 @@ def whole_steps(
             if hasattr(r, "cleanup"):
                 r.cleanup()  # Stone Soup's predictor cache, as pf_bearing.py clears it
 
-        for threads in (1, threaded) if name != "stonesoup" else (1,):
+        for threads in sorted({1, threaded}) if name != "stonesoup" else (1,):
             numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
             wall, cpu = _best(one_run, repeats)
             out.setdefault(name, {})[f"{threads}_thread_ms"] = wall / steps * 1e3
