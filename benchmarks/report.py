@@ -481,10 +481,12 @@ def headline(results: Path) -> list[str]:
         rows = [r for r in rows if r["seconds_per_step"].get("stonesoup") is not None]
         if doc and rows:
             r = min(rows, key=lambda r: abs(r["N"] - 100_000))
+            cell = _speedup_cell(r, "stonesoup")
+            cell = "RMSE disagrees, no ratio" if cell == "disagrees" else f"{cell} (wall / cpu)"
             out.append(
                 f"* bootstrap PF, N = {r['N']:,} ({label}): fusetrack "
-                f"{ms(r['seconds_per_step'].get('fusetrack'))} per step, Stone Soup / fusetrack "
-                f"{_speedup_cell(r, 'stonesoup')} (wall / cpu) (`results/{name}`, {_date(doc)})"
+                f"{ms(r['seconds_per_step'].get('fusetrack'))} per step, Stone Soup / fusetrack: "
+                f"{cell} (`results/{name}`, {_date(doc)})"
             )
     doc = read(results, "batched_runs.json")
     if doc:
