@@ -97,7 +97,7 @@ def limit_threads(threads: int | None, default_blas: int | None = 1) -> Iterator
         import numba
 
         numba_before = numba.get_num_threads()
-        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))  # type: ignore[attr-defined]
     try:
         if blas is None:
             yield thread_setting(threads)
@@ -316,7 +316,7 @@ def _relative(arg: str) -> str:
 
 def _jsonable(x: object) -> object:
     if hasattr(x, "tolist"):
-        return x.tolist()  # type: ignore[attr-defined]
+        return x.tolist()
     if isinstance(x, Path):
         return str(x)
     raise TypeError(f"not JSON serialisable: {type(x).__name__}")

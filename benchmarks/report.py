@@ -339,8 +339,8 @@ def multitarget_table(name: str, doc: dict) -> list[str]:
             sp = f"{lo}{times_x(cpu)} / {times_x(wall)}"
         cells = [r["tracker"].upper(), str(r["targets"]), f"{r['clutter']:g}"]
         for lib in ("fusetrack", "stonesoup"):
-            wall = "" if w.get(lib) is None else f" ({ms(w[lib])})"
-            cells.append(f"{'≥ ' if cut.get(lib) else ''}{ms(s.get(lib))}{wall}")
+            in_wall = "" if w.get(lib) is None else f" ({ms(w[lib])})"
+            cells.append(f"{'≥ ' if cut.get(lib) else ''}{ms(s.get(lib))}{in_wall}")
         cells += [sp, _gospa(r, "fusetrack"), _gospa(r, "stonesoup")]
         cells.append({True: "yes", False: "**no**", None: "not checked"}[agree])
         out.append("| " + " | ".join(cells) + " |")
@@ -599,12 +599,12 @@ def report(results: Path, out: Path) -> list[str]:
     if mt:
         sections.append(("Multi-target trackers: time per scan against targets, against Stone "
                          "Soup", multitarget_section(mt, out / "scaling_targets.png")))  # fmt: skip
-    name = next((n for n in ("zhai2007_speed.json", "zhai2007_speed_c18.json")
+    zhai = next((n for n in ("zhai2007_speed.json", "zhai2007_speed_c18.json")
                  if (results / n).exists()), None)  # fmt: skip
-    if name:
-        doc = _zhai_rows(_results.load(results / name))
+    if zhai:
+        doc = _zhai_rows(_results.load(results / zhai))
         sections.append(("Every Zhai 2007 particle filter against the bootstrap",
-                         filters_section(doc, name, out / "scaling_filters.png")))  # fmt: skip
+                         filters_section(doc, zhai, out / "scaling_filters.png")))  # fmt: skip
     if any(results.glob("service_*.json")):
         sections.append(("The live node: latency against its readings per second",
                          node_section(results, out / "node_rate.png")))  # fmt: skip
