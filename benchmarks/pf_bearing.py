@@ -30,7 +30,8 @@ estimate exceeds ``--budget`` seconds per step is skipped ("skipped (est. Xs)", 
 
 Agreement: every timed run (seed ``--seed + r``) scores its RMSE; a library agrees with
 fusetrack when their mean RMSEs over the runs differ by at most 3 combined standard errors
-(``_results.agree_monte_carlo``; with one run a library borrows the other's spread). A library
+(with few runs the t quantile of the same level instead of 3, ``_results.agree_monte_carlo``;
+with one run a library borrows the other's spread). A library
 that does not agree gets ``"agree": false`` and no speed-up (the table prints "disagrees").
 
 ``--sensors S1 S2 ...``: the sensors sweep instead of the three fixed sensors: the same truth
@@ -414,11 +415,13 @@ def agreement(res: dict[str, dict], reference: str = "fusetrack") -> dict[str, d
     if ref is None or not ref["rmse_runs"]:
         return {}
     m_ref, se_ref = _results.mean_se(ref["rmse_runs"])
+    n_ref = len(ref["rmse_runs"])
     out = {}
     for lib, r in res.items():
         if lib != reference and r["rmse_runs"]:
             m, se = _results.mean_se(r["rmse_runs"])
-            out[lib] = _results.agree_monte_carlo(m, se, m_ref, se_ref)
+            n = len(r["rmse_runs"])
+            out[lib] = _results.agree_monte_carlo(m, se, m_ref, se_ref, n, n_ref)
     return out
 
 

@@ -223,7 +223,8 @@ def pf_section(doc: dict, name: str, x: str, xlabel: str, title: str, fig: Path)
     if all(v is None for r in rows for v in r["rmse"].values()):
         return [*out, "", "(no RMSE in this run)", ""]
     out += ["", "RMSE (m), first timed run, and agreement with fusetrack (mean RMSE over the "
-            "timed runs, |difference| <= 3 combined SE):", ""]  # fmt: skip
+            "timed runs, |difference| <= 3 combined SE, the t quantile of that level for few "
+            "runs):", ""]  # fmt: skip
     out += ["| " + " | ".join([x, *libs]) + " |", "|" + "---|" * (len(libs) + 1)]
     for r in rows:
         cells = [f"{r[x]:,}"]
@@ -307,8 +308,9 @@ def multitarget_agree(r: dict) -> bool | None:
     g, se = r.get("gospa", {}), r.get("gospa_se", {})
     if "fusetrack" not in g or "stonesoup" not in g:
         return None
+    n = r.get("seeds")
     return _results.agree_monte_carlo(
-        g["fusetrack"], se.get("fusetrack"), g["stonesoup"], se.get("stonesoup")
+        g["fusetrack"], se.get("fusetrack"), g["stonesoup"], se.get("stonesoup"), n, n
     )["agree"]
 
 

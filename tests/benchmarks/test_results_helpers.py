@@ -40,6 +40,22 @@ def test_monte_carlo_agreement_is_three_combined_standard_errors() -> None:
     assert _results.agree_monte_carlo(float("nan"), 0.1, 1.0, 0.1)["agree"] is None
 
 
+def test_few_runs_widen_the_factor_to_the_t_quantile() -> None:
+    from scipy.stats import norm, t
+
+    # equal SEs from 3 runs each: Welch-Satterthwaite dof = (2v)^2 / (2 v^2 / 2) = 4
+    q = _results.t_factor(0.1, 0.1, 3, 3)
+    assert q == pytest.approx(t.ppf(1 - 0.0027 / 2, 4), rel=1e-12)
+    assert 6.0 < q < 7.0
+    # the level is the normal's 3 sigma: many runs give back 3
+    assert 2 * norm.sf(3.0) == pytest.approx(_results.SE_LEVEL, rel=0.01)
+    assert _results.t_factor(0.1, 0.1, 10**6, 10**6) == pytest.approx(3.0, abs=0.01)
+    # combined SE 0.1 * sqrt(2): 0.8 apart is 5.7 SE, under q = 6.4 with 3 runs each
+    assert _results.agree_monte_carlo(1.0, 0.1, 1.8, 0.1, 3, 3)["agree"] is True
+    assert _results.agree_monte_carlo(1.0, 0.1, 1.8, 0.1)["agree"] is False
+    assert _results.agree_monte_carlo(1.0, 0.1, 1.8, 0.1, 50, 50)["agree"] is False
+
+
 def test_exact_agreement_and_combination() -> None:
     assert _results.agree_exact(1e-10) and not _results.agree_exact(2e-9)
     assert not _results.agree_exact(float("nan"))
