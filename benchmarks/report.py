@@ -130,8 +130,9 @@ def times_x(r: float | None) -> str:
 
 
 def plot(path: Path, panels: list[dict[str, Any]]) -> None:
-    """One figure of side-by-side log-log panels; a panel: title, xlabel, ylabel and series
-    ``{label: [(x, y), ...]}`` (points with ``y`` ``None`` are left out)."""
+    """One figure of side-by-side log-log panels; a panel: title, xlabel, ylabel, series
+    ``{label: [(x, y), ...]}`` (points with ``y`` ``None`` are left out) and optionally styles
+    ``{label: matplotlib keywords}``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -143,7 +144,8 @@ def plot(path: Path, panels: list[dict[str, Any]]) -> None:
         for label, pts in panel["series"].items():
             pts = sorted((x, y) for x, y in pts if y is not None and y > 0)
             if pts:
-                ax.loglog(*zip(*pts), marker="o", label=label)
+                style = {"marker": "o", **panel.get("styles", {}).get(label, {})}
+                ax.loglog(*zip(*pts), label=label, **style)
                 drawn = True
         ax.set(xlabel=panel["xlabel"], ylabel=panel["ylabel"], title=panel["title"])
         ax.title.set_fontsize(9)
@@ -351,20 +353,23 @@ def multitarget_table(name: str, doc: dict) -> list[str]:
 
 def multitarget_section(docs: list[tuple[str, dict]], fig: Path) -> list[str]:
     panels = []
+    markers = "osD^vP*X"
     for kind in ("gnn", "jpda", "phd"):
         series: dict[str, list] = {}
-        for name, doc in docs:
+        styles: dict[str, dict] = {}
+        for i, (name, doc) in enumerate(docs):
             rows = [r for r in doc["results"] if r["tracker"] == kind and r["clutter"] == 10]
             if len({r["targets"] for r in rows}) < 2:
                 continue  # one point is no curve
             tag = name.rsplit(".", 1)[0].replace("multitarget_", "").replace("multitarget", "run")
-            for lib in ("fusetrack", "stonesoup"):
-                series[f"{lib}, cpu ({tag})"] = [
-                    (r["targets"], r["seconds_per_scan"].get(lib)) for r in rows
-                ]
+            for lib, color in (("fusetrack", "C0"), ("stonesoup", "C3")):
+                label = f"{lib}, cpu ({tag})"
+                series[label] = [(r["targets"], r["seconds_per_scan"].get(lib)) for r in rows]
+                styles[label] = {"color": color, "marker": markers[i % len(markers)],
+                                 "alpha": 0.5 + 0.5 * (i + 1) / len(docs)}  # fmt: skip
         panels.append({"title": f"{kind.upper()}, 10 clutter points per scan",
                        "xlabel": "targets", "ylabel": "CPU seconds per scan",
-                       "series": series})  # fmt: skip
+                       "series": series, "styles": styles})  # fmt: skip
     plot(fig, panels)
     out = [f"![time per scan vs targets]({fig.name})", ""]
     for name, doc in docs:
