@@ -92,6 +92,24 @@ def read(results: Path, name: str) -> dict[str, Any] | None:
     return _results.load(path) if path.exists() else None
 
 
+def newest(results: Path, stem: str) -> tuple[str, dict[str, Any]] | None:
+    """The newest of ``results/stem*.json[l]`` by date (a JSON-lines run whose rows carry
+    ``date`` and ``command`` lends them to its metadata), ``None`` when there is none."""
+    found = []
+    for path in sorted(results.glob(f"{stem}*.json*")):
+        if path.suffix not in (".json", ".jsonl"):
+            continue
+        doc = _results.load(path)
+        rows, meta = doc["results"], doc["metadata"]
+        if "date" not in meta and rows and isinstance(rows[0], dict) and "date" in rows[0]:
+            meta.update(date=rows[0]["date"], command=rows[0].get("command", ""))
+        found.append((str(meta.get("date", "")), path.name == f"{stem}.json", path.name, doc))
+    if not found:
+        return None
+    _, _, name, doc = max(found, key=lambda f: (f[0], f[1]))
+    return name, doc
+
+
 def provenance(doc: dict[str, Any], name: str) -> str:
     """One line: file, date, load at start and end, threads, command."""
     m = doc["metadata"]
@@ -259,6 +277,12 @@ def runs_section(doc: dict, name: str, fig: Path) -> list[str]:
     return [*out, ""]
 
 
+def kalman_agree(r: dict) -> bool:
+    """The row's ``agree``; for runs written before the mark, the same check on its diffs."""
+    d = r["max_abs_diff"]
+    return bool(r.get("agree", _results.agree_exact(max(d["mean"], d["cov"]))))
+
+
 def kalman_section(doc: dict, name: str, fig: Path) -> list[str]:
     rows = doc["results"]
     panels = []
@@ -278,7 +302,7 @@ def kalman_section(doc: dict, name: str, fig: Path) -> list[str]:
            "|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in rows:
         s, c, d = r["seconds_per_step"], r["cpu_seconds_per_step"], r["max_abs_diff"]
-        agree = r.get("agree", max(d["mean"], d["cov"]) <= _results.EXACT_TOL)
+        agree = kalman_agree(r)
         sp = (f"{times_x(r['speedup'])} / {times_x(r['cpu_speedup'])}" if agree
               else "differ > 1e-9: none")  # fmt: skip
         out.append(
@@ -495,26 +519,28 @@ def headline(results: Path) -> list[str]:
                 f"{ms(r['seconds_per_step'].get('fusetrack'))} per step, Stone Soup / fusetrack: "
                 f"{cell} (`results/{name}`, {_date(doc)})"
             )
-    doc = read(results, "batched_runs.json")
-    if doc:
+    found = newest(results, "batched_runs")
+    if found:
+        name, doc = found
         r = max(doc["results"], key=lambda r: r["runs"])
         sp = (f"{times_x(r['speedup'])} wall, {times_x(r['cpu_speedup'])} cpu"
               if r.get("agree", r["bit_identical"]) else "not bit-identical")  # fmt: skip
         out.append(
             f"* {r['runs']} Monte Carlo runs x {r['N']} particles as one batch: {sp} faster than "
-            f"separate runs (`results/batched_runs.json`, {_date(doc)})"
+            f"separate runs (`results/{name}`, {_date(doc)})"
         )
-    doc = read(results, "kalman_batch.json")
-    if doc:
+    found = newest(results, "kalman_batch")
+    if found:
+        name, doc = found
         big = max(r["N"] for r in doc["results"])
         cells = [
             f"{r['filter'].upper()} {times_x(r['speedup'])} wall / {times_x(r['cpu_speedup'])} cpu"
-            if r.get("agree", True) else f"{r['filter'].upper()} differs from FilterPy"
+            if kalman_agree(r) else f"{r['filter'].upper()} differs from FilterPy"
             for r in doc["results"] if r["N"] == big
         ]  # fmt: skip
         out.append(
             f"* {big} Kalman tracks in one batch against {big} FilterPy filters: "
-            f"{', '.join(cells)} (`results/kalman_batch.json`, {_date(doc)})"
+            f"{', '.join(cells)} (`results/{name}`, {_date(doc)})"
         )
     out += _multitarget_headline(results)
     return out or ["* no results committed yet: `python benchmarks/report.py --rerun`"]
@@ -593,31 +619,30 @@ def report(results: Path, out: Path) -> list[str]:
         sections.append(("Time per step against bearing sensors",
                          pf_section(doc, "pf_bearing_sensors.json", "sensors", "bearing sensors",
                                     "bootstrap PF", out / "scaling_sensors.png")))  # fmt: skip
-    for name, title, fn in (
-        ("batched_runs.json", "Time per step against batched Monte Carlo runs", runs_section),
-        ("kalman_batch.json", "Kalman family: time per step against tracks, against FilterPy",
+    for stem, title, fn in (
+        ("batched_runs", "Time per step against batched Monte Carlo runs", runs_section),
+        ("kalman_batch", "Kalman family: time per step against tracks, against FilterPy",
          kalman_section),
     ):  # fmt: skip
-        doc = read(results, name)
-        if doc:
+        found = newest(results, stem)
+        if found:
             fig = out / ("scaling_runs.png" if fn is runs_section else "scaling_tracks.png")
-            sections.append((title, fn(doc, name, fig)))
+            sections.append((title, fn(found[1], found[0], fig)))
     mt = multitarget_docs(results)
     if mt:
         sections.append(("Multi-target trackers: time per scan against targets, against Stone "
                          "Soup", multitarget_section(mt, out / "scaling_targets.png")))  # fmt: skip
-    zhai = next((n for n in ("zhai2007_speed.json", "zhai2007_speed_c18.json")
-                 if (results / n).exists()), None)  # fmt: skip
-    if zhai:
-        doc = _zhai_rows(_results.load(results / zhai))
+    found = newest(results, "zhai2007_speed")
+    if found:
         sections.append(("Every Zhai 2007 particle filter against the bootstrap",
-                         filters_section(doc, zhai, out / "scaling_filters.png")))  # fmt: skip
+                         filters_section(_zhai_rows(found[1]), found[0],
+                                         out / "scaling_filters.png")))  # fmt: skip
     if any(results.glob("service_*.json")):
         sections.append(("The live node: latency against its readings per second",
                          node_section(results, out / "node_rate.png")))  # fmt: skip
-    doc = read(results, "step_floor.json")
-    if doc:
-        sections.append(("The floor of a bootstrap step", floor_section(doc, "step_floor.json")))
+    found = newest(results, "step_floor")
+    if found:
+        sections.append(("The floor of a bootstrap step", floor_section(found[1], found[0])))
     for i, (title, body) in enumerate(sections, 1):
         lines += [f"## {i}. {title}", "", *body]
     lines += ["## How to regenerate", "", *regenerate_lines()]

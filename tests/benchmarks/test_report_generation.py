@@ -118,3 +118,15 @@ def test_report_without_results_still_writes_the_regeneration_commands(tmp_path:
     text = (tmp_path / "REPORT.md").read_text()
     assert "## How to regenerate" in text and "--out benchmarks/results/pf_bearing.json" in text
     assert report.headline(tmp_path / "results")[0].startswith("* no results committed yet")
+
+
+def test_the_newest_results_file_of_a_benchmark_is_reported(tmp_path: Path) -> None:
+    _write(tmp_path, "kalman_batch.json", [{"N": 1}])  # META's date: 2026-12-03T06:00:00Z
+    (tmp_path / "kalman_batch_later.jsonl").write_text(
+        json.dumps({"N": 2, "date": "2026-12-03T07:00:00Z", "command": "python k.py"}) + "\n"
+    )
+    (tmp_path / "kalman_batch_undated.jsonl").write_text(json.dumps({"N": 3}) + "\n")
+    name, doc = report.newest(tmp_path, "kalman_batch")  # type: ignore[misc]
+    assert name == "kalman_batch_later.jsonl" and doc["results"][0]["N"] == 2
+    assert doc["metadata"]["command"] == "python k.py"
+    assert report.newest(tmp_path, "step_floor") is None
