@@ -134,10 +134,18 @@ def build_parser() -> argparse.ArgumentParser:
     add_live_options(demo)
     add_service_parsers(sub)
     add_track_video_parser(sub)
-    for command in sub.choices.values():  # -v/-q after any subcommand, too
-        if "--verbose" not in command._option_string_actions:
-            _add_verbosity(command, argparse.SUPPRESS)
+    _verbosity_after_subcommands(parser)
     return parser
+
+
+def _verbosity_after_subcommands(parser: argparse.ArgumentParser) -> None:
+    """-v/-q after any subcommand too, nested ones included (``log check FILE -q``)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                if "--verbose" not in command._option_string_actions:
+                    _add_verbosity(command, argparse.SUPPRESS)
+                _verbosity_after_subcommands(command)
 
 
 def _print_summary(summary: dict, out: Path) -> None:
