@@ -23,39 +23,42 @@ alias (``np.float = float``) before importing it, and its ``compute_post`` store
 element (the same arithmetic).
 
     python benchmarks/pmmh.py [--iterations 1000] [--libs fusetrack particles limit_reference]
-        [--json]
+        [--threads N] [--save | --out PATH] [--json]
 
 Reported per library: milliseconds per PMMH iteration (one likelihood estimate each) in wall
-time (``time.perf_counter``) and CPU time of all threads (``time.process_time``), the
-acceptance rate, and the posterior means of ``q`` and ``r`` after a 20 % burn-in (each run's
-own Monte Carlo error, from batch means: each library's posterior means of ``log q`` and
-``log r`` are compared with the limit reference's within 3 combined errors, the
-``agrees_with_limit_reference`` field; fusetrack and the limit reference draw the same numbers
-in the same order and give the same chain). BLAS is limited to one thread;
-Numba runs one chain serially. JIT compilation is excluded (a 5-iteration warm-up run first).
-``--json``: one JSON object per library (with date, machine, load and versions).
+time (``time.perf_counter``) and CPU time of all threads (``time.process_time``), the ratio of
+the CPU time to the limit reference's, the acceptance rate, and the posterior means of ``q`` and
+``r`` after a 20 % burn-in with their Monte Carlo errors (batch means, 10 batches). Each
+library's posterior means of ``log q`` and ``log r`` are checked against the limit reference's
+(``_results.agree_monte_carlo``: within the t quantile of the combined errors;
+``agreement_with_limit_reference``); fusetrack and the limit reference draw the same numbers in
+the same order and give the same chain. Threads (``_results.py``): ``--threads N`` for every
+library (BLAS and Numba), default BLAS on one thread; every implementation here runs its one
+chain serially either way. JIT compilation is excluded (a 5-iteration warm-up run first).
+``--save`` writes ``{metadata, results}`` to ``benchmarks/results/pmmh.json`` (date, machine,
+load, versions, threads, command, git); ``--json`` prints one object per library.
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import math
 import os
-import platform
 import sys
 import time
 from collections.abc import Callable
-from importlib import metadata
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numba
 import numpy as np
-from threadpoolctl import threadpool_limits
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results
 
 RHO, Q_TRUE, R_TRUE, T_STEPS, N_PARTICLES = 0.9, 1.0, 0.5, 100, 1000
-PRIOR_SD, STEP, BURN_FRACTION = 2.0, 0.15, 0.2
+PRIOR_SD, STEP, BURN_FRACTION, BATCHES = 2.0, 0.15, 0.2, 10
 LIBS = ("fusetrack", "particles", "limit_reference")
 
 
@@ -253,8 +256,9 @@ def _timed(run: Callable[[int], tuple[np.ndarray, float]], iterations: int) -> d
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
     kept = chain[1 + int(BURN_FRACTION * iterations) :]
     q, r = np.exp(kept).mean(axis=0)
-    k = kept.shape[0] // 10  # batch means: the Monte Carlo error of a correlated chain's mean
-    se = kept[: 10 * k].reshape(10, k, 2).mean(axis=1).std(axis=0, ddof=1) / math.sqrt(10)
+    k = kept.shape[0] // BATCHES  # batch means: the Monte Carlo error of a correlated chain
+    means = kept[: BATCHES * k].reshape(BATCHES, k, 2).mean(axis=1)
+    se = means.std(axis=0, ddof=1) / math.sqrt(BATCHES)
     return {
         "ms_per_iteration_wall": 1e3 * wall / iterations,
         "ms_per_iteration_cpu": 1e3 * cpu / iterations,
@@ -268,13 +272,17 @@ def _timed(run: Callable[[int], tuple[np.ndarray, float]], iterations: int) -> d
     }
 
 
-def agrees(a: dict[str, Any], b: dict[str, Any]) -> bool:
-    """Posterior means of ``log q`` and ``log r`` within 3 combined Monte Carlo errors."""
-    return all(
-        abs(a[f"posterior_mean_log_{p}"] - b[f"posterior_mean_log_{p}"])
-        < 3 * math.hypot(a[f"mc_se_log_{p}"], b[f"mc_se_log_{p}"])
-        for p in ("q", "r")
-    )
+def agreement(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
+    """Posterior means of ``log q`` and ``log r`` against another library's, each by
+    ``_results.agree_monte_carlo`` on the batch-means errors (10 batches each)."""
+    out: dict[str, Any] = {}
+    for p in ("q", "r"):
+        out[f"log_{p}"] = _results.agree_monte_carlo(
+            a[f"posterior_mean_log_{p}"], a[f"mc_se_log_{p}"],
+            b[f"posterior_mean_log_{p}"], b[f"mc_se_log_{p}"], BATCHES, BATCHES,
+        )  # fmt: skip
+    out["agree"] = _results.all_agree([out["log_q"]["agree"], out["log_r"]["agree"]])
+    return out
 
 
 RUNNERS = {
@@ -284,17 +292,7 @@ RUNNERS = {
 }
 
 
-def _versions() -> dict[str, str]:
-    out = {"python": platform.python_version()}
-    for pkg in ("numpy", "numba", "particles", "fusetrack"):
-        try:
-            out[pkg] = metadata.version(pkg)
-        except metadata.PackageNotFoundError:
-            out[pkg] = "source"
-    return out
-
-
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         description=__doc__.split("\n\n")[0], formatter_class=argparse.RawTextHelpFormatter
     )
@@ -302,43 +300,41 @@ def main() -> None:
     ap.add_argument("--libs", nargs="+", choices=LIBS, default=list(LIBS))
     ap.add_argument("--seed", type=int, default=1, help="seed of the chains (data: seed 0)")
     ap.add_argument("--json", action="store_true", help="one JSON object per library")
-    args = ap.parse_args()
-    numba.set_num_threads(1)
+    _results.add_arguments(ap)
+    args = ap.parse_args(argv)
+    run = _results.Run(argv, __file__)
     y = simulate(0)
-    context = {
-        "benchmark": "pmmh",
-        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "machine": f"{platform.machine()} {os.cpu_count()} cpus",
-        "load_1min": os.getloadavg()[0],
-        "versions": _versions(),
-        "T": T_STEPS,
-        "N": N_PARTICLES,
-        "iterations": args.iterations,
-        "step": STEP,
-    }
+    setup = {"T": T_STEPS, "N": N_PARTICLES, "iterations": args.iterations, "step": STEP}
     results: dict[str, dict[str, Any]] = {}
-    with threadpool_limits(1):
+    with _results.limit_threads(args.threads) as threads:
+        run.threads = threads
         for lib in args.libs:
-            results[lib] = RUNNERS[lib](y, args.iterations, args.seed)
-    ref_res = results.get("limit_reference")
+            results[lib] = {"library": lib, **setup, **RUNNERS[lib](y, args.iterations, args.seed)}
+    ref = results.get("limit_reference")
     for res in results.values():
-        res["agrees_with_limit_reference"] = None if ref_res is None else agrees(res, ref_res)
+        res["agreement_with_limit_reference"] = None if ref is None else agreement(res, ref)
+        res["cpu_ratio_to_limit_reference"] = _results.ratio(
+            res["ms_per_iteration_cpu"], None if ref is None else ref["ms_per_iteration_cpu"]
+        )
+    rows = list(results.values())
+    run.save(_results.out_path(args, __file__), rows)
     if args.json:
-        for lib, res in results.items():
-            print(json.dumps({**context, "library": lib, **res}))
-        return
-    ref = results.get("limit_reference", {}).get("ms_per_iteration_cpu")
+        for res in rows:
+            print(json.dumps(res))
+        return 0
     print(f"PMMH, T={T_STEPS}, N={N_PARTICLES}, {args.iterations} iterations, load "
-          f"{context['load_1min']:.1f} on {context['machine']}")  # fmt: skip
+          f"{os.getloadavg()[0]:.1f}, threads {args.threads or 'BLAS 1'}")  # fmt: skip
     print(f"{'library':<16}{'ms/it wall':>11}{'ms/it cpu':>11}{'x ref cpu':>10}{'accept':>8}"
-          f"{'E[q]':>8}{'E[r]':>8}  posterior agrees (3 MC se)")  # fmt: skip
+          f"{'E[q]':>8}{'E[r]':>8}  posterior agrees with the reference")  # fmt: skip
     for lib, res in results.items():
-        ratio = res["ms_per_iteration_cpu"] / ref if ref else math.nan
+        ratio = res["cpu_ratio_to_limit_reference"] or math.nan
+        agree = (res["agreement_with_limit_reference"] or {}).get("agree")
         print(
             f"{lib:<16}{res['ms_per_iteration_wall']:>11.3f}{res['ms_per_iteration_cpu']:>11.3f}"
             f"{ratio:>10.2f}{res['acceptance_rate']:>8.3f}{res['posterior_mean_q']:>8.3f}"
-            f"{res['posterior_mean_r']:>8.3f}  {res['agrees_with_limit_reference']}"
+            f"{res['posterior_mean_r']:>8.3f}  {agree}"
         )
+    return 0
 
 
 if __name__ == "__main__":
