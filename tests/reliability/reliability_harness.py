@@ -6,7 +6,7 @@
   every message gets an outcome and every refusal is counted; :func:`run_mutations` does the
   same with byte-level mutations of valid encoded messages (cheap: for volume), and
   :func:`run_http_fuzz` through the web application's HTTP and WebSocket ingest.
-* :func:`run_chaos`: a node served by a forked process, fed over HTTP at a steady rate, killed
+* :func:`run_chaos`: a node served by a process forked from a fork server, fed over HTTP at a steady rate, killed
   with SIGKILL at random moments and restarted on its log: every acknowledged reading is in
   the log and replaying the log gives the published tracks.
 * :func:`run_flood`: legitimate UDP readings with ``factor`` times as many forged frames from
@@ -361,7 +361,7 @@ class _Sender:
                     time.sleep(ahead)
 
 
-def _wait_up(url: str, proc: Any, timeout: float = 30.0) -> None:
+def _wait_up(url: str, proc: Any, timeout: float = 120.0) -> None:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if not proc.is_alive():
@@ -377,14 +377,18 @@ def _wait_up(url: str, proc: Any, timeout: float = 30.0) -> None:
 def run_chaos(
     cfg: NetworkConfig, workdir: Path, kills: int, rate: float = 1000.0, seed: int = 0
 ) -> dict[str, Any]:
-    """Serve ``cfg`` in a forked process with a durable log, feed it over HTTP at up to ``rate``
+    """Serve ``cfg`` in a process forked from a fork server with a durable log, feed it over HTTP at up to ``rate``
     messages/s, SIGKILL it after a random 0.3-1.0 s, restart on the same log; ``kills`` times.
     Then a last restart on the log: every acknowledged reading is in it, and replaying it gives
     the published tracks."""
     rng = np.random.default_rng(seed)
     log_path = str(workdir / "chaos.sqlite")
     todo = readings(cfg, int(rate * 1.2 * kills) + 100, seed)
-    ctx = multiprocessing.get_context("fork")
+    # forkserver, not fork: a child forked from the test process (threads of BLAS, Numba,
+    # the sender) can inherit a held lock and hang; the fork server is a fresh single-threaded
+    # interpreter with the node's modules imported once, so each start is still a quick fork
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["fusetrack.service", "reliability_harness"])
     acked: set[tuple[str, int]] = set()
     position, moments, sent, seconds = 0, [], 0, 0.0
     for _ in range(kills):
