@@ -1,8 +1,8 @@
 """``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``,
-``replay`` and ``log check|recover``; ``--version``, ``-v``/``-q`` (the ``logging`` level; before
-or after any subcommand), ``run NAME --help`` (the experiment's own options). Progress goes to
-stderr (a bar on a terminal, plain lines elsewhere); colour only on a terminal and never with
-``NO_COLOR``."""
+``replay``, ``log check|recover``, ``reproduce [NAME ...|--all]`` and ``reports tally``;
+``--version``, ``-v``/``-q`` (the ``logging`` level; before or after any subcommand), ``run NAME
+--help`` (the experiment's own options). Progress goes to stderr (a bar on a terminal, plain lines
+elsewhere); colour only on a terminal and never with ``NO_COLOR``."""
 
 from __future__ import annotations
 
@@ -129,11 +129,13 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_options(demo, "out/demo")
     _add_verbosity(demo, argparse.SUPPRESS)
     from .service import add_live_options, add_service_parsers
-    from .tools import add_track_video_parser
+    from .tools import add_reports_parser, add_reproduce_parser, add_track_video_parser
 
     add_live_options(demo)
     add_service_parsers(sub)
     add_track_video_parser(sub)
+    add_reproduce_parser(sub)
+    add_reports_parser(sub)
     _verbosity_after_subcommands(parser)
     return parser
 
@@ -149,19 +151,20 @@ def _verbosity_after_subcommands(parser: argparse.ArgumentParser) -> None:
 
 
 def _print_summary(summary: dict, out: Path) -> None:
-    from .evaluation import coloured
+    from .evaluation import Claim, coloured, verdict_line
 
     claims = summary["claims"]
-    held = sum(c["holds"] for c in claims)
     print(
-        f"\n{summary['experiment']}: {held}/{len(claims)} claims hold "
+        f"\n{summary['experiment']}: {verdict_line([Claim(**c) for c in claims])} "
         f"({summary['runs']} runs, {summary['seconds']:.1f} s, peak {summary['peak_memory_mb']:.0f} MiB)"
     )
     for c in claims:
         ours = f"{c['ours']:.4g}" if isinstance(c["ours"], float) else c["ours"]
         word, colour = ("ok ", "green") if c["holds"] else ("NO ", "red")
         mark = coloured(word, colour, sys.stdout)
-        print(f"  [{mark}] {c['id']}: {c['statement']} — ours {ours}, paper {c['paper']}")
+        print(
+            f"  [{mark}] {c['id']} ({c['kind']}): {c['statement']} — ours {ours}, paper {c['paper']}"
+        )
     print(f"report: {out / 'report.md'}")
 
 
@@ -239,6 +242,15 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .tools import run_track_video_command
 
         return run_track_video_command(args)
+    if args.command == "reports":
+        from .tools import run_reports_command
+
+        return run_reports_command(args)
+    if args.command == "reproduce":
+        from .tools import run_reproduce_command
+
+        _check_output_dir(args.out)
+        return run_reproduce_command(args)
     if args.command == "list":
         width = max(len(n) for n in REGISTRY)
         for name, info in REGISTRY.items():

@@ -1,5 +1,8 @@
-"""Tools that run whole chains on a user's own data (``fusetrack track-video``)."""
+"""Tools that run whole chains on a user's own data (``fusetrack track-video``), regenerate the
+full-size reports (``fusetrack reproduce``) and tally their claims (``fusetrack reports tally``)."""
 
+from .report_tally import add_reports_parser, run_reports_command, tally_markdown
+from .reproduce import add_reproduce_parser, run_reproduce_command
 from .synthetic_recording import write_recording
 from .track_video import InputError, run_track_video_command, track_video
 from .track_video_args import add_track_video_parser
@@ -10,8 +13,13 @@ __all__ = [
     "InputError",
     "TrackerConfig",
     "VideoRadioTracker",
+    "add_reports_parser",
+    "add_reproduce_parser",
     "add_track_video_parser",
+    "run_reports_command",
+    "run_reproduce_command",
     "run_track_video_command",
+    "tally_markdown",
     "track_video",
     "write_recording",
 ]

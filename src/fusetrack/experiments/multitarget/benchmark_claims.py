@@ -57,7 +57,7 @@ def summary_table(df: pd.DataFrame, metrics: tuple[str, ...] = METRICS) -> pd.Da
 def _claim(
     kind: str, cid: str, statement: str, expected: Any, ours: Any, tol: str, holds: bool
 ) -> Claim:
-    return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds))
+    return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds), kind)
 
 
 def _at_most(d: tuple[float, float], k: float) -> bool:
