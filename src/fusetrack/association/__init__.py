@@ -6,8 +6,11 @@ from .base import Associator as Associator
 from .base import ScanLikelihoods as ScanLikelihoods
 from .base import SingleHypothesis as SingleHypothesis
 from .base import hypotheses_of as hypotheses_of
+from .base import hypothesis_weights as hypothesis_weights
+from .batch import PairPosteriors as PairPosteriors
 from .batch import batchable as batchable
 from .batch import predict_many as predict_many
+from .batch import stack_gaussians as stack_gaussians
 from .batch import update_pairs as update_pairs
 from .clusters import gate_clusters as gate_clusters
 from .gating import check_gate_probability as check_gate_probability

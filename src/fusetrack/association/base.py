@@ -77,3 +77,23 @@ class Associator(Protocol):
 def hypotheses_of(association: Association, track_id: int) -> Sequence[SingleHypothesis]:
     """The hypotheses of one track (a missed detection with probability 1 when it has none)."""
     return association.hypotheses.get(track_id, (SingleHypothesis(track_id, None, 1.0),))
+
+
+def hypothesis_weights(
+    association: Association, track_ids: Sequence[int], n_measurements: int
+) -> Array:
+    """``(T, M + 1)``: row ``i`` the hypotheses of track ``track_ids[i]`` with positive
+    probability as weights normalised to sum 1 (column ``j < M``: measurement ``j``; the last
+    column: missed). A track without any (none given, or all of probability 0) is missed with
+    weight 1. The normalising sum adds the probabilities in the association's order."""
+    weights = np.zeros((len(track_ids), n_measurements + 1))
+    for row, track_id in enumerate(track_ids):
+        hyps = [h for h in hypotheses_of(association, track_id) if h.probability > 0]
+        if not hyps:
+            weights[row, n_measurements] = 1.0
+            continue
+        total = sum(h.probability for h in hyps)
+        for h in hyps:
+            col = n_measurements if h.measurement is None else h.measurement
+            weights[row, col] += h.probability / total
+    return weights

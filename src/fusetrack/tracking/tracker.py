@@ -83,12 +83,14 @@ from numpy.typing import ArrayLike
 from ..association import (
     Association,
     Associator,
+    PairPosteriors,
     ScanLikelihoods,
     SingleHypothesis,
     TrackOrientedMHT,
-    hypotheses_of,
+    hypothesis_weights,
     predict_many,
     scan_likelihoods,
+    stack_gaussians,
 )
 from ..core import (
     ConfigError,
@@ -105,9 +107,9 @@ from ..core import (
 )
 from ..filters import as_sensor_map, validate_measurement
 from .deleters import Deleter
-from .existence import predict_existence, update_existence
+from .existence import predict_existence, update_existences
 from .initiators import Initiator
-from .mixing import combine_hypotheses
+from .mixing import combine_hypotheses, combine_stacked
 from .state import LiveTrack, TrackerState, TrackerStats
 
 TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
@@ -525,21 +527,58 @@ class MultiTargetTracker:
             return cols
         p_d = self.p_detect[sensor_id]
         chosen = [measurements[j] for j in cols]
-        scores, posteriors = self._score(ids, [tracks[i].belief for i in ids], chosen, p_d, rng)
+        before = [tracks[i] for i in ids]
+        scores, posteriors = self._score(ids, [tr.belief for tr in before], chosen, p_d, rng)
         association = self._associate_gated(scores, rng)
-        for row, i in enumerate(ids):
-            hyps = [h for h in hypotheses_of(association, i) if h.probability > 0]
-            hyps = hyps or [SingleHypothesis(i, None, 1.0)]  # no weight anywhere: missed
-            tracks[i] = self._apply(tracks[i], row, hyps, scores, posteriors, chosen, p_d, rng)
-            total = sum(h.probability for h in hyps)
-            used = [
-                (cols[h.measurement], h.probability / total)
-                for h in hyps
-                if h.measurement is not None
-            ]
-            records[i].used.extend(used)
-            records[i].detected |= sum(p for _, p in used) >= 0.5
+        weights = hypothesis_weights(association, scores.track_ids, len(chosen))
+        beliefs = self._combine(before, weights, posteriors, chosen, rng)
+        existence = update_existences(
+            [tr.existence for tr in before],
+            p_d * self.gate_probability,
+            _likelihood_ratio_sums(scores, weights),
+        )
+        used_rows, used_cols = np.nonzero(weights[:, :-1])
+        used: list[list[tuple[int, float]]] = [[] for _ in ids]
+        for row, k, w in zip(
+            used_rows.tolist(), used_cols.tolist(), weights[used_rows, used_cols].tolist()
+        ):
+            used[row].append((cols[k], w))
+        for row, (i, tr) in enumerate(zip(ids, before, strict=True)):
+            tracks[i] = tr.evolve(belief=beliefs[row], existence=float(existence[row]))
+            records[i].used.extend(used[row])
+            records[i].detected |= sum(p for _, p in used[row]) >= 0.5
         return [cols[k] for k in association.unassociated]
+
+    def _combine(
+        self,
+        tracks: Sequence[LiveTrack],
+        weights: np.ndarray,
+        posteriors: Mapping[tuple[int, int], Any],
+        chosen: Sequence[Measurement],
+        rng: np.random.Generator | None,
+    ) -> list[Any]:
+        """Each track's belief after its hypotheses (row ``weights[row]``): the posterior of
+        each measurement (the prediction when missed) combined (:mod:`.mixing`). Gaussian
+        tracks whose pairs were updated in one batch are combined in one array pass
+        (:func:`.mixing.combine_stacked`), the others one by one."""
+        if isinstance(posteriors, PairPosteriors):
+            outside = weights[:, :-1] > 0  # weight on a pair outside the gate: one by one
+            outside[posteriors.rows, posteriors.cols] = False
+            if not outside.any():
+                prior = stack_gaussians([tr.belief for tr in tracks])
+                mixed = combine_stacked(prior, posteriors, weights)
+                return [Gaussian(m, c) for m, c in zip(mixed.mean, mixed.cov, strict=True)]
+        out = []
+        for row, tr in enumerate(tracks):
+            ks = np.flatnonzero(weights[row]).tolist()  # measurements, then missed (the last)
+            beliefs = []
+            for k in ks:
+                post = None if k == len(chosen) else posteriors.get((row, k))
+                if post is None and k < len(chosen):  # the associator chose outside the gate
+                    post = self.filter.update(tr.belief, [chosen[k]], rng)
+                beliefs.append(tr.belief if post is None else post)
+            out.append(combine_hypotheses(beliefs, weights[row, ks].tolist()))
+        return out
 
     def _associate_gated(
         self, scores: ScanLikelihoods, rng: np.random.Generator | None
@@ -600,38 +639,6 @@ class MultiTargetTracker:
             rng,
             keep_posteriors=True,
             validated=True,  # step: _check_measurements and _screen did it
-        )
-
-    def _apply(
-        self,
-        track: LiveTrack,
-        row: int,
-        hyps: Sequence[SingleHypothesis],
-        scores: ScanLikelihoods,
-        posteriors: Mapping[tuple[int, int], Any],
-        chosen: Sequence[Measurement],
-        p_detect: float,
-        rng: np.random.Generator | None,
-    ) -> LiveTrack:
-        """The track (row ``row`` of the scores) after its hypotheses: the belief of each (the
-        prediction when missed) combined (:func:`.mixing.combine_hypotheses`), and its
-        existence updated with the likelihood ratios of their measurements (IPDA)."""
-        beliefs, log_ratios = [], []
-        for h in hyps:
-            k = h.measurement
-            if k is None:
-                beliefs.append(track.belief)
-                continue
-            post = posteriors.get((row, k))
-            if post is None:  # the associator chose a pair outside the gate
-                post = self.filter.update(track.belief, [chosen[k]], rng)
-            beliefs.append(post)
-            log_ratios.append(float(scores.log_likelihood[row, k] - scores.log_clutter[k]))
-        return track.evolve(
-            belief=combine_hypotheses(beliefs, [h.probability for h in hyps]),
-            existence=update_existence(
-                track.existence, p_detect * self.gate_probability, log_ratios
-            ),
         )
 
     @staticmethod
@@ -741,6 +748,14 @@ class MultiTargetTracker:
                     scans.append((float(t), []))
             scans.sort(key=lambda s: s[0])
         return scans
+
+
+def _likelihood_ratio_sums(scores: ScanLikelihoods, weights: np.ndarray) -> np.ndarray:
+    """``(T,)``: each track's ``sum_j l_j`` over the measurements its hypotheses used
+    (:mod:`.existence`; ``l_j = exp(log P_D p(z_j | track) - log kappa_j)``, 0 outside the gate)."""
+    rows, cols = np.nonzero(weights[:, :-1])
+    ratios = np.exp(scores.log_likelihood[rows, cols] - scores.log_clutter[cols])
+    return np.bincount(rows, weights=ratios, minlength=weights.shape[0])
 
 
 @dataclass
