@@ -209,13 +209,22 @@ def _mahalanobis_stacked(
     hph = h @ covs @ np.swapaxes(h, -1, -2)  # (T, m, m)
     r_sensor = np.broadcast_to(np.asarray(sensor.noise_cov(means), float), hph.shape)
     values = np.array([np.asarray(z.value, float) for z in measurements])  # (M, m)
-    s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
     y = np.asarray(sensor.residual(values[None, :, :], z_pred[:, None, :]), float)  # (T, M, m)
-    try:
-        s_inv_y = np.linalg.solve(s, y[..., None])[..., 0]
-    except np.linalg.LinAlgError:  # a singular S (no noise, no uncertainty): least squares
-        s_inv_y = (np.linalg.pinv(s, hermitian=True) @ y[..., None])[..., 0]
+    if all(z.covariance is None for z in measurements):  # one S per track: M right-hand sides
+        s_inv_y = _solve_gate(hph + r_sensor, np.swapaxes(y, -1, -2))  # (T, m, M)
+        return np.asarray(np.einsum("tim,tmi->tm", s_inv_y, y))
+    s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
+    s_inv_y = _solve_gate(s, y[..., None])[..., 0]  # (T, M, m)
     return np.asarray(np.einsum("tmi,tmi->tm", y, s_inv_y))
+
+
+def _solve_gate(s: Array, b: Array) -> Array:
+    """``S^-1 B`` (batched), by least squares when some ``S`` is singular (no noise, no
+    uncertainty)."""
+    try:
+        return np.asarray(np.linalg.solve(s, b))
+    except np.linalg.LinAlgError:
+        return np.asarray(np.linalg.pinv(s, hermitian=True) @ b)
 
 
 def _noise(z: Measurement, sensor_noise: Array) -> Array:
