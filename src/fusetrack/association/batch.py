@@ -35,10 +35,6 @@ def batchable(filt: Any, beliefs: Sequence[Any]) -> bool:
     )
 
 
-def _split(stacked: Gaussian) -> list[Gaussian]:
-    return [Gaussian(m, c) for m, c in zip(stacked.mean, stacked.cov)]
-
-
 def stack_gaussians(beliefs: Sequence[Gaussian]) -> Gaussian:
     """One batched Gaussian ``(K, d)`` / ``(K, d, d)`` of ``K`` (unbatched) ones."""
     # np.array of equal-shape arrays is np.stack's result, without its per-call checks
@@ -73,7 +69,7 @@ def predict_many(
 ) -> list[Any]:
     """``[filt.predict(b, dt, rng) for b in beliefs]``, batched when :func:`batchable`."""
     if len(beliefs) > 1 and batchable(filt, beliefs):
-        return _split(filt.predict(stack_gaussians(beliefs), dt, rng))
+        return filt.predict(stack_gaussians(beliefs), dt, rng).unstack()
     return [filt.predict(b, dt, rng) for b in beliefs]
 
 
@@ -96,7 +92,7 @@ def update_pairs(
             out.append((post, float(np.asarray(ll))))
         return out
     post, ll = update_stacked(filt, stack_gaussians(beliefs), measurements, rng)
-    return list(zip(_split(post), ll.tolist()))
+    return list(zip(post.unstack(), ll.tolist()))
 
 
 def update_stacked(

@@ -273,6 +273,10 @@ class MultiTargetTracker:
                 )
             )
         self.filter = filter
+        # each sensor's report length (validate_measurement's m): the fast path of the checks
+        self._value_sizes = {
+            sid: int(getattr(s, "value_size", s.dim)) for sid, s in self.sensors.items()
+        }
         self.associator = associator
         self.initiator = initiator
         self.deleter = deleter
@@ -318,9 +322,13 @@ class MultiTargetTracker:
     def _check_measurements(self, measurements: Iterable[Measurement]) -> None:
         """Unknown sensors (unless skipped), wrong sizes and non-vector values raise
         :class:`MeasurementError`."""
+        sizes = self._value_sizes
         for m in self._known(measurements):
+            value = m.value
+            if isinstance(value, np.ndarray) and value.shape == (sizes.get(m.sensor_id),):
+                continue  # a vector of its sensor's size: nothing below would raise
             validate_measurement(m, self.sensors)
-            if not isinstance(m.value, np.ndarray) or m.value.ndim != 1:
+            if not isinstance(value, np.ndarray) or value.ndim != 1:
                 raise MeasurementError(
                     invalid(
                         f"value.shape (sensor {m.sensor_id!r}, time={m.time})",
@@ -566,8 +574,7 @@ class MultiTargetTracker:
             outside[posteriors.rows, posteriors.cols] = False
             if not outside.any():
                 prior = stack_gaussians([tr.belief for tr in tracks])
-                mixed = combine_stacked(prior, posteriors, weights)
-                return [Gaussian(m, c) for m, c in zip(mixed.mean, mixed.cov, strict=True)]
+                return combine_stacked(prior, posteriors, weights).unstack()
         out = []
         for row, tr in enumerate(tracks):
             ks = np.flatnonzero(weights[row]).tolist()  # measurements, then missed (the last)
