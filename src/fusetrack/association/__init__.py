@@ -2,6 +2,7 @@
 track-oriented MHT, MCMCDA, likelihood peaks."""
 
 from .base import Association as Association
+from .base import AssociationWeights as AssociationWeights
 from .base import Associator as Associator
 from .base import ScanLikelihoods as ScanLikelihoods
 from .base import SingleHypothesis as SingleHypothesis
@@ -28,6 +29,7 @@ from .jpda import JointProbabilisticDataAssociation as JointProbabilisticDataAss
 from .marginals import belief_propagation_marginals as belief_propagation_marginals
 from .marginals import exact_marginals as exact_marginals
 from .marginals import joint_events as joint_events
+from .marginals import lone_track_marginals as lone_track_marginals
 from .mcmcda import MCMCDA as MCMCDA
 from .mcmcda import AssociationState as AssociationState
 from .mcmcda import HypothesisSampler as HypothesisSampler

@@ -85,7 +85,6 @@ from ..association import (
     Associator,
     PairPosteriors,
     ScanLikelihoods,
-    SingleHypothesis,
     TrackOrientedMHT,
     hypothesis_weights,
     predict_many,
@@ -163,6 +162,38 @@ def _check_association(associator: Any, association: Association, n: int) -> Non
                 f" (got indices {bad}, probabilities {probs})",
             )
         )
+
+
+def _checked_weights(associator: Any, answer: Any, shape: tuple[int, int]) -> np.ndarray:
+    """An associator's ``association_weights`` answer: ``(T, M + 1)`` finite weights >= 0 and
+    unassociated indices in ``[0, M)``, else :class:`ConfigError`."""
+    t, m = shape
+    weights = np.asarray(getattr(answer, "weights", None), dtype=float)
+    left = list(getattr(answer, "unassociated", ()))
+    if (
+        weights.shape != (t, m + 1)
+        or not np.isfinite(weights).all()
+        or (weights < 0).any()
+        or not all(0 <= k < m for k in left)
+    ):
+        raise ConfigError(
+            invalid(
+                "associator",
+                associator,
+                f"AssociationWeights with finite weights >= 0 of shape ({t}, {m + 1}) and"
+                f" unassociated indices in [0, {m})",
+            )
+        )
+    return weights
+
+
+def _normalised_rows(weights: np.ndarray) -> np.ndarray:
+    """Each row of ``weights`` ``(T, M + 1)`` divided by its sum; a row of zeros (no
+    hypothesis with positive weight) becomes missed with weight 1."""
+    total = weights.sum(axis=1, keepdims=True)
+    out = np.divide(weights, total, out=np.zeros_like(weights), where=total > 0)
+    out[total[:, 0] <= 0, -1] = 1.0
+    return out
 
 
 def _usable(m: Measurement) -> bool:
@@ -537,8 +568,7 @@ class MultiTargetTracker:
         chosen = [measurements[j] for j in cols]
         before = [tracks[i] for i in ids]
         scores, posteriors = self._score(ids, [tr.belief for tr in before], chosen, p_d, rng)
-        association = self._associate_gated(scores, rng)
-        weights = hypothesis_weights(association, scores.track_ids, len(chosen))
+        weights, left = self._associate_gated(scores, rng)
         beliefs = self._combine(before, weights, posteriors, chosen, rng)
         existence = update_existences(
             [tr.existence for tr in before],
@@ -555,7 +585,7 @@ class MultiTargetTracker:
             tracks[i] = tr.evolve(belief=beliefs[row], existence=float(existence[row]))
             records[i].used.extend(used[row])
             records[i].detected |= sum(p for _, p in used[row]) >= 0.5
-        return [cols[k] for k in association.unassociated]
+        return [cols[k] for k in left]
 
     def _combine(
         self,
@@ -589,40 +619,46 @@ class MultiTargetTracker:
 
     def _associate_gated(
         self, scores: ScanLikelihoods, rng: np.random.Generator | None
-    ) -> Association:
-        """The associator on the gated block only: the tracks with a measurement in their gate
-        against the measurements in some gate. The others drop out of every joint event's
-        score as constant factors (a track without a gated measurement is missed, a measurement
-        in no gate is clutter; Bar-Shalom, Daum & Huang 2009's validation matrix), so the
-        answer is the same, and a scan of thousands of false alarms far from the tracks costs
-        the associator nothing."""
+    ) -> tuple[np.ndarray, list[int]]:
+        """``(weights (T, M + 1), unassociated columns)``: each track's normalised hypothesis
+        weights (last column: missed) from the associator on the gated block only: the tracks
+        with a measurement in their gate against the measurements in some gate. The others
+        drop out of every joint event's score as constant factors (a track without a gated
+        measurement is missed, a measurement in no gate is clutter; Bar-Shalom, Daum & Huang
+        2009's validation matrix), so the answer is the same, and a scan of thousands of false
+        alarms far from the tracks costs the associator nothing. An associator with
+        ``association_weights`` answers with the matrix, any other with an
+        :class:`~fusetrack.association.Association` (:func:`hypothesis_weights`)."""
+        t, m = scores.shape
         gated = np.isfinite(scores.log_likelihood)
         rows = np.flatnonzero(gated.any(axis=1))
         cols = np.flatnonzero(gated.any(axis=0))
-        m = scores.shape[1]
+        weights = np.zeros((t, m + 1))
+        weights[:, m] = 1.0
         if not rows.size:
-            return Association({}, tuple(range(m)))
+            return weights, list(range(m))
         block = ScanLikelihoods(
             tuple(scores.track_ids[r] for r in rows),
             scores.log_likelihood[np.ix_(rows, cols)],
             scores.log_missed[rows],
             scores.log_clutter[cols],
         )
-        inner = self.associator.associate(block, rng)
-        _check_association(self.associator, inner, cols.size)
-        col = cols.tolist()
-        hypotheses = {
-            i: tuple(
-                h
-                if h.measurement is None
-                else SingleHypothesis(h.track_id, col[h.measurement], h.probability)
-                for h in hs
+        as_matrix = getattr(self.associator, "association_weights", None)
+        if callable(as_matrix):
+            answer = as_matrix(block, rng)
+            inner, left = (
+                _checked_weights(self.associator, answer, block.shape),
+                answer.unassociated,
             )
-            for i, hs in inner.hypotheses.items()
-        }
+        else:
+            association = self.associator.associate(block, rng)
+            _check_association(self.associator, association, cols.size)
+            inner = hypothesis_weights(association, block.track_ids, cols.size)
+            left = association.unassociated
+        weights[np.ix_(rows, np.append(cols, m))] = _normalised_rows(inner)
+        col = cols.tolist()
         in_no_gate = set(range(m)) - set(col)
-        left = sorted(in_no_gate | {col[k] for k in inner.unassociated})
-        return Association(hypotheses, tuple(left), inner.info)
+        return weights, sorted(in_no_gate | {col[k] for k in left})
 
     def _score(
         self,
