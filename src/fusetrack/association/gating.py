@@ -343,9 +343,11 @@ def scan_likelihoods(
         for z in measurements:
             _vector(z)
         usable = [bool(validate_measurement(z, sensor_map).usable) for z in measurements]
-    log_clutter = np.array(
-        [math.log(_clutter_of(clutter_density, z.sensor_id)) for z in measurements]
-    )
+    log_kappa = {  # one density per sensor
+        sid: math.log(_clutter_of(clutter_density, sid))
+        for sid in dict.fromkeys(z.sensor_id for z in measurements)
+    }
+    log_clutter = np.array([log_kappa[z.sensor_id] for z in measurements], dtype=float)
     ll = np.full((n, len(measurements)), -np.inf)
     log_pd = np.array([math.log(p) for p in pd.tolist()])  # math.log: the scalar path's digits
     stack = _stacked_prior(filt, beliefs)

@@ -539,14 +539,16 @@ class MultiTargetTracker:
         else:
             started = [(self.initiator.birth(m), j) for j, m in enumerate(leftover)]
         out = []
+        initialize = getattr(self.filter, "initialize", None)
         for belief, j in started:
             if belief is None:
                 continue
-            initialize = getattr(self.filter, "initialize", None)
             if isinstance(belief, Gaussian) and callable(initialize):
                 belief = initialize(belief, rng)
-            track = LiveTrack(births.next_id, belief, time, time, time)
-            out.append((track.evolve(existence=self.birth_existence), j))
+            track = LiveTrack(
+                births.next_id, belief, time, time, time, existence=self.birth_existence
+            )
+            out.append((track, j))
             births.next_id += 1
         return out
 
