@@ -53,6 +53,20 @@ class PairPosteriors(Mapping[tuple[int, int], Gaussian]):
             (r, c): p for p, (r, c) in enumerate(zip(rows.tolist(), cols.tolist(), strict=True))
         }
 
+    def restrict(
+        self, rows: Sequence[int], cols: Sequence[int], shape: tuple[int, int]
+    ) -> PairPosteriors:
+        """The pairs of the sub-block ``rows`` x ``cols`` (of a ``shape`` scan), renumbered
+        as rows and columns of the block (both in increasing order: the pairs keep theirs)."""
+        row_of = np.full(shape[0], -1, dtype=np.intp)
+        row_of[np.asarray(rows, dtype=np.intp)] = np.arange(len(rows))
+        col_of = np.full(shape[1], -1, dtype=np.intp)
+        col_of[np.asarray(cols, dtype=np.intp)] = np.arange(len(cols))
+        new_rows, new_cols = row_of[self.rows], col_of[self.cols]
+        keep = (new_rows >= 0) & (new_cols >= 0)
+        kept = Gaussian(self.stacked.mean[keep], self.stacked.cov[keep])
+        return PairPosteriors(new_rows[keep], new_cols[keep], kept)
+
     def __getitem__(self, pair: tuple[int, int]) -> Gaussian:
         p = self._index[pair]
         return Gaussian(self.stacked.mean[p], self.stacked.cov[p])

@@ -210,21 +210,33 @@ def _mahalanobis_stacked(
     r_sensor = np.broadcast_to(np.asarray(sensor.noise_cov(means), float), hph.shape)
     values = np.array([np.asarray(z.value, float) for z in measurements])  # (M, m)
     y = np.asarray(sensor.residual(values[None, :, :], z_pred[:, None, :]), float)  # (T, M, m)
-    if all(z.covariance is None for z in measurements):  # one S per track: M right-hand sides
-        s_inv_y = _solve_gate(hph + r_sensor, np.swapaxes(y, -1, -2))  # (T, m, M)
-        return np.asarray(np.einsum("tim,tmi->tm", s_inv_y, y))
+    if all(z.covariance is None for z in measurements):  # one S per track
+        return _quadratic_forms((hph + r_sensor)[:, None], y)
     s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
-    s_inv_y = _solve_gate(s, y[..., None])[..., 0]  # (T, M, m)
-    return np.asarray(np.einsum("tmi,tmi->tm", y, s_inv_y))
+    return _quadratic_forms(s, y)
 
 
-def _solve_gate(s: Array, b: Array) -> Array:
-    """``S^-1 B`` (batched), by least squares when some ``S`` is singular (no noise, no
+def _quadratic_forms(s: Array, y: Array) -> Array:
+    """``y^T S^-1 y`` for ``S`` ``(T, 1 or M, m, m)`` and ``y`` ``(T, M, m)``: closed form
+    for ``m <= 2`` (the 2x2 inverse ``[[d, -b], [-c, a]] / det``), else through ``S^-1``; by
+    least squares (the pseudo-inverse) when some ``S`` is singular (no noise, no
     uncertainty)."""
+    m = y.shape[-1]
+    if m == 1:
+        det = s[..., 0, 0]
+        if np.all(np.isfinite(det) & (det != 0.0)):
+            return np.asarray(y[..., 0] ** 2 / det)
+    elif m == 2:
+        a, b, c, d = s[..., 0, 0], s[..., 0, 1], s[..., 1, 0], s[..., 1, 1]
+        det = a * d - b * c
+        if np.all(np.isfinite(det) & (det != 0.0)):
+            y0, y1 = y[..., 0], y[..., 1]
+            return np.asarray((d * y0 * y0 - (b + c) * y0 * y1 + a * y1 * y1) / det)
     try:
-        return np.asarray(np.linalg.solve(s, b))
+        s_inv = np.linalg.inv(s)
     except np.linalg.LinAlgError:
-        return np.asarray(np.linalg.pinv(s, hermitian=True) @ b)
+        s_inv = np.linalg.pinv(s, hermitian=True)
+    return np.asarray(np.einsum("tmi,tmij,tmj->tm", y, np.broadcast_to(s_inv, (*y.shape, m)), y))
 
 
 def _noise(z: Measurement, sensor_noise: Array) -> Array:

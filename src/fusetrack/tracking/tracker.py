@@ -86,6 +86,7 @@ from ..association import (
     PairPosteriors,
     ScanLikelihoods,
     TrackOrientedMHT,
+    batchable,
     hypothesis_weights,
     predict_many,
     scan_likelihoods,
@@ -456,9 +457,10 @@ class MultiTargetTracker:
         births = _Births(state.next_id, state.initiator_state)
         for sid in order:
             cols = [j for j in usable if measurements[j].sensor_id == sid]
+            shared = self._score_once(tracks, measurements, cols, sid, rng)
             for confirmed in (True, False):
                 ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
-                cols = self._associate(tracks, records, ids, measurements, cols, sid, rng)
+                cols = self._associate(tracks, records, ids, measurements, cols, sid, rng, shared)
             for tr, j in self._births(births, t, sid, [measurements[j] for j in cols], rng):
                 tracks[tr.id] = tr
                 records[tr.id] = _ScanRecord(True, [] if j is None else [(cols[j], 1.0)])
@@ -561,15 +563,20 @@ class MultiTargetTracker:
         cols: list[int],
         sensor_id: str,
         rng: np.random.Generator | None,
+        shared: _SharedScores | None = None,
     ) -> list[int]:
         """Associate the tracks ``ids`` with the measurements ``cols`` (all of ``sensor_id``),
-        update them in ``tracks`` and ``records``; return the columns left unassociated."""
+        update them in ``tracks`` and ``records``; return the columns left unassociated. Their
+        scores come from ``shared`` when given (:meth:`_score_once`), else are computed here."""
         if not ids:
             return cols
         p_d = self.p_detect[sensor_id]
         chosen = [measurements[j] for j in cols]
         before = [tracks[i] for i in ids]
-        scores, posteriors = self._score(ids, [tr.belief for tr in before], chosen, p_d, rng)
+        if shared is None:
+            scores, posteriors = self._score(ids, [tr.belief for tr in before], chosen, p_d, rng)
+        else:
+            scores, posteriors = shared.restrict(ids, cols)
         weights, left = self._associate_gated(scores, rng)
         beliefs = self._combine(before, weights, posteriors, chosen, rng)
         existence = update_existences(
@@ -588,6 +595,28 @@ class MultiTargetTracker:
             records[i].used.extend(used[row])
             records[i].detected |= sum(p for _, p in used[row]) >= 0.5
         return [cols[k] for k in left]
+
+    def _score_once(
+        self,
+        tracks: Mapping[int, LiveTrack],
+        measurements: Sequence[Measurement],
+        cols: list[int],
+        sensor_id: str,
+        rng: np.random.Generator | None,
+    ) -> _SharedScores | None:
+        """All the tracks scored against all of one sensor's measurements ``cols`` in one
+        batch, for the confirmed and then the tentative tracks' association to take their
+        blocks from (a pair's score and posterior do not depend on the other pairs). Only for
+        a batched Gaussian filter (:func:`~fusetrack.association.batchable`, deterministic);
+        None for any other, whose pairs are scored pass by pass (a random filter draws only
+        for the pairs it is given)."""
+        beliefs = [tr.belief for tr in tracks.values()]
+        if not beliefs or not cols or not batchable(self.filter, beliefs):
+            return None
+        chosen = [measurements[j] for j in cols]
+        ids = list(tracks)
+        scores, posteriors = self._score(ids, beliefs, chosen, self.p_detect[sensor_id], rng)
+        return _SharedScores(ids, cols, scores, posteriors)
 
     def _combine(
         self,
@@ -801,6 +830,36 @@ def _likelihood_ratio_sums(scores: ScanLikelihoods, weights: np.ndarray) -> np.n
     rows, cols = np.nonzero(weights[:, :-1])
     ratios = np.exp(scores.log_likelihood[rows, cols] - scores.log_clutter[cols])
     return np.bincount(rows, weights=ratios, minlength=weights.shape[0])
+
+
+@dataclass
+class _SharedScores:
+    """One sensor's scores of all the tracks ``ids`` against its measurements ``cols``
+    (:meth:`MultiTargetTracker._score_once`)."""
+
+    ids: list[int]
+    cols: list[int]
+    scores: ScanLikelihoods
+    posteriors: Mapping[tuple[int, int], Any]
+
+    def restrict(
+        self, ids: Sequence[int], cols: Sequence[int]
+    ) -> tuple[ScanLikelihoods, Mapping[tuple[int, int], Any]]:
+        """The scores and posteriors of the tracks ``ids`` against the measurements ``cols``
+        (both in the order of ``self.ids`` and ``self.cols``)."""
+        row_of = {i: r for r, i in enumerate(self.ids)}
+        col_of = {j: c for c, j in enumerate(self.cols)}
+        rows = [row_of[i] for i in ids]
+        ks = [col_of[j] for j in cols]
+        s = self.scores
+        scores = ScanLikelihoods(
+            tuple(s.track_ids[r] for r in rows),
+            s.log_likelihood[np.ix_(rows, ks)],
+            s.log_missed[rows],
+            s.log_clutter[ks],
+        )
+        assert isinstance(self.posteriors, PairPosteriors)  # _score_once: a batched filter
+        return scores, self.posteriors.restrict(rows, ks, s.shape)
 
 
 @dataclass
