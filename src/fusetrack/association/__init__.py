@@ -11,6 +11,7 @@ from .base import hypothesis_weights as hypothesis_weights
 from .batch import PairPosteriors as PairPosteriors
 from .batch import batchable as batchable
 from .batch import predict_many as predict_many
+from .batch import predict_stacked as predict_stacked
 from .batch import stack_gaussians as stack_gaussians
 from .batch import update_pairs as update_pairs
 from .clusters import gate_clusters as gate_clusters

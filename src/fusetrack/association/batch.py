@@ -82,9 +82,20 @@ def predict_many(
     filt: Any, beliefs: Sequence[Any], dt: float, rng: np.random.Generator | None
 ) -> list[Any]:
     """``[filt.predict(b, dt, rng) for b in beliefs]``, batched when :func:`batchable`."""
-    if len(beliefs) > 1 and batchable(filt, beliefs):
-        return filt.predict(stack_gaussians(beliefs), dt, rng).unstack()
+    stacked = predict_stacked(filt, beliefs, dt, rng)
+    if stacked is not None:
+        return stacked.unstack()
     return [filt.predict(b, dt, rng) for b in beliefs]
+
+
+def predict_stacked(
+    filt: Any, beliefs: Sequence[Any], dt: float, rng: np.random.Generator | None
+) -> Gaussian | None:
+    """The predictions of two or more :func:`batchable` beliefs as one batched Gaussian
+    ``(K, d)`` (one filter call), else None."""
+    if len(beliefs) > 1 and batchable(filt, beliefs):
+        return filt.predict(stack_gaussians(beliefs), dt, rng)  # type: ignore[no-any-return]
+    return None
 
 
 def update_pairs(

@@ -271,7 +271,7 @@ def _pair_scores(
 @overload
 def scan_likelihoods(
     track_ids: Sequence[int],
-    beliefs: Sequence[Belief],
+    beliefs: Sequence[Belief] | Gaussian,
     measurements: Sequence[Measurement],
     sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
     filt: Filter[Any],
@@ -288,7 +288,7 @@ def scan_likelihoods(
 @overload
 def scan_likelihoods(
     track_ids: Sequence[int],
-    beliefs: Sequence[Belief],
+    beliefs: Sequence[Belief] | Gaussian,
     measurements: Sequence[Measurement],
     sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
     filt: Filter[Any],
@@ -304,7 +304,7 @@ def scan_likelihoods(
 
 def scan_likelihoods(
     track_ids: Sequence[int],
-    beliefs: Sequence[Belief],
+    beliefs: Sequence[Belief] | Gaussian,
     measurements: Sequence[Measurement],
     sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
     filt: Filter[Any],
@@ -318,7 +318,8 @@ def scan_likelihoods(
 ) -> ScanLikelihoods | tuple[ScanLikelihoods, Mapping[tuple[int, int], Any]]:
     """The :class:`ScanLikelihoods` of one scan (and, with ``keep_posteriors``, the updates).
 
-    ``beliefs[i]`` is track ``track_ids[i]``'s predicted belief at the scan time. For every
+    ``beliefs[i]`` is track ``track_ids[i]``'s predicted belief at the scan time (``beliefs``
+    may also be one batched Gaussian ``(T, d)``, a row per track: stacked already). For every
     measurement ``j`` inside track ``i``'s ``gate_probability`` gate, ``log_likelihood[i, j] =
     log P_D,i + log p(z_j | track i)``: the increment of ``filt.update_with_likelihood(belief,
     [z_j], rng)`` when the filter is a :class:`~fusetrack.core.LikelihoodFilter`, else the
@@ -344,8 +345,15 @@ def scan_likelihoods(
     from ..filters import as_sensor_map, validate_measurement  # here: importing filters is slow
 
     n = len(track_ids)
-    if len(beliefs) != n:
-        raise ShapeError(invalid("len(beliefs)", len(beliefs), f"{n}, one per track id"))
+    if isinstance(beliefs, Gaussian) and beliefs.mean.ndim == 2:  # one batch, a row per track
+        stack: Gaussian | None = beliefs
+        beliefs = beliefs.unstack() if not batchable(filt, ()) else ()
+        count = stack.mean.shape[0]
+    else:
+        stack = None
+        count = len(beliefs)
+    if count != n:
+        raise ShapeError(invalid("len(beliefs)", count, f"{n}, one per track id"))
     pg = check_gate_probability(gate_probability)
     pd = _per_track("p_detect", p_detect, n)
     sensor_map = as_sensor_map(sensors)
@@ -362,7 +370,7 @@ def scan_likelihoods(
     log_clutter = np.array([log_kappa[z.sensor_id] for z in measurements], dtype=float)
     ll = np.full((n, len(measurements)), -np.inf)
     log_pd = np.array([math.log(p) for p in pd.tolist()])  # math.log: the scalar path's digits
-    stack = _stacked_prior(filt, beliefs)
+    stack = _stacked_prior(filt, beliefs) if stack is None or len(beliefs) else stack
     posteriors: dict[tuple[int, int], Any] = {}
     stacked_parts: list[tuple[Any, Any, Gaussian]] = []
     by_sensor: dict[str, list[int]] = {}

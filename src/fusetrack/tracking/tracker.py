@@ -88,7 +88,7 @@ from ..association import (
     TrackOrientedMHT,
     batchable,
     hypothesis_weights,
-    predict_many,
+    predict_stacked,
     scan_likelihoods,
     stack_gaussians,
 )
@@ -452,12 +452,14 @@ class MultiTargetTracker:
         """
         t = self._check_scan(state, time, measurements, rng, scanned)
         usable, order, stats = self._screen(state.stats, measurements, scanned)
-        tracks = {tr.id: tr for tr in self._predict(state.tracks, t, rng)}
+        predicted, stacked = self._predict(state.tracks, t, rng)
+        tracks = {tr.id: tr for tr in predicted}
         records = {i: _ScanRecord() for i in tracks}
         births = _Births(state.next_id, state.initiator_state)
         for sid in order:
             cols = [j for j in usable if measurements[j].sensor_id == sid]
-            shared = self._score_once(tracks, measurements, cols, sid, rng)
+            shared = self._score_once(tracks, measurements, cols, sid, rng, stacked)
+            stacked = None  # the tracks change below: the next sensor stacks them anew
             for confirmed in (True, False):
                 ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
                 cols = self._associate(tracks, records, ids, measurements, cols, sid, rng, shared)
@@ -502,23 +504,32 @@ class MultiTargetTracker:
 
     def _predict(
         self, tracks: Sequence[LiveTrack], time: float, rng: np.random.Generator | None
-    ) -> list[LiveTrack]:
+    ) -> tuple[list[LiveTrack], Gaussian | None]:
         """The tracks predicted to ``time`` (those of one time in one batched call,
-        :func:`~fusetrack.association.predict_many`), their existence with ``P_S``."""
+        :func:`~fusetrack.association.predict_stacked`), their existence with ``P_S``; and
+        the predictions as one batched Gaussian when one call predicted them all (else None)."""
         out = list(tracks)
         due: dict[float, list[int]] = {}
         for k, tr in enumerate(tracks):
             if time - tr.time > TIME_TOLERANCE:
                 due.setdefault(tr.time, []).append(k)
+        stacked = None
         for t0, ks in due.items():
-            beliefs = predict_many(self.filter, [tracks[k].belief for k in ks], time - t0, rng)
-            for k, belief in zip(ks, beliefs):
+            before = [tracks[k].belief for k in ks]
+            stacked = predict_stacked(self.filter, before, time - t0, rng)
+            beliefs = (
+                stacked.unstack()
+                if stacked is not None
+                else [self.filter.predict(b, time - t0, rng) for b in before]
+            )
+            for k, belief in zip(ks, beliefs, strict=True):
                 out[k] = tracks[k].evolve(
                     belief=belief,
                     time=time,
                     existence=predict_existence(tracks[k].existence, self.survival_probability),
                 )
-        return out
+        all_in_one = len(due) == 1 and len(next(iter(due.values()))) == len(tracks)
+        return out, stacked if all_in_one else None
 
     def _births(
         self,
@@ -573,12 +584,13 @@ class MultiTargetTracker:
         p_d = self.p_detect[sensor_id]
         chosen = [measurements[j] for j in cols]
         before = [tracks[i] for i in ids]
+        prior = None
         if shared is None:
             scores, posteriors = self._score(ids, [tr.belief for tr in before], chosen, p_d, rng)
         else:
-            scores, posteriors = shared.restrict(ids, cols)
+            prior, scores, posteriors = shared.restrict(ids, cols)
         weights, left = self._associate_gated(scores, rng)
-        beliefs = self._combine(before, weights, posteriors, chosen, rng)
+        beliefs = self._combine(before, weights, posteriors, chosen, rng, prior)
         existence = update_existences(
             [tr.existence for tr in before],
             p_d * self.gate_probability,
@@ -603,20 +615,25 @@ class MultiTargetTracker:
         cols: list[int],
         sensor_id: str,
         rng: np.random.Generator | None,
+        stacked: Gaussian | None = None,
     ) -> _SharedScores | None:
         """All the tracks scored against all of one sensor's measurements ``cols`` in one
         batch, for the confirmed and then the tentative tracks' association to take their
         blocks from (a pair's score and posterior do not depend on the other pairs). Only for
         a batched Gaussian filter (:func:`~fusetrack.association.batchable`, deterministic);
         None for any other, whose pairs are scored pass by pass (a random filter draws only
-        for the pairs it is given)."""
-        beliefs = [tr.belief for tr in tracks.values()]
-        if not beliefs or not cols or not batchable(self.filter, beliefs):
+        for the pairs it is given). ``stacked``: the tracks' beliefs as one batch, if at hand."""
+        if not tracks or not cols:
             return None
+        if stacked is None:
+            beliefs = [tr.belief for tr in tracks.values()]
+            if not batchable(self.filter, beliefs):
+                return None
+            stacked = stack_gaussians(beliefs)
         chosen = [measurements[j] for j in cols]
         ids = list(tracks)
-        scores, posteriors = self._score(ids, beliefs, chosen, self.p_detect[sensor_id], rng)
-        return _SharedScores(ids, cols, scores, posteriors)
+        scores, posteriors = self._score(ids, stacked, chosen, self.p_detect[sensor_id], rng)
+        return _SharedScores(ids, cols, stacked, scores, posteriors)
 
     def _combine(
         self,
@@ -625,16 +642,19 @@ class MultiTargetTracker:
         posteriors: Mapping[tuple[int, int], Any],
         chosen: Sequence[Measurement],
         rng: np.random.Generator | None,
+        prior: Gaussian | None = None,
     ) -> list[Any]:
         """Each track's belief after its hypotheses (row ``weights[row]``): the posterior of
         each measurement (the prediction when missed) combined (:mod:`.mixing`). Gaussian
         tracks whose pairs were updated in one batch are combined in one array pass
-        (:func:`.mixing.combine_stacked`), the others one by one."""
+        (:func:`.mixing.combine_stacked`; ``prior``: their beliefs stacked, if at hand), the
+        others one by one."""
         if isinstance(posteriors, PairPosteriors):
             outside = weights[:, :-1] > 0  # weight on a pair outside the gate: one by one
             outside[posteriors.rows, posteriors.cols] = False
             if not outside.any():
-                prior = stack_gaussians([tr.belief for tr in tracks])
+                if prior is None:
+                    prior = stack_gaussians([tr.belief for tr in tracks])
                 return combine_stacked(prior, posteriors, weights).unstack()
         out = []
         for row, tr in enumerate(tracks):
@@ -694,11 +714,11 @@ class MultiTargetTracker:
     def _score(
         self,
         ids: Sequence[int],
-        beliefs: Sequence[Any],
+        beliefs: Sequence[Any] | Gaussian,
         chosen: Sequence[Measurement],
         p_detect: float,
         rng: np.random.Generator | None,
-    ) -> tuple[ScanLikelihoods, dict[tuple[int, int], Any]]:
+    ) -> tuple[ScanLikelihoods, Mapping[tuple[int, int], Any]]:
         """:func:`~fusetrack.association.scan_likelihoods` of ``beliefs`` (rows ``ids``) against
         one sensor's measurements ``chosen``, with the gated pairs' posteriors."""
         return scan_likelihoods(
@@ -839,14 +859,15 @@ class _SharedScores:
 
     ids: list[int]
     cols: list[int]
+    prior: Gaussian  # the tracks' beliefs, a row per track
     scores: ScanLikelihoods
     posteriors: Mapping[tuple[int, int], Any]
 
     def restrict(
         self, ids: Sequence[int], cols: Sequence[int]
-    ) -> tuple[ScanLikelihoods, Mapping[tuple[int, int], Any]]:
-        """The scores and posteriors of the tracks ``ids`` against the measurements ``cols``
-        (both in the order of ``self.ids`` and ``self.cols``)."""
+    ) -> tuple[Gaussian, ScanLikelihoods, Mapping[tuple[int, int], Any]]:
+        """The beliefs, scores and posteriors of the tracks ``ids`` against the measurements
+        ``cols`` (both in the order of ``self.ids`` and ``self.cols``)."""
         row_of = {i: r for r, i in enumerate(self.ids)}
         col_of = {j: c for c, j in enumerate(self.cols)}
         rows = [row_of[i] for i in ids]
@@ -859,7 +880,8 @@ class _SharedScores:
             s.log_clutter[ks],
         )
         assert isinstance(self.posteriors, PairPosteriors)  # _score_once: a batched filter
-        return scores, self.posteriors.restrict(rows, ks, s.shape)
+        prior = Gaussian(self.prior.mean[rows], self.prior.cov[rows])
+        return prior, scores, self.posteriors.restrict(rows, ks, s.shape)
 
 
 @dataclass
