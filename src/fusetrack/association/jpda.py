@@ -77,7 +77,11 @@ class JointProbabilisticDataAssociation:
         lone = _lone_tracks(gated, self.max_exact_events)
         beta[lone] = lone_track_marginals(weights[lone])
         shared = np.flatnonzero(~lone)
-        clusters = [(shared[rows], cols) for rows, cols in gate_clusters(gated[shared])]
+        clusters = (
+            [(shared[rows], cols) for rows, cols in gate_clusters(gated[shared])]
+            if shared.size
+            else []
+        )
         approximated = 0
         for tracks, measurements in clusters:
             block: tuple[Any, ...]

@@ -197,6 +197,16 @@ def _normalised_rows(weights: np.ndarray) -> np.ndarray:
     return out
 
 
+def _all_finite(measurements: Sequence[Measurement]) -> bool:
+    """True when every measurement (vector values, checked) has finite values and none has
+    its own covariance (one array test for the common scan; else :func:`_usable` each)."""
+    if any(m.covariance is not None for m in measurements):
+        return False
+    return not measurements or bool(
+        np.isfinite(np.concatenate([m.value for m in measurements])).all()
+    )
+
+
 def _usable(m: Measurement) -> bool:
     """False when the value or its own covariance has a NaN or infinite entry."""
     cov, value = m.covariance, m.value
@@ -412,10 +422,13 @@ class MultiTargetTracker:
         the stats with this scan counted. A measurement with a NaN or infinite value or
         covariance is skipped and counted; its sensor counts as having looked only when it is in
         ``scanned`` or sent a usable measurement too (a corrupt report is no evidence of a miss)."""
-        unknown = sum(m.sensor_id not in self.sensors for m in measurements)
-        usable = [
-            j for j, m in enumerate(measurements) if m.sensor_id in self.sensors and _usable(m)
-        ]
+        known = [j for j, m in enumerate(measurements) if m.sensor_id in self.sensors]
+        unknown = len(measurements) - len(known)
+        usable = (
+            known
+            if _all_finite([measurements[j] for j in known])
+            else [j for j in known if _usable(measurements[j])]
+        )
         skipped = len(measurements) - unknown - len(usable)
         reporting = list(dict.fromkeys(measurements[j].sensor_id for j in usable))
         silent = {m.sensor_id for m in measurements} - set(reporting)
