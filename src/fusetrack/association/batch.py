@@ -49,9 +49,15 @@ class PairPosteriors(Mapping[tuple[int, int], Gaussian]):
 
     def __init__(self, rows: NDArray[np.intp], cols: NDArray[np.intp], stacked: Gaussian) -> None:
         self.rows, self.cols, self.stacked = rows, cols, stacked
-        self._index = {
-            (r, c): p for p, (r, c) in enumerate(zip(rows.tolist(), cols.tolist(), strict=True))
-        }
+        self._pairs: dict[tuple[int, int], int] | None = None  # built when first looked up
+
+    @property
+    def _index(self) -> dict[tuple[int, int], int]:
+        """``(row, col) -> p``."""
+        if self._pairs is None:
+            pairs = zip(self.rows.tolist(), self.cols.tolist(), strict=True)
+            self._pairs = {pair: p for p, pair in enumerate(pairs)}
+        return self._pairs
 
     def restrict(
         self, rows: Sequence[int], cols: Sequence[int], shape: tuple[int, int]

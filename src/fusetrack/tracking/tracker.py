@@ -751,8 +751,8 @@ class MultiTargetTracker:
     @staticmethod
     def _count(track: LiveTrack, record: _ScanRecord, time: float, newborn: bool) -> LiveTrack:
         """The track's hit and miss counts after the scan (a new track's birth is its first hit)."""
-        used = tuple(j for j, _ in record.used)
-        probabilities = tuple(p for _, p in record.used)
+        used = tuple([j for j, _ in record.used])
+        probabilities = tuple([p for _, p in record.used])
         if newborn:
             return track.evolve(measurements=used, probabilities=probabilities)
         if record.detected:
