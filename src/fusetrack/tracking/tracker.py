@@ -87,7 +87,9 @@ from ..association import (
     ScanLikelihoods,
     TrackOrientedMHT,
     batchable,
+    gate_threshold,
     hypothesis_weights,
+    mahalanobis_squared,
     predict_stacked,
     scan_likelihoods,
     stack_gaussians,
@@ -163,6 +165,19 @@ def _check_association(associator: Any, association: Association, n: int) -> Non
                 f" (got indices {bad}, probabilities {probs})",
             )
         )
+
+
+def _birth_only(value: Any, sensors: Collection[str]) -> frozenset[str]:
+    """``birth_only_sensors`` as a set of known sensor ids, else :class:`ConfigError`."""
+    if isinstance(value, str) or not isinstance(value, Iterable):
+        raise ConfigError(invalid("birth_only_sensors", value, "a collection of sensor ids"))
+    ids = list(value)
+    unknown = [s for s in ids if s not in sensors]
+    if unknown:
+        raise ConfigError(
+            invalid("birth_only_sensors", ids, f"ids of the sensors {sorted(sensors)}")
+        )
+    return frozenset(ids)
 
 
 def _checked_weights(associator: Any, answer: Any, shape: tuple[int, int]) -> np.ndarray:
@@ -265,6 +280,13 @@ class MultiTargetTracker:
         ``"raise"`` (default): a measurement of a sensor not in ``sensors`` raises
         :class:`~fusetrack.core.UnknownSensorError` before any work; ``"skip"``: it is left out
         and counted in ``state.stats.skipped_unknown_sensor`` (a live feed with other sensors).
+    birth_only_sensors:
+        ids of sensors whose measurements only start tracks: a measurement inside the gate of
+        a live track (confirmed or tentative, as predicted or updated by the sensors before it
+        in the scan) starts nothing, one outside every gate goes to the initiator, and no track
+        is updated, counted as hit or missed, or has its existence changed by such a sensor
+        (e.g. triangulated points that start trackers of bearings). Their ``p_detect`` and
+        ``clutter_density`` are not needed.
     """
 
     def __new__(cls, *args: Any, **kw: Any) -> MultiTargetTracker:
@@ -291,6 +313,7 @@ class MultiTargetTracker:
         *,
         survival_probability: float = 0.99,
         unknown_sensors: Literal["raise", "skip"] = "raise",
+        birth_only_sensors: Collection[str] = (),
     ) -> None:
         _require(
             filter, "filter", ("predict", "update", "update_with_likelihood"), "a LikelihoodFilter"
@@ -322,9 +345,11 @@ class MultiTargetTracker:
         self.associator = associator
         self.initiator = initiator
         self.deleter = deleter
-        self.p_detect = _per_sensor("p_detect", p_detect, self.sensors, 0.0, 1.0)
+        self.birth_only_sensors = _birth_only(birth_only_sensors, self.sensors)
+        associating = [s for s in self.sensors if s not in self.birth_only_sensors]
+        self.p_detect = _per_sensor("p_detect", p_detect, associating, 0.0, 1.0)
         self.clutter_density = _per_sensor(
-            "clutter_density", clutter_density, self.sensors, 0.0, math.inf
+            "clutter_density", clutter_density, associating, 0.0, math.inf
         )
         self.gate_probability = _in_range("gate_probability", gate_probability, 0.0, 1.0)
         self.survival_probability = _in_range(
@@ -471,16 +496,22 @@ class MultiTargetTracker:
         births = _Births(state.next_id, state.initiator_state)
         for sid in order:
             cols = [j for j in usable if measurements[j].sensor_id == sid]
-            shared = self._score_once(tracks, measurements, cols, sid, rng, stacked)
-            stacked = None  # the tracks change below: the next sensor stacks them anew
-            for confirmed in (True, False):
-                ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
-                cols = self._associate(tracks, records, ids, measurements, cols, sid, rng, shared)
+            if sid in self.birth_only_sensors:
+                cols = self._outside_gates(tracks.values(), measurements, cols, sid)
+            else:
+                shared = self._score_once(tracks, measurements, cols, sid, rng, stacked)
+                stacked = None  # the tracks change below: the next sensor stacks them anew
+                for confirmed in (True, False):
+                    ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
+                    cols = self._associate(
+                        tracks, records, ids, measurements, cols, sid, rng, shared
+                    )
             for tr, j in self._births(births, t, sid, [measurements[j] for j in cols], rng):
                 tracks[tr.id] = tr
                 records[tr.id] = _ScanRecord(True, [] if j is None else [(cols[j], 1.0)])
         stats = stats.add(births=births.next_id - state.next_id)
-        survivors, stats = self._settle(tracks, records, t, state.next_id, bool(order), stats)
+        looked = any(sid not in self.birth_only_sensors for sid in order)
+        survivors, stats = self._settle(tracks, records, t, state.next_id, looked, stats)
         return TrackerState(survivors, t, births.next_id, stats, births.initiator_state)
 
     def _settle(
@@ -620,6 +651,23 @@ class MultiTargetTracker:
             records[i].used.extend(used[row])
             records[i].detected |= sum(p for _, p in used[row]) >= 0.5
         return [cols[k] for k in left]
+
+    def _outside_gates(
+        self,
+        tracks: Iterable[LiveTrack],
+        measurements: Sequence[Measurement],
+        cols: list[int],
+        sensor_id: str,
+    ) -> list[int]:
+        """The measurements ``cols`` (of a birth-only sensor) outside every track's
+        ``gate_probability`` gate (:func:`~fusetrack.association.mahalanobis_squared`)."""
+        beliefs = [tr.belief for tr in tracks]
+        if not beliefs or not cols:
+            return cols
+        sensor = self.sensors[sensor_id]
+        d2 = mahalanobis_squared(sensor, beliefs, [measurements[j] for j in cols])
+        gated = (d2 <= gate_threshold(self.gate_probability, sensor.dim)).any(axis=0)
+        return [j for j, inside in zip(cols, gated.tolist(), strict=True) if not inside]
 
     def _score_once(
         self,
