@@ -640,16 +640,18 @@ class MultiTargetTracker:
             p_d * self.gate_probability,
             _likelihood_ratio_sums(scores, weights),
         )
+        for i, tr, belief, r in zip(ids, before, beliefs, existence.tolist(), strict=True):
+            tracks[i] = tr.evolve(belief=belief, existence=r)
         used_rows, used_cols = np.nonzero(weights[:, :-1])
-        used: list[list[tuple[int, float]]] = [[] for _ in ids]
+        used: dict[int, list[tuple[int, float]]] = {}
         for row, k, w in zip(
             used_rows.tolist(), used_cols.tolist(), weights[used_rows, used_cols].tolist()
         ):
-            used[row].append((cols[k], w))
-        for row, (i, tr) in enumerate(zip(ids, before, strict=True)):
-            tracks[i] = tr.evolve(belief=beliefs[row], existence=float(existence[row]))
-            records[i].used.extend(used[row])
-            records[i].detected |= sum(p for _, p in used[row]) >= 0.5
+            used.setdefault(row, []).append((cols[k], w))
+        for row, pairs in used.items():  # the tracks that took measurements
+            record = records[ids[row]]
+            record.used.extend(pairs)
+            record.detected |= sum(p for _, p in pairs) >= 0.5
         return [cols[k] for k in left]
 
     def _outside_gates(
