@@ -100,7 +100,7 @@ def predict_stacked(
     """The predictions of two or more :func:`batchable` beliefs as one batched Gaussian
     ``(K, d)`` (one filter call), else None."""
     if len(beliefs) > 1 and batchable(filt, beliefs):
-        return filt.predict(stack_gaussians(beliefs), dt, rng)  # type: ignore[no-any-return]
+        return filt.predict(stack_gaussians(beliefs), dt, rng)
     return None
 
 

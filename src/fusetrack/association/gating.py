@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any, Literal, overload
+from typing import Any, Literal, cast, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -345,13 +345,15 @@ def scan_likelihoods(
     from ..filters import as_sensor_map, validate_measurement  # here: importing filters is slow
 
     n = len(track_ids)
+    stack: Gaussian | None = None
+    each: Sequence[Belief]  # the beliefs one by one, for the per-track path
     if isinstance(beliefs, Gaussian) and beliefs.mean.ndim == 2:  # one batch, a row per track
-        stack: Gaussian | None = beliefs
-        beliefs = beliefs.unstack() if not batchable(filt, ()) else ()
-        count = stack.mean.shape[0]
+        count = int(beliefs.mean.shape[0])
+        stack = beliefs if batchable(filt, ()) else None
+        each = () if stack is not None else beliefs.unstack()
     else:
-        stack = None
-        count = len(beliefs)
+        each = cast(Sequence[Belief], beliefs)
+        count = len(each)
     if count != n:
         raise ShapeError(invalid("len(beliefs)", count, f"{n}, one per track id"))
     pg = check_gate_probability(gate_probability)
@@ -370,7 +372,8 @@ def scan_likelihoods(
     log_clutter = np.array([log_kappa[z.sensor_id] for z in measurements], dtype=float)
     ll = np.full((n, len(measurements)), -np.inf)
     log_pd = np.array([math.log(p) for p in pd.tolist()])  # math.log: the scalar path's digits
-    stack = _stacked_prior(filt, beliefs) if stack is None or len(beliefs) else stack
+    if stack is None:
+        stack = _stacked_prior(filt, each)
     posteriors: dict[tuple[int, int], Any] = {}
     stacked_parts: list[tuple[Any, Any, Gaussian]] = []
     by_sensor: dict[str, list[int]] = {}
@@ -381,7 +384,7 @@ def scan_likelihoods(
         sensor = sensor_map[sid]
         chosen = [measurements[j] for j in cols]
         if stack is None:
-            d2 = mahalanobis_squared(sensor, beliefs, chosen)
+            d2 = mahalanobis_squared(sensor, each, chosen)
         else:
             d2 = _mahalanobis_stacked(sensor, stack.mean, stack.cov, chosen)
         rows, ks = np.nonzero(d2 <= gate_threshold(pg, sensor.dim))
@@ -391,7 +394,7 @@ def scan_likelihoods(
         pairs = [chosen[k] for k in ks.tolist()]
         if stack is None:
             found = _pair_scores(
-                filt, beliefs, sensor, list(zip(rows.tolist(), pairs)), rng, keep_posteriors
+                filt, each, sensor, list(zip(rows.tolist(), pairs)), rng, keep_posteriors
             )
             pair_ll = np.array([f for f, _ in found], dtype=float)
             if keep_posteriors:
@@ -415,7 +418,7 @@ def _stacked_prior(filt: Filter[Any], beliefs: Sequence[Belief]) -> Gaussian | N
     (:func:`.batch.batchable`), else None (the per-track path)."""
     if not len(beliefs) or not callable(getattr(filt, "update_with_likelihood", None)):
         return None
-    return stack_gaussians(beliefs) if batchable(filt, beliefs) else None
+    return stack_gaussians(cast(Sequence[Gaussian], beliefs)) if batchable(filt, beliefs) else None
 
 
 def _stacked_pair_scores(

@@ -668,8 +668,8 @@ class MultiTargetTracker:
             return cols
         sensor = self.sensors[sensor_id]
         d2 = mahalanobis_squared(sensor, beliefs, [measurements[j] for j in cols])
-        gated = (d2 <= gate_threshold(self.gate_probability, sensor.dim)).any(axis=0)
-        return [j for j, inside in zip(cols, gated.tolist(), strict=True) if not inside]
+        inside = d2 <= gate_threshold(self.gate_probability, sensor.dim)
+        return [cols[k] for k in np.flatnonzero(~inside.any(axis=0)).tolist()]
 
     def _score_once(
         self,
