@@ -12,16 +12,21 @@ covariance update; the UKF of both uses Van der Merwe's scaled sigma points
 (``alpha = 1, beta = 2, kappa = 3 - d``).
 
 Equality: the first timed run of each library keeps every step's posterior; the benchmark reports
-the largest absolute difference of the means and covariances over all tracks and steps (must be
-below 1e-9).
+the largest absolute difference of the means and covariances over all tracks and steps, and
+``"agree": false`` (no speed-up) when either is above 1e-9 (``_results.agree_exact``).
 
-    python benchmarks/kalman_batch.py [--tracks 1000] [--steps 20] [--repeats 3]
-        [--filters ekf ukf] [--json]
+    python benchmarks/kalman_batch.py [--tracks 1000 [100 ...]] [--steps 20] [--repeats 3]
+        [--filters ekf ukf] [--threads T] [--json] [--save | --out PATH]
 
 Timing: ``time.perf_counter`` (and ``time.process_time``, reported beside it) around a whole run (``steps`` predict + update), divided by
 ``steps``; the median over ``--repeats`` runs, taken round-robin (FilterPy, fusetrack, FilterPy,
-...) so that a change of load hits both alike. BLAS is limited to one thread. Building the
-measurement objects happens before the clock starts for both.
+...) so that a change of load hits both alike. BLAS is limited to one thread (``--threads T``:
+BLAS/OpenMP and Numba get T threads, ``_results.py``). Building the
+measurement objects, the prior and FilterPy's filter objects (one per track, state set from the
+prior) happens before the clock starts, for every repeat.
+
+fusetrack's batch of 1000 EKF tracks takes :mod:`fusetrack.filters.kalman_kernels`' Numba
+Joseph-form update (batches of 16 beliefs or more); the UKF takes the NumPy path.
 """
 
 from __future__ import annotations
@@ -37,8 +42,8 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from threadpoolctl import threadpool_limits
 
+import _results
 from _scenario import cv_matrices, wrap
 
 Array = NDArray[np.float64]
@@ -105,8 +110,12 @@ class FusetrackBatch:
         self.prior = Gaussian(prob.x0, np.broadcast_to(prob.p0, (prob.tracks, 4, 4)).copy())
         self.meas = [Measurement((k + 1) * DT, "radar", prob.z[k]) for k in range(prob.steps)]
 
-    def run(self, steps: int, keep: bool) -> tuple[Array, Array] | None:
-        filt, b = self.filt, self.prior
+    def fresh(self) -> object:
+        """The prior (built outside the clock; beliefs are immutable, so nothing to copy)."""
+        return self.prior
+
+    def run(self, prior: object, steps: int, keep: bool) -> tuple[Array, Array] | None:
+        filt, b = self.filt, prior
         means = np.empty((steps, *b.mean.shape)) if keep else None
         covs = np.empty((steps, *b.cov.shape)) if keep else None
         for k in range(steps):
@@ -173,13 +182,17 @@ class FilterpyLoop:
 
         self.make = make
 
-    def run(self, steps: int, keep: bool) -> tuple[Array, Array] | None:
-        prob = self.prob
-        filters = []
-        for t in range(prob.tracks):  # fresh filters, states set from the prior
+    def fresh(self) -> object:
+        """One new filter per track, state set from the prior (built outside the clock)."""
+        prob, filters = self.prob, []
+        for t in range(prob.tracks):
             f = self.make()
             f.x, f.P = prob.x0[t].copy(), prob.p0.copy()  # type: ignore[attr-defined]
             filters.append(f)
+        return filters
+
+    def run(self, filters: object, steps: int, keep: bool) -> tuple[Array, Array] | None:
+        prob = self.prob
         means = np.empty((steps, prob.tracks, 4)) if keep else None
         covs = np.empty((steps, prob.tracks, 4, 4)) if keep else None
         ekf = self.kind == "ekf"
@@ -206,15 +219,16 @@ RUNNERS: dict[str, Callable[[Problem, str], object]] = {
 def measure(prob: Problem, kind: str, args: argparse.Namespace) -> dict[str, object]:
     runners = {lib: RUNNERS[lib](prob, kind) for lib in RUNNERS}
     for r in runners.values():  # warm-up (imports, caches)
-        r.run(min(2, args.steps), False)  # type: ignore[attr-defined]
+        r.run(r.fresh(), min(2, args.steps), False)  # type: ignore[attr-defined]
     times: dict[str, list[float]] = {lib: [] for lib in runners}
     cpu: dict[str, list[float]] = {lib: [] for lib in runners}
     kept: dict[str, tuple[Array, Array]] = {}
     for rep in range(args.repeats):
         for lib, runner in runners.items():
+            start = runner.fresh()  # type: ignore[attr-defined]
             gc.collect()
             t0, c0 = time.perf_counter(), time.process_time()
-            out = runner.run(args.steps, rep == 0)  # type: ignore[attr-defined]
+            out = runner.run(start, args.steps, rep == 0)  # type: ignore[attr-defined]
             times[lib].append((time.perf_counter() - t0) / args.steps)
             cpu[lib].append((time.process_time() - c0) / args.steps)
             if rep == 0:
@@ -224,6 +238,7 @@ def measure(prob: Problem, kind: str, args: argparse.Namespace) -> dict[str, obj
     diff_cov = float(np.max(np.abs(c_a - 0.5 * (c_b + np.swapaxes(c_b, -1, -2)))))
     sec = {lib: statistics.median(t) for lib, t in times.items()}
     csec = {lib: statistics.median(t) for lib, t in cpu.items()}
+    agree = _results.agree_exact(max(diff_mean, diff_cov))
     rmse = {
         lib: float(
             np.sqrt(
@@ -239,45 +254,62 @@ def measure(prob: Problem, kind: str, args: argparse.Namespace) -> dict[str, obj
         "rmse": rmse,
         "max_abs_diff": {"mean": diff_mean, "cov": diff_cov},
         "cpu_seconds_per_step": csec,
-        "speedup": sec["filterpy"] / sec["fusetrack"],
-        "cpu_speedup": csec["filterpy"] / csec["fusetrack"],
+        "agree": agree,  # equal to 1e-9, else no speed-up
+        "speedup": sec["filterpy"] / sec["fusetrack"] if agree else None,
+        "cpu_speedup": csec["filterpy"] / csec["fusetrack"] if agree else None,
         "load": os.getloadavg()[0],
     }
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--tracks", type=int, default=1000)
+    ap.add_argument("--tracks", type=int, nargs="+", default=[1000])
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--filters", nargs="+", default=["ekf", "ukf"], choices=["ekf", "ukf"])
     ap.add_argument("--json", action="store_true", help="one JSON object per filter")
+    _results.add_arguments(ap)
     args = ap.parse_args(argv)
-    if args.tracks < 1 or args.steps < 1 or args.repeats < 1:
+    if min(args.tracks) < 1 or args.steps < 1 or args.repeats < 1:
         ap.error("--tracks, --steps and --repeats must be >= 1")
-    prob = Problem(args.tracks, args.steps)
-    if not args.json:
-        print(
-            f"{args.tracks} tracks, 4-D CV, range-bearing radar, {args.steps} steps, median of "
-            f"{args.repeats} round-robin runs, BLAS 1 thread; load average "
-            f"{os.getloadavg()[0]:.2f}"
-        )
-    with threadpool_limits(1):
-        for kind in args.filters:
-            res = measure(prob, kind, args)
-            if args.json:
-                print(json.dumps(res), flush=True)
-                continue
-            sec = res["seconds_per_step"]
-            d = res["max_abs_diff"]
-            print(
-                f"\n{kind.upper()}: fusetrack {sec['fusetrack'] * 1e3:.2f} ms/step, "  # type: ignore[index]
-                f"FilterPy {sec['filterpy'] * 1e3:.1f} ms/step, "  # type: ignore[index]
-                f"speed-up {res['speedup']:.1f}x (cpu {res['cpu_speedup']:.1f}x); max |diff| mean {d['mean']:.2e}, "  # type: ignore[index]
-                f"cov {d['cov']:.2e}; RMSE {res['rmse']}; load {res['load']:.2f}",
-                flush=True,
-            )
+    if args.threads is not None and args.threads < 1:
+        ap.error("--threads must be >= 1")
+    run, rows = _results.Run(argv, __file__), []
+    with _results.limit_threads(args.threads) as threads:
+        run.threads = threads
+        for tracks in args.tracks:
+            prob = Problem(tracks, args.steps)
+            if not args.json:
+                print(
+                    f"{tracks} tracks, 4-D CV, range-bearing radar, {args.steps} steps, median "
+                    f"of {args.repeats} round-robin runs, threads {args.threads or 'BLAS 1'}; "
+                    f"load average {os.getloadavg()[0]:.2f}"
+                )
+            for kind in args.filters:
+                res = measure(prob, kind, args)
+                rows.append(res)
+                if args.json:
+                    print(json.dumps(res), flush=True)
+                    continue
+                _print(kind, res)
+    run.save(_results.out_path(args, __file__), rows)
     return 0
+
+
+def _print(kind: str, res: dict) -> None:
+    sec, csec, d = res["seconds_per_step"], res["cpu_seconds_per_step"], res["max_abs_diff"]
+    ratio = (
+        f"speed-up {res['speedup']:.1f}x (cpu {res['cpu_speedup']:.1f}x)"
+        if res["agree"]
+        else "DISAGREE (> 1e-9): no speed-up"
+    )
+    print(
+        f"\n{kind.upper()}: fusetrack {sec['fusetrack'] * 1e3:.2f} ms/step "
+        f"(cpu {csec['fusetrack'] * 1e3:.2f}), FilterPy {sec['filterpy'] * 1e3:.1f} ms/step "
+        f"(cpu {csec['filterpy'] * 1e3:.1f}), {ratio}; max |diff| mean {d['mean']:.2e}, "
+        f"cov {d['cov']:.2e}; RMSE {res['rmse']}; load {res['load']:.2f}",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

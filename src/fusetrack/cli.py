@@ -1,6 +1,7 @@
 """``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``
-and ``replay``; ``--version``, ``-v``/``-q`` (the ``logging`` level), ``run NAME --help`` (the
-experiment's own options)."""
+and ``replay``; ``--version``, ``-v``/``-q`` (the ``logging`` level; before or after any
+subcommand), ``run NAME --help`` (the experiment's own options). Progress goes to stderr (a bar
+on a terminal, plain lines elsewhere); colour only on a terminal and never with ``NO_COLOR``."""
 
 from __future__ import annotations
 
@@ -132,10 +133,15 @@ def build_parser() -> argparse.ArgumentParser:
     add_live_options(demo)
     add_service_parsers(sub)
     add_track_video_parser(sub)
+    for command in sub.choices.values():  # -v/-q after any subcommand, too
+        if "--verbose" not in command._option_string_actions:
+            _add_verbosity(command, argparse.SUPPRESS)
     return parser
 
 
 def _print_summary(summary: dict, out: Path) -> None:
+    from .evaluation import coloured
+
     claims = summary["claims"]
     held = sum(c["holds"] for c in claims)
     print(
@@ -144,9 +150,9 @@ def _print_summary(summary: dict, out: Path) -> None:
     )
     for c in claims:
         ours = f"{c['ours']:.4g}" if isinstance(c["ours"], float) else c["ours"]
-        print(
-            f"  [{'ok ' if c['holds'] else 'NO '}] {c['id']}: {c['statement']} — ours {ours}, paper {c['paper']}"
-        )
+        word, colour = ("ok ", "green") if c["holds"] else ("NO ", "red")
+        mark = coloured(word, colour, sys.stdout)
+        print(f"  [{mark}] {c['id']}: {c['statement']} — ours {ours}, paper {c['paper']}")
     print(f"report: {out / 'report.md'}")
 
 
@@ -199,7 +205,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _dispatch(args)
     except FusetrackError as err:
-        print(f"fusetrack: error: {err}", file=sys.stderr)
+        from .evaluation import coloured
+
+        print(f"fusetrack: {coloured('error', 'red', sys.stderr)}: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # Ctrl-C: a one-line note and the shell's 128 + SIGINT, no traceback
         print(f"fusetrack: interrupted ({args.command})", file=sys.stderr)

@@ -35,6 +35,8 @@ NOT_FILTERS = {
     "measurements) -> state around the MCMCDA associator",
     "fusetrack.tracking.phd_tracker.PHDTracker": "many targets: step(state, time, "
     "measurements) -> state around the GM-PHD Filter",
+    "fusetrack.tracking.pmb_tracker.PMBTracker": "many targets: step(state, time, "
+    "measurements) -> state around the PMB Filter",
     "fusetrack.tracking.single_target.SingleTargetTracker": "the tracker interface around one "
     "Filter (step(state, time, measurements) -> state)",
     "fusetrack.tracking.protocol.Tracker": "the tracker protocol",

@@ -32,6 +32,12 @@ best hypothesis (restricted to the window) and runs ``n_mc`` iterations; observa
 window are committed to their track, and track identities persist through the overlap. The
 tracker is pure: everything carried between steps is an :class:`AssociationState` value
 (``state = tracker.step(state, observations, rng)``).
+
+Observation noise: ``config.obs_std`` (isotropic, Oh et al.'s ``R = σ² I``) unless a step's
+observations come with their own ``(n, 2, 2)`` covariances (``step(..., covariances=)``), e.g.
+triangulated points with elongated error ellipses; then each observation's covariance is its
+``R`` in the track score, its position block of a new track's prior, and its gate radius
+(``2 sqrt(λ_max)`` instead of ``2 σ``).
 """
 
 from __future__ import annotations
@@ -111,12 +117,14 @@ class AssociationState:
     """Everything online MCMCDA carries from one step to the next.
 
     ``observations[k]`` holds the ``(n, 2)`` observations of step ``offset + k`` (steps before
-    ``offset`` were forgotten, :meth:`MCMCDA.forget_past`); ``best`` the MAP hypothesis of the
+    ``offset`` were forgotten, :meth:`MCMCDA.forget_past`); ``covariances[k]`` their
+    ``(n, 2, 2)`` covariances, or None (``obs_std``); ``best`` the MAP hypothesis of the
     window (tracks as tuples of ``(step, index)``); ``ids`` its track identities; ``committed``
     id -> {step: observation index} for observations that have left the window.
     """
 
     observations: tuple[NDArray[np.float64], ...] = ()
+    covariances: tuple[NDArray[np.float64] | None, ...] = ()
     offset: int = 0
     best: tuple[TrackKey, ...] = ()
     ids: Mapping[TrackKey, int] = field(default_factory=dict)
@@ -148,9 +156,17 @@ class HypothesisSampler:
         offset: int = 0,
         stats: MCMCDAStats | None = None,
         memo: _Memo | None = None,
+        covariances: Sequence[NDArray[np.float64] | None] | None = None,
     ) -> None:
         self.config = config
         self.observations = [np.asarray(o, float).reshape(-1, 2) for o in observations]
+        iso = config.obs_std**2 * np.eye(2)
+        covs = [None] * len(self.observations) if covariances is None else list(covariances)
+        self._covs = [
+            np.broadcast_to(iso, (len(o), 2, 2)) if c is None else np.asarray(c, float)
+            for o, c in zip(self.observations, covs)
+        ]
+        self._sds = [_largest_sd(c) for c in self._covs]
         self.offset = offset
         self.rng = rng
         self.stats = MCMCDAStats() if stats is None else stats
@@ -161,6 +177,12 @@ class HypothesisSampler:
     def _obs(self, o: Obs) -> NDArray[np.float64]:
         return self.observations[o[0] - self.offset][o[1]]
 
+    def _cov(self, o: Obs) -> NDArray[np.float64]:
+        return self._covs[o[0] - self.offset][o[1]]
+
+    def _sd(self, o: Obs) -> float:
+        return float(self._sds[o[0] - self.offset][o[1]])
+
     # ---- model -------------------------------------------------------------------------
     def gate(self, a: Obs, b: Obs) -> bool:
         """Can observation ``b`` follow ``a`` on one track (within ``max_gap`` steps and reach)."""
@@ -168,7 +190,7 @@ class HypothesisSampler:
         if gap < 1 or gap > self.config.max_gap:
             return False
         d = self._obs(b) - self._obs(a)
-        reach = self.config.max_speed * gap * self.config.dt + 2 * self.config.obs_std
+        reach = self.config.max_speed * gap * self.config.dt + 2 * max(self._sd(a), self._sd(b))
         return bool(d @ d <= reach * reach)
 
     def kalman(self, track: TrackKey) -> tuple[float, list[tuple[int, NDArray[np.float64]]]]:
@@ -182,10 +204,10 @@ class HypothesisSampler:
         """:meth:`kalman` with the filtered covariances too: ``(ll, [(t, x, P), ...])``."""
         c = self.config
         f1, q1 = _cv_matrices(c.dt, c.accel_std)
-        r = c.obs_std**2 * np.eye(2)
         y0 = self._obs(track[0])
         x = np.array([y0[0], y0[1], 0.0, 0.0])
-        p = np.diag([c.obs_std**2, c.obs_std**2, c.init_speed_std**2, c.init_speed_std**2])
+        p = np.diag([0.0, 0.0, c.init_speed_std**2, c.init_speed_std**2])
+        p[:2, :2] = self._cov(track[0])
         ll = 0.0
         states = [(track[0][0], x.copy(), p.copy())]
         for prev, cur in itertools.pairwise(track):
@@ -193,7 +215,7 @@ class HypothesisSampler:
                 x = f1 @ x
                 p = f1 @ p @ f1.T + q1
             y = self._obs(cur)
-            s = p[:2, :2] + r
+            s = p[:2, :2] + self._cov(cur)
             innov = y - x[:2]
             det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
             sinv = np.array([[s[1, 1], -s[0, 1]], [-s[1, 0], s[0, 0]]]) / det
@@ -455,20 +477,39 @@ class MCMCDA:
             offset=state.offset,
             stats=self.stats,
             memo=state.memo,
+            covariances=_padded(state.covariances, len(state.observations)),
         )
 
     # ---- online loop -------------------------------------------------------------------
     def step(
-        self, state: AssociationState, observations: ArrayLike, rng: np.random.Generator
+        self,
+        state: AssociationState,
+        observations: ArrayLike,
+        rng: np.random.Generator,
+        covariances: ArrayLike | None = None,
     ) -> AssociationState:
-        """Add one step's observations ``(n, 2)``; the new state holds the window's MAP hypothesis."""
+        """Add one step's observations ``(n, 2)`` (with their ``(n, 2, 2)`` covariances, or
+        None for ``config.obs_std``); the new state holds the window's MAP hypothesis. Rows
+        with a non-finite position or covariance are dropped."""
         y = np.asarray(observations, float).reshape(-1, 2)
-        y = y[np.all(np.isfinite(y), axis=1)]
+        cov = _checked_covariances(covariances, len(y))
+        keep = np.all(np.isfinite(y), axis=1)
+        if cov is not None:
+            keep &= np.all(np.isfinite(cov), axis=(1, 2))
+            cov = cov[keep]
+        y = y[keep]
         memo = state.memo if state.memo.steps == state.steps else _Memo()
         memo.steps = state.steps + 1
         new_obs = (*state.observations, y)
+        new_covs = (*_padded(state.covariances, len(state.observations)), cov)
         chain = HypothesisSampler(
-            self.config, new_obs, rng, offset=state.offset, stats=self.stats, memo=memo
+            self.config,
+            new_obs,
+            rng,
+            offset=state.offset,
+            stats=self.stats,
+            memo=memo,
+            covariances=new_covs,
         )
         t_hi = state.steps
         t_lo = max(0, t_hi - self.config.window + 1)
@@ -495,6 +536,7 @@ class MCMCDA:
         return replace(
             state,
             observations=new_obs,
+            covariances=new_covs,
             best=tuple(best),
             ids=ids,
             committed=committed,
@@ -536,6 +578,7 @@ class MCMCDA:
         return replace(
             state,
             observations=state.observations[drop:],
+            covariances=_padded(state.covariances, len(state.observations))[drop:],
             offset=state.offset + drop,
             committed={},
         )
@@ -567,6 +610,32 @@ class MCMCDA:
                     x = f1 @ x
             out[ident] = (np.array(times), np.array(pos))
         return out
+
+
+def _largest_sd(cov: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``sqrt`` of the largest eigenvalue of each ``(2, 2)`` covariance (closed form)."""
+    half_tr = 0.5 * (cov[:, 0, 0] + cov[:, 1, 1])
+    det = cov[:, 0, 0] * cov[:, 1, 1] - cov[:, 0, 1] * cov[:, 1, 0]
+    return np.asarray(np.sqrt(half_tr + np.sqrt(np.maximum(half_tr**2 - det, 0.0))), float)
+
+
+def _checked_covariances(covariances: ArrayLike | None, n: int) -> NDArray[np.float64] | None:
+    """A step's ``(n, 2, 2)`` covariances (None: ``obs_std``); a clear error for a bad shape."""
+    if covariances is None:
+        return None
+    cov = np.asarray(covariances, float)
+    if cov.shape != (n, 2, 2):
+        raise ConfigError(
+            invalid("covariances.shape", cov.shape, f"({n}, 2, 2): one per observation")
+        )
+    return cov
+
+
+def _padded(
+    covariances: tuple[NDArray[np.float64] | None, ...], n: int
+) -> tuple[NDArray[np.float64] | None, ...]:
+    """``covariances`` padded with None to ``n`` steps (states built before covariances)."""
+    return covariances + (None,) * (n - len(covariances))
 
 
 def _commit(

@@ -39,6 +39,7 @@ from .multi_target_metrics import (
 from .options import ExperimentOptions, describe_options, load_yaml, parse_options
 from .projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
 from .report import Claim, Outcome, RunContext, peak_memory_mb, write_outputs
+from .terminal import PlainProgress, colour_enabled, coloured, progress_bar
 
 __all__ = [
     "ENGINES",
@@ -48,12 +49,15 @@ __all__ = [
     "GospaResult",
     "GospaSeries",
     "Outcome",
+    "PlainProgress",
     "RunContext",
     "SiapResult",
     "average",
     "axis_bounds",
     "chi2_interval",
     "clear_mot",
+    "colour_enabled",
+    "coloured",
     "describe_options",
     "deterministic_crlb",
     "direct3d_crlb",
@@ -75,6 +79,7 @@ __all__ = [
     "position_rmse_bound",
     "posterior_crlb",
     "posterior_information",
+    "progress_bar",
     "rmse",
     "rmse_bound",
     "run_monte_carlo",

@@ -8,7 +8,6 @@ the rows are identical whatever the engine or the number of workers.
 from __future__ import annotations
 
 import os
-import sys
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -17,9 +16,9 @@ from typing import Any, Literal
 import numpy as np
 import pandas as pd
 from threadpoolctl import threadpool_limits
-from tqdm.auto import tqdm
 
 from ..core import ConfigError, invalid
+from .terminal import progress_bar
 
 RunFunction = Callable[[Mapping[str, Any], int], list[dict[str, Any]]]
 Engine = Literal["local", "dask"]
@@ -74,11 +73,6 @@ def _jobs(
     return [
         _Job(fn, c, cfg, r, run_seed(seed, r)) for c, cfg in enumerate(configs) for r in range(runs)
     ]
-
-
-def _progress(total: int, desc: str, show: bool | None) -> Any:
-    disable = (not sys.stderr.isatty()) if show is None else not show
-    return tqdm(total=total, desc=desc, unit="run", disable=disable, leave=False)
 
 
 def _local(jobs: list[_Job], workers: int, bar: Any) -> Iterator[list[dict[str, Any]]]:
@@ -136,12 +130,14 @@ def run_monte_carlo(
     ``fn`` must be a module-level function (it is pickled to worker processes). Every row gets
     the columns ``config`` (index), ``run``, ``seed`` and the configuration's scalar parameters.
     Rows come back sorted by (config, run), identical for every engine and worker count.
+    ``progress``: False hides it; otherwise a bar on a terminal and a plain line every few
+    seconds elsewhere (:func:`.terminal.progress_bar`).
     """
     if engine not in ENGINES:
         raise ConfigError(invalid("engine", engine, f"one of {ENGINES}"))
     jobs = _jobs(fn, configs, runs, seed)
     n_workers = workers if workers is not None else (os.cpu_count() or 1)
-    with _progress(len(jobs), desc, progress) as bar:
+    with progress_bar(len(jobs), desc, progress) as bar:
         if engine == "local":
             chunks = list(_local(jobs, n_workers, bar))
         else:

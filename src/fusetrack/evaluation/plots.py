@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -20,6 +21,30 @@ def save(fig: plt.Figure, path: Path) -> Path:
     return path
 
 
+_LINESTYLES = ("-", "--", "-.", ":")
+_MARKERS = ("o", "s", "^", "D", "v", "x", "P", "*")
+
+
+def distinct_style(index: int, n_points: int) -> dict[str, Any]:
+    """Colour, line style and sparse markers of the ``index``-th curve: curves that lie on top
+    of each other (filters that agree) stay distinguishable, also in grey-scale print."""
+    return {
+        "color": f"C{index % 10}",
+        "linestyle": _LINESTYLES[index % len(_LINESTYLES)],
+        "marker": _MARKERS[index % len(_MARKERS)],
+        "markevery": max(1, n_points // 12) + index,  # offset so the markers do not coincide
+        "markersize": 4,
+    }
+
+
+def shade_intervals(
+    ax: plt.Axes, intervals: Sequence[tuple[float, float]], label: str, color: str = "0.6"
+) -> None:
+    """Grey bands over the x intervals (e.g. a sensor's outages), one legend entry."""
+    for k, (a, b) in enumerate(intervals):
+        ax.axvspan(a, b, color=color, alpha=0.2, lw=0, label=label if k == 0 else None)
+
+
 def plot_series(
     path: Path,
     x: ArrayLike,
@@ -30,11 +55,24 @@ def plot_series(
     title: str = "",
     logy: bool = False,
     styles: Mapping[str, str] | None = None,
+    shade: Sequence[tuple[float, float]] = (),
+    shade_label: str = "",
 ) -> Path:
-    """Several curves over a shared x axis (e.g. RMSE versus time beside a bound)."""
+    """Several curves over a shared x axis (e.g. RMSE versus time beside a bound). Curves
+    without an entry in ``styles`` (a Matplotlib format string) get :func:`distinct_style`;
+    ``shade`` marks x intervals (e.g. outages) as grey bands labelled ``shade_label``."""
     fig, ax = plt.subplots(figsize=(7, 4))
+    xs = np.asarray(x)
+    if shade:
+        shade_intervals(ax, shade, shade_label or "shaded")
+    k = 0
     for name, y in series.items():
-        ax.plot(np.asarray(x), np.asarray(y), (styles or {}).get(name, "-"), label=name, lw=1.4)
+        fmt = (styles or {}).get(name)
+        if fmt is None:
+            ax.plot(xs, np.asarray(y), label=name, lw=1.4, **distinct_style(k, len(xs)))
+            k += 1
+        else:
+            ax.plot(xs, np.asarray(y), fmt, label=name, lw=1.4)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if logy:
@@ -54,15 +92,23 @@ def plot_trajectories(
     sensors: Sequence[tuple[str, ArrayLike]] = (),
     area: tuple[float, float, float, float] | None = None,
     title: str = "",
+    truth_marked: ArrayLike | None = None,
+    marked_label: str = "",
 ) -> Path:
-    """Top view: true path, estimated paths and sensor positions (metres)."""
+    """Top view: true path, estimated paths (:func:`distinct_style`) and sensor positions
+    (metres); ``truth_marked`` (booleans per truth point) highlights part of the true path,
+    e.g. where a sensor could not see the target, labelled ``marked_label``."""
     fig, ax = plt.subplots(figsize=(7, 4.8))
     t = np.asarray(truth)
+    if truth_marked is not None:
+        hidden = np.where(np.asarray(truth_marked, bool), 1.0, np.nan)
+        ax.plot(t[:, 0] * hidden, t[:, 1] * hidden, "-", color="0.6", lw=7, alpha=0.5,
+                solid_capstyle="round", label=marked_label or "marked")  # fmt: skip
     ax.plot(t[:, 0], t[:, 1], "k-", lw=2, label="truth")
-    ax.plot(t[0, 0], t[0, 1], "ko")
-    for name, est in estimates.items():
+    ax.plot(t[0, 0], t[0, 1], "ko", label="start")
+    for k, (name, est) in enumerate(estimates.items()):
         e = np.asarray(est)
-        ax.plot(e[:, 0], e[:, 1], "-", lw=1, label=name)
+        ax.plot(e[:, 0], e[:, 1], lw=1.1, label=name, **distinct_style(k, len(e)))
     for name, pos in sensors:
         p = np.asarray(pos)
         ax.plot(p[0], p[1], "^", ms=9)

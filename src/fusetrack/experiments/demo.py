@@ -197,6 +197,8 @@ def _figures(
         ylabel="position RMSE (m)",
         title=f"Position RMSE over {runs} runs",
         styles={"PCRB": "k--", "per-trajectory bound (RMS)": "k:"},
+        shade=scn.occluded,
+        shade_label="camera occluded",
     )
     run0 = df[df["run"] == 0]
     truth0 = run0[run0["method"] == "EKF"][["true_x", "true_y"]].to_numpy()
@@ -211,6 +213,8 @@ def _figures(
         ],
         area=(AREA[0] - 5, AREA[1] + 5, AREA[2] - 5, AREA[3] + 5),
         title="Run 0: truth and estimates",
+        truth_marked=[any(a <= t < b for a, b in scn.occluded) for t in scn.times],
+        marked_label="camera occluded",
     )
     return {"rmse": fig_rmse, "trajectory": fig_traj}
 

@@ -92,6 +92,7 @@ from ..core import (
     invalid,
 )
 from ..sensors import StackedSensor
+from .kalman_kernels import joseph_update
 from .stats import FilterStats, ValidatedMeasurement, as_sensor_map, validate_measurement
 
 Array = NDArray[np.float64]
@@ -330,6 +331,9 @@ class GaussianFilter:
         self, mean: Array, cov: Array, checked: ValidatedMeasurement, want_loglik: bool
     ) -> tuple[Array, Array, Array]:
         sensor, usable = checked.sensor, checked.usable
+        fast = self._kernel_update(mean, cov, checked, want_loglik)
+        if fast is not None:
+            return fast
         mom = self.propagate_sensor(sensor, mean, cov)
         if checked.covariance is not None:
             r = checked.covariance
@@ -380,6 +384,48 @@ class GaussianFilter:
             new_cov = np.where(usable[..., None, None], new_cov, cov)
         new_mean, new_cov = _broadcast(new_mean, new_cov)
         return new_mean, new_cov, ll
+
+    def _kernel_update(
+        self, mean: Array, cov: Array, checked: ValidatedMeasurement, want_loglik: bool
+    ) -> tuple[Array, Array, Array] | None:
+        """The update of a batch of at least :data:`KERNEL_MIN_BATCH` beliefs by the Numba
+        Joseph kernel (:mod:`.kalman_kernels`; the same equations, one belief at a time) when
+        the moments are the linearised ones (:class:`KalmanFilter`, :class:`ExtendedKalmanFilter`)
+        and every row is usable; None otherwise (the NumPy path below runs)."""
+        if (
+            type(self).propagate_sensor is not KalmanFilter.propagate_sensor
+            or mean.ndim != 2
+            or cov.ndim != 3
+            or mean.shape[0] < KERNEL_MIN_BATCH
+            or not checked.usable.all()
+        ):
+            return None
+        n, d = mean.shape
+        sensor = checked.sensor
+        h = _constant(np.asarray(sensor.jacobian(mean), dtype=float))
+        z_pred = np.asarray(sensor.predict(mean), dtype=float)
+        m = z_pred.shape[-1]
+        r = checked.covariance
+        r = _constant(np.asarray(sensor.noise_cov(mean) if r is None else r, dtype=float))
+        if m > d or h.shape[-2:] != (m, d) or r.shape[-2:] != (m, m):
+            return None
+        h3 = h[None] if h.ndim == 2 else h
+        r3 = r[None] if r.ndim == 2 else r
+        if h3.shape[0] not in (1, n) or r3.shape[0] not in (1, n) or h3.ndim != 3 or r3.ndim != 3:
+            return None
+        y = np.asarray(sensor.residual(checked.value, z_pred), dtype=float)
+        if y.shape != (n, m):
+            y = np.broadcast_to(y, (n, m))
+        out = joseph_update(mean, cov, h3, r3, y, want_loglik)
+        if out is None:
+            return None
+        new_mean, new_cov, ll = out
+        return new_mean, new_cov, (ll if want_loglik else np.zeros(()))
+
+
+KERNEL_MIN_BATCH = 16
+"""Batches of at least this many beliefs take the Numba update kernel (below it the NumPy
+path's call overhead is smaller than a kernel call's; both give the same result to rounding)."""
 
 
 def _gain_many_readings(cov: Array, h: Array, r: Array) -> Array | None:

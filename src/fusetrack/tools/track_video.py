@@ -337,8 +337,8 @@ def _track_and_annotate(
 ) -> list[dict[str, Any]]:
     """Track every frame after the background ones, writing the annotated video as it goes."""
     import cv2
-    from tqdm import tqdm
 
+    from ..evaluation import progress_bar
     from ..sensors import apply_homography
 
     info, fps, n_bg, cfg, other_arr = inp.info, inp.fps, inp.n_bg, inp.cfg, inp.other_arr
@@ -350,7 +350,7 @@ def _track_and_annotate(
     )
     rows: list[dict[str, Any]] = []
     total = max(info.n_frames - n_bg, 0) or None
-    bar = tqdm(total=total, desc="track-video", unit="frame", disable=(progress is False))
+    bar = progress_bar(total, "track-video", progress, unit="frame")
     buffered: list[tuple[int, float, NDArray[np.uint8]]] = []
 
     def feed() -> Iterator[tuple[int, float, NDArray[np.uint8]]]:

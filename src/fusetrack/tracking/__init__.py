@@ -2,9 +2,10 @@
 and a deleter, pure (``state = tracker.step(state, time, measurements, rng)``):
 :class:`MultiTargetTracker` (GNN, JPDA, any single-scan associator), :class:`MHTTracker`
 (track-oriented MHT, a belief per hypothesis leaf), :class:`MCMCDATracker` (online MCMCDA on
-position reports), :class:`PHDTracker` (a GM-PHD intensity's labelled components) and
-:class:`SingleTargetTracker` (any filter as a one-track tracker), all behind one interface
-(:class:`Tracker`: ``initial_state / step``)."""
+position reports), :class:`PHDTracker` (a GM-PHD intensity's labelled components),
+:class:`PMBTracker` (the track-oriented Poisson multi-Bernoulli filter :class:`PMBFilter`,
+Williams 2015) and :class:`SingleTargetTracker` (any filter as a one-track tracker), all behind
+one interface (:class:`Tracker`: ``initial_state / step``)."""
 
 from .deleters import AnyOf, CovarianceDeleter, Deleter, ExistenceDeleter, MissedCountDeleter
 from .existence import predict_existence, update_existence
@@ -19,6 +20,8 @@ from .mht_tracker import MHTTracker, MHTTrackerState
 from .mixing import combine_hypotheses
 from .phd_initiator import PHDBirthState, PHDInitiator
 from .phd_tracker import PHDTracker, PHDTrackerState
+from .pmb import PMBDensity, PMBFilter
+from .pmb_tracker import PMBTracker, PMBTrackerState, cardinality_distribution
 from .protocol import Tracker, TrackView, belief_summary
 from .single_target import SingleTargetState, SingleTargetTracker
 from .state import LiveTrack, TrackerState, TrackerStats
@@ -43,6 +46,10 @@ __all__ = [
     "PHDInitiator",
     "PHDTracker",
     "PHDTrackerState",
+    "PMBDensity",
+    "PMBFilter",
+    "PMBTracker",
+    "PMBTrackerState",
     "SinglePointInitiator",
     "SingleTargetState",
     "SingleTargetTracker",
@@ -51,6 +58,7 @@ __all__ = [
     "TrackerState",
     "TrackerStats",
     "belief_summary",
+    "cardinality_distribution",
     "combine_hypotheses",
     "predict_existence",
     "update_existence",

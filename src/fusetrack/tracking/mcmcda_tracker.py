@@ -186,9 +186,13 @@ class MCMCDATracker:
 
     def _positions(
         self, measurements: Sequence[Measurement]
-    ) -> tuple[Array, tuple[int, ...], dict[str, int]]:
-        """The usable measurements' positions ``(n, 2)``, their indices, and skip counts."""
-        rows, index = [], []
+    ) -> tuple[Array, Array | None, tuple[int, ...], dict[str, int]]:
+        """The usable measurements' positions ``(n, 2)``, their covariances ``(n, 2, 2)``
+        (None when no measurement carries one: ``config.obs_std`` for all; otherwise
+        ``Measurement.covariance`` mapped through the sensor's inverse, ``obs_std² I`` for those
+        without), their indices, and skip counts."""
+        rows, covs, index = [], [], []
+        iso = self.mcmcda.config.obs_std**2 * np.eye(2)
         unknown = nonfinite = 0
         for j, m in enumerate(measurements):
             inverse = self.inverses.get(m.sensor_id)
@@ -200,9 +204,13 @@ class MCMCDATracker:
                 nonfinite += 1
                 continue
             rows.append(inverse.pinv @ (value - inverse.offset))
+            c = m.covariance
+            covs.append(iso if c is None else inverse.pinv @ np.asarray(c, float) @ inverse.pinv.T)
             index.append(j)
         counts = {"skipped_unknown_sensor": unknown, "skipped_nonfinite": nonfinite}
-        return np.array(rows, float).reshape(-1, 2), tuple(index), counts
+        carried = any(measurements[j].covariance is not None for j in index)
+        cov = np.array(covs, float).reshape(-1, 2, 2) if carried else None
+        return np.array(rows, float).reshape(-1, 2), cov, tuple(index), counts
 
     def step(
         self,
@@ -223,12 +231,12 @@ class MCMCDATracker:
             raise ConfigError(invalid("rng", rng, "a numpy Generator: MCMCDA's chain draws"))
         advance = self._check(state, time, measurements)
         t = float(time)
-        y, index, counts = self._positions(measurements)
+        y, cov, index, counts = self._positions(measurements)
         association, scan_index = state.association, state.scan_index
         for _ in range(advance - 1):  # grid points without a scan: every target missed
             association = self._advance(association, np.zeros((0, 2)), rng)
             scan_index = (*scan_index, ()) if self.keep_history else ()
-        association = self._advance(association, y, rng)
+        association = self._advance(association, y, rng, cov)
         scan_index = (*scan_index, index) if self.keep_history else ()
         stats = state.stats.add(
             scans=1,
@@ -242,9 +250,13 @@ class MCMCDATracker:
         return MCMCDATrackerState(association, tracks, t, start, stats, scan_index)
 
     def _advance(
-        self, association: AssociationState, y: Array, rng: np.random.Generator
+        self,
+        association: AssociationState,
+        y: Array,
+        rng: np.random.Generator,
+        cov: Array | None = None,
     ) -> AssociationState:
-        after = self.mcmcda.step(association, y, rng)
+        after = self.mcmcda.step(association, y, rng, cov)
         return after if self.keep_history else self.mcmcda.forget_past(after)
 
     def _live(
