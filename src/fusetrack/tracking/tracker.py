@@ -21,9 +21,17 @@ measurement per sensor, but may give one to each):
 4. the measurements still left may start tentative tracks (``initiator.birth`` for each, or a
    scan-level initiator's ``births``, e.g. :class:`~fusetrack.tracking.PHDInitiator`).
 
-For the Kalman family the predictions of all tracks, and the updates of all gated pairs of a
-sensor, are one batched filter call each (:mod:`fusetrack.association.batch`), and the gate of
-all pairs a few array operations, so a scan of thousands of false alarms stays cheap.
+For the Kalman family a scan runs on arrays (:mod:`fusetrack.association.batch`): the
+predictions of all tracks are one batched filter call, all tracks are gated and scored against
+a sensor's measurements once (one batched update of the gated pairs, whose posteriors stay
+stacked; the confirmed and the tentative pass take their blocks), the associator answers with
+a weight matrix when it can (``association_weights``), and the PDA mixture and the existence
+of all tracks are one array pass each (:func:`.mixing.combine_stacked`,
+:func:`.existence.update_existences`); any other filter goes track by track, with the same
+results. So a scan of thousands of false alarms stays cheap.
+
+A sensor in ``birth_only_sensors`` only starts tracks: its measurements inside a live track's
+gate start nothing, the others go to the initiator; no track is updated by it.
 
 After the scan every track counts a hit or a miss (none when no sensor looked); the initiator
 confirms or drops tentative tracks (M-of-N), the deleter ends confirmed ones. Everything lives in
