@@ -36,9 +36,9 @@ class LiveTrack:
     def evolve(self, **changes: Any) -> LiveTrack:
         """A copy with ``changes`` (``dataclasses.replace`` without its per-call overhead: a
         tracker makes several per track and scan)."""
-        unknown = changes.keys() - _LIVE_TRACK_FIELDS
-        if unknown:
-            raise TypeError(f"LiveTrack has no field(s) {sorted(unknown)}")
+        if not _LIVE_TRACK_FIELDS.issuperset(changes):
+            unknown = sorted(changes.keys() - _LIVE_TRACK_FIELDS)
+            raise TypeError(f"LiveTrack has no field(s) {unknown}")
         new = object.__new__(LiveTrack)
         new.__dict__.update(self.__dict__)
         new.__dict__.update(changes)
