@@ -28,10 +28,10 @@ from fusetrack.filters import KalmanFilter
 from fusetrack.tracking import (
     MultiTargetTracker,
     combine_hypotheses,
+    combine_stacked,
     update_existence,
+    update_existences,
 )
-from fusetrack.tracking.existence import update_existences
-from fusetrack.tracking.mixing import combine_stacked
 
 KF = KalmanFilter(MOTION, [POS])
 NO = -np.inf
