@@ -122,8 +122,10 @@ def mcmcda_tracks(
     n_targets: int,
     rng: np.random.Generator,
 ) -> list[Track]:
-    """Online MCMCDA on the pooled candidates of every scan (as ``kushwaha2010-mcmcda``)."""
+    """Online MCMCDA on the pooled candidates of every scan (as ``kushwaha2010-mcmcda``), each
+    candidate with its own triangulation covariance (gate, track score, new-track prior)."""
     obs = [np.array([c.point for c in cs]).reshape(-1, 2) for cs in candidates]
+    covs = [np.array([c.cov for c in cs]).reshape(-1, 2, 2) for cs in candidates]
     n_pairs = len(_pair_ids(scene))
     stds = [np.sqrt(np.trace(c.cov) / 2) for cs in candidates for c in cs]
     config = MCMCDAConfig(
@@ -140,8 +142,8 @@ def mcmcda_tracks(
     )
     tracker = MCMCDA(config)
     state = tracker.initial_state()
-    for y in obs:
-        state = tracker.step(state, y, rng)
+    for y, cov in zip(obs, covs):
+        state = tracker.step(state, y, rng, cov)
     out = []
     for ident, (steps, pos) in tracker.tracks(tracker.finish(state)).items():
         ok = steps < truth.times.size
