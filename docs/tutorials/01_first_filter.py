@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from fusetrack.core import Gaussian, Measurement
-from fusetrack.evaluation import position_error
+from fusetrack.evaluation import nees, position_error
 from fusetrack.evaluation.plots import plot_trajectories
 from fusetrack.filters import ExtendedKalmanFilter, KalmanFilter, run_filter
 from fusetrack.motion import ConstantVelocity
@@ -31,7 +31,9 @@ from fusetrack.sensors import PositionFix, RangeBearing
 def options() -> argparse.Namespace:
     """`--quick` (or `FUSETRACK_QUICK=1`) for a short run; `--out DIR` for the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK")))
+    parser.add_argument(
+        "--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK"))
+    )
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "figures")
     return parser.parse_args()
 
@@ -74,15 +76,17 @@ kf = KalmanFilter(motion, [tag])
 track_kf = run_filter(kf, prior, reports, t0=0.0)
 
 err_kf = position_error(track_kf.means, truth, [0, 1])
-print(f"Kalman filter: mean position error {err_kf.mean():.2f} m "
-      f"(the tag alone: {np.mean(np.linalg.norm([m.value for m in reports] - truth[:, :2], axis=1)):.2f} m)")
+err_tag = np.linalg.norm([m.value for m in reports] - truth[:, :2], axis=1)
+print(
+    f"Kalman filter: mean position error {err_kf.mean():.2f} m "
+    f"(the tag alone: {err_tag.mean():.2f} m)"
+)
 
 # The filter also says how sure it is: the covariance. If it is honest, the squared error
 # normalised by it (NEES) averages the state dimension, here 2 for the position.
-p_cov = track_kf.covariances[:, :2, :2]
-e = track_kf.means[:, :2] - truth[:, :2]
-nees = np.einsum("ti,tij,tj->t", e, np.linalg.inv(p_cov), e)
-print(f"position NEES averages {nees[5:].mean():.2f} (2 for a consistent filter)")
+# (The first few steps, still dominated by the prior, are left out.)
+position_nees = nees(track_kf.means, track_kf.covariances, truth, index=[0, 1])
+print(f"position NEES averages {position_nees[5:].mean():.2f} (2 for a consistent filter)")
 
 # --- 4. A nonlinear sensor and an EKF ---------------------------------------------------------
 # A radar at the origin reports range (sigma 0.5 m) and bearing (sigma 1 degree). The bearing
@@ -90,8 +94,9 @@ print(f"position NEES averages {nees[5:].mean():.2f} (2 for a consistent filter)
 # jump of 2 pi. The Kalman filter needs a linear sensor; the EKF linearises h(x) at the
 # prediction with the sensor's Jacobian.
 radar = RangeBearing("radar", position=[0.0, 0.0], sigma_range=0.5, sigma_bearing=np.deg2rad(1.0))
-radar_reports = [Measurement(float(k), "radar", radar.simulate(x, rng))
-                 for k, x in enumerate(truth, start=1)]
+radar_reports = [
+    Measurement(float(k), "radar", radar.simulate(x, rng)) for k, x in enumerate(truth, start=1)
+]
 ekf = ExtendedKalmanFilter(motion, [radar])
 track_ekf = run_filter(ekf, prior, radar_reports, t0=0.0)
 err_ekf = position_error(track_ekf.means, truth, [0, 1])
@@ -101,7 +106,8 @@ print(f"EKF on the radar: mean position error {err_ekf.mean():.2f} m")
 # order, and fuses those that share a time step one after the other.
 both = ExtendedKalmanFilter(motion, [tag, radar])
 track_both = run_filter(both, prior, sorted(reports + radar_reports, key=lambda m: m.time), t0=0.0)
-print(f"EKF on tag + radar: mean position error {position_error(track_both.means, truth, [0, 1]).mean():.2f} m")
+err_both = position_error(track_both.means, truth, [0, 1])
+print(f"EKF on tag + radar: mean position error {err_both.mean():.2f} m")
 
 # --- The figure ------------------------------------------------------------------------------
 # `plot_trajectories` draws the truth and each estimate with its own colour, line style and
@@ -110,8 +116,11 @@ args.out.mkdir(parents=True, exist_ok=True)
 plot_trajectories(
     args.out / "01_first_filter.png",
     truth,
-    {"Kalman filter (tag)": track_kf.means, "EKF (radar)": track_ekf.means,
-     "EKF (tag + radar)": track_both.means},
+    {
+        "Kalman filter (tag)": track_kf.means,
+        "EKF (radar)": track_ekf.means,
+        "EKF (tag + radar)": track_both.means,
+    },
     sensors=[("radar", radar.position)],
     title="A first filter: truth and estimates",
 )

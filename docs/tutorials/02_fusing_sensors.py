@@ -38,7 +38,9 @@ from fusetrack.sensors import Bearing, PositionFix
 def options() -> argparse.Namespace:
     """`--quick` (or `FUSETRACK_QUICK=1`) for a short run; `--out DIR` for the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK")))
+    parser.add_argument(
+        "--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK"))
+    )
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "figures")
     return parser.parse_args()
 
@@ -59,8 +61,9 @@ motion = CoordinatedTurnRate(q=0.05, q_omega=2e-4)
 # Bearings are anticlockwise from +x, relative to the sensor's heading; angles in radians.
 mic_west = Bearing("mic_west", position=[0.0, 0.0], sigma=np.deg2rad(3.0))
 mic_east = Bearing("mic_east", position=[100.0, 0.0], sigma=np.deg2rad(3.0))
-camera = Bearing("camera", position=[50.0, 62.0], sigma=np.deg2rad(0.5),
-                 heading=-np.pi / 2, fov=np.deg2rad(70.0))  # looking down (-y), 70 deg wide
+camera = Bearing(
+    "camera", position=[50.0, 62.0], sigma=np.deg2rad(0.5), heading=-np.pi / 2, fov=np.deg2rad(70.0)
+)  # looking down (-y), 70 deg wide
 tag = PositionFix("tag", cov=[[4.0, 1.2], [1.2, 2.25]])  # m^2, a tilted error ellipse
 sensors = [mic_west, mic_east, camera, tag]
 
@@ -104,7 +107,8 @@ filters = {
     "EKF": ExtendedKalmanFilter(motion, sensors),
     "UKF": UnscentedKalmanFilter(motion, sensors),
     f"PF ({n_particles} particles)": BootstrapFilter(
-        motion, sensors, n_particles=n_particles, ess_threshold=0.5),
+        motion, sensors, n_particles=n_particles, ess_threshold=0.5
+    ),
 }
 errors = {}
 for name, filt in filters.items():
@@ -113,8 +117,10 @@ for name, filt in filters.items():
     print(f"{name:>22}: mean position error {errors[name].mean():.2f} m")
 
 # What does each sensor bring? Run the EKF again without the camera, and with the tag alone.
-for label, keep in (("EKF without the camera", {"mic_west", "mic_east", "tag"}),
-                    ("EKF, tag alone", {"tag"})):
+for label, keep in (
+    ("EKF without the camera", {"mic_west", "mic_east", "tag"}),
+    ("EKF, tag alone", {"tag"}),
+):
     subset = [m for m in reports if m.sensor_id in keep]
     track = run_filter(ExtendedKalmanFilter(motion, sensors), prior, subset, times=times, t0=0.0)
     errors[label] = position_error(track.means, truth, [0, 1])

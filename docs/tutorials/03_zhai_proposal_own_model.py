@@ -10,10 +10,12 @@ works on any motion and sensor model that follow the two small protocols.
 
 Here we bring our own model: the transition of the classic "growth" model of Kitagawa (1987)
 and Gordon, Salmond & Smith (1993), without its time-varying forcing, seen through a cubic
-sensor (as in Zhai's own benchmark)::
+sensor (as in Zhai's own benchmark):
 
-    x' = x / 2 + 25 x / (1 + x^2) + w,    w ~ N(0, 10)
-    z  = x^3 / 20 + v,                    v ~ N(0, 1)
+```text
+x' = x / 2 + 25 x / (1 + x^2) + w,    w ~ N(0, 10)
+z  = x^3 / 20 + v,                    v ~ N(0, 1)
+```
 
 The transition is strongly nonlinear and the measurement is sharp where ``|x|`` is large, so
 most particles drawn from the motion model land where the likelihood is negligible. We write
@@ -42,14 +44,21 @@ import numpy as np
 
 from fusetrack.core import Gaussian, Measurement, MotionModel
 from fusetrack.evaluation.plots import plot_series
-from fusetrack.filters import ExtendedKalmanFilter, ProposalParticleFilter, SPPEKFProposal, run_filter
+from fusetrack.filters import (
+    ExtendedKalmanFilter,
+    ProposalParticleFilter,
+    SPPEKFProposal,
+    run_filter,
+)
 from fusetrack.sensors import Power
 
 
 def options() -> argparse.Namespace:
     """`--quick` (or `FUSETRACK_QUICK=1`) for a short run; `--out DIR` for the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK")))
+    parser.add_argument(
+        "--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK"))
+    )
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "figures")
     return parser.parse_args()
 
@@ -118,7 +127,8 @@ filters = {
     f"bootstrap, N={few}": ProposalParticleFilter(motion, [sensor], n_particles=few),
     f"bootstrap, N={many}": ProposalParticleFilter(motion, [sensor], n_particles=many),
     f"PF-SP-PEKF, N={few}, 20 EKFs": ProposalParticleFilter(
-        motion, [sensor], SPPEKFProposal(n_channels=20), n_particles=few),
+        motion, [sensor], SPPEKFProposal(n_channels=20), n_particles=few
+    ),
 }
 
 # --- Several runs, the same truth for every filter in a run -----------------------------------

@@ -48,7 +48,9 @@ from fusetrack.tracking import (
 def options() -> argparse.Namespace:
     """`--quick` (or `FUSETRACK_QUICK=1`) for a short run; `--out DIR` for the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK")))
+    parser.add_argument(
+        "--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK"))
+    )
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "figures")
     return parser.parse_args()
 
@@ -117,8 +119,14 @@ birth = PhdIntensity(
     np.column_stack([gx.ravel(), gy.ravel(), np.zeros((cells * cells, 2))]),
     np.tile(np.diag([(100.0 / cells) ** 2] * 2 + [4.0, 4.0]), (cells * cells, 1, 1)),
 )
-pmb = PMBFilter(motion, [sensor], birth, survival_probability=0.99,
-                detection_probability=p_detect, clutter_intensity=clutter_density)
+pmb = PMBFilter(
+    motion,
+    [sensor],
+    birth,
+    survival_probability=0.99,
+    detection_probability=p_detect,
+    clutter_intensity=clutter_density,
+)
 
 trackers = {
     "GNN, 3 of 4": scan_tracker(GlobalNearestNeighbour(), 3, 4),
@@ -153,9 +161,11 @@ for name, tracker in trackers.items():
 gospa = {name: gospa_over_time(est, truth_sets, c=10.0, p=2.0) for name, est in estimates.items()}
 print(f"{scans} scans, {len(targets)} targets, {clutter_per_scan} false alarms per scan")
 for name, g in gospa.items():
-    print(f"  {name:>12}: mean GOSPA {g.distance.mean():5.2f} m, "
-          f"missed {g.n_missed.sum():3d}, false {g.n_false.sum():3d} (target-scans), "
-          f"{len(ids_seen[name])} track ids")
+    print(
+        f"  {name:>12}: mean GOSPA {g.distance.mean():5.2f} m, "
+        f"missed {g.n_missed.sum():3d}, false {g.n_false.sum():3d} (target-scans), "
+        f"{len(ids_seen[name])} track ids"
+    )
 
 args.out.mkdir(parents=True, exist_ok=True)
 plot_series(

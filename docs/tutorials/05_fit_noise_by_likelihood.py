@@ -41,7 +41,9 @@ from fusetrack.sensors import PositionFix
 def options() -> argparse.Namespace:
     """`--quick` (or `FUSETRACK_QUICK=1`) for a short run; `--out DIR` for the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK")))
+    parser.add_argument(
+        "--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK"))
+    )
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "figures")
     return parser.parse_args()
 
@@ -85,12 +87,17 @@ hessian = np.empty((2, 2))
 for i in range(2):
     for j in range(2):
         ei, ej = np.eye(2)[i] * h, np.eye(2)[j] * h
-        hessian[i, j] = (negative_log_likelihood(fit.x + ei + ej) - negative_log_likelihood(fit.x + ei - ej)
-                         - negative_log_likelihood(fit.x - ei + ej) + negative_log_likelihood(fit.x - ei - ej)) / (4 * h * h)
+        hessian[i, j] = (
+            negative_log_likelihood(fit.x + ei + ej)
+            - negative_log_likelihood(fit.x + ei - ej)
+            - negative_log_likelihood(fit.x - ei + ej)
+            + negative_log_likelihood(fit.x - ei - ej)
+        ) / (4 * h * h)
 se = np.sqrt(np.diag(np.linalg.inv(hessian)))  # of log q and log sigma
 print(f"{steps} reports, {fit.nfev} filter runs")
-print(f"q:     true {true_q}, fitted {q_hat:.3f} (95% interval {q_hat * np.exp(-1.96 * se[0]):.3f} to {q_hat * np.exp(1.96 * se[0]):.3f})")
-print(f"sigma: true {true_sigma}, fitted {sigma_hat:.3f} (95% interval {sigma_hat * np.exp(-1.96 * se[1]):.3f} to {sigma_hat * np.exp(1.96 * se[1]):.3f})")
+for name, true, fitted, s in (("q", true_q, q_hat, se[0]), ("sigma", true_sigma, sigma_hat, se[1])):
+    low, high = fitted * np.exp(-1.96 * s), fitted * np.exp(1.96 * s)
+    print(f"{name:>5}: true {true}, fitted {fitted:.3f} (95% interval {low:.3f} to {high:.3f})")
 
 # --- 4. The profile over q (sigma at its fitted value) -----------------------------------------
 grid = np.linspace(np.log(0.05), np.log(2.0), 9 if args.quick else 40)
@@ -99,8 +106,10 @@ args.out.mkdir(parents=True, exist_ok=True)
 plot_series(
     args.out / "05_fit_noise_by_likelihood.png",
     np.exp(grid),
-    {"log-likelihood (sigma at its fit)": profile - profile.max(),
-     "95% cut-off (-1.92)": np.full(grid.size, -1.92)},
+    {
+        "log-likelihood (sigma at its fit)": profile - profile.max(),
+        "95% cut-off (-1.92)": np.full(grid.size, -1.92),
+    },
     xlabel="process noise q (m²/s³)",
     ylabel="log-likelihood − its maximum",
     title=f"Fitting q: true {true_q}, fitted {q_hat:.2f}",

@@ -7,10 +7,12 @@ tick with the configured filter and publishes tracks. The same node can be fed a
 network configuration on logged data before going live, or to re-run a day's data with another
 filter.
 
-Over the network that is two commands::
+Over the network that is two commands:
 
-    fusetrack serve --config network.yaml
-    fusetrack replay recording.jsonl --to udp://127.0.0.1:9000 --config network.yaml --speed inf
+```sh
+fusetrack serve --config network.yaml
+fusetrack replay recording.jsonl --to udp://127.0.0.1:9000 --config network.yaml --speed inf
+```
 
 Here we do the same in-process, with no network at all: the node's rules (authentication
 aside) live in `FusionNode`, which the server only wraps. We
@@ -42,7 +44,9 @@ from fusetrack.service import FusionNode, load_config
 def options() -> argparse.Namespace:
     """`--quick` (or `FUSETRACK_QUICK=1`) for a short run; `--out DIR` for the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK")))
+    parser.add_argument(
+        "--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK"))
+    )
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "figures")
     return parser.parse_args()
 
@@ -92,13 +96,27 @@ for k in range(1, int(duration / 0.5) + 1):
     truth.append((t, *x[:2]))
     seq["array-1"] += 1
     bearing = float(mic.simulate(x, rng)[0])
-    lines.append({"node": "array-1", "seq": seq["array-1"], "sensor": "mic", "time": t,
-                  "reading": {"kind": "bearing", "bearing": bearing}})
+    lines.append(
+        {
+            "node": "array-1",
+            "seq": seq["array-1"],
+            "sensor": "mic",
+            "time": t,
+            "reading": {"kind": "bearing", "bearing": bearing},
+        }
+    )
     if k % 4 == 0:  # the tag every 2 s
         seq["tag-reader"] += 1
         fix = [float(v) for v in tag.simulate(x, rng)]
-        lines.append({"node": "tag-reader", "seq": seq["tag-reader"], "sensor": "tag", "time": t,
-                      "reading": {"kind": "position_fix", "position": fix}})
+        lines.append(
+            {
+                "node": "tag-reader",
+                "seq": seq["tag-reader"],
+                "sensor": "tag",
+                "time": t,
+                "reading": {"kind": "position_fix", "position": fix},
+            }
+        )
 recording = workdir / "recording.jsonl"
 recording.write_text("".join(json.dumps(line) + "\n" for line in lines))
 truth = np.array(truth)
@@ -126,8 +144,10 @@ for line in recording.read_text().splitlines():
     published += node.advance()
 wall[0] += network.fusion.idle_flush + 1.0  # the recording has ended: flush the last ticks
 published += node.advance()
-print(f"accepted {sum(node.accepted.values())} readings, refused {refused or 'none'}; "
-      f"{len(published)} ticks published")
+print(
+    f"accepted {sum(node.accepted.values())} readings, refused {refused or 'none'}; "
+    f"{len(published)} ticks published"
+)
 
 # A bad line is refused with a reason, not a crash: a sequence number the node has seen.
 outcome = node.ingest_payload(recording.read_text().splitlines()[0].encode(), "json", "array-1")[0]
@@ -136,12 +156,15 @@ print(f"sending the first line again: accepted={outcome.accepted}, reason={outco
 # Each TrackState has the tick, its time, the fused state and covariance, the position and its
 # covariance, and which sensors' readings went in.
 last = published[-1]
-print(f"last tick {last.tick} at t={last.time:.1f} s: position {np.round(last.position, 2)}, "
-      f"fused {last.readings} readings from {last.sensors}")
+print(
+    f"last tick {last.tick} at t={last.time:.1f} s: position {np.round(last.position, 2)}, "
+    f"fused {last.readings} readings from {last.sensors}"
+)
 times = np.array([s.time for s in published])
 positions = np.array([s.position for s in published])
 on_truth = np.array([np.interp(times, truth[:, 0], truth[:, i]) for i in (1, 2)]).T
-print(f"mean position error of the node's track: {position_error(positions, on_truth, [0, 1]).mean():.2f} m")
+error = position_error(positions, on_truth, [0, 1])
+print(f"mean position error of the node's track: {error.mean():.2f} m")
 
 args.out.mkdir(parents=True, exist_ok=True)
 plot_trajectories(
