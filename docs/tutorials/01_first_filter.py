@@ -46,7 +46,7 @@ rng = np.random.default_rng(7)
 # The state is [x, y, vx, vy] (metres, metres per second): positions first, then velocities.
 # `q` is the power spectral density of the white-noise acceleration (m^2/s^3): how much the
 # velocity may wander per second.
-motion = ConstantVelocity(ndim=2, q=0.05)
+motion = ConstantVelocity(ndim=2, q=0.01)
 
 # The tag reports the position [x, y] with covariance `cov` (m^2). Every sensor has an id; a
 # measurement names the sensor it came from, and the filter routes it to that model.

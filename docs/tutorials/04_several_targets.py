@@ -141,15 +141,15 @@ trackers = {
 # none, at the price of confirming real targets one scan later: see the printed counts.
 
 # --- One loop for every tracker ------------------------------------------------------------
-# `scanned=["plots"]` says the sensor looked even when a scan brought no plot at all: every
-# track then counts a miss.
+# Every sensor is taken to have looked at every scan, so a scan that brought no plot at all is
+# a miss for every track; `scanned=[...]` names the sensors that looked when some did not.
 estimates = {name: [] for name in trackers}
 ids_seen = {name: set() for name in trackers}
 for name, tracker in trackers.items():
     state = tracker.initial_state()
     tracker_rng = np.random.default_rng(0)
     for t, plots in enumerate(scans_of_plots):
-        state = tracker.step(state, float(t), plots, tracker_rng, scanned=["plots"])
+        state = tracker.step(state, float(t), plots, tracker_rng)
         confirmed = state.confirmed
         estimates[name].append(np.array([tr.belief.mean[:2] for tr in confirmed]).reshape(-1, 2))
         ids_seen[name] |= {tr.id for tr in confirmed}
