@@ -1,7 +1,8 @@
-"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``
-and ``replay``; ``--version``, ``-v``/``-q`` (the ``logging`` level; before or after any
-subcommand), ``run NAME --help`` (the experiment's own options). Progress goes to stderr (a bar
-on a terminal, plain lines elsewhere); colour only on a terminal and never with ``NO_COLOR``."""
+"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``,
+``replay`` and ``log check|recover``; ``--version``, ``-v``/``-q`` (the ``logging`` level; before
+or after any subcommand), ``run NAME --help`` (the experiment's own options). Progress goes to
+stderr (a bar on a terminal, plain lines elsewhere); colour only on a terminal and never with
+``NO_COLOR``."""
 
 from __future__ import annotations
 
@@ -133,10 +134,18 @@ def build_parser() -> argparse.ArgumentParser:
     add_live_options(demo)
     add_service_parsers(sub)
     add_track_video_parser(sub)
-    for command in sub.choices.values():  # -v/-q after any subcommand, too
-        if "--verbose" not in command._option_string_actions:
-            _add_verbosity(command, argparse.SUPPRESS)
+    _verbosity_after_subcommands(parser)
     return parser
+
+
+def _verbosity_after_subcommands(parser: argparse.ArgumentParser) -> None:
+    """-v/-q after any subcommand too, nested ones included (``log check FILE -q``)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                if "--verbose" not in command._option_string_actions:
+                    _add_verbosity(command, argparse.SUPPRESS)
+                _verbosity_after_subcommands(command)
 
 
 def _print_summary(summary: dict, out: Path) -> None:
@@ -222,7 +231,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     from .evaluation import RunContext
     from .experiments import REGISTRY, run_experiment
 
-    if args.command in ("serve", "replay") or getattr(args, "live", False):
+    if args.command in ("serve", "replay", "log") or getattr(args, "live", False):
         from .service import run_service_command
 
         return run_service_command(args)

@@ -58,6 +58,7 @@ REQUIRED = {  # the least each subcommand needs to parse
     "serve": ["--config", "n.yaml"],
     "replay": ["demo", "--to", "udp://127.0.0.1:9000", "--config", "n.yaml"],
     "track-video": ["v.mp4", "--radio", "r.csv", "--calibration", "c.yaml", "--out", "o"],
+    "log": ["check", "node.sqlite"],
 }
 
 

@@ -291,6 +291,15 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "fusetrack (issue 17; Kushwaha 2010 field, Lee 2009 bearings)",
             options="Options",
         ),
+        ExperimentInfo(
+            "multitarget-benchmark",
+            "multitarget.benchmark:run",
+            "Beyond the papers: GNN, JPDA, MHT, MCMCDA and GM-PHD on targets born and dying, "
+            "position + range-bearing sensors, P_D 0.9, sparse/dense Poisson clutter, crossings; "
+            "GOSPA, OSPA(2), CLEAR MOT, cardinality",
+            "fusetrack (issue 17)",
+            options="Options",
+        ),
     ]
 }
 
