@@ -42,7 +42,7 @@ def options() -> argparse.Namespace:
     """`--quick` (or `FUSETRACK_QUICK=1`) for a short run; `--out DIR` for the figure."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
-        "--quick", action="store_true", default=bool(os.environ.get("FUSETRACK_QUICK"))
+        "--quick", action="store_true", default=os.environ.get("FUSETRACK_QUICK") == "1"
     )
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "figures")
     return parser.parse_args()

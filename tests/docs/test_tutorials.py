@@ -39,6 +39,15 @@ def test_a_tutorial_runs_quick_and_writes_its_figure(name, tmp_path, monkeypatch
     CHECKS.get(name, lambda r: None)(result)
 
 
+def test_the_quick_switch_is_also_an_environment_variable(tmp_path, monkeypatch):
+    name = "06_live_node_from_recordings"
+    monkeypatch.setattr(sys, "argv", [f"{name}.py", "--out", str(tmp_path)])
+    monkeypatch.setenv("FUSETRACK_QUICK", "1")
+    result = runpy.run_path(str(TUTORIALS / f"{name}.py"), run_name="__main__")
+    assert result["args"].quick and result["duration"] == 30.0
+    assert (tmp_path / f"{name}.png").exists()
+
+
 def _first_filter(r: dict) -> None:
     assert r["err_kf"].mean() < r["err_tag"].mean()  # the filter beats the raw fixes
     assert r["err_ekf"].mean() < 1.5  # the radar EKF converged (metres)
