@@ -81,6 +81,12 @@ def _live_node(r: dict) -> None:
     assert not Path(r["workdir"]).exists()  # the scratch directory is removed
 
 
+def _ercan(r: dict) -> None:
+    assert r["hidden"] > 0.1  # the occlusion-aware part of the likelihood has work to do
+    for mode, error in r["errors"].items():  # a lost tracker is ~30 units off in this room
+        assert np.all(np.isfinite(error)) and error[-20:].mean() < 2 * r["diameter"], mode
+
+
 CHECKS = {
     "01_first_filter": _first_filter,
     "02_fusing_sensors": _fusing,
@@ -88,6 +94,7 @@ CHECKS = {
     "04_several_targets": _several_targets,
     "05_fit_noise_by_likelihood": _fit,
     "06_live_node_from_recordings": _live_node,
+    "07_ercan_occlusion_own_room": _ercan,
 }
 
 
