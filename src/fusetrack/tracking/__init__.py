@@ -23,6 +23,7 @@ from .phd_tracker import PHDTracker, PHDTrackerState
 from .pmb import PMBDensity, PMBFilter
 from .pmb_tracker import PMBTracker, PMBTrackerState, cardinality_distribution
 from .protocol import Tracker, TrackView, belief_summary
+from .recording import run_tracker
 from .single_target import SingleTargetState, SingleTargetTracker
 from .state import LiveTrack, TrackerState, TrackerStats
 from .tracker import MultiTargetTracker
@@ -62,6 +63,7 @@ __all__ = [
     "combine_hypotheses",
     "combine_stacked",
     "predict_existence",
+    "run_tracker",
     "update_existence",
     "update_existences",
 ]

@@ -3,14 +3,17 @@ threshold are the tracks, behind the tracker interface (:class:`~.protocol.Track
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from ..core import Gaussian, Measurement
+from ..core import Gaussian, Measurement, Track
 from ..filters import GMPHDFilter, PhdIntensity, extract_states
 from .protocol import TrackView
+from .recording import run_tracker
 
 
 @dataclass(frozen=True)
@@ -37,6 +40,20 @@ class PHDTracker:
 
     def initial_state(self) -> PHDTrackerState:
         return PHDTrackerState(PhdIntensity.empty(self.filter.motion.dim))
+
+    def run(
+        self,
+        measurements: Iterable[Measurement | tuple[Any, ...]],
+        rng: np.random.Generator | None = None,
+        *,
+        times: ArrayLike | None = None,
+        order: Literal["reject", "reorder"] = "reject",
+        state: Any = None,
+    ) -> list[Track]:
+        """Track over a whole recording (:func:`~.recording.run_tracker`): every track ever
+        extracted, by id, at the scans it was extracted; ``state`` the state to start from
+        (e.g. a prior intensity; default :meth:`initial_state`)."""
+        return run_tracker(self, measurements, rng, times=times, order=order, state=state)
 
     def step(
         self,

@@ -5,15 +5,17 @@ identity of the measurement that created it, behind the tracker interface
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from ..core import ConfigError, Gaussian, Measurement, check_probability, invalid
+from ..core import ConfigError, Gaussian, Measurement, Track, check_probability, invalid
 from .pmb import PMBDensity, PMBFilter
 from .protocol import TrackView
+from .recording import run_tracker
 
 EXTRACTIONS = ("threshold", "map")
 
@@ -50,6 +52,20 @@ class PMBTracker:
 
     def initial_state(self) -> PMBTrackerState:
         return PMBTrackerState(PMBDensity.empty(self.filter.motion.dim))
+
+    def run(
+        self,
+        measurements: Iterable[Measurement | tuple[Any, ...]],
+        rng: np.random.Generator | None = None,
+        *,
+        times: ArrayLike | None = None,
+        order: Literal["reject", "reorder"] = "reject",
+        state: Any = None,
+    ) -> list[Track]:
+        """Track over a whole recording (:func:`~.recording.run_tracker`): every track ever
+        extracted, by id, at the scans it was extracted; ``state`` the state to start from
+        (e.g. a prior intensity; default :meth:`initial_state`)."""
+        return run_tracker(self, measurements, rng, times=times, order=order, state=state)
 
     def step(
         self,

@@ -110,19 +110,15 @@ from ..core import (
     SensorModel,
     Track,
     UnknownSensorError,
-    as_measurements,
-    group_by_time,
     invalid,
-    order_by_time,
 )
 from ..filters import as_sensor_map, validate_measurement
 from .deleters import Deleter
 from .existence import predict_existence, update_existences
 from .initiators import Initiator
 from .mixing import combine_hypotheses, combine_stacked
+from .recording import TIME_TOLERANCE, ordered_scans
 from .state import LiveTrack, TrackerState, TrackerStats
-
-TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
 
 
 def _in_range(name: str, value: object, lo: float, hi: float, valid: str = "") -> float:
@@ -863,18 +859,9 @@ class MultiTargetTracker:
         order: Literal["reject", "reorder"] = "reject",
     ) -> tuple[list[Track], TrackerState]:
         """:meth:`run`, and the state after the last scan (``state.stats``: what was skipped)."""
-        ms = as_measurements(measurements)
-        if order not in ("reject", "reorder"):
-            raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
-        index = (
-            sorted(range(len(ms)), key=lambda k: ms[k].time)
-            if order == "reorder"
-            else range(len(ms))
-        )
-        ordered = order_by_time([ms[k] for k in index], "reject")
-        scans = self._scans(ordered, list(index), times)
+        ms, scans = ordered_scans(measurements, times, order)
         state = self.initial_state()
-        self._check_measurements(ordered)  # before any work
+        self._check_measurements(ms)  # before any work
         history: dict[int, _History] = {}  # tracks alive, and ended ones that were confirmed
         alive: set[int] = set()
         for t, idx in scans:
@@ -890,29 +877,6 @@ class MultiTargetTracker:
             alive = now
         tracks = [h.track(i) for i, h in sorted(history.items()) if any(h.confirmed)]
         return tracks, state
-
-    @staticmethod
-    def _scans(
-        ordered: list[Measurement], index: list[int], times: ArrayLike | None
-    ) -> list[tuple[float, list[int]]]:
-        """``(time, indices into the original measurements)`` per scan, with empty scans at ``times``."""
-        scans: list[tuple[float, list[int]]] = []
-        k = 0
-        for t, group in group_by_time(ordered, TIME_TOLERANCE):
-            scans.append((t, index[k : k + len(group)]))
-            k += len(group)
-        if times is not None:
-            extra = np.atleast_1d(np.asarray(times, dtype=float))
-            if extra.ndim != 1 or not np.all(np.isfinite(extra)):
-                raise ConfigError(
-                    invalid("times", times, "a 1-D sequence of finite times (seconds)")
-                )
-            have = np.array([t for t, _ in scans])
-            for t in np.unique(extra):
-                if not have.size or np.min(np.abs(have - t)) > TIME_TOLERANCE:
-                    scans.append((float(t), []))
-            scans.sort(key=lambda s: s[0])
-        return scans
 
 
 def _likelihood_ratio_sums(scores: ScanLikelihoods, weights: np.ndarray) -> np.ndarray:

@@ -1,0 +1,99 @@
+"""A whole recording through any tracker: measurements grouped into scans by time, empty scans
+where the sensors looked and saw nothing, and the confirmed tracks gathered by id into
+:class:`~fusetrack.core.Track` values (:func:`run_tracker`). :class:`~.tracker.MultiTargetTracker`
+keeps its own richer history (the measurements each track used); the random-finite-set trackers
+(:class:`~.phd_tracker.PHDTracker`, :class:`~.pmb_tracker.PMBTracker`) run through this."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..core import (
+    ConfigError,
+    Measurement,
+    Track,
+    as_measurements,
+    group_by_time,
+    invalid,
+    order_by_time,
+)
+from .protocol import Tracker, belief_summary
+
+TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
+
+
+def scan_groups(
+    ordered: list[Measurement], index: list[int], times: ArrayLike | None
+) -> list[tuple[float, list[int]]]:
+    """``(time, indices into the original measurements)`` per scan of the time-ordered
+    ``ordered`` (``index[k]``: the original position of ``ordered[k]``), plus an empty scan at
+    each of ``times`` where no measurement falls."""
+    scans: list[tuple[float, list[int]]] = []
+    k = 0
+    for t, group in group_by_time(ordered, TIME_TOLERANCE):
+        scans.append((t, index[k : k + len(group)]))
+        k += len(group)
+    if times is not None:
+        extra = np.atleast_1d(np.asarray(times, dtype=float))
+        if extra.ndim != 1 or not np.all(np.isfinite(extra)):
+            raise ConfigError(invalid("times", times, "a 1-D sequence of finite times (seconds)"))
+        have = np.array([t for t, _ in scans])
+        for t in np.unique(extra):
+            if not have.size or np.min(np.abs(have - t)) > TIME_TOLERANCE:
+                scans.append((float(t), []))
+        scans.sort(key=lambda s: s[0])
+    return scans
+
+
+def ordered_scans(
+    measurements: Iterable[Measurement | tuple[Any, ...]],
+    times: ArrayLike | None,
+    order: Literal["reject", "reorder"],
+) -> tuple[list[Measurement], list[tuple[float, list[int]]]]:
+    """The measurements as :class:`~fusetrack.core.Measurement` values and their scans
+    (:func:`scan_groups`); out-of-order timestamps raise (naming both times) unless
+    ``order="reorder"``."""
+    ms = as_measurements(measurements)
+    if order not in ("reject", "reorder"):
+        raise ConfigError(invalid("order", order, "'reject' or 'reorder'"))
+    index = (
+        sorted(range(len(ms)), key=lambda k: ms[k].time)
+        if order == "reorder"
+        else list(range(len(ms)))
+    )
+    ordered = order_by_time([ms[k] for k in index], "reject")
+    return ms, scan_groups(ordered, index, times)
+
+
+def run_tracker(
+    tracker: Tracker,
+    measurements: Iterable[Measurement | tuple[Any, ...]],
+    rng: np.random.Generator | None = None,
+    *,
+    times: ArrayLike | None = None,
+    order: Literal["reject", "reorder"] = "reject",
+    state: Any = None,
+) -> list[Track]:
+    """Step ``tracker`` scan by scan over a recording (from ``state``, default its
+    ``initial_state()``) and return every track it ever confirmed, by id: the scans at which it
+    was confirmed, its mean and covariance after each (``filter.estimate`` when the tracker's
+    filter has one)."""
+    ms, scans = ordered_scans(measurements, times, order)
+    state = tracker.initial_state() if state is None else state
+    history: dict[int, tuple[list[float], list[np.ndarray], list[np.ndarray]]] = {}
+    for t, idx in scans:
+        state = tracker.step(state, t, [ms[k] for k in idx], rng)
+        for tr in state.confirmed:
+            mean, cov = belief_summary(getattr(tracker, "filter", None), tr.belief)
+            ts, means, covs = history.setdefault(int(tr.id), ([], [], []))
+            ts.append(t)
+            means.append(np.asarray(mean, float))
+            covs.append(np.asarray(cov, float))
+    return [
+        Track(np.array(ts), np.stack(means), np.stack(covs), label=f"track {i}", id=i)
+        for i, (ts, means, covs) in sorted(history.items())
+    ]
