@@ -4,7 +4,8 @@ One person walks through the rendered room of Nott (2009) (:mod:`fusetrack.world
 for ``duration`` seconds after ``empty`` seconds of empty scene, talking as they go. Written into
 ``DIR``, all on one clock (seconds from the first video frame):
 
-* ``video.mp4`` + ``camera.yaml``: the rendered camera at low resolution (192x144, 10 frames/s),
+* ``video.avi`` + ``camera.yaml``: the rendered camera at low resolution (160x120, 10 frames/s, lossless FFV1: background subtraction
+  needs it, MPEG-4 blocks read as foreground),
   with its floor homography (:func:`fusetrack.tools.write_recording`);
 * ``tags.csv``: the person's radio tag (simulated NFER fixes, 5 Hz; columns time, tag, x, y);
 * ``array.wav``: a 4-microphone square array (0.2 m side, 16 kHz, 16-bit PCM) hearing the
@@ -31,7 +32,7 @@ from ..world import pink_noise, propagate, single_person_walk, speech_like
 from .synthetic_recording import write_recording
 
 FPS = 10.0
-SCALE = 0.3  # of the 640x480 camera: 192x144
+SCALE = 0.25  # of the 640x480 camera: 160x120
 AUDIO_FS = 16_000
 ARRAY_POSITION = (8.0, 1.0)
 ARRAY_HEADING = 0.0
@@ -102,9 +103,9 @@ def _scene(empty: float) -> dict[str, Any]:
             {
                 "id": "camera",
                 "kind": "image_position",
-                "sigma_px": 4.0,
-                "image_size": [192, 144],
-                "recording": {"format": "video", "path": "video.mp4", "calibration": "camera.yaml"},
+                "sigma_px": 3.0,
+                "image_size": [160, 120],
+                "recording": {"format": "video", "path": "video.avi", "calibration": "camera.yaml"},
             },
             {
                 "id": "tag",
@@ -123,7 +124,7 @@ def _scene(empty: float) -> dict[str, Any]:
     }
 
 
-def make_sample(out: str | Path, *, seed: int = 0, empty: float = 2.0, duration: float = 5.0) -> dict[str, Path]:
+def make_sample(out: str | Path, *, seed: int = 0, empty: float = 1.5, duration: float = 5.0) -> dict[str, Path]:
     """Write the sample recordings and their scene into ``out`` (module docstring); the paths."""
     import yaml
 
@@ -139,7 +140,7 @@ def make_sample(out: str | Path, *, seed: int = 0, empty: float = 2.0, duration:
         n_frames=n_frames,
         fps=FPS,
         tag_every=2,
-        video_name="video.mp4",
+        video_name="video.avi",
         camera=low_resolution_camera(),
         min_area=20,
     )
