@@ -124,6 +124,21 @@ class SceneSensor(SensorConfig):
 
     recording: Recording
 
+    @model_validator(mode="before")
+    @classmethod
+    def _format_from_suffix(cls, data: Any) -> Any:
+        """``recording.format`` from the file's suffix when not given."""
+        rec = data.get("recording") if isinstance(data, dict) else None
+        if isinstance(rec, dict) and "format" not in rec and isinstance(rec.get("path"), str):
+            fmt = _format_of(rec)
+            if fmt is None:
+                raise ValueError(
+                    f"recording.path={rec['path']!r} does not say its format: give "
+                    f"recording.format, or a file ending in {', '.join(SUFFIXES)}"
+                )
+            data = {**data, "recording": {**rec, "format": fmt}}
+        return data
+
     @model_validator(mode="after")
     def _recording_fits(self) -> SceneSensor:
         fmt = self.recording.format
@@ -166,26 +181,11 @@ class Scene(_Strict):
     animation: Animation = Animation()
 
 
-def _with_format(data: Any) -> Any:
-    """Each sensor's ``recording.format`` from its file's suffix when not given."""
-    if not isinstance(data, dict) or not isinstance(data.get("sensors"), list):
-        return data
-    sensors = []
-    for i, s in enumerate(data["sensors"]):
-        rec = s.get("recording") if isinstance(s, dict) else None
-        if isinstance(rec, dict) and "format" not in rec and isinstance(rec.get("path"), str):
-            suffix = Path(rec["path"]).suffix.lower()
-            if suffix not in SUFFIXES:
-                raise ConfigError(
-                    invalid(
-                        f"sensors[{i}].recording.path",
-                        rec["path"],
-                        f"a file ending in {', '.join(SUFFIXES)}, or a recording.format",
-                    )
-                )
-            s = {**s, "recording": {**rec, "format": SUFFIXES[suffix]}}
-        sensors.append(s)
-    return {**data, "sensors": sensors}
+def _format_of(rec: dict[str, Any]) -> Any:
+    """``rec``'s ``format``, or the one its file's suffix implies (None if neither)."""
+    if "format" in rec or not isinstance(rec.get("path"), str):
+        return rec.get("format")
+    return SUFFIXES.get(Path(rec["path"]).suffix.lower())
 
 
 def _with_calibration(data: Any, base: Path) -> Any:
@@ -199,7 +199,7 @@ def _with_calibration(data: Any, base: Path) -> Any:
         rec = s.get("recording") if isinstance(s, dict) else None
         if (
             isinstance(rec, dict)
-            and rec.get("format") == "video"
+            and _format_of(rec) == "video"
             and isinstance(rec.get("calibration"), str)
             and s.get("homography") is None
         ):
@@ -282,7 +282,7 @@ def load_scene(path: str | Path) -> tuple[Scene, NetworkConfig, Path]:
     if not isinstance(data, dict):
         raise ConfigError(invalid("--config", str(p), "a YAML mapping (docs/track.md)"))
     base = p.parent
-    data = _with_calibration(_with_format(data), base)
+    data = _with_calibration(data, base)
     try:
         scene = Scene.model_validate(data)
     except ValidationError as err:
