@@ -152,7 +152,7 @@ def make_sample(out: str | Path, *, seed: int = 0, empty: float = 1.5, duration:
     scene = out / "scene.yaml"
     scene.write_text(
         "# The sample scene of `fusetrack track` (written by `fusetrack make-sample`; docs/track.md)\n"
-        + yaml.safe_dump(_scene(empty), sort_keys=False)
+        + yaml.safe_dump(_scene(empty), sort_keys=False, default_flow_style=None)
     )
     return {**paths, "audio": out / "array.wav", "scene": scene}
 
