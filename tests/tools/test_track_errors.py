@@ -53,7 +53,9 @@ def test_a_missing_recording_names_the_sensor_and_the_file(tmp_path):
 
 def test_a_channel_count_that_does_not_match_the_array(tmp_path):
     def change(d):
-        d["sensors"][0]["recording"]["microphones"] = d["sensors"][0]["recording"]["microphones"][:3]
+        d["sensors"][0]["recording"]["microphones"] = d["sensors"][0]["recording"]["microphones"][
+            :3
+        ]
 
     refused(tmp_path, change, "sensors[0].recording.microphones=", "3 microphones", "4 channels")
 
@@ -96,7 +98,13 @@ def test_a_table_without_the_kinds_columns(tmp_path):
     def change(d):
         d["sensors"][2]["recording"] = {"path": str(tmp_path / "fix.csv")}
 
-    refused(tmp_path, change, "sensors[2].recording.path=", "columns ['time', 'x', 'y']", "missing ['y']")
+    refused(
+        tmp_path,
+        change,
+        "sensors[2].recording.path=",
+        "columns ['time', 'x', 'y']",
+        "missing ['y']",
+    )
 
 
 def test_the_command_line_says_the_error_and_exits_2(tmp_path, capsys):

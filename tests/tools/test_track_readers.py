@@ -33,10 +33,18 @@ def test_a_table_of_fixes_is_read_filtered_sorted_and_shifted(tmp_path, fmt):
         }
     )
     path = tmp_path / f"log.{fmt}"
-    {"csv": lambda: df.to_csv(path, index=False),
-     "jsonl": lambda: df.to_json(path, orient="records", lines=True),
-     "parquet": lambda: df.to_parquet(path)}[fmt]()
-    rec = {"format": fmt, "path": path.name, "offset": 100.0, "where": {"tag": "a"}, "columns": {"time": "t"}}
+    {
+        "csv": lambda: df.to_csv(path, index=False),
+        "jsonl": lambda: df.to_json(path, orient="records", lines=True),
+        "parquet": lambda: df.to_parquet(path),
+    }[fmt]()
+    rec = {
+        "format": fmt,
+        "path": path.name,
+        "offset": 100.0,
+        "where": {"tag": "a"},
+        "columns": {"time": "t"},
+    }
     src = open_source(0, sensor(**TAG, recording=rec), tmp_path)
     r = src.load(None)
     np.testing.assert_allclose(r.times, [100.1, 100.2, 100.3])
@@ -45,8 +53,16 @@ def test_a_table_of_fixes_is_read_filtered_sorted_and_shifted(tmp_path, fmt):
 
 
 def test_bearings_in_degrees_are_converted(tmp_path):
-    pd.DataFrame({"time": [0.0, 1.0], "bearing": [90.0, -45.0]}).to_csv(tmp_path / "b.csv", index=False)
-    s = sensor(id="b", kind="bearing", position=[0, 0], sigma=0.1, recording={"path": "b.csv", "degrees": True})
+    pd.DataFrame({"time": [0.0, 1.0], "bearing": [90.0, -45.0]}).to_csv(
+        tmp_path / "b.csv", index=False
+    )
+    s = sensor(
+        id="b",
+        kind="bearing",
+        position=[0, 0],
+        sigma=0.1,
+        recording={"path": "b.csv", "degrees": True},
+    )
     r = open_source(0, s, tmp_path).load(None)
     np.testing.assert_allclose(r.values[:, 0], [math.pi / 2, -math.pi / 4])
 
@@ -55,9 +71,14 @@ def test_the_node_log_gives_one_sensors_messages_with_their_covariances(tmp_path
     from fusetrack.service import DurableLog, SensorMessage
 
     log = DurableLog(tmp_path / "node.sqlite")
-    for i, (sid, t, xy) in enumerate([("tag", 1.0, [1, 2]), ("other", 1.5, [7, 7]), ("tag", 2.0, [3, 4])]):
+    for i, (sid, t, xy) in enumerate(
+        [("tag", 1.0, [1, 2]), ("other", 1.5, [7, 7]), ("tag", 2.0, [3, 4])]
+    ):
         msg = SensorMessage(
-            node="n1", seq=i, sensor=sid, time=t,
+            node="n1",
+            seq=i,
+            sensor=sid,
+            time=t,
             reading={"kind": "position_fix", "position": xy},
             covariance=[[0.5, 0.0], [0.0, 0.5]],
         )
@@ -81,7 +102,13 @@ def test_a_wav_of_a_source_at_a_known_bearing_gives_that_bearing(tmp_path):
     c, s = math.cos(heading), math.sin(heading)
     world = mics @ np.array([[c, s], [-s, c]]) + [1.0, 2.0]
     src = np.array([1.0, 2.0]) + 6.0 * np.array([math.cos(bearing), math.sin(bearing)])
-    x = propagate(speech_like(1.2, rng, fs=fs), lambda t: np.broadcast_to(src, (t.size, 2)), world, 0.1 + np.arange(fs) / fs, fs=fs)
+    x = propagate(
+        speech_like(1.2, rng, fs=fs),
+        lambda t: np.broadcast_to(src, (t.size, 2)),
+        world,
+        0.1 + np.arange(fs) / fs,
+        fs=fs,
+    )
     x += 0.05 * x.std() * pink_noise(x.shape, rng)
     wavfile.write(tmp_path / "a.wav", fs, (x / np.abs(x).max() * 20000).astype(np.int16).T.copy())
     rec = {"path": "a.wav", "microphones": mics.tolist(), "offset": 5.0, "hop": 0.25}
@@ -93,11 +120,13 @@ def test_a_wav_of_a_source_at_a_known_bearing_gives_that_bearing(tmp_path):
 
 
 def test_position_errors_follow_the_nearest_truth_target(tmp_path):
-    pd.DataFrame({"time": [0, 2, 0, 2], "x": [0, 2, 10, 10], "y": [0, 0, 5, 5], "target": [1, 1, 2, 2]}).to_csv(
-        tmp_path / "t.csv", index=False
-    )
+    pd.DataFrame(
+        {"time": [0, 2, 0, 2], "x": [0, 2, 10, 10], "y": [0, 0, 5, 5], "target": [1, 1, 2, 2]}
+    ).to_csv(tmp_path / "t.csv", index=False)
     truth = read_truth(tmp_path / "t.csv")
-    tracks = pd.DataFrame({"track": [7, 7, 7], "time": [1.0, 2.0, 3.0], "x": [1.0, 2.0, 5.0], "y": [0.3, 0.4, 0.0]})
+    tracks = pd.DataFrame(
+        {"track": [7, 7, 7], "time": [1.0, 2.0, 3.0], "x": [1.0, 2.0, 5.0], "y": [0.3, 0.4, 0.0]}
+    )
     e = position_errors(tracks, truth)
     assert list(e["target"]) == [1, 1]  # t = 3 is outside the truth
     np.testing.assert_allclose(e["error"], [0.3, 0.4])

@@ -2,8 +2,8 @@
 ``make-sample``)."""
 
 from .sample import add_make_sample_parser, make_sample, run_make_sample_command
-from .synthetic_recording import write_recording
 from .scene import Scene, load_scene
+from .synthetic_recording import write_recording
 from .track_scene import add_track_parser, run_track_command, track_scene
 from .track_video import InputError, run_track_video_command, track_video
 from .track_video_args import add_track_video_parser
@@ -12,9 +12,9 @@ from .video_tracker import FrameResult, TrackerConfig, VideoRadioTracker
 __all__ = [
     "FrameResult",
     "InputError",
+    "Scene",
     "TrackerConfig",
     "VideoRadioTracker",
-    "Scene",
     "add_make_sample_parser",
     "add_track_parser",
     "add_track_video_parser",
@@ -22,8 +22,8 @@ __all__ = [
     "make_sample",
     "run_make_sample_command",
     "run_track_command",
-    "track_scene",
     "run_track_video_command",
+    "track_scene",
     "track_video",
     "write_recording",
 ]

@@ -87,12 +87,16 @@ def read_table(path: Path, fmt: str, field: str) -> pd.DataFrame:
         raise ConfigError(invalid(field, str(path), f"a readable {fmt} file ({err})")) from None
 
 
-def table_readings(df: pd.DataFrame, i: int, sensor: SceneSensor, rec: TableRecording) -> SensorReadings:
+def table_readings(
+    df: pd.DataFrame, i: int, sensor: SceneSensor, rec: TableRecording
+) -> SensorReadings:
     """The rows of ``df`` kept by ``where``, as readings: ``time`` + the kind's columns, numbers,
     sorted by time (stable), angles converted from degrees when ``degrees``."""
     for col, value in rec.where.items():
         if col not in df.columns:
-            raise ConfigError(invalid(_field(i, f"where.{col}"), value, f"a column of {list(df.columns)}"))
+            raise ConfigError(
+                invalid(_field(i, f"where.{col}"), value, f"a column of {list(df.columns)}")
+            )
         df = df[df[col].astype(str) == str(value)]
     names = ("time", *COLUMNS[sensor.kind])
     file_cols = [rec.columns.get(n, n) for n in names]
@@ -111,9 +115,13 @@ def table_readings(df: pd.DataFrame, i: int, sensor: SceneSensor, rec: TableReco
     data = df[file_cols].apply(pd.to_numeric, errors="coerce").to_numpy(float)
     bad = ~np.isfinite(data)
     if bad.any():
-        row, col = (int(v[0]) for v in np.nonzero(bad))
+        row, j = (int(v[0]) for v in np.nonzero(bad))
         raise ConfigError(
-            invalid(f"{rec.path} column {file_cols[col]!r} at data row {row + 1}", df[file_cols[col]].iloc[row], "a finite number")
+            invalid(
+                f"{rec.path} column {file_cols[j]!r} at data row {row + 1}",
+                df[file_cols[j]].iloc[row],
+                "a finite number",
+            )
         )
     order = np.argsort(data[:, 0], kind="stable")
     data = data[order]
@@ -134,7 +142,9 @@ def _open_table(i: int, sensor: SceneSensor, rec: TableRecording, base: Path) ->
 # -- the durable log of a fusion node (SQLite) ------------------------------------------------
 
 
-def node_log_readings(path: Path, i: int, sensor: SceneSensor, rec: NodeLogRecording) -> SensorReadings:
+def node_log_readings(
+    path: Path, i: int, sensor: SceneSensor, rec: NodeLogRecording
+) -> SensorReadings:
     """The messages of one sensor in a node's durable log (:mod:`fusetrack.service.log`: table
     ``messages``, a JSON :class:`~fusetrack.service.SensorMessage` per row), read-only."""
     from ..service import SensorMessage
@@ -143,18 +153,28 @@ def node_log_readings(path: Path, i: int, sensor: SceneSensor, rec: NodeLogRecor
     try:
         db = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
         try:
-            rows = db.execute("SELECT body FROM messages WHERE sensor = ? ORDER BY id", (name,)).fetchall()
+            rows = db.execute(
+                "SELECT body FROM messages WHERE sensor = ? ORDER BY id", (name,)
+            ).fetchall()
         finally:
             db.close()
     except sqlite3.Error as err:
-        raise ConfigError(invalid(_field(i, "path"), rec.path, f"a fusion node's SQLite log ({err})")) from None
+        raise ConfigError(
+            invalid(_field(i, "path"), rec.path, f"a fusion node's SQLite log ({err})")
+        ) from None
     if not rows:
-        raise ConfigError(invalid(_field(i, "sensor"), name, f"a sensor with messages in {rec.path}"))
+        raise ConfigError(
+            invalid(_field(i, "sensor"), name, f"a sensor with messages in {rec.path}")
+        )
     messages = [SensorMessage.model_validate_json(body) for (body,) in rows]
     kinds = {m.reading.kind for m in messages}
     if kinds != {sensor.kind}:
         raise ConfigError(
-            invalid(f"sensors[{i}].kind", sensor.kind, f"the kind of the logged readings {sorted(kinds)}")
+            invalid(
+                f"sensors[{i}].kind",
+                sensor.kind,
+                f"the kind of the logged readings {sorted(kinds)}",
+            )
         )
     times = np.array([m.time for m in messages]) + rec.offset
     values = np.array([m.value() for m in messages])
@@ -241,7 +261,11 @@ def _open_wav(i: int, sensor: SceneSensor, rec: WavRecording, base: Path) -> Sou
         )
     if len(data) < 2 * rec.window:
         raise ConfigError(
-            invalid(_field(i, "path"), rec.path, f"at least 2 windows of audio ({2 * rec.window} samples)")
+            invalid(
+                _field(i, "path"),
+                rec.path,
+                f"at least 2 windows of audio ({2 * rec.window} samples)",
+            )
         )
 
     def load(progress: Any) -> SensorReadings:
@@ -279,7 +303,13 @@ def video_positions(
 
 
 def _open_video(i: int, sensor: SceneSensor, rec: VideoRecording, base: Path) -> Source:
-    from .track_video import InputError, _background_frames, _frame_rate, open_video, read_calibration
+    from .track_video import (
+        InputError,
+        _background_frames,
+        _frame_rate,
+        open_video,
+        read_calibration,
+    )
 
     path = resolve(base, rec.path, _field(i, "path"))
     cal_path = resolve(base, rec.calibration, _field(i, "calibration"))
@@ -338,7 +368,9 @@ def read_truth(path: Path) -> pd.DataFrame:
     df = read_table(path, "csv", "truth")
     missing = [c for c in ("time", "x", "y") if c not in df.columns]
     if missing:
-        raise ConfigError(invalid("truth", str(path), f"a CSV with columns time, x, y (missing {missing})"))
+        raise ConfigError(
+            invalid("truth", str(path), f"a CSV with columns time, x, y (missing {missing})")
+        )
     if "target" not in df.columns:
         df["target"] = 0
     return df.sort_values(["target", "time"], kind="stable").reset_index(drop=True)
@@ -347,11 +379,18 @@ def read_truth(path: Path) -> pd.DataFrame:
 def readings_table(readings: list[SensorReadings]) -> pd.DataFrame:
     """All readings as one table: sensor, kind, time, value (JSON list)."""
     rows = [
-        {"sensor": r.sensor, "kind": r.kind, "time": float(t), "value": json.dumps(np.round(v, 6).tolist())}
+        {
+            "sensor": r.sensor,
+            "kind": r.kind,
+            "time": float(t),
+            "value": json.dumps(np.round(v, 6).tolist()),
+        }
         for r in readings
         for t, v in zip(r.times, r.values, strict=True)
     ]
-    return pd.DataFrame(rows, columns=["sensor", "kind", "time", "value"]).sort_values("time", kind="stable")
+    return pd.DataFrame(rows, columns=["sensor", "kind", "time", "value"]).sort_values(
+        "time", kind="stable"
+    )
 
 
 __all__ = [

@@ -124,7 +124,9 @@ def _scene(empty: float) -> dict[str, Any]:
     }
 
 
-def make_sample(out: str | Path, *, seed: int = 0, empty: float = 1.5, duration: float = 5.0) -> dict[str, Path]:
+def make_sample(
+    out: str | Path, *, seed: int = 0, empty: float = 1.5, duration: float = 5.0
+) -> dict[str, Path]:
     """Write the sample recordings and their scene into ``out`` (module docstring); the paths."""
     import yaml
 

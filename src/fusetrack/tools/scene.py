@@ -160,7 +160,7 @@ class Fusion(_Strict):
 
 
 class Animation(_Strict):
-    fps: float = Field(default=10.0, gt=0.0, le=60.0)
+    fps: int = Field(default=10, ge=1, le=60, description="frames per second")
     max_frames: int = Field(default=120, ge=2, le=2000)
     format: Literal["gif", "mp4"] = "gif"
 
@@ -227,7 +227,9 @@ def network_config(scene: Scene, source: str) -> NetworkConfig:
     data = {
         "area": scene.area,
         "sensors": sensors,
-        "nodes": [{"id": "offline", "key": OFFLINE_NODE_KEY, "sensors": [s["id"] for s in sensors]}],
+        "nodes": [
+            {"id": "offline", "key": OFFLINE_NODE_KEY, "sensors": [s["id"] for s in sensors]}
+        ],
         "fusion": {
             "rate_hz": scene.fusion.rate_hz,
             "alignment": scene.fusion.alignment,

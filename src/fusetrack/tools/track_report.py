@@ -34,7 +34,10 @@ def position_errors(tracks: pd.DataFrame, truth: pd.DataFrame) -> pd.DataFrame:
             if best is None or err.mean() < best[0]:
                 best = (float(err.mean()), target, t, err)
         if best is not None:
-            rows += [{"track": tid, "target": best[1], "time": t, "error": e} for t, e in zip(best[2], best[3], strict=True)]
+            rows += [
+                {"track": tid, "target": best[1], "time": t, "error": e}
+                for t, e in zip(best[2], best[3], strict=True)
+            ]
     return pd.DataFrame(rows, columns=["track", "target", "time", "error"])
 
 
@@ -48,7 +51,7 @@ def _axes_scene(ax: Any, scene: Scene, net: NetworkConfig, truth: pd.DataFrame |
             ax.plot(*s.position[:2], MARKERS.get(s.kind, "o"), color="k", ms=8, mfc="w")
             ax.annotate(s.id, s.position[:2], textcoords="offset points", xytext=(5, 5), fontsize=8)
     if truth is not None:
-        for i, (target, g) in enumerate(truth.groupby("target")):
+        for i, (_target, g) in enumerate(truth.groupby("target")):
             ax.plot(g["x"], g["y"], "k:", lw=2, label="ground truth" if i == 0 else None)
     ax.set_xlim(x0 - 0.5, x1 + 0.5)
     ax.set_ylim(y0 - 0.5, y1 + 0.5)
@@ -62,7 +65,14 @@ def _fixes(readings: list[SensorReadings]) -> list[SensorReadings]:
     return [r for r in readings if r.kind == "position_fix"]
 
 
-def scene_figure(path: Path, scene: Scene, net: NetworkConfig, readings: list[SensorReadings], tracks: pd.DataFrame, truth: pd.DataFrame | None) -> None:
+def scene_figure(
+    path: Path,
+    scene: Scene,
+    net: NetworkConfig,
+    readings: list[SensorReadings],
+    tracks: pd.DataFrame,
+    truth: pd.DataFrame | None,
+) -> None:
     """Tracks (one style per id), position fixes, sensors and truth over the scene's area."""
     import matplotlib.pyplot as plt
 
@@ -86,7 +96,9 @@ def error_figure(path: Path, errors: pd.DataFrame) -> None:
 
     fig, ax = plt.subplots(figsize=(7, 3.2))
     for i, (tid, g) in enumerate(errors.groupby("track")):
-        ax.plot(g["time"], g["error"], STYLES[i % len(STYLES)], marker=".", ms=3, label=f"track {tid}")
+        ax.plot(
+            g["time"], g["error"], STYLES[i % len(STYLES)], marker=".", ms=3, label=f"track {tid}"
+        )
     ax.set_xlabel("time (s)")
     ax.set_ylabel("position error (m)")
     ax.grid(alpha=0.3)
@@ -96,7 +108,9 @@ def error_figure(path: Path, errors: pd.DataFrame) -> None:
     plt.close(fig)
 
 
-def animate(path: Path, scene: Scene, net: NetworkConfig, tracks: pd.DataFrame, truth: pd.DataFrame | None) -> Path:
+def animate(
+    path: Path, scene: Scene, net: NetworkConfig, tracks: pd.DataFrame, truth: pd.DataFrame | None
+) -> Path:
     """Tracks growing over the scene, one frame per tick (at most ``animation.max_frames``):
     a GIF (Pillow), or an MP4 when asked for and ffmpeg exists. Returns the file written."""
     import matplotlib.pyplot as plt
@@ -104,11 +118,18 @@ def animate(path: Path, scene: Scene, net: NetworkConfig, tracks: pd.DataFrame, 
 
     opts = scene.animation
     times = np.unique(tracks["time"].to_numpy()) if not tracks.empty else np.zeros(1)
-    frames = times[np.unique(np.linspace(0, len(times) - 1, min(len(times), opts.max_frames)).round().astype(int))]
+    frames = times[
+        np.unique(
+            np.linspace(0, len(times) - 1, min(len(times), opts.max_frames)).round().astype(int)
+        )
+    ]
     fig, ax = plt.subplots(figsize=(4.5, 4.5))
     _axes_scene(ax, scene, net, truth)
     ids = sorted(tracks["track"].unique()) if not tracks.empty else []
-    trails = {tid: ax.plot([], [], STYLES[i % len(STYLES)], lw=1.5, label=f"track {tid}")[0] for i, tid in enumerate(ids)}
+    trails = {
+        tid: ax.plot([], [], STYLES[i % len(STYLES)], lw=1.5, label=f"track {tid}")[0]
+        for i, tid in enumerate(ids)
+    }
     heads = {tid: ax.plot([], [], "o", color=trails[tid].get_color(), ms=5)[0] for tid in ids}
     (true_dot,) = ax.plot([], [], "kx", ms=7, label="truth now" if truth is not None else None)
     title = ax.set_title("", fontsize=9)
@@ -122,7 +143,11 @@ def animate(path: Path, scene: Scene, net: NetworkConfig, tracks: pd.DataFrame, 
             now = g[g["time"] > t - 1e-9]
             heads[tid].set_data(now["x"], now["y"])
         if truth is not None:
-            pts = [(np.interp(t, g["time"], g["x"]), np.interp(t, g["time"], g["y"])) for _, g in truth.groupby("target") if g["time"].min() <= t <= g["time"].max()]
+            pts = [
+                (np.interp(t, g["time"], g["x"]), np.interp(t, g["time"], g["y"]))
+                for _, g in truth.groupby("target")
+                if g["time"].min() <= t <= g["time"].max()
+            ]
             true_dot.set_data([p[0] for p in pts], [p[1] for p in pts])
         title.set_text(f"{scene.name[:40]}  t = {t:.2f} s")
         return [*trails.values(), *heads.values(), true_dot, title]
@@ -138,15 +163,44 @@ def animate(path: Path, scene: Scene, net: NetworkConfig, tracks: pd.DataFrame, 
     return out
 
 
-def _markdown(scene: Scene, net: NetworkConfig, readings: list[SensorReadings], tracks: pd.DataFrame, errors: pd.DataFrame | None, gif: Path | None) -> str:
+def _markdown(
+    scene: Scene,
+    net: NetworkConfig,
+    readings: list[SensorReadings],
+    tracks: pd.DataFrame,
+    errors: pd.DataFrame | None,
+    gif: Path | None,
+) -> str:
     t = net.tracker
-    lines = [f"# fusetrack track: {scene.name}", "", "## Sensors and readings", "", "| sensor | kind | recording | readings | from (s) | to (s) |", "|---|---|---|---|---|---|"]
+    lines = [
+        f"# fusetrack track: {scene.name}",
+        "",
+        "## Sensors and readings",
+        "",
+        "| sensor | kind | recording | readings | from (s) | to (s) |",
+        "|---|---|---|---|---|---|",
+    ]
     for s, r in zip(scene.sensors, readings, strict=True):
         span = (f"{r.times.min():.2f}", f"{r.times.max():.2f}") if len(r) else ("-", "-")
-        lines.append(f"| {s.id} | {s.kind} | {s.recording.format}: `{s.recording.path}` | {len(r)} | {span[0]} | {span[1]} |")
-    lines += ["", "## Tracker", "", f"filter `{t.filter}`, motion `{t.motion.model}` (q = {t.motion.q}), association `{t.association.method}`, {net.fusion.rate_hz:g} ticks/s, alignment `{net.fusion.alignment}`.", ""]
+        lines.append(
+            f"| {s.id} | {s.kind} | {s.recording.format}: `{s.recording.path}` | {len(r)} | {span[0]} | {span[1]} |"
+        )
+    lines += [
+        "",
+        "## Tracker",
+        "",
+        f"filter `{t.filter}`, motion `{t.motion.model}` (q = {t.motion.q}), association `{t.association.method}`, {net.fusion.rate_hz:g} ticks/s, alignment `{net.fusion.alignment}`.",
+        "",
+    ]
     n_tracks = tracks["track"].nunique() if not tracks.empty else 0
-    lines += ["## Tracks", "", f"{n_tracks} track(s), {len(tracks)} published states: `tracks.parquet`, `tracks.csv`.", "", "![tracks over the scene](scene.png)", ""]
+    lines += [
+        "## Tracks",
+        "",
+        f"{n_tracks} track(s), {len(tracks)} published states: `tracks.parquet`, `tracks.csv`.",
+        "",
+        "![tracks over the scene](scene.png)",
+        "",
+    ]
     if gif is not None:
         lines += [f"Animation: ![tracks over time]({gif.name})", ""]
     if errors is not None:
@@ -154,14 +208,34 @@ def _markdown(scene: Scene, net: NetworkConfig, readings: list[SensorReadings], 
         if errors.empty:
             lines += ["No track state falls inside the ground truth's time span.", ""]
         else:
-            lines += ["| track | truth target | states | RMSE (m) | max (m) |", "|---|---|---|---|---|"]
+            lines += [
+                "| track | truth target | states | RMSE (m) | max (m) |",
+                "|---|---|---|---|---|",
+            ]
             for tid, g in errors.groupby("track"):
-                lines.append(f"| {tid} | {g['target'].iloc[0]} | {len(g)} | {np.sqrt(np.mean(g['error'] ** 2)):.3f} | {g['error'].max():.3f} |")
-            lines += ["", f"**Position RMSE (all tracks): {np.sqrt(np.mean(errors['error'] ** 2)):.3f} m**", "", "![position error](error.png)", ""]
+                lines.append(
+                    f"| {tid} | {g['target'].iloc[0]} | {len(g)} | {np.sqrt(np.mean(g['error'] ** 2)):.3f} | {g['error'].max():.3f} |"
+                )
+            lines += [
+                "",
+                f"**Position RMSE (all tracks): {np.sqrt(np.mean(errors['error'] ** 2)):.3f} m**",
+                "",
+                "![position error](error.png)",
+                "",
+            ]
     return "\n".join(lines)
 
 
-def write_report(out: Path, scene: Scene, net: NetworkConfig, readings: list[SensorReadings], tracks: pd.DataFrame, truth: pd.DataFrame | None, *, animate_tracks: bool = True) -> dict[str, Any]:
+def write_report(
+    out: Path,
+    scene: Scene,
+    net: NetworkConfig,
+    readings: list[SensorReadings],
+    tracks: pd.DataFrame,
+    truth: pd.DataFrame | None,
+    *,
+    animate_tracks: bool = True,
+) -> dict[str, Any]:
     """``report.md`` and its figures (and the animation) into ``out``; the summary's numbers."""
     import matplotlib
 
@@ -175,7 +249,11 @@ def write_report(out: Path, scene: Scene, net: NetworkConfig, readings: list[Sen
         errors.to_csv(out / "errors.csv", index=False)
     gif = animate(out / "tracks.gif", scene, net, tracks, truth) if animate_tracks else None
     (out / "report.md").write_text(_markdown(scene, net, readings, tracks, errors, gif) + "\n")
-    rmse = float(np.sqrt(np.mean(errors["error"] ** 2))) if errors is not None and not errors.empty else None
+    rmse = (
+        float(np.sqrt(np.mean(errors["error"] ** 2)))
+        if errors is not None and not errors.empty
+        else None
+    )
     return {
         "scene": scene.name,
         "readings": {r.sensor: len(r) for r in readings},

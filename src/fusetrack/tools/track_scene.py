@@ -32,12 +32,23 @@ import pandas as pd
 
 from ..core import ConfigError, invalid
 from ..service import Aligner, NetworkConfig, Reading, TrackState, build_engine
-from .recordings import SensorReadings, Source, check_clocks, open_source, read_truth, readings_table
+from .recordings import (
+    SensorReadings,
+    Source,
+    check_clocks,
+    open_source,
+    read_truth,
+    readings_table,
+)
 from .scene import Scene, load_scene, resolve
 
 
 def run_engine(
-    net: NetworkConfig, readings: list[SensorReadings], start: float, end: float, progress: Any = None
+    net: NetworkConfig,
+    readings: list[SensorReadings],
+    start: float,
+    end: float,
+    progress: Any = None,
 ) -> list[TrackState]:
     """Every tick from ``start`` to ``end`` through the node's aligner and engine (module docstring)."""
     total = sum(len(r) for r in readings)
@@ -71,7 +82,13 @@ def tracks_table(states: list[TrackState]) -> pd.DataFrame:
     rows = []
     for s in states:
         p, P = s.position, np.asarray(s.position_covariance)
-        row: dict[str, Any] = {"track": s.track, "tick": s.tick, "time": s.time, "x": p[0], "y": p[1]}
+        row: dict[str, Any] = {
+            "track": s.track,
+            "tick": s.tick,
+            "time": s.time,
+            "x": p[0],
+            "y": p[1],
+        }
         if len(p) > 2:
             row["z"] = p[2]
         row.update(cov_xx=P[0, 0], cov_xy=P[0, 1], cov_yy=P[1, 1])
@@ -97,7 +114,11 @@ def _load(sources: list[Source], show: bool | None) -> list[SensorReadings]:
             r = src.load(bar)
         if len(r) == 0:
             raise ConfigError(
-                invalid(f"sensors[{src.index}].recording.path", src.sensor.recording.path, "a recording that gives readings (it gave none)")
+                invalid(
+                    f"sensors[{src.index}].recording.path",
+                    src.sensor.recording.path,
+                    "a recording that gives readings (it gave none)",
+                )
             )
         out.append(r)
     return out
@@ -122,14 +143,21 @@ def track_scene(
     with progress_bar(ticks, "track: fusion", progress, unit="tick") as bar:
         states = run_engine(net, readings, start, t_last, bar)
     tracks = tracks_table(states)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{Path(out).name}.partial-", dir=Path(out).absolute().parent))
+    tmp = Path(
+        tempfile.mkdtemp(prefix=f".{Path(out).name}.partial-", dir=Path(out).absolute().parent)
+    )
     try:
         if not tracks.empty:
             tracks.to_parquet(tmp / "tracks.parquet", index=False)
         tracks.to_csv(tmp / "tracks.csv", index=False)
         readings_table(readings).to_csv(tmp / "readings.csv", index=False)
         summary = write_report(tmp, scene, net, readings, tracks, truth, animate_tracks=not quick)
-        summary.update(config=str(config), ticks=ticks, start=start, seconds=round(time.perf_counter() - started, 3))
+        summary.update(
+            config=str(config),
+            ticks=ticks,
+            start=start,
+            seconds=round(time.perf_counter() - started, 3),
+        )
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         dest = Path(out)
         dest.mkdir(parents=True, exist_ok=True)
@@ -160,13 +188,19 @@ def add_track_parser(sub: Any) -> None:
 
 def run_track_command(args: Any) -> int:
     if (args.scene is None) == (args.config is None):
-        raise ConfigError(invalid("--config", args.config or args.scene, "one scene YAML: SCENE or --config SCENE"))
+        raise ConfigError(
+            invalid(
+                "--config", args.config or args.scene, "one scene YAML: SCENE or --config SCENE"
+            )
+        )
     config = args.config or args.scene
     show = False if args.no_progress or getattr(args, "quiet", 0) else None
     summary = track_scene(config, args.out, progress=show, quick=args.quick)
     rmse = summary.get("rmse")
     said = f", position RMSE {rmse:.3f} m" if isinstance(rmse, float) else ""
-    print(f"track: {summary['tracks']} track(s) over {summary['ticks']} ticks{said}; report: {Path(args.out) / 'report.md'}")
+    print(
+        f"track: {summary['tracks']} track(s) over {summary['ticks']} ticks{said}; report: {Path(args.out) / 'report.md'}"
+    )
     return 0
 
 
