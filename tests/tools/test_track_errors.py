@@ -118,3 +118,14 @@ def test_the_command_line_says_the_error_and_exits_2(tmp_path, capsys):
     assert not out.exists()
     assert main(["track", "--config", str(tmp_path / "none.yaml"), "--out", str(out)]) == 2
     assert "an existing scene YAML file" in capsys.readouterr().err
+
+
+def test_a_value_that_is_not_a_number_names_its_row(tmp_path):
+    pd.DataFrame({"time": [1.0, 2.0], "x": [1.0, "far"], "y": [1.0, 2.0]}).to_csv(
+        tmp_path / "fix.csv", index=False
+    )
+
+    def change(d):
+        d["sensors"][2]["recording"] = {"path": str(tmp_path / "fix.csv")}
+
+    refused(tmp_path, change, "column 'x' at data row 2='far'", "a finite number")

@@ -130,3 +130,52 @@ def test_position_errors_follow_the_nearest_truth_target(tmp_path):
     e = position_errors(tracks, truth)
     assert list(e["target"]) == [1, 1]  # t = 3 is outside the truth
     np.testing.assert_allclose(e["error"], [0.3, 0.4])
+
+
+def test_two_targets_in_a_jsonl_log_give_two_tracks_with_their_own_ids(tmp_path):
+    """GNN on a log of position fixes of two people 6 m apart: two confirmed tracks, each staying
+    with its person (the node's multi-target tracker, run offline)."""
+    import yaml
+
+    from fusetrack.tools import track_scene
+
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 4.0, 0.25)
+    rows = [
+        {
+            "time": float(ti),
+            "x": float(x0 + 0.5 * ti + rng.normal(0, 0.1)),
+            "y": float(y0 + rng.normal(0, 0.1)),
+        }
+        for ti in t
+        for x0, y0 in ((2.0, 2.0), (2.0, 8.0))
+    ]
+    pd.DataFrame(rows).to_json(tmp_path / "fixes.jsonl", orient="records", lines=True)
+    truth = pd.DataFrame(
+        [
+            {"time": ti, "x": 2.0 + 0.5 * ti, "y": y0, "target": k}
+            for k, y0 in enumerate((2.0, 8.0))
+            for ti in t
+        ]
+    )
+    truth.to_csv(tmp_path / "truth.csv", index=False)
+    scene = {
+        "area": [0, 10, 0, 10],
+        "truth": "truth.csv",
+        "sensors": [{**TAG, "recording": {"path": "fixes.jsonl"}}],
+        "fusion": {"rate_hz": 4},
+        "tracker": {
+            "prior_mean": [5, 5, 0, 0],
+            "prior_std": [5, 5, 1, 1],
+            "association": {"method": "gnn", "p_detect": 0.95, "clutter_density": 0.001},
+        },
+    }
+    (tmp_path / "scene.yaml").write_text(yaml.safe_dump(scene))
+    summary = track_scene(tmp_path / "scene.yaml", tmp_path / "out", progress=False, quick=True)
+    tracks = pd.read_csv(tmp_path / "out" / "tracks.csv")
+    assert summary["tracks"] == 2 and sorted(set(tracks["track"])) == [1, 2]
+    for _, g in tracks.groupby("track"):
+        assert g["y"].std() < 0.2  # each track stays with one person
+    errors = pd.read_csv(tmp_path / "out" / "errors.csv")
+    assert sorted(errors.groupby("track")["target"].first()) == [0, 1]
+    assert summary["rmse"] < 0.2
