@@ -45,9 +45,11 @@ def test_track_on_the_sample_writes_tracks_report_and_animation(tmp_path, capsys
     assert summary["rmse"] < 0.25
     report = (out / "report.md").read_text()
     assert f"Position RMSE (all tracks): {summary['rmse']:.3f} m" in report
-    for name in ("scene.png", "error.png", "tracks.gif"):
+    for name in ("scene.png", "error.png", "tracks.gif", "camera-camera.gif"):
         assert (out / name).stat().st_size > 1000 and f"]({name})" in report
     from PIL import Image
 
     with Image.open(out / "tracks.gif") as gif:
-        assert gif.n_frames == 25
+        assert gif.n_frames == 25  # one per tick
+    with Image.open(out / "camera-camera.gif") as gif:
+        assert gif.n_frames == 48 and gif.size == (320, 240)  # frames 17..64: from the 1st tick

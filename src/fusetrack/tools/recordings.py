@@ -66,6 +66,16 @@ class Source:
     sensor: SceneSensor
     span: tuple[float, float]
     load: Callable[[Any], SensorReadings]  # the progress bar's update(n) or None
+    video: VideoClock | None = None
+
+
+@dataclass(frozen=True)
+class VideoClock:
+    """A video recording's file and frame times: frame ``k`` is at ``start + k / fps``."""
+
+    path: Path
+    start: float
+    fps: float
 
 
 def _field(i: int, name: str) -> str:
@@ -327,7 +337,7 @@ def _open_video(i: int, sensor: SceneSensor, rec: VideoRecording, base: Path) ->
         t, feet = video_positions(path, cal, fps, progress)
         return SensorReadings(sensor.id, sensor.kind, t + start, feet)
 
-    return Source(i, sensor, (start, end), load)
+    return Source(i, sensor, (start, end), load, VideoClock(path, start, fps))
 
 
 def open_source(i: int, sensor: SceneSensor, base: Path) -> Source:
@@ -397,6 +407,7 @@ __all__ = [
     "COLUMNS",
     "SensorReadings",
     "Source",
+    "VideoClock",
     "check_clocks",
     "node_log_readings",
     "open_source",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import shutil
 from pathlib import Path
 from typing import Any
@@ -10,8 +11,8 @@ import numpy as np
 import pandas as pd
 
 from ..service import NetworkConfig
-from .recordings import SensorReadings
-from .scene import Scene
+from .recordings import SensorReadings, VideoClock
+from .scene import Animation, Scene
 
 MARKERS = {"bearing": "^", "doa": "^", "range": "s", "range_bearing": "D", "image_position": "v"}
 STYLES = ["-", "--", "-.", ":"]
@@ -158,7 +159,7 @@ def animate(
         anim.save(str(out), writer=FFMpegWriter(fps=opts.fps), dpi=80)
     else:
         out = path.with_suffix(".gif")
-        anim.save(str(out), writer=PillowWriter(fps=opts.fps), dpi=60)
+        anim.save(str(out), writer=PillowWriter(fps=opts.fps), dpi=80)
     plt.close(fig)
     return out
 
@@ -170,6 +171,7 @@ def _markdown(
     tracks: pd.DataFrame,
     errors: pd.DataFrame | None,
     gif: Path | None,
+    camera_gifs: tuple[Path, ...] = (),
 ) -> str:
     t = net.tracker
     lines = [
@@ -203,6 +205,8 @@ def _markdown(
     ]
     if gif is not None:
         lines += [f"Animation: ![tracks over time]({gif.name})", ""]
+    for cam in camera_gifs:
+        lines += [f"Over the camera's frames: ![tracks in {cam.stem}]({cam.name})", ""]
     if errors is not None:
         lines += ["## Position error against the ground truth", ""]
         if errors.empty:
@@ -235,8 +239,10 @@ def write_report(
     truth: pd.DataFrame | None,
     *,
     animate_tracks: bool = True,
+    videos: dict[str, VideoClock] | None = None,
 ) -> dict[str, Any]:
-    """``report.md`` and its figures (and the animation) into ``out``; the summary's numbers."""
+    """``report.md`` and its figures (and the animations: over the scene, and over each camera's
+    frames for ``videos``, sensor id -> its video) into ``out``; the summary's numbers."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -248,7 +254,20 @@ def write_report(
         error_figure(out / "error.png", errors)
         errors.to_csv(out / "errors.csv", index=False)
     gif = animate(out / "tracks.gif", scene, net, tracks, truth) if animate_tracks else None
-    (out / "report.md").write_text(_markdown(scene, net, readings, tracks, errors, gif) + "\n")
+    cams = tuple(
+        camera_animation(
+            out / f"camera-{sid}.gif",
+            clock,
+            np.asarray(net.sensor(sid).homography, float),
+            tracks,
+            truth,
+            scene.animation,
+        )
+        for sid, clock in (videos or {}).items()
+        if animate_tracks
+    )
+    text = _markdown(scene, net, readings, tracks, errors, gif, cams)
+    (out / "report.md").write_text(text + "\n")
     rmse = (
         float(np.sqrt(np.mean(errors["error"] ** 2)))
         if errors is not None and not errors.empty
@@ -261,7 +280,71 @@ def write_report(
         "states": len(tracks),
         "rmse": rmse,
         "animation": gif.name if gif is not None else None,
+        "camera_animations": [c.name for c in cams],
     }
 
 
 __all__ = ["animate", "position_errors", "write_report"]
+
+
+def camera_animation(
+    path: Path,
+    clock: VideoClock,
+    homography: np.ndarray,
+    tracks: pd.DataFrame,
+    truth: pd.DataFrame | None,
+    opts: Animation,
+) -> Path:
+    """The tracks over the camera's own frames (GIF): each track's floor positions mapped into
+    the image by the floor homography (trail and current point), the truth as a white cross."""
+    import cv2
+    from PIL import Image
+
+    from ..sensors import apply_homography
+    from .track_video import read_frames
+
+    colours = [(230, 60, 40), (40, 120, 230), (40, 180, 60), (200, 160, 0)]
+    frames = list(read_frames(clock.path))
+    first = 0  # the first frame at or after the first track state
+    if not tracks.empty:
+        first = min(
+            max(0, math.ceil((tracks["time"].min() - clock.start) * clock.fps - 1e-6)),
+            len(frames) - 1,
+        )
+    keep = np.unique(
+        np.linspace(first, len(frames) - 1, min(len(frames) - first, opts.max_frames)).round()
+    )
+    scale = max(1, round(320 / frames[0].shape[1]))
+    images = []
+    for k in keep.astype(int):
+        t = clock.start + k / clock.fps
+        img = cv2.resize(frames[k], None, fx=scale, fy=scale, interpolation=cv2.INTER_NEAREST)
+        for i, (_tid, g) in enumerate(tracks.groupby("track") if not tracks.empty else []):
+            g = g[g["time"] <= t + 1e-9]
+            if g.empty:
+                continue
+            uv = apply_homography(homography, g[["x", "y"]].to_numpy()) * scale
+            pts = np.round(uv).astype(np.int32).reshape(-1, 1, 2)
+            cv2.polylines(img, [pts], False, colours[i % len(colours)], 2)
+            cv2.circle(img, tuple(int(v) for v in pts[-1, 0]), 5, colours[i % len(colours)], -1)
+        for _, g in truth.groupby("target") if truth is not None else []:
+            if g["time"].min() <= t <= g["time"].max():
+                xy = np.array([np.interp(t, g["time"], g["x"]), np.interp(t, g["time"], g["y"])])
+                u, v = np.round(apply_homography(homography, xy) * scale).astype(int)
+                cv2.drawMarker(img, (int(u), int(v)), (255, 255, 255), cv2.MARKER_CROSS, 12, 2)
+        cv2.putText(
+            img,
+            f"t = {t:.2f} s",
+            (6, 16),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            0.45,
+            (255, 255, 255),
+            1,
+            cv2.LINE_AA,
+        )
+        images.append(Image.fromarray(img))
+    out = path.with_suffix(".gif")
+    images[0].save(
+        out, save_all=True, append_images=images[1:], duration=round(1000 / opts.fps), loop=0
+    )
+    return out

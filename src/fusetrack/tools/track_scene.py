@@ -11,7 +11,8 @@ tracks are those ``fusetrack serve`` would publish for the same readings. Writes
   time, position, position covariance, state, sensors fused);
 * ``readings.csv``: every reading the recordings gave (sensor, kind, time, value);
 * ``report.md`` with ``scene.png`` (tracks over the scene) and, with ground truth,
-  ``error.png`` and the position RMSE; ``tracks.gif`` (or ``.mp4``): the animation;
+  ``error.png`` and the position RMSE; ``tracks.gif`` (or ``.mp4``): the animation over the
+  scene, and ``camera-ID.gif`` over each camera's frames;
 * ``summary.json``.
 
 Outputs are written into a temporary folder and moved into ``DIR`` when the run succeeds.
@@ -151,7 +152,10 @@ def track_scene(
             tracks.to_parquet(tmp / "tracks.parquet", index=False)
         tracks.to_csv(tmp / "tracks.csv", index=False)
         readings_table(readings).to_csv(tmp / "readings.csv", index=False)
-        summary = write_report(tmp, scene, net, readings, tracks, truth, animate_tracks=not quick)
+        videos = {s.sensor.id: s.video for s in sources if s.video is not None}
+        summary = write_report(
+            tmp, scene, net, readings, tracks, truth, animate_tracks=not quick, videos=videos
+        )
         summary.update(
             config=str(config),
             ticks=ticks,
