@@ -37,3 +37,18 @@ def test_track_on_the_sample_writes_tracks_report_and_animation(tmp_path, capsys
         assert gif.n_frames == 25  # one per tick
     with Image.open(out / "camera-camera.gif") as gif:
         assert gif.n_frames == 48 and gif.size == (320, 240)  # frames 17..64: from the 1st tick
+
+
+def test_track_video_runs_on_the_sample_out_of_the_box(tmp_path, capsys):
+    import numpy as np
+
+    out = tmp_path / "tv"
+    args = ["track-video", str(SAMPLE / "video.avi"), "--radio", str(SAMPLE / "tags.csv")]
+    assert main([*args, "--calibration", str(SAMPLE / "camera.yaml"), "--out", str(out), "-q"]) == 0
+    tracks, truth = pd.read_csv(out / "tracks.csv"), pd.read_csv(SAMPLE / "truth.csv")
+    assert len(tracks) == 50 and tracks["updated_visual"].sum() > 30
+    err = np.hypot(
+        tracks["x"] - np.interp(tracks["time"], truth["time"], truth["x"]),
+        tracks["y"] - np.interp(tracks["time"], truth["time"], truth["y"]),
+    )
+    assert np.sqrt(np.mean(err**2)) < 0.25  # the tag alone: 0.42 m
