@@ -83,3 +83,18 @@ def position_rmse(estimates: Array, truth: Array) -> float:
     """``sqrt(mean_k |p_hat_k - p_k|^2)``; ``estimates`` and ``truth`` ``(K, 2)`` positions."""
     e = np.asarray(estimates, float) - np.asarray(truth, float)
     return float(np.sqrt(np.mean(np.sum(e * e, axis=-1))))
+
+
+def with_sensors(base: Scenario, count: int) -> Scenario:
+    """``base``'s truth and prior seen by ``count`` bearing sensors evenly on a circle of radius
+    400 m around (200, 100) m, bearings drawn from seed ``count`` (the sensors sweep)."""
+    ang = np.linspace(0.0, 2.0 * np.pi, count, endpoint=False)
+    sensors = np.stack([200 + 400 * np.cos(ang), 100 + 400 * np.sin(ang)], axis=-1)
+    d = base.truth[1:, None, :2] - sensors[None]
+    rng = np.random.default_rng(count)
+    z = wrap(np.arctan2(d[..., 1], d[..., 0]) + base.sigma * rng.standard_normal(d.shape[:2]))
+    ids = tuple(f"s{i}" for i in range(count))
+    return Scenario(
+        base.steps, base.dt, base.q, base.sigma, sensors, ids,
+        base.prior_mean, base.prior_cov, base.truth, z,
+    )  # fmt: skip

@@ -14,11 +14,14 @@ simulated truth and bearings (``_scenario.py``'s model, one seed per run) and it
     exactly what the separate run ``r`` draws, so the estimates must be bit-identical (checked:
     ``bit_identical`` compares every run's estimate at every step and its final particles).
 
-    python benchmarks/batched_runs.py [--runs 200] [--N 1000] [--steps 20] [--repeats 3] [--json]
+    python benchmarks/batched_runs.py [--runs 200] [--N 1000] [--steps 20] [--repeats 3]
+        [--threads T] [--json] [--save | --out PATH]
 
 Timing: ``time.perf_counter`` (and ``time.process_time``) around the whole study, divided by
 ``steps``; median over ``--repeats``, round-robin (separate, batched, separate, ...). BLAS is
-limited to one thread; Numba compile time is excluded by a warm-up.
+limited to one thread (``--threads T``: BLAS/OpenMP and Numba's threaded loops get T threads,
+``_results.py``); Numba compile time is excluded by a warm-up. The two ways agree when they are
+bit-identical (``"agree"``); otherwise no speed-up is reported.
 """
 
 from __future__ import annotations
@@ -33,9 +36,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results
 from _scenario import (
     DT,
     PRIOR_STD,
@@ -155,9 +158,10 @@ def measure(study: Study, repeats: int, seed: int = 1) -> dict[str, object]:
         "N": study.n,
         "seconds_per_step": sec,
         "cpu_seconds_per_step": csec,
-        "speedup": sec["separate"] / sec["batched"],
-        "cpu_speedup": csec["separate"] / csec["batched"],
+        "speedup": sec["separate"] / sec["batched"] if identical else None,
+        "cpu_speedup": csec["separate"] / csec["batched"] if identical else None,
         "bit_identical": identical,
+        "agree": identical,
         "rmse": rmse,
         "load": os.getloadavg()[0],
     }
@@ -170,24 +174,36 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--json", action="store_true", help="one JSON object per --runs value")
+    _results.add_arguments(ap)
     args = ap.parse_args(argv)
     if args.N < 1 or args.steps < 1 or args.repeats < 1 or min(args.runs) < 1:
         ap.error("--runs, --N, --steps and --repeats must be >= 1")
-    with threadpool_limits(1):
+    if args.threads is not None and args.threads < 1:
+        ap.error("--threads must be >= 1")
+    run, rows = _results.Run(argv, __file__), []
+    with _results.limit_threads(args.threads) as threads:
+        run.threads = threads
         for runs in args.runs:
             res = measure(Study(runs, args.N, args.steps), args.repeats)
+            rows.append(res)
             if args.json:
                 print(json.dumps(res), flush=True)
                 continue
             s, c = res["seconds_per_step"], res["cpu_seconds_per_step"]
+            ratio = (
+                f"speed-up {res['speedup']:.1f}x wall, {res['cpu_speedup']:.1f}x cpu"
+                if res["agree"]
+                else "NOT bit-identical: no speed-up"
+            )
             print(
                 f"{runs} runs x {args.N} particles, {args.steps} steps: separate "
                 f"{s['separate'] * 1e3:.1f} ms/step (cpu {c['separate'] * 1e3:.1f}), batched "  # type: ignore[index]
-                f"{s['batched'] * 1e3:.1f} ms/step (cpu {c['batched'] * 1e3:.1f}); speed-up "  # type: ignore[index]
-                f"{res['speedup']:.1f}x wall, {res['cpu_speedup']:.1f}x cpu; bit-identical "
-                f"{res['bit_identical']}; RMSE {res['rmse']:.2f} m; load {res['load']:.2f}",
+                f"{s['batched'] * 1e3:.1f} ms/step (cpu {c['batched'] * 1e3:.1f}); {ratio}; "  # type: ignore[index]
+                f"bit-identical {res['bit_identical']}; RMSE {res['rmse']:.2f} m; "
+                f"load {res['load']:.2f}",
                 flush=True,
             )
+    run.save(_results.out_path(args, __file__), rows)
     return 0
 
 

@@ -8,25 +8,30 @@
   brute-force search over all C(12, k) subsets for comparison.
 
     python benchmarks/ercan2013_speed.py [--particles 1000] [--cameras 8] [--occluders 40]
-        [--select 6] [--exclusion 3.33] [--repeats 5] [--json]
+        [--select 6] [--exclusion 3.33] [--repeats 5] [--threads T] [--json] [--save | --out PATH]
 
 ``--exclusion``: Eq. 7's rectangles end this far before the particle in both the likelihood and
 the selection (default one occluder diameter, what the experiments use; 0 = as printed).
 ``greedy_<model>_total_ms`` = moments + Algorithm 2: one selection epoch of the tracker.
 
-Median wall time over ``--repeats`` calls after one warm-up call (Numba compile excluded).
+Median wall time over ``--repeats`` calls after one warm-up call (Numba compile excluded); the
+median CPU time of the same calls (``time.process_time``, all threads) in ``"cpu"``. BLAS and
+Numba at their defaults (``--threads T``: T threads for both, ``_results.py``). fusetrack only
+(its Numba kernels against its own NumPy references): no peer, no agreement check.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import statistics
-import time
+import sys
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results
 from fusetrack.experiments.ercan2013.scenes import l_scene, square_scene
 from fusetrack.management.camera_selection import (
     brute_force_selection,
@@ -40,15 +45,16 @@ from fusetrack.world.occlusion import (
     pattern_probability_reference,
 )
 
+_CPU: dict[str, float] = {}  # the CPU seconds of the last timed() call
+
 
 def timed(fn: Callable[[], object], repeats: int) -> float:
+    """Median wall seconds of ``repeats`` calls after a warm-up; their median CPU seconds are
+    left in ``_CPU["last"]``."""
     fn()
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
+    both = _results.repeat(fn, repeats, stat="median")
+    _CPU["last"] = both["cpu"]
+    return both["wall"]
 
 
 def main() -> None:
@@ -60,7 +66,23 @@ def main() -> None:
     ap.add_argument("--exclusion", type=float, default=3.33)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--json", action="store_true")
+    _results.add_arguments(ap)
     a = ap.parse_args()
+    run = _results.Run()
+    with _results.limit_threads(a.threads, default_blas=None) as threads:
+        run.threads = threads
+        out = measure(a)
+    run.save(_results.out_path(a, __file__), [out])
+    if a.json:
+        print(json.dumps(out))
+    else:
+        for k, v in out.items():
+            print(f"{k:32s} {v:.3f}" if isinstance(v, float) else f"{k:32s} {v}")
+
+
+def measure(a: argparse.Namespace) -> dict[str, object]:
+    """Every timing of the module docstring: ``{key_ms: wall ms, ..., "cpu": {key_ms: cpu ms}}``."""
+    cpu: dict[str, float] = {}
     rng = np.random.default_rng(0)
 
     sq = square_scene(True)
@@ -79,6 +101,7 @@ def main() -> None:
     if possible.mean() < 0.5:  # the readings must come from where the cloud is
         raise SystemExit(f"only {possible.mean():.0%} of the particles are possible")
     t_lik = timed(lambda: lik.log_likelihood(z, cams, x, pri), a.repeats)
+    cpu["likelihood_ms"] = 1e3 * _CPU["last"]
 
     def reference() -> None:
         eta = np.isfinite(z)
@@ -87,6 +110,7 @@ def main() -> None:
         pattern_probability_reference(q, eta, assigned)
 
     t_ref = timed(reference, max(1, a.repeats // 2))
+    cpu["likelihood_numpy_reference_ms"] = 1e3 * _CPU["last"]
 
     ls = l_scene()
     centre = ls.room.sample_free(rng, 1)[0]
@@ -117,18 +141,19 @@ def main() -> None:
             ls.cameras, ls.room, xs, w, pri_l, 3.33, "gaussian", (model,), a.exclusion
         )
         out[f"moments_{model}_ms"] = 1e3 * mom_t
+        cpu[f"moments_{model}_ms"] = 1e3 * _CPU["last"]
         out[f"greedy_{model}_ms"] = 1e3 * timed(
             lambda m=model, mm=mom: greedy_selection(mm, a.select, m), a.repeats
         )
+        cpu[f"greedy_{model}_ms"] = 1e3 * _CPU["last"]
         out[f"greedy_{model}_total_ms"] = out[f"moments_{model}_ms"] + out[f"greedy_{model}_ms"]  # type: ignore[operator]
+        cpu[f"greedy_{model}_total_ms"] = cpu[f"moments_{model}_ms"] + cpu[f"greedy_{model}_ms"]
         out[f"brute_{model}_ms"] = 1e3 * timed(
             lambda m=model, mm=mom: brute_force_selection(mm, a.select, m), a.repeats
         )
-    if a.json:
-        print(json.dumps(out))
-    else:
-        for k, v in out.items():
-            print(f"{k:32s} {v:.3f}" if isinstance(v, float) else f"{k:32s} {v}")
+        cpu[f"brute_{model}_ms"] = 1e3 * _CPU["last"]
+    out["cpu"] = cpu
+    return out
 
 
 if __name__ == "__main__":

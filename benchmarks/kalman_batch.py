@@ -12,15 +12,16 @@ covariance update; the UKF of both uses Van der Merwe's scaled sigma points
 (``alpha = 1, beta = 2, kappa = 3 - d``).
 
 Equality: the first timed run of each library keeps every step's posterior; the benchmark reports
-the largest absolute difference of the means and covariances over all tracks and steps (must be
-below 1e-9).
+the largest absolute difference of the means and covariances over all tracks and steps, and
+``"agree": false`` (no speed-up) when either is above 1e-9 (``_results.agree_exact``).
 
-    python benchmarks/kalman_batch.py [--tracks 1000] [--steps 20] [--repeats 3]
-        [--filters ekf ukf] [--json]
+    python benchmarks/kalman_batch.py [--tracks 1000 [100 ...]] [--steps 20] [--repeats 3]
+        [--filters ekf ukf] [--threads T] [--json] [--save | --out PATH]
 
 Timing: ``time.perf_counter`` (and ``time.process_time``, reported beside it) around a whole run (``steps`` predict + update), divided by
 ``steps``; the median over ``--repeats`` runs, taken round-robin (FilterPy, fusetrack, FilterPy,
-...) so that a change of load hits both alike. BLAS is limited to one thread. Building the
+...) so that a change of load hits both alike. BLAS is limited to one thread (``--threads T``:
+BLAS/OpenMP and Numba get T threads, ``_results.py``). Building the
 measurement objects, the prior and FilterPy's filter objects (one per track, state set from the
 prior) happens before the clock starts, for every repeat.
 
@@ -41,8 +42,8 @@ from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
-from threadpoolctl import threadpool_limits
 
+import _results
 from _scenario import cv_matrices, wrap
 
 Array = NDArray[np.float64]
@@ -237,6 +238,7 @@ def measure(prob: Problem, kind: str, args: argparse.Namespace) -> dict[str, obj
     diff_cov = float(np.max(np.abs(c_a - 0.5 * (c_b + np.swapaxes(c_b, -1, -2)))))
     sec = {lib: statistics.median(t) for lib, t in times.items()}
     csec = {lib: statistics.median(t) for lib, t in cpu.items()}
+    agree = _results.agree_exact(max(diff_mean, diff_cov))
     rmse = {
         lib: float(
             np.sqrt(
@@ -252,45 +254,62 @@ def measure(prob: Problem, kind: str, args: argparse.Namespace) -> dict[str, obj
         "rmse": rmse,
         "max_abs_diff": {"mean": diff_mean, "cov": diff_cov},
         "cpu_seconds_per_step": csec,
-        "speedup": sec["filterpy"] / sec["fusetrack"],
-        "cpu_speedup": csec["filterpy"] / csec["fusetrack"],
+        "agree": agree,  # equal to 1e-9, else no speed-up
+        "speedup": sec["filterpy"] / sec["fusetrack"] if agree else None,
+        "cpu_speedup": csec["filterpy"] / csec["fusetrack"] if agree else None,
         "load": os.getloadavg()[0],
     }
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--tracks", type=int, default=1000)
+    ap.add_argument("--tracks", type=int, nargs="+", default=[1000])
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--filters", nargs="+", default=["ekf", "ukf"], choices=["ekf", "ukf"])
     ap.add_argument("--json", action="store_true", help="one JSON object per filter")
+    _results.add_arguments(ap)
     args = ap.parse_args(argv)
-    if args.tracks < 1 or args.steps < 1 or args.repeats < 1:
+    if min(args.tracks) < 1 or args.steps < 1 or args.repeats < 1:
         ap.error("--tracks, --steps and --repeats must be >= 1")
-    prob = Problem(args.tracks, args.steps)
-    if not args.json:
-        print(
-            f"{args.tracks} tracks, 4-D CV, range-bearing radar, {args.steps} steps, median of "
-            f"{args.repeats} round-robin runs, BLAS 1 thread; load average "
-            f"{os.getloadavg()[0]:.2f}"
-        )
-    with threadpool_limits(1):
-        for kind in args.filters:
-            res = measure(prob, kind, args)
-            if args.json:
-                print(json.dumps(res), flush=True)
-                continue
-            sec = res["seconds_per_step"]
-            d = res["max_abs_diff"]
-            print(
-                f"\n{kind.upper()}: fusetrack {sec['fusetrack'] * 1e3:.2f} ms/step, "  # type: ignore[index]
-                f"FilterPy {sec['filterpy'] * 1e3:.1f} ms/step, "  # type: ignore[index]
-                f"speed-up {res['speedup']:.1f}x (cpu {res['cpu_speedup']:.1f}x); max |diff| mean {d['mean']:.2e}, "  # type: ignore[index]
-                f"cov {d['cov']:.2e}; RMSE {res['rmse']}; load {res['load']:.2f}",
-                flush=True,
-            )
+    if args.threads is not None and args.threads < 1:
+        ap.error("--threads must be >= 1")
+    run, rows = _results.Run(argv, __file__), []
+    with _results.limit_threads(args.threads) as threads:
+        run.threads = threads
+        for tracks in args.tracks:
+            prob = Problem(tracks, args.steps)
+            if not args.json:
+                print(
+                    f"{tracks} tracks, 4-D CV, range-bearing radar, {args.steps} steps, median "
+                    f"of {args.repeats} round-robin runs, threads {args.threads or 'BLAS 1'}; "
+                    f"load average {os.getloadavg()[0]:.2f}"
+                )
+            for kind in args.filters:
+                res = measure(prob, kind, args)
+                rows.append(res)
+                if args.json:
+                    print(json.dumps(res), flush=True)
+                    continue
+                _print(kind, res)
+    run.save(_results.out_path(args, __file__), rows)
     return 0
+
+
+def _print(kind: str, res: dict) -> None:
+    sec, csec, d = res["seconds_per_step"], res["cpu_seconds_per_step"], res["max_abs_diff"]
+    ratio = (
+        f"speed-up {res['speedup']:.1f}x (cpu {res['cpu_speedup']:.1f}x)"
+        if res["agree"]
+        else "DISAGREE (> 1e-9): no speed-up"
+    )
+    print(
+        f"\n{kind.upper()}: fusetrack {sec['fusetrack'] * 1e3:.2f} ms/step "
+        f"(cpu {csec['fusetrack'] * 1e3:.2f}), FilterPy {sec['filterpy'] * 1e3:.1f} ms/step "
+        f"(cpu {csec['filterpy'] * 1e3:.1f}), {ratio}; max |diff| mean {d['mean']:.2e}, "
+        f"cov {d['cov']:.2e}; RMSE {res['rmse']}; load {res['load']:.2f}",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

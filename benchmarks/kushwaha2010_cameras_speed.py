@@ -7,17 +7,24 @@ so other load on the machine matters less), its split, the paper's 4 Hz budget (
 ratio, and the ratio of the Numba region-histogram kernel to its NumPy reference on the same
 regions. Also one step of T2 (mixture fit + in-network product) and of T4 (2-D mixtures + MAP).
 
-    python benchmarks/kushwaha2010_cameras_speed.py [--repeats 3] [--particles 1000] [--json]
+The wall seconds of the same calls (each clock's fastest) are in ``"wall"``. BLAS and Numba at
+their defaults (``--threads T``: T threads for both, ``_results.py``). fusetrack only: no peer.
+
+    python benchmarks/kushwaha2010_cameras_speed.py [--repeats 3] [--particles 1000]
+        [--threads T] [--json] [--save | --out PATH]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results
 from fusetrack.core import filter_step
 from fusetrack.experiments.kushwaha2010.cameras import appearance_model
 from fusetrack.filters.smart_camera_trackers import (
@@ -49,13 +56,15 @@ def ring(n: int = 10, radius: float = 6.0, focal: float = 200.0) -> list[Ellipso
     return cams
 
 
-def _cpu(fn, repeats: int) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        tic = time.process_time()
-        fn()
-        best = min(best, time.process_time() - tic)
-    return float(best)
+_WALL: dict[str, float] = {}  # wall seconds of the _cpu calls, by label
+
+
+def _cpu(fn, repeats: int, label: str | None = None) -> float:
+    """Least CPU seconds of ``repeats`` calls; the least wall seconds go to ``_WALL[label]``."""
+    both = _results.repeat(fn, repeats)
+    if label is not None:
+        _WALL[label] = both["wall"]
+    return float(both["cpu"])
 
 
 def measure(repeats: int = 3, particles: int = 1000) -> dict[str, float]:
@@ -82,18 +91,29 @@ def measure(repeats: int = 3, particles: int = 1000) -> dict[str, float]:
         filter_step(tracker, tracker.initial_belief(*init), 1.0, measurements, rng)
 
     step("T0")  # compile the Numba kernel
-    out = {f"{m}_step_cpu_s": _cpu(lambda m=m: step(m), repeats) for m in ("T0", "T2", "T4")}
+    out: dict[str, object] = {
+        f"{m}_step_cpu_s": _cpu(lambda m=m: step(m), repeats, f"{m}_step_s")
+        for m in ("T0", "T2", "T4")
+    }
     out["T0_step_over_4Hz_budget"] = out["T0_step_cpu_s"] / BUDGET_S
     x = truth.positions[1] + 0.15 * rng.standard_normal((particles, 3))
     yc, B = cams[0].ellipse(x, truth.quaternions[1], target.semi_axes)
-    fast = _cpu(lambda: region_histograms(feats[0].hs, yc, B, N_HS), repeats)
-    slow = _cpu(lambda: region_histograms_reference(feats[0].hs, yc[:100], B[:100], N_HS), 1) * (
-        particles / 100
-    )
+    fast = _cpu(lambda: region_histograms(feats[0].hs, yc, B, N_HS), repeats, "histograms_s")
+    slow = _cpu(
+        lambda: region_histograms_reference(feats[0].hs, yc[:100], B[:100], N_HS), 1, "ref_s"
+    ) * (particles / 100)
     out["histograms_1000_regions_cpu_s"] = fast
     out["numpy_reference_over_numba"] = slow / max(fast, 1e-9)
     out["cameras"] = len(cams)
     out["particles"] = particles
+    out["wall"] = {
+        **{f"{m}_step_s": _WALL[f"{m}_step_s"] for m in ("T0", "T2", "T4")},
+        "histograms_1000_regions_s": _WALL["histograms_s"],
+        "numpy_reference_over_numba": _WALL["ref_s"]
+        * particles
+        / 100
+        / max(_WALL["histograms_s"], 1e-9),
+    }
     return out
 
 
@@ -102,8 +122,13 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--particles", type=int, default=1000)
     ap.add_argument("--json", action="store_true")
+    _results.add_arguments(ap)
     args = ap.parse_args()
-    res = measure(args.repeats, args.particles)
+    run = _results.Run()
+    with _results.limit_threads(args.threads, default_blas=None) as threads:
+        run.threads = threads
+        res = measure(args.repeats, args.particles)
+    run.save(_results.out_path(args, __file__), [res])
     if args.json:
         print(json.dumps(res, indent=2))
         return

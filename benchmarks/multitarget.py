@@ -5,7 +5,8 @@ libraries allow) the same initiation and deletion rules on both sides; time per 
 GOSPA, so a speed-up is never bought with a worse tracker.
 
     python benchmarks/multitarget.py [--trackers gnn jpda phd] [--targets 10 50]
-        [--clutter 10] [--scans 100] [--seeds 10] [--budget SECONDS] [--json]
+        [--clutter 10] [--scans 100] [--seeds 10] [--budget SECONDS] [--threads T] [--json]
+        [--save | --out PATH]
 
 **Scenario** (:class:`Scenario`, plain NumPy, one per seed, shared by both libraries): state
 ``[x, vx, y, vy]`` (Stone Soup's order, used on both sides), ``dt = 1`` s, constant velocity
@@ -58,8 +59,10 @@ mean and standard error over ``--seeds`` runs.
 **Timing**: ``time.process_time`` (CPU seconds of every thread of the process) around each
 scan's call (fusetrack ``tracker.step`` / ``predict`` + ``update`` + ``extract_states``; Stone
 Soup ``tracker.update_tracker`` (+ the extraction for the PHD)), summed over the scans and
-divided by their number; building measurement and detection objects is outside the clock. Runs
-alternate between the libraries seed by seed. BLAS is limited to one thread. A 3-scan warm-up
+divided by their number; the wall time (``time.perf_counter``) of the same calls beside it
+(``wall_seconds_per_scan``, ``wall_speedup``); building measurement and detection objects is
+outside the clock. Runs alternate between the libraries seed by seed. BLAS is limited to one
+thread (``--threads T``: BLAS/OpenMP and Numba get T threads, ``_results.py``). A 3-scan warm-up
 run of each (library, tracker) comes first, untimed (within the budget). ``--budget S``: a library's run stops
 after the scan at which its CPU time passed ``S`` seconds (its ``scans`` in the output says how
 many it measured), and every figure of the configuration (both libraries' times and GOSPAs) is
@@ -67,12 +70,20 @@ then over the first scans that every run measured. A scan that alone would pass 
 cut off by a CPU-time alarm (``SIGPROF``): ``cut_by_budget`` is then true for that library and
 its time per scan is a lower bound (its GOSPA over the cut scan is NaN).
 
+**Agreement**: the two libraries' mean GOSPAs over the seeds agree when they differ by at most 3
+combined standard errors (the t quantile of the same level for few seeds: 3.4 for 10;
+``_results.agree_monte_carlo``; ``gospa_paired`` gives the mean and
+standard error of the per-seed differences beside it, for information). A configuration that
+does not agree has ``"agree": false`` and no ``speedup``; one where a library was cut before
+any scan was scored has ``"agree": null``.
+
 ``--json`` prints one object per (tracker, targets, clutter) on one line::
 
     {"tracker": "jpda", "targets": 50, "clutter": 10, "seeds": 10,
      "scans": 100,
      "seconds_per_scan": {"fusetrack": ..., "stonesoup": ...}, "speedup": ...,
-     "gospa": {...}, "gospa_se": {...}, "estimates_per_scan": {...},
+     "wall_seconds_per_scan": {...}, "wall_speedup": ..., "agree": ...,
+     "gospa": {...}, "gospa_se": {...}, "gospa_paired": {...}, "estimates_per_scan": {...},
      "seconds_per_scan_own": {...}, "scans_own": {...}, "load": ...}
 """
 
@@ -90,7 +101,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from threadpoolctl import threadpool_limits
+
+import _results
 
 Array = NDArray[np.float64]
 
@@ -399,34 +411,34 @@ def _raise_over_budget(signum: int, frame: object) -> None:
 def run_once(
     lib: str, kind: str, scn: Scenario, seed: int, scans: int, budget: float
 ) -> tuple[Array, bool]:
-    """``(3, n)``: per scan the CPU seconds, the GOSPA and the number of estimates, for the
-    ``n`` scans run (all, or up to the one at which the CPU time passed ``budget``); and
+    """``(4, n)``: per scan the CPU seconds, the GOSPA, the number of estimates and the wall
+    seconds, for the ``n`` scans run (all, or up to the one at which the CPU time passed ``budget``); and
     whether the last scan was cut off by the budget (its time is then a lower bound and its
     GOSPA NaN)."""
     from fusetrack.evaluation import gospa
 
     runner = RUNNERS[lib](kind, scn, seed)
-    rows: list[tuple[float, float, float]] = []
+    rows: list[tuple[float, float, float, float]] = []
     cpu, cut = 0.0, False
     old = signal.signal(signal.SIGPROF, _raise_over_budget)
     try:
         for k in range(scans):
             if np.isfinite(budget):  # a CPU-time alarm for what is left of the budget
                 signal.setitimer(signal.ITIMER_PROF, max(budget - cpu, 1e-3))
-            c0 = time.process_time()
+            c0, w0 = time.process_time(), time.perf_counter()
             try:
                 est = runner.scan(k)
             except _OverBudget:
-                rows.append((time.process_time() - c0, np.nan, np.nan))
+                rows.append((time.process_time() - c0, np.nan, np.nan, time.perf_counter() - w0))
                 cut = True
                 break
             finally:
                 signal.setitimer(signal.ITIMER_PROF, 0.0)
-            dt = time.process_time() - c0
+            dt, wall = time.process_time() - c0, time.perf_counter() - w0
             cpu += dt
             truth = scn.truth[k][:, [0, 2]]
             g = gospa(est, truth, c=GOSPA_C, p=GOSPA_P, alpha=GOSPA_ALPHA).distance
-            rows.append((dt, g, len(est)))
+            rows.append((dt, g, len(est), wall))
             if cpu > budget:
                 break
     finally:
@@ -452,6 +464,7 @@ def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -
             cut[lib] |= was_cut
     n = min(r.shape[1] for rs in per.values() for r in rs)
     sec = {lib: float(np.mean([r[0, :n].mean() for r in rs])) for lib, rs in per.items()}
+    wall = {lib: float(np.mean([r[3, :n].mean() for r in rs])) for lib, rs in per.items()}
     g = {lib: np.array([r[1, :n].mean() for r in rs]) for lib, rs in per.items()}
     se = {
         lib: float(v.std(ddof=1) / np.sqrt(len(v))) if len(v) > 1 else float("nan")
@@ -464,6 +477,7 @@ def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -
         "seeds": args.seeds,
         "scans": n,
         "seconds_per_scan": sec,
+        "wall_seconds_per_scan": wall,
         "gospa": {lib: float(v.mean()) for lib, v in g.items()},
         "gospa_se": se,
         "estimates_per_scan": {
@@ -477,8 +491,24 @@ def measure(kind: str, targets: int, clutter: float, args: argparse.Namespace) -
         "load": os.getloadavg()[0],
     }
     if "fusetrack" in sec and "stonesoup" in sec:
-        out["speedup"] = sec["stonesoup"] / sec["fusetrack"]
+        out.update(gospa_agreement(g["fusetrack"], g["stonesoup"]))
+        ok = out["agree"] is not False
+        out["speedup"] = sec["stonesoup"] / sec["fusetrack"] if ok else None
+        out["wall_speedup"] = wall["stonesoup"] / wall["fusetrack"] if ok else None
     return out
+
+
+def gospa_agreement(a: Array, b: Array) -> dict[str, object]:
+    """``agree`` (``_results.agree_monte_carlo`` on the means and standard errors over seeds),
+    and the paired per-seed difference ``a - b`` (mean, standard error) for information."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        return {"agree": None, "gospa_paired": None}
+    ma, sa = _results.mean_se(a.tolist())
+    mb, sb = _results.mean_se(b.tolist())
+    check = _results.agree_monte_carlo(ma, sa, mb, sb, len(a), len(b))
+    md, sd = _results.mean_se((a - b).tolist())
+    return {"agree": check["agree"], "gospa_paired": {"difference": md, "se": sd}}
 
 
 def _row(res: dict) -> str:
@@ -492,8 +522,10 @@ def _row(res: dict) -> str:
             f"{lib} {sec[lib] * 1e3:8.2f} ms/scan, "
             f"GOSPA {g[lib]:6.2f} +- {se[lib]:.2f}, {res['estimates_per_scan'][lib]:.1f} est;"
         )
-    if "speedup" in res:
-        parts.append(f"speed-up {res['speedup']:.1f}x")
+    if res.get("agree") is False:
+        parts.append("GOSPA DISAGREES (> 3 SE): no speed-up")
+    elif res.get("speedup") is not None:
+        parts.append(f"speed-up {res['speedup']:.1f}x cpu, {res['wall_speedup']:.1f}x wall")
     return " ".join(parts)
 
 
@@ -509,6 +541,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--libs", nargs="+", default=["fusetrack", "stonesoup"], choices=list(RUNNERS))
     ap.add_argument("--budget", type=float, default=np.inf, help="CPU seconds per library run")
     ap.add_argument("--json", action="store_true", help="one JSON object per configuration")
+    _results.add_arguments(ap)
     args = ap.parse_args(argv)
     if min(args.targets) < 1 or args.scans < 1 or args.seeds < 1 or min(args.clutter) <= 0:
         ap.error("--targets, --scans and --seeds must be >= 1, --clutter > 0")
@@ -518,12 +551,18 @@ def main(argv: list[str] | None = None) -> int:
             f"thread; load average {os.getloadavg()[0]:.2f}",
             flush=True,
         )
-    with threadpool_limits(1):
+    if args.threads is not None and args.threads < 1:
+        ap.error("--threads must be >= 1")
+    run, rows = _results.Run(argv, __file__), []
+    with _results.limit_threads(args.threads) as threads:
+        run.threads = threads
         for kind in args.trackers:
             for targets in args.targets:
                 for clutter in args.clutter:
                     res = measure(kind, targets, clutter, args)
+                    rows.append(res)
                     print(json.dumps(res) if args.json else _row(res), flush=True)
+    run.save(_results.out_path(args, __file__), rows)
     return 0
 
 

@@ -9,20 +9,33 @@ weighted particle mean of the position, so their RMSEs must agree within Monte C
 
     python benchmarks/pf_bearing.py [--N 1000 10000 100000 1000000]
         [--libs fusetrack stonesoup particles numpy limit_reference] [--repeats K] [--steps S]
-        [--json]
+        [--sensors S1 S2 ...] [--threads T] [--json] [--save | --out PATH]
 
 ``limit_reference`` is not a library: it is this one filter written as two fused Numba loops
 (propagate + all likelihoods; weights + estimate + systematic resampling) with the noise from
 NumPy's generator, i.e. about as fast as this filter can be written by hand. It draws exactly what
 fusetrack draws, so its RMSE equals fusetrack's to rounding. BLAS is limited to one thread for
-every library (a threaded (N, 4) @ (4, 4) product is pathologically slow on a loaded machine).
+every library (a threaded (N, 4) @ (4, 4) product is pathologically slow on a loaded machine);
+``--threads T`` gives every library T threads instead (BLAS/OpenMP via threadpoolctl, Numba via
+``numba.set_num_threads``: fusetrack's and the limit reference's threaded loops; ``_results.py``).
 
-Timing: ``time.perf_counter`` (``--clock cpu``: ``time.process_time``) around a whole run
-(prior draw, then ``steps`` predict + update + resample + mean), divided by ``steps``; the
-median over ``--repeats`` runs, taken round-robin over the libraries. Each library is first
-warmed up with a 3-step run (Numba JIT compile time is excluded); that run, or the previous N
-scaled linearly, estimates the time per step, and a library whose estimate exceeds ``--budget``
-seconds per step is skipped ("skipped (est. Xs)", JSON ``null``).
+Timing: ``time.perf_counter`` and ``time.process_time`` (CPU seconds of all the process's
+threads) around a whole run (prior draw, then ``steps`` predict + update + resample + mean),
+divided by ``steps``; the median over ``--repeats`` runs, taken round-robin over the libraries.
+``--clock`` chooses which of the two is ``seconds_per_step`` (and the budget's estimate); both
+are in the JSON (``wall_seconds_per_step``, ``cpu_seconds_per_step``) with the ratios both
+ways. Each library is first warmed up with a 3-step run (Numba JIT compile time is excluded);
+that run, or the previous N scaled linearly, estimates the time per step, and a library whose
+estimate exceeds ``--budget`` seconds per step is skipped ("skipped (est. Xs)", JSON ``null``).
+
+Agreement: every timed run (seed ``--seed + r``) scores its RMSE; a library agrees with
+fusetrack when their mean RMSEs over the runs differ by at most 3 combined standard errors
+(with few runs the t quantile of the same level instead of 3, ``_results.agree_monte_carlo``;
+with one run a library borrows the other's spread). A library
+that does not agree gets ``"agree": false`` and no speed-up (the table prints "disagrees").
+
+``--sensors S1 S2 ...``: the sensors sweep instead of the three fixed sensors: the same truth
+seen by S bearing sensors on a circle (``_scenario.with_sensors``), one row per (S, N).
 
 Building models and measurement objects happens before the clock starts, for every library.
 """
@@ -42,10 +55,18 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from threadpoolctl import threadpool_limits
 
+import _results
 from _limit_reference import LimitReferencePF
-from _scenario import Array, Scenario, cv_matrices, make_scenario, position_rmse, wrap
+from _scenario import (
+    Array,
+    Scenario,
+    cv_matrices,
+    make_scenario,
+    position_rmse,
+    with_sensors,
+    wrap,
+)
 
 LIBS = ("fusetrack", "stonesoup", "particles", "numpy", "limit_reference")
 WARMUP_STEPS = 3
@@ -202,9 +223,9 @@ def _particles_model(scn: Scenario) -> object:
     sensors, sigma = scn.sensors, scn.sigma
 
     class WrappedBearings(dists.ProbDist):
-        """Three independent Gaussian bearings with the residual wrapped to [-pi, pi)."""
+        """Independent Gaussian bearings (one per sensor), the residual wrapped to [-pi, pi)."""
 
-        dim = 3
+        dim = len(sensors)
 
         def __init__(self, x: Array) -> None:
             self.x = x
@@ -215,7 +236,8 @@ def _particles_model(scn: Scenario) -> object:
 
         def logpdf(self, y: Array) -> Array:
             r = wrap(y - self._pred()) / sigma
-            return -0.5 * np.sum(r * r, axis=-1) - 3 * (np.log(sigma) + 0.5 * np.log(2 * np.pi))
+            norm = len(sensors) * (np.log(sigma) + 0.5 * np.log(2 * np.pi))
+            return -0.5 * np.sum(r * r, axis=-1) - norm
 
         def rvs(self, size: int | None = None) -> Array:
             return wrap(self._pred() + sigma * np.random.standard_normal(self._pred().shape))  # noqa: NPY002
@@ -306,17 +328,17 @@ RUNNERS: dict[str, Callable[[Scenario, int], object]] = {
 
 
 CLOCKS = {"wall": time.perf_counter, "cpu": time.process_time}
-_clock = time.perf_counter
+_clock_name = "wall"
 
 
-def _timed_run(runner: object, seed: int, steps: int) -> tuple[float, Array]:
+def _timed_run(runner: object, seed: int, steps: int) -> tuple[float, Array, float, float]:
+    """Seconds of the ``--clock`` clock, the estimates, wall and CPU seconds of one run."""
     gc.collect()
-    t0 = _clock()
-    est = runner.run(seed, steps)  # type: ignore[attr-defined]
-    elapsed = _clock() - t0
+    with _results.Clock() as c:
+        est = runner.run(seed, steps)  # type: ignore[attr-defined]
     if hasattr(runner, "cleanup"):
         runner.cleanup()  # type: ignore[attr-defined]
-    return elapsed, est
+    return (c.cpu if _clock_name == "cpu" else c.wall), est, c.wall, c.cpu
 
 
 def measure(
@@ -344,9 +366,9 @@ def measure(
             runner = RUNNERS[lib](scn, n)
             # Warm-up: JIT compilation, caches, page faults. A library's first warm-up may
             # include compile time, so when it looks over budget it gets a second one.
-            t_warm, _ = _timed_run(runner, args.seed + 10_000, warm_steps)
+            t_warm = _timed_run(runner, args.seed + 10_000, warm_steps)[0]
             if prev is None and t_warm / warm_steps > args.budget:
-                t_warm, _ = _timed_run(runner, args.seed + 10_001, warm_steps)
+                t_warm = _timed_run(runner, args.seed + 10_001, warm_steps)[0]
             est_step = t_warm / warm_steps
             if est_step <= args.budget:
                 runners[lib] = runner
@@ -356,24 +378,83 @@ def measure(
                 )
             else:
                 del runner
-        res[lib] = {"seconds_per_step": None, "rmse": None, "estimate": est_step, "runs": 0}
+        res[lib] = {
+            "seconds_per_step": None,
+            "rmse": None,
+            "estimate": est_step,
+            "runs": 0,
+            "wall": None,
+            "cpu": None,
+            "rmse_runs": [],
+        }
         last[lib] = (n, float(est_step))  # a skipped library stays skipped at larger N
-    times: dict[str, list[float]] = {lib: [] for lib in runners}
+    times: dict[str, list[tuple[float, float, float]]] = {lib: [] for lib in runners}
     for r in range(max(runs.values(), default=0)):
         for lib, runner in runners.items():
             if r >= runs[lib]:
                 continue
-            elapsed, est = _timed_run(runner, args.seed + r, args.steps)
-            times[lib].append(elapsed / args.steps)
+            elapsed, est, wall, cpu = _timed_run(runner, args.seed + r, args.steps)
+            times[lib].append((elapsed / args.steps, wall / args.steps, cpu / args.steps))
+            rmse = position_rmse(est, scn.truth[1 : args.steps + 1, :2])
+            res[lib]["rmse_runs"].append(rmse)  # type: ignore[union-attr]
             if r == 0:
-                res[lib]["rmse"] = position_rmse(est, scn.truth[1 : args.steps + 1, :2])
+                res[lib]["rmse"] = rmse
     for lib in runners:
-        t = statistics.median(times[lib])
-        res[lib]["seconds_per_step"], res[lib]["runs"] = t, runs[lib]
+        t, wall, cpu = (statistics.median(col) for col in zip(*times[lib]))
+        res[lib].update(seconds_per_step=t, runs=runs[lib], wall=wall, cpu=cpu)
         last[lib] = (n, t)
     runners.clear()
     gc.collect()
     return res
+
+
+def agreement(res: dict[str, dict], reference: str = "fusetrack") -> dict[str, dict]:
+    """Per library: its mean RMSE over the timed runs against ``reference``'s
+    (``_results.agree_monte_carlo``); the reference itself and skipped libraries are left out."""
+    ref = res.get(reference)
+    if ref is None or not ref["rmse_runs"]:
+        return {}
+    m_ref, se_ref = _results.mean_se(ref["rmse_runs"])
+    n_ref = len(ref["rmse_runs"])
+    out = {}
+    for lib, r in res.items():
+        if lib != reference and r["rmse_runs"]:
+            m, se = _results.mean_se(r["rmse_runs"])
+            n = len(r["rmse_runs"])
+            out[lib] = _results.agree_monte_carlo(m, se, m_ref, se_ref, n, n_ref)
+    return out
+
+
+def result_row(n: int, sensors: int, libs: list[str], res: dict[str, dict]) -> dict:
+    """One JSON row: the ``--json`` line (N, seconds_per_step, rmse) and the rest (both clocks,
+    RMSE of every run, agreement with fusetrack, speed-ups wall and cpu where they agree)."""
+    agree = agreement(res)
+    ft = res.get("fusetrack", {})
+    speedup = {
+        lib: None
+        if agree.get(lib, {}).get("agree") is False
+        else {
+            "wall": _results.ratio(res[lib]["wall"], ft.get("wall")),
+            "cpu": _results.ratio(res[lib]["cpu"], ft.get("cpu")),
+        }
+        for lib in libs
+        if lib != "fusetrack" and "fusetrack" in res
+    }
+    return {
+        "N": n,
+        "seconds_per_step": {lib: res[lib]["seconds_per_step"] for lib in libs},
+        "rmse": {lib: res[lib]["rmse"] for lib in libs},
+        "sensors": sensors,
+        "clock": _clock_name,
+        "wall_seconds_per_step": {lib: res[lib]["wall"] for lib in libs},
+        "cpu_seconds_per_step": {lib: res[lib]["cpu"] for lib in libs},
+        "runs": {lib: res[lib]["runs"] for lib in libs},
+        "rmse_runs": {lib: res[lib]["rmse_runs"] for lib in libs},
+        "agreement": agree,
+        "agree": _results.all_agree([a["agree"] for a in agree.values()]),
+        "speedup_over": speedup,
+        "load": os.getloadavg()[0],
+    }
 
 
 def _fmt_time(t: float | None, est: float | None) -> str:
@@ -388,7 +469,7 @@ def _profile(lib: str, scn: Scenario, n: int, args: argparse.Namespace) -> None:
 
     runner = RUNNERS[lib](scn, n)
     _timed_run(runner, args.seed + 10_000, min(WARMUP_STEPS, args.steps))
-    prof = cProfile.Profile()
+    prof = cProfile.Profile(time.process_time if args.clock == "cpu" else time.perf_counter)
     prof.enable()
     runner.run(args.seed, args.steps)  # type: ignore[attr-defined]
     prof.disable()
@@ -450,6 +531,14 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--json", action="store_true", help="one JSON object per N instead of a table")
     ap.add_argument(
+        "--sensors",
+        type=int,
+        nargs="+",
+        default=None,
+        help="the sensors sweep: S bearing sensors on a circle instead of the three fixed ones",
+    )
+    _results.add_arguments(ap)
+    ap.add_argument(
         "--clock",
         choices=sorted(CLOCKS),
         default="wall",
@@ -465,63 +554,86 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.steps < 1 or args.repeats < 1:
         ap.error("--steps and --repeats must be >= 1")
-    if any(n < 1 for n in args.N):
-        ap.error("--N values must be >= 1")
-    global _clock
-    _clock = CLOCKS[args.clock]
-    threadpool_limits(1)  # BLAS: one thread for every library
-
-    # The first --steps steps of the standard 100-step scenario (the same truth for any --steps).
-    scn = make_scenario(steps=max(args.steps, 100))
-    if not args.json:
-        print(
-            "bootstrap PF, 4-D CV, 3 bearing sensors, systematic resampling every step, "
-            f"{args.steps} steps; median of up to {args.repeats} runs; "
-            f"budget {args.budget}s/step; {args.clock} clock\n{_versions(args.libs)}; {os.cpu_count()} cores; "
-            f"load average at start {os.getloadavg()[0]:.2f}"
-        )
-    if args.profile:
-        for n in args.N:
-            _profile(args.profile, scn, n, args)
-        return 0
-    last: dict[str, tuple[int, float]] = {}  # lib -> (N, seconds per step) of the last measured N
-    for n in args.N:
-        res = measure(scn, n, args, last)
-        if args.json:
-            print(
-                json.dumps(
-                    {
-                        "N": n,
-                        "seconds_per_step": {
-                            lib: res[lib]["seconds_per_step"] for lib in args.libs
-                        },
-                        "rmse": {lib: res[lib]["rmse"] for lib in args.libs},
-                    }
-                ),
-                flush=True,
-            )
-        else:
-            _print_table(n, args.libs, res)
+    if any(n < 1 for n in args.N) or (args.sensors and min(args.sensors) < 1):
+        ap.error("--N and --sensors values must be >= 1")
+    if args.threads is not None and args.threads < 1:
+        ap.error("--threads must be >= 1")
+    global _clock_name
+    _clock_name = args.clock
+    run = _results.Run(argv, __file__)
+    with _results.limit_threads(args.threads) as threads:
+        run.threads = threads
+        rows = _measure_all(args)
     if not args.json:
         print(f"\nload average at end {os.getloadavg()[0]:.2f}")
+    if rows is not None:
+        run.save(_results.out_path(args, __file__), rows)
     return 0
 
 
-def _print_table(n: int, libs: list[str], res: dict[str, dict[str, float | None]]) -> None:
-    ft = res.get("fusetrack", {}).get("seconds_per_step")
+def _measure_all(args: argparse.Namespace) -> list[dict] | None:
+    """Every (sensors, N) of the command line: table or JSON lines; the rows (``None`` after
+    ``--profile``)."""
+    # The first --steps steps of the standard 100-step scenario (the same truth for any --steps).
+    base = make_scenario(steps=max(args.steps, 100))
+    if not args.json:
+        print(
+            "bootstrap PF, 4-D CV, bearing sensors, systematic resampling every step, "
+            f"{args.steps} steps; median of up to {args.repeats} runs; "
+            f"budget {args.budget}s/step; {args.clock} clock\n{_versions(args.libs)}; {os.cpu_count()} cores; "
+            f"threads {args.threads or 'default (BLAS 1)'}; "
+            f"load average at start {os.getloadavg()[0]:.2f}"
+        )
+    counts = args.sensors or [None]
+    if args.profile:
+        for s_count in counts:
+            scn = base if s_count is None else with_sensors(base, s_count)
+            for n in args.N:
+                _profile(args.profile, scn, n, args)
+        return None
+    rows = []
+    for s_count in counts:
+        scn = base if s_count is None else with_sensors(base, s_count)
+        last: dict[str, tuple[int, float]] = {}  # lib -> (N, s per step) of the last measured N
+        for n in args.N:
+            res = measure(scn, n, args, last)
+            rows.append(result_row(n, len(scn.sensors), args.libs, res))
+            if args.json:
+                print(json.dumps(rows[-1]), flush=True)
+            else:
+                if s_count is not None:
+                    print(f"\n{s_count} sensors", end="")
+                _print_table(n, args.libs, res, rows[-1]["agreement"])
+    return rows
+
+
+def _print_table(
+    n: int, libs: list[str], res: dict[str, dict[str, float | None]], agree: dict[str, dict]
+) -> None:
+    ft = res.get("fusetrack", {})
     w = max(10, *(len(lib) for lib in libs))
     print(f"\nN = {n:,}")
     print(
-        f"  {'library':<{w}} {'time / step':>24} {'runs':>5} {'RMSE (m)':>10} "
-        f"{'fusetrack speed-up':>19}"
+        f"  {'library':<{w}} {'time / step':>24} {'cpu / step':>11} {'runs':>5} {'RMSE (m)':>10} "
+        f"{'fusetrack speed-up':>19} {'(cpu)':>7}"
     )
     for lib in libs:
         r = res[lib]
         t, rmse, est = r["seconds_per_step"], r["rmse"], r["estimate"]
-        ratio = "" if lib == "fusetrack" or ft is None or t is None else f"{t / ft:.1f}x"
+        ratio = cpu_ratio = ""
+        if agree.get(lib, {}).get("agree") is False:
+            ratio = "disagrees"
+        elif lib != "fusetrack" and ft.get("seconds_per_step") and t is not None:
+            ratio = f"{t / ft['seconds_per_step']:.1f}x"  # type: ignore[operator]
+            cpu_ratio = f"{r['cpu'] / ft['cpu']:.1f}x" if ft.get("cpu") else ""  # type: ignore[operator]
         rm = "" if rmse is None else f"{rmse:.3f}"
         runs = "" if t is None else str(r["runs"])
-        print(f"  {lib:<{w}} {_fmt_time(t, est):>24} {runs:>5} {rm:>10} {ratio:>19}", flush=True)
+        cpu = "" if r["cpu"] is None else f"{r['cpu'] * 1e3:.3f} ms"  # type: ignore[operator]
+        print(
+            f"  {lib:<{w}} {_fmt_time(t, est):>24} {cpu:>11} {runs:>5} {rm:>10} {ratio:>19} "
+            f"{cpu_ratio:>7}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

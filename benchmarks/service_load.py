@@ -41,11 +41,16 @@ import numpy as np
 import yaml
 from websockets.sync.client import connect
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results
 from fusetrack.service.auth import seal
 from fusetrack.service.schema import BearingReading, SensorMessage, encode_message
 
 CENTRE, RADIUS, RING, PERIOD = (50.0, 50.0), 25.0, 60.0, 60.0
 SIGMA = math.radians(2.0)
+
+
+_RUN = _results.Run()  # replaced when main() starts a run
 
 
 def truth(t: float) -> np.ndarray:
@@ -168,6 +173,8 @@ def main() -> int:
     if args.report:
         write_report(args.report, args.md)
         return 0
+    global _RUN
+    _RUN = _results.Run()  # the run starts now (date, load average at the start)
     rng = np.random.default_rng(args.seed)
 
     tmp = Path(tempfile.mkdtemp(prefix="fusetrack-load-"))
@@ -385,6 +392,7 @@ def run(args, cfg, node, url, udp_port, rng) -> int:
             "late_refused": final["rejected"].get("late", 0),
             "messages_of_jumped_clocks": jumped,
         }
+    result["metadata"] = _RUN.metadata()  # date, load at start and end, machine, versions, command
     text = json.dumps(result, indent=2)
     print(text)
     if args.out is not None:

@@ -25,9 +25,14 @@ Each figure is the minimum over ``--repeats`` timed calls (the least disturbed b
 processes), in wall and CPU seconds; the sum of the phases is the floor of a step built from
 separate passes. ``--stonesoup`` adds whole runs of Stone Soup (``pf_bearing.py``'s runner)
 beside fusetrack's and the limit reference's (minimum of a few runs of ``--steps`` steps, the
-prior draw included). BLAS runs on one thread for everyone. ``--json`` prints one object.
+prior draw included). BLAS runs on one thread for everyone. ``--threads T``: the threaded
+column and the threaded whole runs use T Numba threads instead of 2, and BLAS (Stone Soup) gets
+T threads too (``_results.py``). ``--json`` prints one object; ``--save`` / ``--out`` write it
+with the run's metadata. The whole runs are ``pf_bearing.py``'s filters, whose RMSE agreement
+that script checks; this one only times them.
 
-    python benchmarks/step_floor.py [--N 100000] [--repeats 30] [--stonesoup-ms 107] [--json]
+    python benchmarks/step_floor.py [--N 100000] [--repeats 30] [--stonesoup-ms 107]
+        [--threads T] [--json] [--save | --out PATH]
 """
 
 from __future__ import annotations
@@ -44,9 +49,9 @@ from pathlib import Path
 
 import numba
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results
 from _scenario import DT, Q_PSD, SENSORS, SIGMA_BEARING, cv_matrices
 from fusetrack.core.resampling import systematic_row
 from fusetrack.filters import fused, rng_handles
@@ -175,7 +180,7 @@ def _best(fn: Callable[[], object], repeats: int) -> tuple[float, float]:
     return wall, cpu
 
 
-def measure(n: int, repeats: int) -> dict[str, dict[str, float]]:
+def measure(n: int, repeats: int, threaded: int = 2) -> dict[str, dict[str, float]]:
     """ns per particle of each phase: ``{phase: {"serial": .., "threads": .., "cpu_threads": ..}}``."""
     fused.passive_threads()
     rng = np.random.default_rng(1)
@@ -208,10 +213,11 @@ def measure(n: int, repeats: int) -> dict[str, dict[str, float]]:
         np.exp(e, out=e)
 
     res: dict[str, dict[str, float]] = {}
-    for threads in (1, 2):
+    for key, threads in (("serial", 1), ("threads", threaded)):
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-        kern = {name: pair[1 if threads > 1 else 0] for name, pair in _KERNELS.items()}
-        h = h4 if threads > 1 else h1
+        par = key == "threads"  # the threaded kernels and 4 child generators, on `threads`
+        kern = {name: pair[1 if par else 0] for name, pair in _KERNELS.items()}
+        h = h4 if par else h1
         calls: dict[str, Callable[[], object]] = {
             "normals": partial(kern["normals"], h, out),
             "propagate": partial(kern["propagate"], x, F, G, eps, out),
@@ -224,7 +230,6 @@ def measure(n: int, repeats: int) -> dict[str, dict[str, float]]:
         for name, fn in calls.items():
             wall, cpu = _best(fn, repeats)
             row = res.setdefault(name, {})
-            key = "serial" if threads == 1 else "threads"
             row[key] = wall / n * 1e9
             row["cpu_" + key] = cpu / n * 1e9
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
@@ -236,9 +241,11 @@ def measure(n: int, repeats: int) -> dict[str, dict[str, float]]:
     return res
 
 
-def whole_steps(n: int, repeats: int, steps: int, libs: list[str]) -> dict[str, dict[str, float]]:
+def whole_steps(
+    n: int, repeats: int, steps: int, libs: list[str], threaded: int = 2
+) -> dict[str, dict[str, float]]:
     """ms per step of whole filter runs (``pf_bearing.py``'s runners, ``steps`` steps, the
-    prior draw included), the minimum over ``repeats`` runs, on 1 and 2 threads."""
+    prior draw included), the minimum over ``repeats`` runs, on 1 and ``threaded`` threads."""
     from _limit_reference import LimitReferencePF
     from _scenario import make_scenario
     from pf_bearing import FusetrackPF, StoneSoupPF
@@ -255,7 +262,7 @@ def whole_steps(n: int, repeats: int, steps: int, libs: list[str]) -> dict[str, 
             if hasattr(r, "cleanup"):
                 r.cleanup()  # Stone Soup's predictor cache, as pf_bearing.py clears it
 
-        for threads in (1, 2) if name != "stonesoup" else (1,):
+        for threads in sorted({1, threaded}) if name != "stonesoup" else (1,):
             numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
             wall, cpu = _best(one_run, repeats)
             out.setdefault(name, {})[f"{threads}_thread_ms"] = wall / steps * 1e3
@@ -277,12 +284,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--steps", type=int, default=20, help="steps of the whole-run timings")
     ap.add_argument("--stonesoup", action="store_true", help="also time Stone Soup's whole run")
     ap.add_argument("--json", action="store_true")
+    _results.add_arguments(ap)
     args = ap.parse_args(argv)
+    if args.threads is not None and args.threads < 1:
+        ap.error("--threads must be >= 1")
     load0 = os.getloadavg()[0]
-    with threadpool_limits(1):  # BLAS on one thread for everyone, as in pf_bearing.py
-        res = measure(args.N, args.repeats)
+    run = _results.Run(argv, __file__)
+    threaded = args.threads or 2
+    with _results.limit_threads(args.threads) as threads:  # default: BLAS on one thread
+        run.threads = threads
+        res = measure(args.N, args.repeats, threaded)
         libs = ["stonesoup"] if args.stonesoup else []
-        runs = whole_steps(args.N, max(3, args.repeats // 6), args.steps, libs)
+        runs = whole_steps(args.N, max(3, args.repeats // 6), args.steps, libs, threaded)
     phases = [p for p in res if not p.startswith("(")]
     total = {k: sum(res[p][k] for p in phases) for k in ("serial", "threads", "cpu_threads")}
     ss_ms = runs["stonesoup"]["1_thread_ms"] if "stonesoup" in runs else args.stonesoup_ms
@@ -297,14 +310,18 @@ def main(argv: list[str] | None = None) -> int:
         "bar_ns_per_particle": budget_ns,
         "whole_steps": runs,
         "load": [load0, os.getloadavg()[0]],
+        "threaded": threaded,
     }
+    run.save(_results.out_path(args, __file__), [summary])
     if args.json:
         print(json.dumps(summary))
         return 0
     print(
         f"N = {args.N}, min of {args.repeats} calls, load {load0:.2f} -> {os.getloadavg()[0]:.2f}"
     )
-    print(f"{'phase':28s} {'serial ns':>10s} {'2 thr. ns':>10s} {'2 thr. cpu':>10s}")
+    print(
+        f"{'phase':28s} {'serial ns':>10s} {f'{threaded} thr. ns':>10s} {f'{threaded} thr. cpu':>10s}"
+    )
     for p, row in res.items():
         print(f"{p:28s} {row['serial']:10.2f} {row['threads']:10.2f} {row['cpu_threads']:10.2f}")
     print(
@@ -312,7 +329,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(
         f"floor per step: {total['serial'] * args.N / 1e6:.2f} ms serial, "
-        f"{total['threads'] * args.N / 1e6:.2f} ms on 2 threads; 30x Stone Soup "
+        f"{total['threads'] * args.N / 1e6:.2f} ms on {threaded} threads; 30x Stone Soup "
         f"({ss_ms:.4g} ms{', measured here' if 'stonesoup' in runs else ''}) needs "
         f"{ss_ms / 30:.2f} ms ({budget_ns:.1f} ns/particle)"
     )

@@ -3,13 +3,16 @@ complexity statement of Sec. 3.5.4 (MMPF-SP costs O(4 N K) + 3 O(N_s): linear in
 channels; claim C18).
 
     python benchmarks/zhai2007_speed.py [--N 200 1000] [--steps 30] [--repeats 3] [--clock cpu]
-                                        [--json] [--plot PATH]
+                                        [--threads T] [--json] [--plot PATH] [--save | --out PATH]
 
 Scenario: 2-D CV target, one bearing sensor at the origin (the E2/E13 set-up), ``steps`` steps;
 every filter filters the same measurements. Time per step = the fastest of ``--repeats`` runs of
 the whole run divided by ``steps`` (one untimed run first: Numba compilation, caches), in CPU
-seconds of the process (``--clock wall``: wall seconds); BLAS limited to one thread. The
-IMM-EKF has no particles: its cost is the same at every N (three EKFs).
+seconds of the process (``--clock wall``: wall seconds; both are measured and saved, each the
+fastest of the runs by that clock); BLAS limited to one thread (``--threads T``: BLAS/OpenMP and
+Numba get T threads, ``_results.py``). The IMM-EKF has no particles: its cost is the same at
+every N (three EKFs). Every filter is fusetrack's (no peer library has them), so there is no
+agreement check; the ratios are costs relative to the bootstrap filter.
 
 Filters (Zhai 2007 algorithm in brackets): bootstrap; PF-SP-PEKF (Alg. 1, 20 channels); CPF-SP
 (Alg. 2, one bank per active sensor: here one); MM-bootstrap (Alg. 3); MMPF-SP (Alg. 4, 20
@@ -22,12 +25,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _results
 from fusetrack.core import Gaussian
 from fusetrack.experiments.zhai2007.common import run_steps, timed_gaussian
 from fusetrack.filters.cpf_sp import CPFSPProposal
@@ -102,19 +108,24 @@ CLOCKS = {"cpu": time.process_time, "wall": time.perf_counter}
 def time_filter(make: Callable[[], object], steps: int, repeats: int, clock: str = "cpu") -> float:
     """Seconds per step: the fastest of ``repeats`` timed runs (after one untimed run), by the
     process's CPU time (default; the least disturbed by other processes) or wall time."""
+    return time_filter_both(make, steps, repeats)[clock]
+
+
+def time_filter_both(make: Callable[[], object], steps: int, repeats: int) -> dict[str, float]:
+    """``{"cpu": .., "wall": ..}`` seconds per step, each the fastest of ``repeats`` timed runs
+    by its clock (after one untimed run)."""
     _, _, prior, zs = scenario(steps)
-    tick = CLOCKS[clock]
     out = []
     for r in range(repeats + 1):
         f = make()
         rng = np.random.default_rng(r)
-        t0 = tick()
-        if isinstance(f, InteractingMultipleModel):
-            timed_gaussian(f, prior, zs, ["s"], 1.0)
-        else:  # ProposalParticleFilter, MultipleModelParticleFilter
-            run_steps(f, prior, zs, 1.0, rng)
-        out.append((tick() - t0) / steps)
-    return min(out[1:])
+        with _results.Clock() as c:
+            if isinstance(f, InteractingMultipleModel):
+                timed_gaussian(f, prior, zs, ["s"], 1.0)
+            else:  # ProposalParticleFilter, MultipleModelParticleFilter
+                run_steps(f, prior, zs, 1.0, rng)
+        out.append((c.cpu / steps, c.wall / steps))
+    return {"cpu": min(o[0] for o in out[1:]), "wall": min(o[1] for o in out[1:])}
 
 
 def linear_fit(x: list[int], y: list[float]) -> dict[str, float]:
@@ -129,8 +140,9 @@ def scaling(steps: int, repeats: int, clock: str = "cpu") -> dict[str, object]:
     """C18: MMPF-SP seconds per step against particles N_s (10 channels per bank) and against
     channels N per bank (N_s = 200), with linear fits."""
     ns, ks = [500, 1000, 2000, 4000, 8000], [10, 20, 40, 80, 160]
-    t_n = [time_filter(builders(n, 10)["MMPF-SP"], steps, repeats, clock) for n in ns]
-    t_k = [time_filter(builders(200, k)["MMPF-SP"], steps, repeats, clock) for k in ks]
+    b_n = [time_filter_both(builders(n, 10)["MMPF-SP"], steps, repeats) for n in ns]
+    b_k = [time_filter_both(builders(200, k)["MMPF-SP"], steps, repeats) for k in ks]
+    t_n, t_k = [b[clock] for b in b_n], [b[clock] for b in b_k]
     return {
         "N_s": ns,
         "sec_vs_N_s": t_n,
@@ -138,6 +150,9 @@ def scaling(steps: int, repeats: int, clock: str = "cpu") -> dict[str, object]:
         "channels": ks,
         "sec_vs_channels": t_k,
         "fit_channels": linear_fit(ks, t_k),
+        "clock": clock,
+        "both_vs_N_s": b_n,
+        "both_vs_channels": b_k,
     }
 
 
@@ -176,36 +191,63 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--clock", choices=list(CLOCKS), default="cpu")
     ap.add_argument("--plot", default=None, help="write the C18 scaling figure to this PNG")
+    _results.add_arguments(ap)
     args = ap.parse_args(argv)
-    threadpool_limits(1)  # BLAS: one thread, as in pf_bearing.py
+    if args.threads is not None and args.threads < 1:
+        ap.error("--threads must be >= 1")
+    run, rows = _results.Run(argv, __file__), []
+    with _results.limit_threads(args.threads) as threads:  # default: BLAS one thread
+        run.threads = threads
+        results = _measure(args, rows)
+    if args.json:
+        print(json.dumps(results, default=float))
+    run.save(_results.out_path(args, __file__), rows)
+    return 0
+
+
+def _measure(args: argparse.Namespace, rows: list[dict]) -> dict[str, object]:
+    """The ``--json`` document; ``rows`` gets one results row per N (and the C18 scaling)."""
     results: dict[str, object] = {}
     for n in args.N:
         b = builders(n)
         names = args.filters or list(b)
-        per = {m: time_filter(b[m], args.steps, args.repeats, args.clock) for m in names}
-        base = per.get("bootstrap") or time_filter(
-            b["bootstrap"], args.steps, args.repeats, args.clock
+        both = {m: time_filter_both(b[m], args.steps, args.repeats) for m in names}
+        if "bootstrap" not in both:
+            both["bootstrap"] = time_filter_both(b["bootstrap"], args.steps, args.repeats)
+        per = {m: both[m][args.clock] for m in names}
+        rel = {c: {m: both[m][c] / both["bootstrap"][c] for m in names} for c in CLOCKS}
+        results[f"N={n}"] = {"seconds_per_step": per, "relative_to_bootstrap": rel[args.clock]}
+        rows.append(
+            {
+                "N": n,
+                "steps": args.steps,
+                "clock": args.clock,
+                "seconds_per_step": per,
+                "cpu_seconds_per_step": {m: both[m]["cpu"] for m in names},
+                "wall_seconds_per_step": {m: both[m]["wall"] for m in names},
+                "relative_to_bootstrap": rel[args.clock],
+                "cpu_relative_to_bootstrap": rel["cpu"],
+                "wall_relative_to_bootstrap": rel["wall"],
+            }
         )
-        results[f"N={n}"] = {
-            "seconds_per_step": per,
-            "relative_to_bootstrap": {m: t / base for m, t in per.items()},
-        }
         if not args.json:
-            print(f"N = {n}: seconds per step (x bootstrap)")
-            for m, t in per.items():
-                print(f"  {m:20s} {t:.5f}  ({t / base:.1f}x)")
+            print(f"N = {n}: seconds per step, {args.clock} (x bootstrap; wall / cpu)")
+            for m in names:
+                print(
+                    f"  {m:20s} {per[m]:.5f}  ({rel[args.clock][m]:.1f}x; "
+                    f"{rel['wall'][m]:.1f}x / {rel['cpu'][m]:.1f}x)"
+                )
     if not args.no_scaling:
         sc = scaling(args.steps, args.repeats, args.clock)
         results["C18_scaling"] = sc
+        rows.append({"C18_scaling": sc})
         if args.plot:
             plot_scaling(sc, args.plot)
         if not args.json:
             for key in ("N_s", "channels"):
                 ms = ", ".join(f"{t * 1e3:.2f}" for t in sc[f"sec_vs_{key}"])  # type: ignore[attr-defined]
                 print(f"C18 MMPF-SP ms/step vs {key} {sc[key]}: {ms}; fit {sc[f'fit_{key}']}")
-    if args.json:
-        print(json.dumps(results, default=float))
-    return 0
+    return results
 
 
 if __name__ == "__main__":

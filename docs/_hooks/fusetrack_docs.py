@@ -12,6 +12,10 @@ Nothing on the site is typed twice; at build time this hook
 * expands ``{{ readme_code "HEADING" }}`` into the first code block under that heading of
   ``README.md`` (the commands are written once), and ``{{ figure NAME/FILE.png "caption" }}`` into
   that figure of ``reports/`` or, while the report is missing, a note saying how to make it;
+* expands ``{{ tutorial NAME }}`` into the tutorial ``docs/tutorials/NAME.py``: its module
+  docstring as the page's text (the first line its title), its committed figure
+  ``docs/tutorials/figures/NAME.png`` and the script itself without the docstring, so the page
+  shows exactly the code the tests run;
 * gives each API page's ``::: fusetrack.PACKAGE`` block (with no options of its own) the
   package's public names as ``members``: the packages re-export their names from submodules
   (``from .kalman import KalmanFilter as KalmanFilter``), which mkdocstrings lists only when
@@ -73,6 +77,7 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str
         lambda m: figure(m.group(1), m.group(2), page.file.src_uri),
         markdown,
     )
+    markdown = re.sub(r"\{\{ tutorial ([\w-]+) \}\}", lambda m: tutorial(m.group(1)), markdown)
     return re.sub(r"^::: (fusetrack\.\w+)\s*$(?!\n\s+options:)", _api_block, markdown, flags=re.M)
 
 
@@ -141,6 +146,46 @@ def figure(path: str, caption: str, page_uri: str) -> str:
     return (
         f'!!! note "Figure not yet in reports/"\n    {caption}: `reports/{path}` appears after the '
         f"full-size run `fusetrack run {name} --out reports/{name}`."
+    )
+
+
+# --- tutorials ---------------------------------------------------------------------------------
+
+TUTORIALS = ROOT / "docs" / "tutorials"
+
+
+def tutorial(name: str) -> str:
+    """Markdown for the page of ``docs/tutorials/NAME.py`` (a page in ``docs/tutorials/``): the
+    docstring's first line as the title, the rest as text, the figure the script writes (run at
+    full size and committed), a link to the script and its code without the docstring."""
+    path = TUTORIALS / f"{name}.py"
+    source = path.read_text()
+    module = ast.parse(source)
+    doc = ast.get_docstring(module, clean=True)
+    first = module.body[0] if module.body else None
+    if doc is None or first is None:
+        raise ValueError(f"{path.relative_to(ROOT)} has no module docstring")
+    title, _, text = doc.partition("\n")
+    code = "\n".join(source.splitlines()[first.end_lineno :]).strip("\n")
+    figure_path = TUTORIALS / "figures" / f"{name}.png"
+    if not figure_path.exists():
+        raise ValueError(
+            f"{figure_path.relative_to(ROOT)} is missing: run the tutorial at full size"
+        )
+    return "\n".join(
+        [
+            f"# {title.strip().rstrip('.')}",
+            "",
+            text.strip(),
+            "",
+            f"![The figure {name}.py writes](figures/{name}.png)",
+            "",
+            f"## The script: [`{name}.py`]({name}.py)",
+            "",
+            "```python",
+            code,
+            "```",
+        ]
     )
 
 

@@ -2,7 +2,8 @@
 
 The package is organised by stage (``docs/ARCHITECTURE.md``): ``core`` values, ``motion`` and
 ``sensors`` models, ``world`` geometry, ``filters``, ``management``, ``association``,
-``perception``, ``evaluation`` and the reproduced ``experiments``.
+``perception``, ``estimation`` (model parameters from the filters' log-likelihood),
+``evaluation`` and the reproduced ``experiments``.
 """
 
 __version__ = "0.1.0"

@@ -1,7 +1,9 @@
 """``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track``,
-``make-sample``, ``track-video``, ``serve`` and ``replay``; ``--version``, ``-v``/``-q`` (the ``logging`` level; before or after any
-subcommand), ``run NAME --help`` (the experiment's own options). Progress goes to stderr (a bar
-on a terminal, plain lines elsewhere); colour only on a terminal and never with ``NO_COLOR``."""
+``make-sample``, ``track-video``, ``serve``, ``replay``, ``log check|recover``, ``reproduce
+[NAME ...|--all]`` and ``reports tally``; ``--version``, ``-v``/``-q`` (the ``logging`` level;
+before or after any subcommand), ``run NAME --help`` (the experiment's own options). Progress
+goes to stderr (a bar on a terminal, plain lines elsewhere); colour only on a terminal and never
+with ``NO_COLOR``."""
 
 from __future__ import annotations
 
@@ -128,16 +130,26 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_options(demo, "out/demo")
     _add_verbosity(demo, argparse.SUPPRESS)
     from .service import add_live_options, add_service_parsers
-    from .tools import add_track_video_parser
+    from .tools import add_reports_parser, add_reproduce_parser, add_track_video_parser
 
     add_live_options(demo)
     add_service_parsers(sub)
     add_track_video_parser(sub)
     _add_track_parsers(sub)
-    for command in sub.choices.values():  # -v/-q after any subcommand, too
-        if "--verbose" not in command._option_string_actions:
-            _add_verbosity(command, argparse.SUPPRESS)
+    add_reproduce_parser(sub)
+    add_reports_parser(sub)
+    _verbosity_after_subcommands(parser)
     return parser
+
+
+def _verbosity_after_subcommands(parser: argparse.ArgumentParser) -> None:
+    """-v/-q after any subcommand too, nested ones included (``log check FILE -q``)."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for command in action.choices.values():
+                if "--verbose" not in command._option_string_actions:
+                    _add_verbosity(command, argparse.SUPPRESS)
+                _verbosity_after_subcommands(command)
 
 
 def _add_track_parsers(sub: Any) -> None:
@@ -164,19 +176,20 @@ def _run_track_commands(args: argparse.Namespace) -> int | None:
 
 
 def _print_summary(summary: dict, out: Path) -> None:
-    from .evaluation import coloured
+    from .evaluation import Claim, coloured, verdict_line
 
     claims = summary["claims"]
-    held = sum(c["holds"] for c in claims)
     print(
-        f"\n{summary['experiment']}: {held}/{len(claims)} claims hold "
+        f"\n{summary['experiment']}: {verdict_line([Claim(**c) for c in claims])} "
         f"({summary['runs']} runs, {summary['seconds']:.1f} s, peak {summary['peak_memory_mb']:.0f} MiB)"
     )
     for c in claims:
         ours = f"{c['ours']:.4g}" if isinstance(c["ours"], float) else c["ours"]
         word, colour = ("ok ", "green") if c["holds"] else ("NO ", "red")
         mark = coloured(word, colour, sys.stdout)
-        print(f"  [{mark}] {c['id']}: {c['statement']} — ours {ours}, paper {c['paper']}")
+        print(
+            f"  [{mark}] {c['id']} ({c['kind']}): {c['statement']} — ours {ours}, paper {c['paper']}"
+        )
     print(f"report: {out / 'report.md'}")
 
 
@@ -246,7 +259,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     from .evaluation import RunContext
     from .experiments import REGISTRY, run_experiment
 
-    if args.command in ("serve", "replay") or getattr(args, "live", False):
+    if args.command in ("serve", "replay", "log") or getattr(args, "live", False):
         from .service import run_service_command
 
         return run_service_command(args)
@@ -256,6 +269,15 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .tools import run_track_video_command
 
         return run_track_video_command(args)
+    if args.command == "reports":
+        from .tools import run_reports_command
+
+        return run_reports_command(args)
+    if args.command == "reproduce":
+        from .tools import run_reproduce_command
+
+        _check_output_dir(args.out)
+        return run_reproduce_command(args)
     if args.command == "list":
         width = max(len(n) for n in REGISTRY)
         for name, info in REGISTRY.items():

@@ -132,7 +132,7 @@ def _toy_run(ctx: RunContext) -> Outcome:
     logging.getLogger("fusetrack.experiments.toy").info("toy: progress line")
     logging.getLogger("fusetrack.experiments.toy").debug("toy: debug line")
     df = pd.DataFrame({"run": range(opts.size)})
-    return Outcome(df, [Claim("c", "toy", 1, 1, 0, True)], "body", opts.size)
+    return Outcome(df, [Claim("c", "toy", 1, 1, 0, True, "paper")], "body", opts.size)
 
 
 @pytest.fixture
@@ -154,7 +154,8 @@ def test_verbosity_sets_the_logging_level(toy, flags, info, debug, tmp_path, cap
     assert ("toy: progress line" in captured.err) is info
     assert ("toy: debug line" in captured.err) is debug
     assert (_SEEN[-1].progress is False) is (flags == ["-q"])  # -q: no progress bar either
-    assert "1/1 claims hold (2 runs" in captured.out  # the summary is the product: always printed
+    # the summary is the product: always printed
+    assert "1 of 1 paper claims hold (2 runs" in captured.out
     assert "--set size=2`" in (tmp_path / "report.md").read_text().splitlines()[2]
     assert main(["run", toy, *flags, "--out", str(tmp_path)]) == 0  # after the command, too
     assert ("toy: progress line" in capsys.readouterr().err) is info

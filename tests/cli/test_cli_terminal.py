@@ -60,6 +60,9 @@ REQUIRED = {  # the least each subcommand needs to parse
     "track": ["scene.yaml", "--out", "o"],
     "make-sample": [],
     "track-video": ["v.mp4", "--radio", "r.csv", "--calibration", "c.yaml", "--out", "o"],
+    "log": ["check", "node.sqlite"],
+    "reproduce": ["--all", "--out", "o"],
+    "reports": ["tally"],
 }
 
 
@@ -156,7 +159,10 @@ def test_monte_carlo_progress_reaches_a_log(monkeypatch, capsys):
 def _toy_run(ctx: RunContext) -> Outcome:
     df = ctx.monte_carlo(_one_row, [{}], 2)
     return Outcome(
-        df, [Claim("a", "holds", 1, 1, 0, True), Claim("b", "fails", 1, 2, 0, False)], "body", 2
+        df,
+        [Claim("a", "holds", 1, 1, 0, True, "paper"), Claim("b", "fails", 1, 2, 0, False, "paper")],
+        "body",
+        2,
     )
 
 
@@ -214,7 +220,7 @@ def test_summary_colours_on_a_terminal_unless_no_color(toy, no_color, tmp_path, 
     monkeypatch.setattr(sys, "stdout", out)
     assert main(["run", toy, "--workers", "1", "-q", "--out", str(tmp_path)]) == 0
     text = out.getvalue()
-    assert "1/2 claims hold" in text
+    assert "1 of 2 paper claims hold" in text
     if no_color:
         assert "\x1b" not in text and "[ok ] a" in text and "[NO ] b" in text
     else:

@@ -1,7 +1,8 @@
 """Lower stages never import higher ones (docs/ARCHITECTURE.md): ``core`` <- ``motion``,
-``sensors``, ``world`` <- ``filters`` <- ``association``, ``perception``, ``management`` <-
-``evaluation`` <- ``experiments``, ``service``, ``tools``, ``cli``. Checked on the source text of
-every module (imports inside functions count too), so it needs no import of the package."""
+``sensors``, ``world`` <- ``filters`` <- ``association``, ``perception``, ``management``,
+``tracking``, ``estimation`` <- ``evaluation`` <- ``experiments``, ``service``, ``tools``, ``cli``.
+Checked on the source text of every module (imports inside functions count too), so it needs no
+import of the package."""
 
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ RANK = {
     "perception": 3,
     "management": 3,
     "tracking": 3,
+    "estimation": 3,
     "evaluation": 4,
     "experiments": 5,
     "service": 5,

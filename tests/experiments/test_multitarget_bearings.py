@@ -1,15 +1,14 @@
 """multitarget-bearings: the quick run's contract files, the triangulation (hand-computed points,
-covariance against Monte Carlo), ghost counting, the birth-only associator and the options."""
+covariance against Monte Carlo), ghost counting and the options (the tracker's birth-only
+sensors, which the direct method uses, are tested in tests/tracking/test_birth_only.py)."""
 
 import json
 
 import numpy as np
 import pytest
 
-from fusetrack.association import ScanLikelihoods
 from fusetrack.cli import main
 from fusetrack.core import ConfigError
-from fusetrack.experiments.multitarget.methods import BirthOnly
 from fusetrack.experiments.multitarget.scenario import Scene
 from fusetrack.experiments.multitarget.triangulation import (
     count_ghosts,
@@ -95,25 +94,6 @@ def test_rays_that_meet_behind_an_array_give_no_candidate():
     # A looks east, B (east of A) looks east too but slightly north: they meet west of A
     scan = {"A": np.array([0.5]), "B": np.array([0.3])}
     assert pair_candidates(_scene(), scan, "A", "B") == []
-
-
-def test_birth_only_associator_misses_every_track_and_frees_ungated_points():
-    inner_called = []
-
-    class Inner:
-        def associate(self, scores, rng=None):
-            inner_called.append(True)
-
-    ll = np.array([[-1.0, -np.inf, -np.inf], [-np.inf, -2.0, -np.inf]])
-    birth = ScanLikelihoods((4, 9), ll, np.full(2, np.log1p(-1e-9)), np.zeros(3))
-    out = BirthOnly(Inner()).associate(birth)
-    assert out.unassociated == (2,)
-    assert all(
-        h[0].measurement is None and h[0].probability == 1.0 for h in out.hypotheses.values()
-    )
-    assert not inner_called
-    BirthOnly(Inner()).associate(ScanLikelihoods((4, 9), ll, np.log([0.1, 0.1]), np.zeros(3)))
-    assert inner_called
 
 
 @pytest.mark.parametrize("raw", [{"targets": 7}, {"p_detect": 0.0}, {"no_such_key": 1}])

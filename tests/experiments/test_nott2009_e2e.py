@@ -19,7 +19,7 @@ CASES = {
     ),
     "nott2009-radio-accuracy": (
         ["--runs", "4"],
-        {"H7-table-mean", "H7-table-std", "H7-sim-mean", "H7-sim-std"},
+        {"H7-sim-mean", "H7-sim-std"},
     ),
     "nott2009-video": (
         ["--quick"],

@@ -121,3 +121,98 @@ def test_a_huge_sequence_jump_is_accepted_in_bounded_memory():
         assert w.bitmap.bit_length() <= w.size
     assert not w.accept(1_764_000_000_000_000)  # older than the window now
     assert w.accept(10**17 + 1) and not w.accept(10**17 + 1)
+
+
+def test_a_forged_flood_from_one_source_is_dropped_unchecked_and_counted(
+    tmp_path, network, monkeypatch
+):
+    """Issue 18: 60,000 forged frames from one sender starved the legitimate ones and the loss
+    was not in /health. A source spends ``auth_failure_burst`` failures, then its frames are
+    dropped before their HMAC is computed; valid frames from other addresses all get through,
+    every accepted one is in the durable log, and /health counts every dropped frame."""
+    from fusetrack.service import node as node_module
+    from fusetrack.service.log import DurableLog
+
+    limits = network.limits.model_copy(
+        update={"auth_failure_burst": 50, "auth_failures_per_second": 10.0}
+    )
+    cfg = network.model_copy(update={"limits": limits})
+    clock = [1000.0]
+    node = FusionNode(cfg, wall=lambda: clock[0], log=DurableLog(tmp_path / "n.sqlite"))
+    checked = []
+    real_open = node_module.open_frame
+    monkeypatch.setattr(
+        node_module, "open_frame", lambda f, k: checked.append(1) or real_open(f, k)
+    )
+    forged = _frame(network, "array-west", 10**6, key=b"attacker-key-0000")
+    for seq in range(1, 201):  # 10 forged frames per valid one, all in the same wall second
+        for _ in range(10):
+            assert not node.ingest_frame(forged, "203.0.113.9")[0].accepted
+        ok = node.ingest_frame(_frame(network, "array-west", seq, time=seq * 0.01), "10.0.0.1")
+        assert ok[0].accepted
+    assert node.rejected == {"bad_mac": 50, "rate_limited": 1950}
+    assert len(checked) == 50 + 200  # the blocked source's frames were never authenticated
+    health = node.health()
+    assert health["accepted"] == 200
+    assert health["dropped_unauthenticated"] == 2000 and health["rate_limited"] == 1950
+    node.commit()
+    assert [m.seq for _, m in node.log.messages()] == list(range(1, 201))
+    # the bucket refills: one failure per 1 / auth_failures_per_second seconds
+    clock[0] += 0.1
+    assert node.ingest_frame(forged, "203.0.113.9")[0].reason == "bad_mac"
+    assert node.ingest_frame(forged, "203.0.113.9")[0].reason == "rate_limited"
+
+
+def test_http_clients_that_keep_failing_get_429_valid_tokens_still_pass(network):
+    """The same over HTTP: after the burst a bad token is answered 429 (Retry-After) before the
+    body is read, counted as rate_limited; a valid token from the same address is unaffected
+    (a proxy in front of the node shows every client with one address)."""
+    from fastapi.testclient import TestClient
+
+    from fusetrack.service.app import create_app
+
+    limits = network.limits.model_copy(update={"auth_failure_burst": 3})
+    node = FusionNode(network.model_copy(update={"limits": limits}))
+    m = SensorMessage(
+        node="array-west",
+        seq=1,
+        sensor="mic_west",
+        time=1.0,
+        reading=reading_from_vector("bearing", [0.2]),
+    )
+    with TestClient(create_app(node)) as c:
+        bad = {"Authorization": "Bearer " + "0" * 64}
+        codes = [c.post("/ingest", content=b"{}", headers=bad).status_code for _ in range(5)]
+        assert codes == [401, 401, 401, 429, 429]
+        good = {"Authorization": "Bearer " + node.tokens["array-west"]}
+        r = c.post("/ingest", content=m.model_dump_json(), headers=good)
+        assert r.status_code == 200 and r.json()["accepted"] == 1
+        health = c.get("/health").json()
+    assert health["dropped_unauthenticated"] == 5 and health["rate_limited"] == 2
+    assert node.rejected["unauthorized"] == 3
+
+
+def test_what_the_kernel_drops_for_a_full_socket_is_counted():
+    """/health's udp_dropped: datagrams lost before the node could read them are counted
+    (``/proc/net/udp``), so received + dropped = sent."""
+    import socket
+
+    from fusetrack.service.udp import kernel_drops, udp_socket
+
+    sock = udp_socket(rcvbuf=4096)
+    out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    drops = kernel_drops(sock)
+    if drops is None:
+        pytest.skip("no /proc/net/udp here")
+    for _ in range(300):
+        out.sendto(b"x" * 1000, sock.getsockname())
+    received = 0
+    while True:
+        try:
+            sock.recv(2048)
+        except BlockingIOError:
+            break
+        received += 1
+    assert 0 < received < 300 and received + kernel_drops(sock) - drops == 300
+    sock.close()
+    out.close()

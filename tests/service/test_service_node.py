@@ -194,6 +194,7 @@ def test_example_config_is_the_demo_network():
         (lambda d: d["fusion"].update(rate_hz=0), "rate_hz"),
         (lambda d: d["tracker"].update(prior_mean=[0, 0]), "prior"),
         (lambda d: d["tracker"].update(filter="kalman9000"), "filter"),
+        (lambda d: d.setdefault("limits", {}).update(auth_failure_burst=0), "auth_failure_burst"),
     ],
 )
 def test_bad_configs_name_the_field(network, change, field):
@@ -329,3 +330,68 @@ def test_damaged_foreign_and_directory_logs_are_refused_with_a_way_out(tmp_path,
         db.execute("UPDATE messages SET body = '{bad' WHERE rowid = 1")
     with pytest.raises(ConfigError, match="rows read back"):
         FusionNode(network, log=DurableLog(path))
+
+
+def test_one_node_stamping_ahead_cannot_drag_the_data_clock(tmp_path, network):
+    """Issue 18: with ``clock: data`` one sender's batch stamped ahead (each reading within
+    ``max_future`` of the last) moved fusion time from 78 s to 3,048 s, after which every other
+    sensor was refused as late, even after a restart. The data clock is now the second latest
+    node's time (``fusion.clock_quorum: 2``): the runaway readings are refused as ``future``
+    and counted, the honest nodes keep being fused, a restart resumes at the honest time."""
+    clock = [0.0]
+    path = tmp_path / "node.sqlite"
+    node = FusionNode(network, wall=lambda: clock[0], log=DurableLog(path))
+    honest = [("array-east", "mic_east"), ("camera-1", "camera"), ("tag-reader", "tag")]
+    kinds = {s.id: s.kind for s in network.sensors}
+
+    def send(t, seq):
+        for who, sensor in honest:
+            z = [30.0, 20.0] if kinds[sensor] == "position_fix" else [0.3]
+            assert node.ingest_message(msg(who, seq, sensor, t, kinds[sensor], z), who).accepted
+
+    for i in range(1, 79):  # 78 s of honest readings
+        send(float(i), i)
+    runaway = [
+        node.ingest_message(
+            msg("array-west", i, "mic_west", 78 + 9.0 * i, "bearing", [0.3]), "array-west"
+        )
+        for i in range(1, 331)  # 9 s further each time: up to 3,048 s
+    ]
+    accepted = [o.accepted for o in runaway]
+    assert accepted == [True] + [False] * 329  # only 87 s is within max_future of 78 s
+    assert node.rejected["future"] == 329 and node.clock() == 78.0
+    node.advance()
+    assert node.aligner.fused_until <= 78.0
+    send(79.0, 79)  # the others are still fused, not late
+    node.advance()
+    assert node.clock() == 79.0 and node.rejected["late"] == 0
+    node.log.close()
+    again = FusionNode(network, wall=lambda: clock[0], log=DurableLog(path))
+    assert again.clock() == 79.0
+
+
+def test_the_data_clock_follows_the_heard_nodes_when_others_are_quiet(network):
+    """No stall: with one node heard (the others never sent, or quiet for ``silent_after`` wall
+    seconds) that node's time is the clock and its ticks are fused."""
+    clock = [0.0]
+    node = FusionNode(network, wall=lambda: clock[0])
+    for i in range(1, 11):
+        node.ingest_message(
+            msg("array-west", i, "mic_west", float(i), "bearing", [0.3]), "array-west"
+        )
+    assert node.clock() == 10.0 and node.advance()
+    node.ingest_message(msg("array-east", 1, "mic_east", 10.5, "bearing", [0.3]), "array-east")
+    assert node.clock() == 10.0  # two nodes heard: the second latest
+    clock[0] += network.fusion.silent_after + 1  # array-east falls quiet; array-west goes on
+    for i in range(11, 21):
+        node.ingest_message(
+            msg("array-west", i, "mic_west", float(i), "bearing", [0.3]), "array-west"
+        )
+    assert node.clock() == 20.0
+    with_one = network.model_copy(
+        update={"fusion": network.fusion.model_copy(update={"clock_quorum": 1})}
+    )
+    lone = FusionNode(with_one, wall=lambda: clock[0])
+    lone.ingest_message(msg("array-west", 1, "mic_west", 5.0, "bearing", [0.3]), "array-west")
+    lone.ingest_message(msg("array-east", 1, "mic_east", 9.0, "bearing", [0.3]), "array-east")
+    assert lone.clock() == 9.0  # clock_quorum 1: the latest reading, as before

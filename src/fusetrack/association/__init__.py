@@ -2,12 +2,17 @@
 track-oriented MHT, MCMCDA, likelihood peaks."""
 
 from .base import Association as Association
+from .base import AssociationWeights as AssociationWeights
 from .base import Associator as Associator
 from .base import ScanLikelihoods as ScanLikelihoods
 from .base import SingleHypothesis as SingleHypothesis
 from .base import hypotheses_of as hypotheses_of
+from .base import hypothesis_weights as hypothesis_weights
+from .batch import PairPosteriors as PairPosteriors
 from .batch import batchable as batchable
 from .batch import predict_many as predict_many
+from .batch import predict_stacked as predict_stacked
+from .batch import stack_gaussians as stack_gaussians
 from .batch import update_pairs as update_pairs
 from .clusters import gate_clusters as gate_clusters
 from .gating import check_gate_probability as check_gate_probability
@@ -25,6 +30,7 @@ from .jpda import JointProbabilisticDataAssociation as JointProbabilisticDataAss
 from .marginals import belief_propagation_marginals as belief_propagation_marginals
 from .marginals import exact_marginals as exact_marginals
 from .marginals import joint_events as joint_events
+from .marginals import lone_track_marginals as lone_track_marginals
 from .mcmcda import MCMCDA as MCMCDA
 from .mcmcda import AssociationState as AssociationState
 from .mcmcda import HypothesisSampler as HypothesisSampler

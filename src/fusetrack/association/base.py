@@ -63,6 +63,20 @@ class Association:
     info: Mapping[str, object] = field(default_factory=dict)
 
 
+@dataclass(frozen=True, eq=False)
+class AssociationWeights:
+    """One scan's association as a matrix, for ``T`` tracks and ``M`` measurements:
+    ``weights`` ``(T, M + 1)``, the probability of each single hypothesis (column ``j < M``:
+    measurement ``j``, the last column: missed; each row sums to 1), ``unassociated`` and
+    ``info`` as in :class:`Association`. A single-scan associator may offer it as
+    ``association_weights(scores, rng)`` besides ``associate``: a tracker that works on arrays
+    then needs no per-track hypothesis objects."""
+
+    weights: Array
+    unassociated: tuple[int, ...] = ()
+    info: Mapping[str, object] = field(default_factory=dict)
+
+
 @runtime_checkable
 class Associator(Protocol):
     """Associate one scan: ``associate(scores, rng) -> Association``, pure (the associator holds
@@ -77,3 +91,18 @@ class Associator(Protocol):
 def hypotheses_of(association: Association, track_id: int) -> Sequence[SingleHypothesis]:
     """The hypotheses of one track (a missed detection with probability 1 when it has none)."""
     return association.hypotheses.get(track_id, (SingleHypothesis(track_id, None, 1.0),))
+
+
+def hypothesis_weights(
+    association: Association, track_ids: Sequence[int], n_measurements: int
+) -> Array:
+    """``(T, M + 1)``: row ``i`` the probabilities of the hypotheses of track ``track_ids[i]``
+    (column ``j < M``: measurement ``j``; the last column: missed; a track without
+    hypotheses is missed with probability 1). Negative probabilities count as 0."""
+    weights = np.zeros((len(track_ids), n_measurements + 1))
+    for row, track_id in enumerate(track_ids):
+        for h in hypotheses_of(association, track_id):
+            if h.probability > 0:
+                col = n_measurements if h.measurement is None else h.measurement
+                weights[row, col] += h.probability
+    return weights

@@ -15,12 +15,18 @@ from scipy.sparse.csgraph import connected_components
 
 IntArray = NDArray[np.int64]
 
+_DENSE_TRACKS = 32  # up to this many tracks: boolean matrix products, not a sparse graph
+
 
 def gate_clusters(gated: NDArray[np.bool_]) -> list[tuple[IntArray, IntArray]]:
     """``[(track rows, measurement columns), ...]`` of the gate matrix ``gated`` ``(T, M)``, one
     entry per connected component that holds at least one track, in order of its first track.
     Measurements gated by no track belong to no cluster."""
     t, m = gated.shape
+    if t == 0:
+        return []
+    if t <= _DENSE_TRACKS:
+        return _dense_clusters(gated)
     rows, cols = np.nonzero(gated)
     graph = coo_matrix((np.ones(rows.size), (rows, t + cols)), shape=(t + m, t + m))
     _, labels = connected_components(graph, directed=False)
@@ -43,3 +49,25 @@ def _groups(labels: NDArray[np.int_], n_labels: int) -> dict[int, IntArray]:
         return {}
     parts = np.split(order, np.cumsum(counts[present])[:-1])
     return dict(zip(present.tolist(), parts, strict=True))
+
+
+def _dense_clusters(gated: NDArray[np.bool_]) -> list[tuple[IntArray, IntArray]]:
+    """:func:`gate_clusters` of a few tracks: the tracks that share a measurement are
+    neighbours (``G G^T``), and squaring the neighbour matrix until it stops growing gives
+    every track the tracks it reaches; a cluster is named by its first track."""
+    g = gated.astype(np.int64)
+    reach = (g @ g.T) > 0
+    np.fill_diagonal(reach, True)
+    while True:
+        wider = (reach.astype(np.int64) @ reach.astype(np.int64)) > 0
+        if np.array_equal(wider, reach):
+            break
+        reach = wider
+    first = np.argmax(reach, axis=1)  # each track's smallest reachable track
+    return [
+        (
+            np.flatnonzero(reach[label]).astype(np.int64),
+            np.flatnonzero(gated[reach[label]].any(axis=0)).astype(np.int64),
+        )
+        for label in dict.fromkeys(first.tolist())
+    ]

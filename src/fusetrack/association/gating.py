@@ -23,16 +23,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any, Literal, overload
+from typing import Any, Literal, cast, overload
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.special import chdtr, chdtri
 
 from ..core import (
     Belief,
     ConfigError,
     Filter,
+    Gaussian,
     Measurement,
     MeasurementError,
     SensorModel,
@@ -41,7 +42,7 @@ from ..core import (
     invalid,
 )
 from .base import Array, ScanLikelihoods
-from .batch import update_pairs
+from .batch import PairPosteriors, batchable, stack_gaussians, update_pairs, update_stacked
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -188,24 +189,54 @@ def mahalanobis_squared(
     ``(m,)``) against each belief, in a few batched array operations: the gate of
     :func:`mahalanobis_distance` for all pairs at once (``R`` the measurement's own covariance
     when it has one; a singular ``S`` is solved by least squares)."""
-    n_t, n_m = len(beliefs), len(measurements)
-    if not n_t or not n_m:
-        return np.zeros((n_t, n_m))
+    if not len(beliefs) or not len(measurements):
+        return np.zeros((len(beliefs), len(measurements)))
     moments = [_moments(b) for b in beliefs]
     means = np.array([m for m, _ in moments])  # (T, d) (np.stack without its overhead)
     covs = np.array([c for _, c in moments])  # (T, d, d)
+    return _mahalanobis_stacked(sensor, means, covs, measurements)
+
+
+def _mahalanobis_stacked(
+    sensor: SensorModel, means: Array, covs: Array, measurements: Sequence[Measurement]
+) -> Array:
+    """:func:`mahalanobis_squared` of the stacked moments ``means`` ``(T, d)``, ``covs``
+    ``(T, d, d)``."""
+    if not means.shape[0] or not len(measurements):
+        return np.zeros((means.shape[0], len(measurements)))
     h = np.asarray(sensor.jacobian(means), float)  # (T, m, d)
     z_pred = np.asarray(sensor.predict(means), float)  # (T, m)
     hph = h @ covs @ np.swapaxes(h, -1, -2)  # (T, m, m)
     r_sensor = np.broadcast_to(np.asarray(sensor.noise_cov(means), float), hph.shape)
     values = np.array([np.asarray(z.value, float) for z in measurements])  # (M, m)
-    s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
     y = np.asarray(sensor.residual(values[None, :, :], z_pred[:, None, :]), float)  # (T, M, m)
+    if all(z.covariance is None for z in measurements):  # one S per track
+        return _quadratic_forms((hph + r_sensor)[:, None], y)
+    s = hph[:, None] + np.stack([_noise(z, r_sensor) for z in measurements], axis=1)
+    return _quadratic_forms(s, y)
+
+
+def _quadratic_forms(s: Array, y: Array) -> Array:
+    """``y^T S^-1 y`` for ``S`` ``(T, 1 or M, m, m)`` and ``y`` ``(T, M, m)``: closed form
+    for ``m <= 2`` (the 2x2 inverse ``[[d, -b], [-c, a]] / det``), else through ``S^-1``; by
+    least squares (the pseudo-inverse) when some ``S`` is singular (no noise, no
+    uncertainty)."""
+    m = y.shape[-1]
+    if m == 1:
+        det = s[..., 0, 0]
+        if np.all(np.isfinite(det) & (det != 0.0)):
+            return np.asarray(y[..., 0] ** 2 / det)
+    elif m == 2:
+        a, b, c, d = s[..., 0, 0], s[..., 0, 1], s[..., 1, 0], s[..., 1, 1]
+        det = a * d - b * c
+        if np.all(np.isfinite(det) & (det != 0.0)):
+            y0, y1 = y[..., 0], y[..., 1]
+            return np.asarray((d * y0 * y0 - (b + c) * y0 * y1 + a * y1 * y1) / det)
     try:
-        s_inv_y = np.linalg.solve(s, y[..., None])[..., 0]
-    except np.linalg.LinAlgError:  # a singular S (no noise, no uncertainty): least squares
-        s_inv_y = (np.linalg.pinv(s, hermitian=True) @ y[..., None])[..., 0]
-    return np.asarray(np.einsum("tmi,tmi->tm", y, s_inv_y))
+        s_inv = np.linalg.inv(s)
+    except np.linalg.LinAlgError:
+        s_inv = np.linalg.pinv(s, hermitian=True)
+    return np.asarray(np.einsum("tmi,tmij,tmj->tm", y, np.broadcast_to(s_inv, (*y.shape, m)), y))
 
 
 def _noise(z: Measurement, sensor_noise: Array) -> Array:
@@ -240,7 +271,7 @@ def _pair_scores(
 @overload
 def scan_likelihoods(
     track_ids: Sequence[int],
-    beliefs: Sequence[Belief],
+    beliefs: Sequence[Belief] | Gaussian,
     measurements: Sequence[Measurement],
     sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
     filt: Filter[Any],
@@ -257,7 +288,7 @@ def scan_likelihoods(
 @overload
 def scan_likelihoods(
     track_ids: Sequence[int],
-    beliefs: Sequence[Belief],
+    beliefs: Sequence[Belief] | Gaussian,
     measurements: Sequence[Measurement],
     sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
     filt: Filter[Any],
@@ -268,12 +299,12 @@ def scan_likelihoods(
     *,
     keep_posteriors: Literal[True],
     validated: bool = False,
-) -> tuple[ScanLikelihoods, dict[tuple[int, int], Any]]: ...
+) -> tuple[ScanLikelihoods, Mapping[tuple[int, int], Any]]: ...
 
 
 def scan_likelihoods(
     track_ids: Sequence[int],
-    beliefs: Sequence[Belief],
+    beliefs: Sequence[Belief] | Gaussian,
     measurements: Sequence[Measurement],
     sensors: Mapping[str, SensorModel] | Sequence[SensorModel],
     filt: Filter[Any],
@@ -284,10 +315,11 @@ def scan_likelihoods(
     *,
     keep_posteriors: bool = False,
     validated: bool = False,
-) -> ScanLikelihoods | tuple[ScanLikelihoods, dict[tuple[int, int], Any]]:
+) -> ScanLikelihoods | tuple[ScanLikelihoods, Mapping[tuple[int, int], Any]]:
     """The :class:`ScanLikelihoods` of one scan (and, with ``keep_posteriors``, the updates).
 
-    ``beliefs[i]`` is track ``track_ids[i]``'s predicted belief at the scan time. For every
+    ``beliefs[i]`` is track ``track_ids[i]``'s predicted belief at the scan time (``beliefs``
+    may also be one batched Gaussian ``(T, d)``, a row per track: stacked already). For every
     measurement ``j`` inside track ``i``'s ``gate_probability`` gate, ``log_likelihood[i, j] =
     log P_D,i + log p(z_j | track i)``: the increment of ``filt.update_with_likelihood(belief,
     [z_j], rng)`` when the filter is a :class:`~fusetrack.core.LikelihoodFilter`, else the
@@ -301,7 +333,9 @@ def scan_likelihoods(
 
     ``p_detect``: one probability in ``(0, 1]`` or one per track. Returns ``scores``, or
     ``(scores, posteriors)`` with ``keep_posteriors=True``: ``posteriors[(i, j)]`` the belief
-    of track row ``i`` updated with measurement ``j`` alone, for every gated pair. A
+    of track row ``i`` updated with measurement ``j`` alone, for every gated pair (for the
+    Kalman family a :class:`~fusetrack.association.PairPosteriors`, whose batched arrays hold
+    them all: the beliefs are stacked once and every sensor's gated pairs updated in one call). A
     measurement from a sensor not in ``sensors`` raises
     :class:`~fusetrack.core.UnknownSensorError` (a :class:`MeasurementError`).
     ``validated=True``: the caller has already checked every measurement (a vector value of a
@@ -311,8 +345,17 @@ def scan_likelihoods(
     from ..filters import as_sensor_map, validate_measurement  # here: importing filters is slow
 
     n = len(track_ids)
-    if len(beliefs) != n:
-        raise ShapeError(invalid("len(beliefs)", len(beliefs), f"{n}, one per track id"))
+    stack: Gaussian | None = None
+    each: Sequence[Belief]  # the beliefs one by one, for the per-track path
+    if isinstance(beliefs, Gaussian) and beliefs.mean.ndim == 2:  # one batch, a row per track
+        count = int(beliefs.mean.shape[0])
+        stack = beliefs if batchable(filt, ()) else None
+        each = () if stack is not None else beliefs.unstack()
+    else:
+        each = cast(Sequence[Belief], beliefs)
+        count = len(each)
+    if count != n:
+        raise ShapeError(invalid("len(beliefs)", count, f"{n}, one per track id"))
     pg = check_gate_probability(gate_probability)
     pd = _per_track("p_detect", p_detect, n)
     sensor_map = as_sensor_map(sensors)
@@ -322,28 +365,91 @@ def scan_likelihoods(
         for z in measurements:
             _vector(z)
         usable = [bool(validate_measurement(z, sensor_map).usable) for z in measurements]
-    log_clutter = np.array(
-        [math.log(_clutter_of(clutter_density, z.sensor_id)) for z in measurements]
-    )
+    log_kappa = {  # one density per sensor
+        sid: math.log(_clutter_of(clutter_density, sid))
+        for sid in dict.fromkeys(z.sensor_id for z in measurements)
+    }
+    log_clutter = np.array([log_kappa[z.sensor_id] for z in measurements], dtype=float)
     ll = np.full((n, len(measurements)), -np.inf)
+    log_pd = np.array([math.log(p) for p in pd.tolist()])  # math.log: the scalar path's digits
+    if stack is None:
+        stack = _stacked_prior(filt, each)
     posteriors: dict[tuple[int, int], Any] = {}
+    stacked_parts: list[tuple[Any, Any, Gaussian]] = []
     by_sensor: dict[str, list[int]] = {}
     for j, ok in enumerate(usable):
         if ok:
             by_sensor.setdefault(measurements[j].sensor_id, []).append(j)
     for sid, cols in by_sensor.items():
         sensor = sensor_map[sid]
-        d2 = mahalanobis_squared(sensor, beliefs, [measurements[j] for j in cols])
+        chosen = [measurements[j] for j in cols]
+        if stack is None:
+            d2 = mahalanobis_squared(sensor, each, chosen)
+        else:
+            d2 = _mahalanobis_stacked(sensor, stack.mean, stack.cov, chosen)
         rows, ks = np.nonzero(d2 <= gate_threshold(pg, sensor.dim))
-        pairs = [(int(i), cols[int(k)]) for i, k in zip(rows, ks, strict=True)]
-        found = _pair_scores(
-            filt, beliefs, sensor, [(i, measurements[j]) for i, j in pairs], rng, keep_posteriors
-        )
-        for (i, j), (pair, post) in zip(pairs, found, strict=True):
-            ll[i, j] = math.log(pd[i]) + pair if math.isfinite(pair) else -math.inf
+        if not rows.size:
+            continue
+        at = np.asarray(cols, dtype=np.intp)[ks]  # the pairs' measurement indices
+        pairs = [chosen[k] for k in ks.tolist()]
+        if stack is None:
+            found = _pair_scores(
+                filt, each, sensor, list(zip(rows.tolist(), pairs)), rng, keep_posteriors
+            )
+            pair_ll = np.array([f for f, _ in found], dtype=float)
             if keep_posteriors:
-                posteriors[(i, j)] = post
+                posteriors.update(zip(zip(rows.tolist(), at.tolist()), (p for _, p in found)))
+        else:
+            post, pair_ll = _stacked_pair_scores(filt, stack, rows, pairs, rng)
+            stacked_parts.append((rows, at, post))
+        ll[rows, at] = np.where(np.isfinite(pair_ll), log_pd[rows] + pair_ll, -np.inf)
     with np.errstate(divide="ignore"):
         log_missed = np.log1p(-pd * pg)
     scores = ScanLikelihoods(tuple(int(t) for t in track_ids), ll, log_missed, log_clutter)
-    return (scores, posteriors) if keep_posteriors else scores
+    if not keep_posteriors:
+        return scores
+    if stack is not None:
+        return scores, _pair_posteriors(stacked_parts, stack.dim)
+    return scores, posteriors
+
+
+def _stacked_prior(filt: Filter[Any], beliefs: Sequence[Belief]) -> Gaussian | None:
+    """The beliefs as one batched Gaussian when the filter updates them in one call
+    (:func:`.batch.batchable`), else None (the per-track path)."""
+    if not len(beliefs) or not callable(getattr(filt, "update_with_likelihood", None)):
+        return None
+    return stack_gaussians(cast(Sequence[Gaussian], beliefs)) if batchable(filt, beliefs) else None
+
+
+def _stacked_pair_scores(
+    filt: Filter[Any],
+    stack: Gaussian,
+    rows: NDArray[np.intp],
+    measurements: Sequence[Measurement],
+    rng: np.random.Generator | None,
+) -> tuple[Gaussian, Array]:
+    """``(posteriors (P, d), log p(z | track) (P,))`` of the gated pairs ``(rows[p],
+    measurements[p])`` of one sensor, from the stacked prior: one batched filter call (one
+    unbatched call for a lone pair, as :func:`.batch.update_pairs` does)."""
+    if rows.size == 1:
+        r = int(rows[0])
+        post, ll = filt.update_with_likelihood(  # type: ignore[attr-defined]
+            Gaussian(stack.mean[r], stack.cov[r]), [measurements[0]], rng
+        )
+        return Gaussian(post.mean[None], post.cov[None]), np.array([float(np.asarray(ll))])
+    return update_stacked(filt, Gaussian(stack.mean[rows], stack.cov[rows]), measurements, rng)
+
+
+def _pair_posteriors(parts: Sequence[tuple[Any, Any, Gaussian]], dim: int) -> PairPosteriors:
+    """The :class:`.batch.PairPosteriors` of every sensor's gated pairs, in one stack."""
+    if not parts:
+        empty = np.zeros(0, np.intp)
+        return PairPosteriors(empty, empty, Gaussian(np.zeros((0, dim)), np.zeros((0, dim, dim))))
+    return PairPosteriors(
+        np.concatenate([r for r, _, _ in parts]),
+        np.concatenate([c for _, c, _ in parts]),
+        Gaussian(
+            np.concatenate([g.mean for _, _, g in parts]),
+            np.concatenate([g.cov for _, _, g in parts]),
+        ),
+    )

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .base import Array, Association, ScanLikelihoods, SingleHypothesis
+from .base import Array, Association, AssociationWeights, ScanLikelihoods, SingleHypothesis
 from .scores import log_likelihood_ratios, validate_scores
 
 
@@ -54,26 +54,32 @@ class GlobalNearestNeighbour:
     measurement left) is reported missed.
     """
 
+    def association_weights(
+        self, scores: ScanLikelihoods, rng: np.random.Generator | None = None
+    ) -> AssociationWeights:
+        """The answer of :meth:`associate` as a matrix ``(T, M + 1)`` of zeros and ones."""
+        validate_scores(scores, "GlobalNearestNeighbour")
+        t, m = scores.shape
+        costs, big = _augmented_costs(scores)
+        rows, cols = linear_sum_assignment(costs)
+        chosen = cols[rows < t][np.argsort(rows[rows < t])]  # each track's column
+        taken = (chosen < m) & (costs[np.arange(t), np.minimum(chosen, m + t - 1)] < big)
+        column = np.where(taken, chosen, m)  # a forbidden or missed-column choice: missed
+        weights = np.zeros((t, m + 1))
+        weights[np.arange(t), column] = 1.0
+        log_ratio = float(sum(log_likelihood_ratios(scores)[np.arange(t), column].tolist()))
+        used = set(column[taken].tolist())
+        unassociated = tuple(j for j in range(m) if j not in used)
+        return AssociationWeights(weights, unassociated, {"log_ratio": log_ratio})
+
     def associate(
         self, scores: ScanLikelihoods, rng: np.random.Generator | None = None
     ) -> Association:
-        validate_scores(scores, "GlobalNearestNeighbour")
+        answer = self.association_weights(scores, rng)
         m = scores.shape[1]
-        costs, big = _augmented_costs(scores)
-        rows, cols = linear_sum_assignment(costs)
-        chosen = dict(zip(rows.tolist(), cols.tolist(), strict=True))
-        weights = log_likelihood_ratios(scores)
-        hypotheses: dict[int, tuple[SingleHypothesis, ...]] = {}
-        used: set[int] = set()
-        log_ratio = 0.0
-        for i, track_id in enumerate(scores.track_ids):
-            j = chosen[i]
-            if j < m and costs[i, j] < big:
-                used.add(j)
-                log_ratio += float(weights[i, j])
-                hypotheses[track_id] = (SingleHypothesis(track_id, j, 1.0),)
-            else:
-                log_ratio += float(weights[i, m])
-                hypotheses[track_id] = (SingleHypothesis(track_id, None, 1.0),)
-        unassociated = tuple(j for j in range(m) if j not in used)
-        return Association(hypotheses, unassociated, {"log_ratio": log_ratio})
+        columns = np.argmax(answer.weights, axis=1).tolist()
+        hypotheses = {
+            track_id: (SingleHypothesis(track_id, j if j < m else None, 1.0),)
+            for track_id, j in zip(scores.track_ids, columns, strict=True)
+        }
+        return Association(hypotheses, answer.unassociated, answer.info)

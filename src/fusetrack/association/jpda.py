@@ -24,11 +24,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..core import ConfigError, invalid
-from .base import Array, Association, ScanLikelihoods, SingleHypothesis
+from .base import Array, Association, AssociationWeights, ScanLikelihoods, SingleHypothesis
 from .clusters import IntArray, gate_clusters
-from .marginals import belief_propagation_marginals, exact_marginals
+from .marginals import belief_propagation_marginals, exact_marginals, lone_track_marginals
 from .scores import gated_pairs, log_likelihood_ratios, validate_scores
 
 
@@ -39,8 +40,11 @@ class JointProbabilisticDataAssociation:
 
     ``associate(scores)`` gives each track its hypotheses ``(j, beta_ij)`` for every
     measurement with ``beta_ij > 0`` and ``(None, beta_i0)``; ``info`` holds ``beta``
-    ``(T, M + 1)`` (last column: missed), ``clusters`` (track rows, measurement columns) and
-    ``approximated`` (how many clusters used belief propagation).
+    ``(T, M + 1)`` (last column: missed), ``clusters`` (track rows, measurement columns; the
+    clusters of tracks that share a measurement, a track alone in its cluster is not listed)
+    and ``approximated`` (how many clusters used belief propagation).
+    ``association_weights(scores)`` gives the same answer as a matrix
+    (:class:`~fusetrack.association.AssociationWeights`).
     """
 
     max_exact_events: int = 10_000
@@ -63,15 +67,25 @@ class JointProbabilisticDataAssociation:
     def marginals(
         self, scores: ScanLikelihoods
     ) -> tuple[Array, list[tuple[IntArray, IntArray]], int]:
-        """``(beta (T, M + 1), clusters, number of approximated clusters)`` of a valid scan."""
+        """``(beta (T, M + 1), clusters, number of approximated clusters)`` of a valid scan.
+        The tracks that share no measurement with another (most, in a sparse scan) are solved
+        in one array pass (:func:`lone_track_marginals`); ``clusters`` are the others'."""
         t, m = scores.shape
         weights = log_likelihood_ratios(scores)
         beta = np.zeros((t, m + 1))
-        clusters = gate_clusters(gated_pairs(scores))
+        gated = gated_pairs(scores)
+        lone = _lone_tracks(gated, self.max_exact_events)
+        beta[lone] = lone_track_marginals(weights[lone])
+        shared = np.flatnonzero(~lone)
+        clusters = (
+            [(shared[rows], cols) for rows, cols in gate_clusters(gated[shared])]
+            if shared.size
+            else []
+        )
         approximated = 0
         for tracks, measurements in clusters:
             block: tuple[Any, ...]
-            if tracks.size == 1:  # most clusters: a lone track, indexed without np.ix_
+            if tracks.size == 1:  # a lone track with too many events: indexed without np.ix_
                 block = (tracks[:1, None], [*measurements.tolist(), m])
             else:
                 block = np.ix_(tracks, np.append(measurements, m))
@@ -84,19 +98,35 @@ class JointProbabilisticDataAssociation:
                 )
         return beta, clusters, approximated
 
-    def associate(
+    def association_weights(
         self, scores: ScanLikelihoods, rng: np.random.Generator | None = None
-    ) -> Association:
+    ) -> AssociationWeights:
+        """The answer of :meth:`associate` as a matrix: ``beta`` ``(T, M + 1)``."""
         validate_scores(scores, "JointProbabilisticDataAssociation")
         m = scores.shape[1]
         beta, clusters, approximated = self.marginals(scores)
-        hypotheses = {
-            track_id: _hypotheses(track_id, beta[i]) for i, track_id in enumerate(scores.track_ids)
-        }
         from_tracks = beta[:, :m].sum(axis=0)
         unassociated = tuple(int(j) for j in np.flatnonzero(from_tracks < self.unassociated_below))
         info = {"beta": beta, "clusters": clusters, "approximated": approximated}
-        return Association(hypotheses, unassociated, info)
+        return AssociationWeights(beta, unassociated, info)
+
+    def associate(
+        self, scores: ScanLikelihoods, rng: np.random.Generator | None = None
+    ) -> Association:
+        answer = self.association_weights(scores, rng)
+        hypotheses = {
+            track_id: _hypotheses(track_id, answer.weights[i])
+            for i, track_id in enumerate(scores.track_ids)
+        }
+        return Association(hypotheses, answer.unassociated, answer.info)
+
+
+def _lone_tracks(gated: NDArray[np.bool_], limit: int) -> NDArray[np.bool_]:
+    """``(T,)``: the tracks that share none of their gated measurements with another track
+    and have at most ``limit`` joint events (their gated measurements and missed)."""
+    shared_cols = np.count_nonzero(gated, axis=0) > 1
+    alone = ~(gated & shared_cols).any(axis=1)
+    return np.asarray(alone & (np.count_nonzero(gated, axis=1) + 1 <= limit))
 
 
 def _hypotheses(track_id: int, beta_row: Array) -> tuple[SingleHypothesis, ...]:

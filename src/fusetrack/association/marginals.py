@@ -90,20 +90,24 @@ def exact_marginals(log_weights: Array, limit: int | None = None) -> Array:
 
 def _lone_track_marginals(log_weights: Array, limit: int | None) -> Array:
     """:func:`exact_marginals` of one track, weights ``(M + 1,)``: its events are its gated
-    columns and missed, so its ``beta`` is their normalised weights (no enumeration)."""
-    cols = log_weights.size
-    events = np.append(np.flatnonzero(np.isfinite(log_weights[:-1])), cols - 1)
-    if limit is not None and events.size > limit:
+    columns and missed (:func:`lone_track_marginals`)."""
+    events = np.count_nonzero(np.isfinite(log_weights[:-1])) + 1
+    if limit is not None and events > limit:
         raise OverflowError(f"more than {limit} joint events")
-    beta = np.zeros((1, cols))
-    log_p = log_weights[events]
-    if not np.isfinite(log_p).any():
-        beta[0, -1] = 1.0
-        return beta
-    p = np.exp(log_p - log_p.max())
-    p /= p.sum()
-    beta[0, events] = p
-    return beta
+    return lone_track_marginals(log_weights[None, :])
+
+
+def lone_track_marginals(log_weights: Array) -> Array:
+    """``beta`` ``(L, M + 1)`` of ``L`` tracks that share no measurement with another track
+    (each one a cluster alone): a track's joint events are its gated columns and missed, so
+    its ``beta`` is its row of weights normalised (no enumeration), all rows in one pass.
+    A track whose every event has probability zero is missed."""
+    top = np.max(log_weights, axis=1, initial=-np.inf)
+    possible = np.isfinite(top)
+    p = np.exp(log_weights - np.where(possible, top, 0.0)[:, None])  # -inf: 0
+    p[~possible] = 0.0
+    p[~possible, -1] = 1.0
+    return np.asarray(p / p.sum(axis=1, keepdims=True))
 
 
 def belief_propagation_marginals(

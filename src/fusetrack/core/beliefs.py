@@ -46,6 +46,16 @@ class Gaussian:
     def dim(self) -> int:
         return int(self.mean.shape[-1])
 
+    def unstack(self) -> list[Gaussian]:
+        """The entries of a batched ``(K, d)`` Gaussian as ``K`` Gaussians ``(d,)`` (views of
+        its rows, not checked again: the batch was)."""
+        out = []
+        for m, c in zip(self.mean, self.cov, strict=True):
+            g = object.__new__(Gaussian)
+            g.__dict__.update(mean=m, cov=c)
+            out.append(g)
+        return out
+
     def logpdf(self, x: ArrayLike) -> NDArray[np.float64]:
         """Log density at ``x`` ``(..., d)``."""
         x = np.asarray(x, float)

@@ -10,6 +10,13 @@ from .crlb import (
     rmse_bound,
     velocity_rmse_bound,
 )
+from .intervals import (
+    interval_values,
+    mean_interval,
+    paired_interval,
+    shown_positive,
+    within_margin,
+)
 from .metrics import (
     average,
     chi2_interval,
@@ -38,12 +45,25 @@ from .multi_target_metrics import (
 )
 from .options import ExperimentOptions, describe_options, load_yaml, parse_options
 from .projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
-from .report import Claim, Outcome, RunContext, peak_memory_mb, write_outputs
+from .report import (
+    KINDS,
+    Claim,
+    ClaimKinds,
+    Outcome,
+    RunContext,
+    check_kind,
+    claims_table,
+    peak_memory_mb,
+    verdict_line,
+    write_outputs,
+)
 from .terminal import PlainProgress, colour_enabled, coloured, progress_bar
 
 __all__ = [
     "ENGINES",
+    "KINDS",
     "Claim",
+    "ClaimKinds",
     "ClearMotResult",
     "ExperimentOptions",
     "GospaResult",
@@ -54,7 +74,9 @@ __all__ = [
     "SiapResult",
     "average",
     "axis_bounds",
+    "check_kind",
     "chi2_interval",
+    "claims_table",
     "clear_mot",
     "colour_enabled",
     "coloured",
@@ -64,7 +86,9 @@ __all__ = [
     "fused_bound",
     "gospa",
     "gospa_over_time",
+    "interval_values",
     "load_yaml",
+    "mean_interval",
     "nees",
     "nis",
     "ospa",
@@ -72,6 +96,7 @@ __all__ = [
     "ospa2_over_time",
     "ospa_components",
     "ospa_over_time",
+    "paired_interval",
     "parse_options",
     "peak_memory_mb",
     "plane_crlb",
@@ -84,9 +109,12 @@ __all__ = [
     "rmse_bound",
     "run_monte_carlo",
     "run_seed",
+    "shown_positive",
     "siap",
     "track_loss_onset",
     "track_loss_rate",
     "velocity_rmse_bound",
+    "verdict_line",
+    "within_margin",
     "write_outputs",
 ]

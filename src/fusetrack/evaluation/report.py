@@ -11,6 +11,7 @@ import math
 import resource
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
+from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Any
 
@@ -21,10 +22,23 @@ from ..core import ConfigError, invalid
 from .montecarlo import ENGINES, RunFunction, run_monte_carlo
 from .options import ExperimentOptions
 
+KINDS = ("paper", "calibration", "diagnostic", "beyond")
+"""What a claim is: ``paper`` (a number, ordering or statement the paper makes), ``calibration``
+(a target a free parameter was tuned to reach), ``diagnostic`` (our own check under a reading),
+``beyond`` (modern baselines, beyond the paper). Tallies count ``paper`` claims only."""
+
+
+def check_kind(kind: str, field: str = "kind") -> str:
+    """``kind`` if it is one of :data:`KINDS`, else :class:`ConfigError` naming it."""
+    if kind not in KINDS:
+        raise ConfigError(invalid(field, kind, f"one of {KINDS}"))
+    return kind
+
 
 @dataclass(frozen=True)
 class Claim:
-    """One checked statement: what the paper prints, what this run measured, and whether it holds."""
+    """One checked statement: what the paper prints, what this run measured, whether it holds,
+    and its ``kind`` (one of :data:`KINDS`)."""
 
     id: str
     statement: str
@@ -32,9 +46,39 @@ class Claim:
     ours: Any
     tolerance: Any
     holds: bool
+    kind: str
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "holds", bool(self.holds))
+        check_kind(self.kind, f"kind of claim {self.id!r}")
+
+
+class ClaimKinds:
+    """An experiment's ``claim id -> kind`` table, kept next to its claims: keys are exact ids
+    or ``fnmatch`` patterns (``"C14_*"``), tried in order. It also labels the claims of old
+    ``summary.json`` files written before kinds existed (``fusetrack reports tally``), which
+    leaves out the ``retired`` ids: claims removed because they held by construction."""
+
+    def __init__(self, table: Mapping[str, str], retired: Sequence[str] = ()) -> None:
+        self.table = {
+            pattern: check_kind(k, f"kind of {pattern!r}") for pattern, k in table.items()
+        }
+        self.retired = frozenset(retired)
+
+    def kind_of(self, claim_id: str) -> str:
+        """The kind of ``claim_id``: :class:`ConfigError` if no key matches or it is retired."""
+        if claim_id not in self.retired:
+            for pattern, kind in self.table.items():
+                if claim_id == pattern or fnmatchcase(claim_id, pattern):
+                    return kind
+        raise ConfigError(
+            invalid("claim id", claim_id, f"an id this table gives a kind: {list(self.table)}")
+        )
+
+    def claim(self, *args: Any, **kwargs: Any) -> Claim:
+        """:class:`Claim` with the fields given and the kind this table gives its id."""
+        claim_id = kwargs["id"] if "id" in kwargs else args[0]
+        return Claim(*args, **{**kwargs, "kind": self.kind_of(claim_id)})
 
 
 @dataclass
@@ -126,19 +170,39 @@ def peak_memory_mb() -> float:
 
 
 def claims_table(claims: Sequence[Claim]) -> str:
-    """Markdown table of claims."""
-    lines = ["| id | statement | paper | ours | tolerance | holds |", "|---|---|---|---|---|---|"]
+    """Markdown table of claims, with each claim's kind."""
+    lines = [
+        "| id | kind | statement | paper | ours | tolerance | holds |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for c in claims:
         ours = f"{c.ours:.4g}" if isinstance(c.ours, float) else str(c.ours)
         lines.append(
-            f"| {c.id} | {c.statement} | {c.paper} | {ours} | {c.tolerance} | {'yes' if c.holds else '**no**'} |"
+            f"| {c.id} | {c.kind} | {c.statement} | {c.paper} | {ours} | {c.tolerance} "
+            f"| {'yes' if c.holds else '**no**'} |"
         )
     return "\n".join(lines)
 
 
+def verdict_line(claims: Sequence[Claim]) -> str:
+    """``"k of n paper claims hold"``, then the other kinds apart: ``"; calibration 2 of 2, ..."``."""
+    parts = []
+    for kind in KINDS:
+        of_kind = [c for c in claims if c.kind == kind]
+        held = sum(c.holds for c in of_kind)
+        if kind == "paper":
+            parts.append(f"{held} of {len(of_kind)} paper claims hold")
+        elif of_kind:
+            parts.append(f"{kind} {held} of {len(of_kind)}")
+    return "; ".join(parts)
+
+
 def _option_flags(extra: dict[str, Any]) -> str:
     """``--config`` and ``--set`` options as they were given, for the report's command line."""
-    flags = [f" --config {v}" if k == "config" else f" --set {k}={v}" for k, v in extra.items()]
+    flags = [
+        f" --{k} {v}" if k in ("config", "measurements") else f" --set {k}={v}"
+        for k, v in extra.items()
+    ]
     return "".join(flags)
 
 
@@ -168,7 +232,6 @@ def write_outputs(
     if outcome.beyond_the_paper:
         summary["beyond_the_paper"] = _jsonable(outcome.beyond_the_paper)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    held = sum(c.holds for c in outcome.claims)
     header = [
         f"# {outcome.title or ctx.name}",
         "",
@@ -176,7 +239,7 @@ def write_outputs(
         f" --engine {ctx.engine}{_option_flags(ctx.extra)}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
         f"{' (quick run: fewer runs, wider tolerances)' if ctx.quick else ''}.",
         "",
-        f"## Claims ({held} of {len(outcome.claims)} hold)",
+        f"## Claims ({verdict_line(outcome.claims)})",
         "",
         claims_table(outcome.claims),
         "",

@@ -3,6 +3,7 @@
 from .registry import (
     REGISTRY,
     ExperimentInfo,
+    claim_kinds,
     describe,
     options_model,
     run_experiment,
@@ -12,6 +13,7 @@ from .registry import (
 __all__ = [
     "REGISTRY",
     "ExperimentInfo",
+    "claim_kinds",
     "describe",
     "options_model",
     "run_experiment",

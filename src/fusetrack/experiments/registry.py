@@ -16,6 +16,7 @@ from typing import Any
 
 from ..core import ConfigError, UnknownExperimentError
 from ..evaluation import (
+    ClaimKinds,
     ExperimentOptions,
     Outcome,
     RunContext,
@@ -291,6 +292,15 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "fusetrack (issue 17; Kushwaha 2010 field, Lee 2009 bearings)",
             options="Options",
         ),
+        ExperimentInfo(
+            "multitarget-benchmark",
+            "multitarget.benchmark:run",
+            "Beyond the papers: GNN, JPDA, MHT, MCMCDA and GM-PHD on targets born and dying, "
+            "position + range-bearing sensors, P_D 0.9, sparse/dense Poisson clutter, crossings; "
+            "GOSPA, OSPA(2), CLEAR MOT, cardinality",
+            "fusetrack (issue 17)",
+            options="Options",
+        ),
     ]
 }
 
@@ -317,6 +327,13 @@ def options_model(name: str) -> type[ExperimentOptions]:
     if not (isinstance(model, type) and issubclass(model, ExperimentOptions)):
         raise TypeError(f"{info.target}: {info.options} is not an ExperimentOptions model")
     return model
+
+
+def claim_kinds(name: str) -> ClaimKinds | None:
+    """Experiment ``name``'s ``claim id -> kind`` table (``CLAIM_KINDS`` in its module), or
+    ``None`` if its module keeps none (its claims then carry their kinds in ``summary.json``)."""
+    kinds = getattr(_module(describe(name)), "CLAIM_KINDS", None)
+    return kinds if isinstance(kinds, ClaimKinds) else None
 
 
 def validate_options(name: str, raw: dict[str, Any]) -> ExperimentOptions:

@@ -69,6 +69,10 @@ from .projected_planes import select_pairs as select_pairs
 from .proposals import PriorProposal as PriorProposal
 from .proposals import SISBelief as SISBelief
 from .proposals import sensor_measurements as sensor_measurements
+from .rng_handles import RunStreams as RunStreams
+from .rng_handles import bitgen_from_handle as bitgen_from_handle
+from .rng_handles import next_double as next_double
+from .rng_handles import random_standard_normal as random_standard_normal
 from .runner import run_filter as run_filter
 from .sis import ProposalParticleFilter as ProposalParticleFilter
 from .smart_camera_trackers import GMM3_BYTES as GMM3_BYTES

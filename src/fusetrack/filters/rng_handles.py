@@ -33,7 +33,13 @@ from numba.np.random.distributions import random_standard_normal
 from numba.np.random.generator_core import next_double
 from numpy.typing import NDArray
 
-__all__ = ["RunStreams", "generator_handles", "next_double", "random_standard_normal"]
+__all__ = [
+    "RunStreams",
+    "bitgen_from_handle",
+    "generator_handles",
+    "next_double",
+    "random_standard_normal",
+]
 
 
 def _address(fn: object) -> int:
@@ -95,3 +101,6 @@ def _bitgen(tyctx, handle):  # pragma: no cover - compile time
         return bg._getvalue()
 
     return sig, codegen
+
+
+bitgen_from_handle = _bitgen  # the public name (fusetrack.estimation's kernels use it)

@@ -26,6 +26,8 @@ from .engine import FusionEngine as FusionEngine
 from .engine import build_engine as build_engine
 from .log import DurableLog as DurableLog
 from .log import replay_log as replay_log
+from .log_repair import check_log as check_log
+from .log_repair import recover_log as recover_log
 from .node import FusionNode as FusionNode
 from .schema import MessageBatch as MessageBatch
 from .schema import SensorMessage as SensorMessage

@@ -1,6 +1,8 @@
 """The node's web application (FastAPI on Starlette): ingest, tracks, status and the dashboard.
 
-Reading (no key needed; the dashboard uses only these):
+Reading (no key needed unless the config names ``readers``: then ``/tracks``, ``/sensors``,
+``/health``, ``/metrics`` and ``/ws/tracks`` need a reader's or a node's bearer token, in the
+``Authorization`` header or as ``?token=``; the dashboard passes on its own ``?token=``):
 
 * ``GET /`` the dashboard, ``GET /static/dashboard.js`` its script (served here: no CDN);
 * ``GET /tracks`` the latest track state and its recent trail; ``GET /sensors`` each sensor's
@@ -11,8 +13,9 @@ Reading (no key needed; the dashboard uses only these):
 Writing (``Authorization: Bearer <node token>``; see :func:`.auth.bearer_token`):
 
 * ``POST /ingest`` a message or a batch, ``application/json`` or ``application/msgpack``;
-  answers each message's outcome. 401 without a valid token, 413 when too large, 400 when
-  nothing parses, 503 (``Retry-After``) when the node is overloaded;
+  answers each message's outcome. 401 without a valid token (429 once the client's address
+  has failed ``limits.auth_failure_burst`` times), 413 when too large, 400 when nothing
+  parses, 503 (``Retry-After``) when the node is overloaded;
 * ``WS /ws/ingest`` the same per frame (text: JSON, binary: MessagePack).
 
 The lifespan runs the tick loop and, when given a socket, the UDP listener (:mod:`.udp`).
@@ -27,7 +30,7 @@ from collections.abc import AsyncIterator, Callable
 from importlib import resources
 from typing import Any
 
-from fastapi import FastAPI, Request, WebSocket, WebSocketDisconnect
+from fastapi import Depends, FastAPI, HTTPException, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from pydantic.json_schema import models_json_schema
 
@@ -133,7 +136,17 @@ def _lifespan(
 
 
 def _reading_routes(app: FastAPI, node: FusionNode) -> None:
-    """The dashboard, tracks, sensors, health, metrics, schema and the tracks' WebSocket."""
+    """The dashboard, tracks, sensors, health, metrics, schema and the tracks' WebSocket (the
+    data ones need a reader's token when the config names ``readers``)."""
+
+    def reader(request: Request) -> None:
+        header, token = request.headers.get("authorization"), request.query_params.get("token")
+        if not node.may_read(header, token):
+            raise HTTPException(
+                401, "a reader's or a node's bearer token is needed", {"WWW-Authenticate": "Bearer"}
+            )
+
+    read = [Depends(reader)]
 
     @app.get("/", response_class=HTMLResponse, include_in_schema=False)
     async def dashboard() -> HTMLResponse:
@@ -143,19 +156,25 @@ def _reading_routes(app: FastAPI, node: FusionNode) -> None:
     async def dashboard_script() -> Response:
         return Response((_STATIC / "dashboard.js").read_text(), media_type="text/javascript")
 
-    @app.get("/tracks", summary="the latest track state and its recent trail")
+    @app.get("/tracks", dependencies=read, summary="the latest track state and its recent trail")
     async def tracks(history: int = 200) -> dict[str, Any]:
         return node.tracks_view(max(0, min(history, node.cfg.limits.history)))
 
-    @app.get("/sensors", summary="each sensor's geometry, last reading and its age")
+    @app.get(
+        "/sensors", dependencies=read, summary="each sensor's geometry, last reading and its age"
+    )
     async def sensors() -> dict[str, Any]:
         return {"area": node.cfg.area, "sensors": node.sensors_view()}
 
-    @app.get("/health", summary="status, clock, counts of accepted and refused messages")
+    @app.get(
+        "/health",
+        dependencies=read,
+        summary="status, clock, counts of accepted and refused messages",
+    )
     async def health() -> dict[str, Any]:
         return node.health()
 
-    @app.get("/metrics", summary="Prometheus text format")
+    @app.get("/metrics", dependencies=read, summary="Prometheus text format")
     async def metrics() -> Response:
         return Response(node.metrics_text(), media_type="text/plain; version=0.0.4")
 
@@ -165,6 +184,9 @@ def _reading_routes(app: FastAPI, node: FusionNode) -> None:
 
     @app.websocket("/ws/tracks")
     async def ws_tracks(ws: WebSocket) -> None:
+        if not node.may_read(ws.headers.get("authorization"), ws.query_params.get("token")):
+            await ws.close(code=1008, reason="unauthorized")
+            return
         q = node.subscribe()
         if q is None:  # limits.max_subscribers: try again later (RFC 6455 close code 1013)
             await ws.close(code=1013)
@@ -208,8 +230,13 @@ def _ingest_routes(app: FastAPI, node: FusionNode) -> None:
     )
     async def ingest(request: Request) -> JSONResponse:
         who = node.authorize(request.headers.get("authorization"))
-        if who is None:
-            node.reject("unauthorized", "missing or unknown bearer token")
+        if who is None:  # refused before the body is read
+            source = request.client.host if request.client else None
+            refused = node.refuse_unauthenticated(
+                source, "unauthorized", "missing or unknown bearer token"
+            )
+            if refused.reason == "rate_limited":
+                return JSONResponse({"error": refused.detail}, 429, {"Retry-After": "1"})
             return JSONResponse(
                 {"error": "unauthorized: a node's bearer token is needed"},
                 401,
@@ -229,8 +256,11 @@ def _ingest_routes(app: FastAPI, node: FusionNode) -> None:
     async def ws_ingest(ws: WebSocket) -> None:
         who = node.authorize(ws.headers.get("authorization"))
         if who is None:
-            node.reject("unauthorized", "missing or unknown bearer token (WebSocket)")
-            await ws.close(code=1008, reason="unauthorized")
+            source = ws.client.host if ws.client else None
+            refused = node.refuse_unauthenticated(
+                source, "unauthorized", "missing or unknown bearer token (WebSocket)"
+            )
+            await ws.close(code=1008, reason=refused.reason)
             return
         await ws.accept()
         try:

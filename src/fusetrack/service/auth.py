@@ -12,14 +12,17 @@
 * **Replays**: each message carries a per-node sequence number; :class:`SequenceWindow` accepts
   a number once, tolerating reordering within a window of the last 64 (the IPsec anti-replay
   window, RFC 4303 §3.4.3), and rejects anything older.
+* **Floods**: :class:`FailureLimiter` gives each source address a token bucket of
+  authentication failures; once a source has spent it, its datagrams are dropped before their
+  tag is computed (issue 18: forged frames from one sender starved the legitimate ones).
 """
 
 from __future__ import annotations
 
 import hashlib
 import hmac
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Hashable, Mapping
+from dataclasses import dataclass, field
 
 MAGIC = b"FT"
 FRAME_VERSION = 1
@@ -76,7 +79,7 @@ def open_frame(frame: bytes, keys: Mapping[str, bytes]) -> tuple[str, str, bytes
     if key is None:
         raise Rejected("unknown_node", f"node={node!r} has no key in the network config")
     tag, payload = frame[end : end + TAG_SIZE], frame[end + TAG_SIZE :]
-    expected = hmac.new(key, frame[:end] + payload, hashlib.sha256).digest()
+    expected = hmac.digest(key, frame[:end] + payload, "sha256")  # one-shot C HMAC
     if not hmac.compare_digest(tag, expected):
         raise Rejected("bad_mac", f"HMAC of the frame from node={node!r} does not match its key")
     return node, encoding, payload
@@ -126,3 +129,46 @@ class SequenceWindow:
             return False
         self.bitmap |= 1 << offset
         return True
+
+
+@dataclass
+class FailureLimiter:
+    """Per-source token buckets of authentication failures (the token bucket of RFC 2697's
+    single-rate meter): each source may fail ``burst`` times, refilled at ``rate`` failures per
+    second. :meth:`blocked` is a dictionary look-up, so a source that has spent its bucket costs
+    the node almost nothing per message; a source that never fails is never tracked.
+
+    At most ``max_sources`` sources are remembered: past that, full buckets are forgotten and,
+    if that is not enough, all of them (a flood from many forged addresses then gets ``burst``
+    failures per address again, each still counted).
+
+    >>> lim = FailureLimiter(rate=1.0, burst=2)
+    >>> lim.fail("a", 0.0), lim.fail("a", 0.0), lim.blocked("a", 0.5), lim.blocked("a", 1.0)
+    (None, None, True, False)
+    """
+
+    rate: float
+    burst: float
+    max_sources: int = 4096
+    buckets: dict[Hashable, tuple[float, float]] = field(default_factory=dict)
+
+    def _tokens(self, source: Hashable, now: float) -> float:
+        tokens, since = self.buckets.get(source, (self.burst, now))
+        return min(self.burst, tokens + max(0.0, now - since) * self.rate)
+
+    def blocked(self, source: Hashable, now: float) -> bool:
+        """True when ``source`` has no failure left: drop its message unchecked."""
+        return source in self.buckets and self._tokens(source, now) < 1.0
+
+    def fail(self, source: Hashable, now: float) -> None:
+        """``source`` sent a message that failed authentication: spend one token."""
+        if source not in self.buckets and len(self.buckets) >= self.max_sources:
+            self._forget(now)
+        self.buckets[source] = (self._tokens(source, now) - 1.0, now)
+
+    def _forget(self, now: float) -> None:
+        full = [s for s in self.buckets if self._tokens(s, now) >= self.burst]
+        for s in full:
+            del self.buckets[s]
+        if len(self.buckets) >= self.max_sources:
+            self.buckets.clear()

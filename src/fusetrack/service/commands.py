@@ -1,4 +1,4 @@
-"""The ``fusetrack serve``, ``fusetrack replay`` and ``fusetrack demo --live`` commands.
+"""The ``fusetrack serve``, ``replay``, ``log check|recover`` and ``demo --live`` commands.
 
 :func:`add_service_parsers` and :func:`add_live_options` extend the CLI's parser (imports stay
 light); :func:`run_service_command` runs whichever of the three was asked for. What the user came
@@ -18,13 +18,24 @@ log = logging.getLogger(__name__)
 
 
 def add_service_parsers(sub: Any) -> None:
-    """The ``serve`` and ``replay`` subcommands (``fusetrack.cli`` calls this)."""
+    """The ``serve``, ``log`` and ``replay`` subcommands (``fusetrack.cli`` calls this)."""
     serve = sub.add_parser("serve", help="run a live fusion node (HTTP/WebSocket + UDP)")
     serve.add_argument("--config", type=Path, required=True, help="network YAML")
     serve.add_argument("--host", default="127.0.0.1", help="address to listen on")
     serve.add_argument("--port", type=int, default=8000, help="HTTP/WebSocket port")
     serve.add_argument("--udp-port", type=int, default=9000, help="UDP port (-1: no UDP)")
     serve.add_argument("--log", type=Path, default=None, help="durable log (default: config's)")
+    serve.add_argument("--tls-cert", type=Path, default=None, help="TLS certificate (PEM)")
+    serve.add_argument("--tls-key", type=Path, default=None, help="its private key (PEM)")
+
+    logs = sub.add_parser("log", help="check or recover a node's durable log (SQLite)")
+    what = logs.add_subparsers(dest="log_command", required=True)
+    check = what.add_parser("check", help="integrity, tables, config fingerprint, counts")
+    check.add_argument("file", type=Path, help="the node log")
+    check.add_argument("--config", type=Path, default=None, help="network YAML: its fingerprint")
+    recover = what.add_parser("recover", help="copy what reads back into a new log")
+    recover.add_argument("file", type=Path, help="the damaged node log")
+    recover.add_argument("--out", type=Path, required=True, help="the new log (must not exist)")
 
     rep = sub.add_parser("replay", help="play a scenario or a recording into a running node")
     rep.add_argument("source", help="a scenario name (demo) or a .jsonl / .sqlite recording")
@@ -70,11 +81,34 @@ def run_service_command(args: argparse.Namespace) -> int:
 
         cfg = load_config(args.config)
         udp = None if args.udp_port < 0 else args.udp_port
-        serve(cfg, args.host, args.port, udp, args.log)
+        serve(cfg, args.host, args.port, udp, args.log, args.tls_cert, args.tls_key)
         return 0
     if args.command == "replay":
         return _replay(args, load_config(args.config))
+    if args.command == "log":
+        return _log_command(args)
     return _live_demo(args)
+
+
+def _log_command(args: argparse.Namespace) -> int:
+    """``fusetrack log check FILE`` (exit 1 when it finds problems) or ``log recover FILE
+    --out NEW``."""
+    from .config import load_config
+    from .log_repair import check_log, recover_log
+
+    if args.log_command == "check":
+        cfg = load_config(args.config) if args.config is not None else None
+        report = check_log(args.file, cfg)
+        print("\n".join(report.lines()))
+        return 0 if report.ok else 1
+    got = recover_log(args.file, args.out)
+    print(
+        f"recovered {len(got.messages)} messages and {len(got.ticks)} ticks into {args.out}; "
+        f"left out {got.dropped_messages} messages and {got.dropped_ticks} ticks"
+    )
+    for problem in got.problems:
+        log.info("%s: %s", args.file, problem)
+    return 0
 
 
 def _replay(args: argparse.Namespace, cfg: Any) -> int:

@@ -17,7 +17,7 @@ import os
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 import yaml
@@ -215,30 +215,45 @@ class DetectionFunctionSensor:
         return (0, 1)
 
 
-class NodeConfig(_Section):
-    """A sensor node: its id, its key (inline, or the name of an environment variable holding
-    it) and the sensors it may report for."""
+class _KeyHolder(_Section):
+    """An id with a key, inline or the name of an environment variable holding it."""
 
     id: str = Field(pattern=_NAME)
     key: str | None = None
     key_env: str | None = None
-    sensors: list[str] = Field(min_length=1)
+
+    _section: ClassVar[str] = "nodes"
 
     def secret(self) -> bytes:
-        """The node's key as bytes (at least 16)."""
+        """The key as bytes (at least 16)."""
+        where = f"{self._section}[{self.id}]"
         if (self.key is None) == (self.key_env is None):
-            raise ConfigError(invalid(f"nodes[{self.id}].key", self.key, "key or key_env, one"))
+            raise ConfigError(invalid(f"{where}.key", self.key, "key or key_env, one"))
         raw = self.key if self.key is not None else os.environ.get(str(self.key_env))
         if raw is None:
             raise ConfigError(
-                invalid(f"nodes[{self.id}].key_env", self.key_env, "a set environment variable")
+                invalid(f"{where}.key_env", self.key_env, "a set environment variable")
             )
         key = raw.encode()
         if len(key) < MIN_KEY_BYTES:
             raise ConfigError(
-                invalid(f"nodes[{self.id}].key", "<hidden>", f"at least {MIN_KEY_BYTES} bytes")
+                invalid(f"{where}.key", "<hidden>", f"at least {MIN_KEY_BYTES} bytes")
             )
         return key
+
+
+class NodeConfig(_KeyHolder):
+    """A sensor node: its id, its key (``key`` or ``key_env``) and the sensors it may report
+    for. Its bearer token (:func:`.auth.bearer_token`) may post readings and read."""
+
+    sensors: list[str] = Field(min_length=1)
+
+
+class ReaderConfig(_KeyHolder):
+    """A reader (a dashboard, a client of ``/tracks``): its bearer token may read and subscribe
+    but never post readings. Once any reader is configured, reading needs a token."""
+
+    _section: ClassVar[str] = "readers"
 
 
 class MotionConfig(_Section):
@@ -460,7 +475,9 @@ class FusionConfig(_Section):
     order (each at its own time, then predicts to the tick); ``closest`` fuses, per sensor, the
     one reading closest to the tick time (within half a period each side), as if taken at the
     tick. ``clock``: ``wall`` ticks on the node's clock (readings stamped in Unix seconds);
-    ``data`` ticks as the readings' own times advance (replays at any speed, simulations).
+    ``data`` ticks as the readings' own times advance (replays at any speed, simulations): the
+    ``clock_quorum``-th latest of the nodes' latest reading times, so that one node stamping
+    ahead cannot move everyone's clock (with fewer nodes heard, the heard ones set it).
     ``lag``: seconds the fusion waits behind the clock for late readings. ``start``: the time of
     the prior and of tick 0 (``data`` clock; the ``wall`` clock starts at the node's start).
     ``idle_flush``: with the ``data`` clock, the last ``lag`` seconds of a stream are fused once
@@ -473,6 +490,14 @@ class FusionConfig(_Section):
     lag: float = Field(default=0.5, ge=0.0, le=3600.0)
     start: float = 0.0
     max_future: float = Field(default=10.0, gt=0.0, description="s ahead of the clock allowed")
+    clock_quorum: int = Field(
+        default=2,
+        ge=1,
+        le=1000,
+        description="data clock: the clock is the clock_quorum-th latest of the nodes' latest "
+        "reading times (nodes heard within silent_after wall seconds), so no single node drags "
+        "it; 1: the latest reading's time",
+    )
     silent_after: float = Field(default=5.0, gt=0.0, description="s without readings: silent")
     idle_flush: float | None = Field(
         default=2.0,
@@ -494,6 +519,27 @@ class LimitsConfig(_Section):
     max_subscribers: int = Field(
         default=64, ge=1, le=100_000, description="open /ws/tracks connections at most"
     )
+    auth_failure_burst: int = Field(
+        default=100,
+        ge=1,
+        le=1_000_000,
+        description="authentication failures one source address may make before its messages "
+        "are dropped unchecked (UDP) or answered 429 (HTTP)",
+    )
+    auth_failures_per_second: float = Field(
+        default=10.0, gt=0.0, le=1e6, description="refill rate of a source's failures"
+    )
+
+
+class LogConfig(_Section):
+    """The durable log (:mod:`.log`): ``path``, a SQLite file (relative to the config file), and
+    ``durability``: ``normal`` (SQLite ``synchronous=NORMAL`` in WAL mode: a killed process
+    loses no committed message, a power cut or OS crash may lose the last commits) or ``full``
+    (``synchronous=FULL``: every commit is on disk before it is acknowledged; slower writes).
+    ``log: PATH`` is short for ``log: {path: PATH}``."""
+
+    path: str | None = None
+    durability: Literal["normal", "full"] = "normal"
 
 
 class NetworkConfig(_Section):
@@ -503,10 +549,21 @@ class NetworkConfig(_Section):
     area: list[float] = Field(default=[0.0, 100.0, 0.0, 100.0], min_length=4, max_length=4)
     sensors: list[SensorConfig] = Field(min_length=1)
     nodes: list[NodeConfig] = Field(min_length=1)
+    readers: list[ReaderConfig] = Field(
+        default=[], description="read-only tokens; when given, reading needs a token"
+    )
     fusion: FusionConfig = FusionConfig()
     tracker: TrackerConfig
     limits: LimitsConfig = LimitsConfig()
-    log: str | None = Field(default=None, description="SQLite file of the durable log")
+    log: LogConfig = LogConfig()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _log_path(cls, data: Any) -> Any:
+        """``log: PATH`` (or null) is the log section with that path."""
+        if isinstance(data, dict) and (data.get("log") is None or isinstance(data["log"], str)):
+            data = {**data, "log": {"path": data.get("log")}}
+        return data
 
     @model_validator(mode="after")
     def _consistent(self) -> NetworkConfig:
@@ -537,13 +594,18 @@ class NetworkConfig(_Section):
         return {n.id: n.secret() for n in self.nodes}
 
     def fingerprint(self) -> str:
-        """SHA-256 of everything that decides the tracks (all but ``log`` and ``limits``): a
+        """SHA-256 of everything that decides the tracks (all but ``log``, ``limits`` and
+        ``readers``): a
         durable log records it and refuses to resume under another config."""
-        body = self.model_dump_json(exclude={"log", "limits"})
+        body = self.model_dump_json(exclude={"log", "limits", "readers"})
         return hashlib.sha256(body.encode()).hexdigest()
 
     def tokens(self) -> dict[str, str]:
         return {node: bearer_token(key) for node, key in self.keys().items()}
+
+    def read_tokens(self) -> dict[str, str]:
+        """reader id -> its bearer token (read only)."""
+        return {r.id: bearer_token(r.secret()) for r in self.readers}
 
     def owner(self) -> dict[str, str]:
         """sensor id -> the node allowed to report it."""
@@ -556,7 +618,14 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
         cfg = NetworkConfig.model_validate(data)
     except ValidationError as err:
         raise ConfigError(f"{source}: " + _first_error(err)) from None
-    cfg.keys()  # keys are checked now, not at the first message
+    keys = cfg.keys()  # keys are checked now, not at the first message
+    shared = [r.id for r in cfg.readers if r.secret() in keys.values() or r.id in keys]
+    readers = [r.id for r in cfg.readers]
+    if shared or len(set(readers)) != len(readers):
+        raise ConfigError(
+            f"{source}: "
+            + invalid("readers", readers, "ids and keys of their own (not a node's, unique)")
+        )
     try:
         models = cfg.sensor_models()
     except ConfigError as err:
@@ -683,6 +752,7 @@ def load_config(path: str | Path) -> NetworkConfig:
     if not isinstance(data, dict):
         raise ConfigError(invalid("config", str(p), "a YAML mapping"))
     cfg = parse_config(data, str(p))
-    if cfg.log is not None and not Path(cfg.log).is_absolute():
-        cfg = cfg.model_copy(update={"log": str(p.parent / cfg.log)})
+    if cfg.log.path is not None and not Path(cfg.log.path).is_absolute():
+        log = cfg.log.model_copy(update={"path": str(p.parent / cfg.log.path)})
+        cfg = cfg.model_copy(update={"log": log})
     return cfg

@@ -7,7 +7,10 @@ One SQLite file (write-ahead journal) with three tables:
 * ``ticks(tick, time, message_ids, body)``: each fusion tick, the ids of the readings it fused
   (in fusion order) and what it published: one :class:`~.schema.TrackState` (a single-target
   tracker), or a JSON list of them (the multi-target tracker: none, one or several);
-* ``meta(key, value)``: the tick grid's ``start``.
+* ``meta(key, value)``: the tick grid's ``start`` and the network config's fingerprint.
+
+``fusetrack log check FILE`` checks a log, ``fusetrack log recover FILE --out NEW`` copies what
+still reads back into a new one (:mod:`.log_repair`).
 
 :func:`replay_log` recomputes the tracks offline from the messages and the tick assignment and
 gives the same states (the node's engine is deterministic given its seed); a restarted node
@@ -51,13 +54,17 @@ def reading_of(message: SensorMessage, reading_id: int, value: np.ndarray | None
 class DurableLog:
     """Append-only SQLite log (see the module docstring)."""
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, durability: str = "normal") -> None:
+        """``durability``: ``normal`` or ``full``, SQLite's ``synchronous`` (see
+        :class:`~.config.LogConfig`)."""
+        if durability not in ("normal", "full"):
+            raise ConfigError(invalid("log.durability", durability, "'normal' or 'full'"))
         self.path = Path(path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.db = sqlite3.connect(self.path, check_same_thread=False, timeout=1.0)
             self.db.execute("PRAGMA journal_mode=WAL")
-            self.db.execute("PRAGMA synchronous=NORMAL")
+            self.db.execute(f"PRAGMA synchronous={durability.upper()}")
             self.db.executescript(_TABLES)
             self.db.commit()
             self.db.execute("SELECT count(*) FROM messages").fetchone()
@@ -68,7 +75,7 @@ class DurableLog:
                     str(self.path),
                     "a fusetrack node log this node can open and write "
                     f"({type(err).__name__}: {err}); if it is damaged, move it aside to start a "
-                    f"new log, or try `sqlite3 {self.path} .recover` to save what it holds",
+                    f"new log, or `fusetrack log recover {self.path} --out NEW` to save what it holds",
                 )
             ) from None
 
@@ -161,6 +168,11 @@ class DurableLog:
         for _, _, states, ids in self.tick_rows():
             for st in states:
                 yield st, ids
+
+    def node_times(self) -> dict[str, tuple[float, float]]:
+        """node -> (its latest reading's time, the wall time its latest reading was received)."""
+        rows = self.db.execute("SELECT node, MAX(time), MAX(received) FROM messages GROUP BY node")
+        return {str(n): (float(t), float(r)) for n, t, r in rows}
 
     def highest_seq(self) -> dict[str, int]:
         rows = self.db.execute("SELECT node, MAX(seq) FROM messages GROUP BY node")

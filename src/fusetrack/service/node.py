@@ -3,8 +3,10 @@
 What happens to a message (:meth:`FusionNode.ingest_frame` for UDP, :meth:`ingest_payload` for
 HTTP/WebSocket after the bearer token named the node):
 
-1. authenticated (UDP: the frame's HMAC, :mod:`.auth`), size-checked, parsed and validated
-   against the schema (:mod:`.schema`);
+1. a source address that has failed authentication too often (``limits.auth_failure_burst``,
+   refilled at ``auth_failures_per_second``) is dropped first, unchecked (``rate_limited``);
+   then authenticated (UDP: the frame's HMAC, :mod:`.auth`), size-checked, parsed and
+   validated against the schema (:mod:`.schema`);
 2. checked against the network: the message's node is the authenticated one, its sequence
    number is new (replays refused), the sensor exists, belongs to that node, is of the kind
    the message says, the value has the sensor's size, the time is not beyond the clock by more
@@ -19,6 +21,7 @@ engine, logs and publishes each :class:`~.schema.TrackState`.
 from __future__ import annotations
 
 import asyncio
+import heapq
 import json
 import math
 import sqlite3
@@ -34,7 +37,7 @@ from prometheus_client import Counter as PromCounter
 
 from ..core import ConfigError, invalid
 from .alignment import Aligner
-from .auth import Rejected, SequenceWindow, node_of_token, open_frame
+from .auth import FailureLimiter, Rejected, SequenceWindow, node_of_token, open_frame
 from .config import FUSED_KINDS, NetworkConfig
 from .engine import build_engine
 from .log import DurableLog, reading_of, replay_ticks
@@ -48,6 +51,8 @@ REJECTION_REASONS: tuple[str, ...] = (
     "unknown_node",
     "bad_mac",
     "unauthorized",
+    "rate_limited",
+    "unauthorized_read",
     "too_many_subscribers",
     "malformed",
     "schema",
@@ -63,6 +68,15 @@ REJECTION_REASONS: tuple[str, ...] = (
     "late",
     "overload",
 )
+
+UNAUTHENTICATED_REASONS: tuple[str, ...] = (
+    "bad_frame",
+    "unknown_node",
+    "bad_mac",
+    "unauthorized",
+    "rate_limited",
+)
+"""Refusals of messages no node's key vouches for (``/health``'s ``dropped_unauthenticated``)."""
 
 
 @dataclass(frozen=True)
@@ -95,8 +109,7 @@ class _Metrics:
         self.rejected = PromCounter(
             "fusetrack_messages_rejected", "refused messages", ["reason"], registry=r
         )
-        for reason in REJECTION_REASONS:
-            self.rejected.labels(reason)
+        self.rejected_by = {reason: self.rejected.labels(reason) for reason in REJECTION_REASONS}
         self.ticks = PromCounter("fusetrack_ticks", "fusion ticks published", registry=r)
         self.tick_seconds = Histogram(
             "fusetrack_tick_seconds",
@@ -136,10 +149,15 @@ class FusionNode:
         self.wall = wall
         self.keys = cfg.keys()
         self.tokens = cfg.tokens()
+        self.read_tokens = cfg.read_tokens()
         self.owner = cfg.owner()
         self.models = cfg.sensor_models()
         self.kinds = {s.id: s.kind for s in cfg.sensors}
         self.windows = {n: SequenceWindow() for n in self.keys}
+        self.limiter = FailureLimiter(
+            cfg.limits.auth_failures_per_second, cfg.limits.auth_failure_burst
+        )
+        self.udp_dropped: Callable[[], int | None] = lambda: None  # set by the UDP listener
         self.started = wall()
         fusion = cfg.fusion
         start = fusion.start
@@ -164,7 +182,10 @@ class FusionNode:
         self.engine = build_engine(cfg, start)
         self.single = cfg.tracker.association.method == "none"  # one track, every tick
         self.next_id = log.next_id() if log is not None else 1
-        self.watermark = -math.inf  # latest accepted reading time (data clock)
+        self.watermark = -math.inf  # latest accepted reading time, any node
+        self.node_time: dict[str, float] = {}  # each node's latest accepted reading time
+        self.node_heard: dict[str, float] = {}  # wall time of each node's latest acceptance
+        self.data_time = -math.inf  # the data clock (:meth:`update_data_clock`)
         self.accepted: Counter[str] = Counter()
         self.rejected: Counter[str] = Counter()
         self.last: dict[str, dict[str, Any]] = {}
@@ -182,23 +203,53 @@ class FusionNode:
 
     # -- clock -------------------------------------------------------------------------------
     def clock(self) -> float:
-        """The fusion clock: Unix time (``wall``) or the latest reading's time (``data``)."""
-        return self.wall() if self.cfg.fusion.clock == "wall" else self.watermark
+        """The fusion clock: Unix time (``wall``) or the data clock (:meth:`update_data_clock`)."""
+        return self.wall() if self.cfg.fusion.clock == "wall" else self.data_time
+
+    def update_data_clock(self) -> None:
+        """The data clock: the ``fusion.clock_quorum``-th latest of the nodes' latest reading
+        times, over the nodes heard within ``fusion.silent_after`` wall seconds (all heard nodes
+        when none is). No single node can drag it ahead of the others (issue 18: one batch
+        stamped ahead moved fusion time from 78 s to 3,048 s and every other sensor's readings
+        were then late); with fewer nodes heard than the quorum, the heard ones set it, so
+        quiet nodes never stall the fusion."""
+        now, quiet = self.wall(), self.cfg.fusion.silent_after
+        times = [t for n, t in self.node_time.items() if now - self.node_heard[n] <= quiet]
+        times = times or list(self.node_time.values())
+        if times:
+            q = min(self.cfg.fusion.clock_quorum, len(times))
+            self.data_time = heapq.nlargest(q, times)[-1]
 
     # -- ingest ------------------------------------------------------------------------------
     def reject(self, reason: str, detail: str = "", seq: int | None = None) -> Outcome:
         self.rejected[reason] += 1
-        self.metrics.rejected.labels(reason).inc()
+        counter = self.metrics.rejected_by.get(reason)  # looked up once per reason
+        (counter or self.metrics.rejected.labels(reason)).inc()
         return Outcome(False, reason, detail, seq)
 
-    def ingest_frame(self, frame: bytes) -> list[Outcome]:
-        """A UDP datagram: a sealed frame of one message or a batch."""
+    def refuse_unauthenticated(self, source: object, reason: str, detail: str) -> Outcome:
+        """Refuse a message that failed authentication, charged to its source address: once the
+        source has spent ``limits.auth_failure_burst`` failures it is ``rate_limited``."""
+        if source is None:
+            return self.reject(reason, detail)
+        now = self.wall()
+        if self.limiter.blocked(source, now):
+            return self.reject("rate_limited", f"{source} failed authentication too often")
+        self.limiter.fail(source, now)
+        return self.reject(reason, detail)
+
+    def ingest_frame(self, frame: bytes, source: object = None) -> list[Outcome]:
+        """A UDP datagram from ``source`` (the sender's address): a sealed frame of one message
+        or a batch. A source that failed authentication too often is dropped before the frame's
+        HMAC is computed (issue 18: a flood of forged frames starved the legitimate ones)."""
+        if source is not None and self.limiter.blocked(source, self.wall()):
+            return [self.reject("rate_limited", f"{source} failed authentication too often")]
         if len(frame) > self.cfg.limits.max_message_bytes:
-            return [self.reject("oversized", f"{len(frame)} bytes")]
+            return [self.refuse_unauthenticated(source, "oversized", f"{len(frame)} bytes")]
         try:
             node, encoding, payload = open_frame(frame, self.keys)
         except Rejected as err:
-            return [self.reject(err.reason, err.detail)]
+            return [self.refuse_unauthenticated(source, err.reason, err.detail)]
         return self.ingest_payload(payload, encoding, node)
 
     def ingest_payload(self, payload: bytes, encoding: str, node: str) -> list[Outcome]:
@@ -214,10 +265,21 @@ class FusionNode:
     def authorize(self, header: str | None) -> str | None:
         """The node an ``Authorization: Bearer ...`` header names, or None (the scheme name is
         case-insensitive, RFC 7235 §2.1: ``bearer`` was refused, issue 18)."""
-        scheme, _, token = (header or "").strip().partition(" ")
-        if scheme.lower() != "bearer" or not token.strip():
-            return None
-        return node_of_token(token.strip(), self.tokens)
+        token = _bearer(header)
+        return None if token is None else node_of_token(token, self.tokens)
+
+    def may_read(self, header: str | None, token: str | None = None) -> bool:
+        """Whether a reader may read tracks, sensors, health and metrics: always, unless the
+        config names ``readers``; then a reader's or a node's bearer token is needed, in the
+        ``Authorization`` header or as ``token`` (``?token=``: the dashboard, browsers'
+        WebSockets). A refusal is counted as ``unauthorized_read``."""
+        if not self.read_tokens:
+            return True
+        token = token or _bearer(header)
+        if token and (node_of_token(token, self.read_tokens) or node_of_token(token, self.tokens)):
+            return True
+        self.reject("unauthorized_read", "missing or unknown reader token")
+        return False
 
     def ingest_message(self, m: SensorMessage, node: str) -> Outcome:
         """Check one parsed message against the network and accept or refuse it."""
@@ -286,6 +348,9 @@ class FusionNode:
             self.log.append_message(rid, m, now)
         self.aligner.push(reading_of(m, rid, value))
         self.watermark = max(self.watermark, m.time)
+        self.node_time[m.node] = max(self.node_time.get(m.node, -math.inf), m.time)
+        self.node_heard[m.node] = now
+        self.update_data_clock()
         self.accepted[m.sensor] += 1
         self.metrics.accepted_by[m.sensor].inc()
         self.recent_accepts.append(now)
@@ -311,13 +376,17 @@ class FusionNode:
     # -- fusion ------------------------------------------------------------------------------
     def advance(self, limit: int = MAX_TICKS_PER_ADVANCE) -> list[TrackState]:
         """Fire the ticks due by the clock (at most ``limit``); log and publish each state."""
+        if self.cfg.fusion.clock == "data":
+            self.update_data_clock()  # a node may have fallen quiet
         clock = self.clock()
         if not math.isfinite(clock):
             return []
         idle = self.cfg.fusion.idle_flush
         if self.cfg.fusion.clock == "data" and idle is not None and self.recent_accepts:
             if self.wall() - self.recent_accepts[-1] >= idle:
-                clock += self.aligner.lag  # the stream has paused: fuse what has come
+                # the stream has paused: fuse what has come (every node's, at most max_future
+                # ahead of the quorum clock each)
+                clock = max(clock, self.watermark) + self.aligner.lag
         states = []
         for k in self.aligner.due(clock, limit):
             t0 = time.perf_counter()
@@ -358,7 +427,8 @@ class FusionNode:
                     "log",
                     str(log.path),
                     f"a log whose rows read back ({type(err).__name__}: {reason}); move it aside "
-                    "to start a new log",
+                    f"to start a new log, or `fusetrack log recover {log.path} --out NEW` to "
+                    "keep what reads back",
                 )
             ) from None
         if last:
@@ -369,6 +439,9 @@ class FusionNode:
             self.latest_time = self.aligner.tick_time(last)
             self.resumed_ticks = last
         fused = {i for _, _, _, ids in log.tick_rows() for i in ids}
+        for node, (t, heard) in log.node_times().items():
+            self.node_time[node], self.node_heard[node] = t, heard
+        self.update_data_clock()
         for rid, m in log.messages():
             self.watermark = max(self.watermark, m.time)
             if rid not in fused and not self.aligner.is_late(m.time):
@@ -473,6 +546,9 @@ class FusionNode:
             "silent_sensors": silent,
             "accepted": sum(self.accepted.values()),
             "rejected": dict(self.rejected),
+            "dropped_unauthenticated": sum(self.rejected[r] for r in UNAUTHENTICATED_REASONS),
+            "rate_limited": self.rejected["rate_limited"],
+            "udp_dropped": self.udp_dropped(),
             "buffered": self.aligner.pending,
             "superseded": self.aligner.superseded,
             "dropped": sum(b.dropped for b in self.aligner.buffers.values()),
@@ -490,6 +566,14 @@ class FusionNode:
             self.metrics.age.labels(s).set(math.inf if last is None else now - last["received"])
         self.metrics.buffered.set(self.aligner.pending)
         return bytes(generate_latest(self.metrics.registry))
+
+
+def _bearer(header: str | None) -> str | None:
+    """The token of an ``Authorization: Bearer <token>`` header (any case of the scheme)."""
+    scheme, _, token = (header or "").strip().partition(" ")
+    if scheme.lower() != "bearer" or not token.strip():
+        return None
+    return token.strip()
 
 
 def _valid_covariance(c: list[list[float]], dim: int) -> bool:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import socket
+import ssl
 import threading
 import time
 from pathlib import Path
@@ -24,8 +25,8 @@ log = logging.getLogger(__name__)
 
 def build_node(cfg: NetworkConfig, log_path: str | Path | None = None) -> FusionNode:
     """A node for ``cfg``, resuming from its durable log when one is configured and exists."""
-    path = log_path if log_path is not None else cfg.log
-    return FusionNode(cfg, log=DurableLog(path) if path else None)
+    path = log_path if log_path is not None else cfg.log.path
+    return FusionNode(cfg, log=DurableLog(path, cfg.log.durability) if path else None)
 
 
 def tcp_socket(host: str, port: int) -> socket.socket:
@@ -52,6 +53,28 @@ def uvicorn_options(node: FusionNode) -> dict[str, Any]:
     }
 
 
+def tls_options(cert: str | Path | None, key: str | Path | None) -> dict[str, Any]:
+    """uvicorn's TLS settings for ``--tls-cert``/``--tls-key`` (both or neither), checked by
+    loading them before the node starts: HTTPS and WSS instead of HTTP and WS (UDP frames are
+    authenticated by their HMAC but not encrypted)."""
+    if cert is None and key is None:
+        return {}
+    if cert is None or key is None:
+        given = "--tls-cert" if cert is not None else "--tls-key"
+        raise ConfigError(invalid(given, str(cert or key), "--tls-cert and --tls-key together"))
+    try:
+        ssl.create_default_context(ssl.Purpose.CLIENT_AUTH).load_cert_chain(cert, key)
+    except (OSError, ssl.SSLError) as err:
+        raise ConfigError(
+            invalid(
+                "--tls-cert/--tls-key",
+                f"{cert}, {key}",
+                f"a PEM certificate and its private key ({type(err).__name__}: {err})",
+            )
+        ) from None
+    return {"ssl_certfile": str(cert), "ssl_keyfile": str(key)}
+
+
 class RunningNode:
     """A node served by uvicorn on its own thread; ``url`` and ``udp`` say where it listens."""
 
@@ -61,18 +84,20 @@ class RunningNode:
         host: str = "127.0.0.1",
         http_port: int = 0,
         udp_port: int | None = 0,
+        tls: dict[str, Any] | None = None,
     ) -> None:
+        """``tls``: :func:`tls_options` (HTTPS/WSS)."""
         self.node = node
         self.http_sock = tcp_socket(host, http_port)
         self.udp_sock = udp_socket(host, udp_port) if udp_port is not None else None
         app = create_app(node, self.udp_sock)
-        config = uvicorn.Config(app, lifespan="on", **uvicorn_options(node))
+        config = uvicorn.Config(app, lifespan="on", **uvicorn_options(node), **(tls or {}))
         self.server = uvicorn.Server(config)
         self.thread = threading.Thread(
             target=self.server.run, kwargs={"sockets": [self.http_sock]}, daemon=True
         )
         h, p = self.http_sock.getsockname()[:2]
-        self.url = f"http://{h}:{p}"
+        self.url = f"{'https' if tls else 'http'}://{h}:{p}"
         self.udp = None if self.udp_sock is None else self.udp_sock.getsockname()[:2]
 
     def start(self, timeout: float = 20.0) -> RunningNode:
@@ -103,19 +128,22 @@ def serve(
     http_port: int = 8000,
     udp_port: int | None = 9000,
     log_path: str | Path | None = None,
+    tls_cert: str | Path | None = None,
+    tls_key: str | Path | None = None,
 ) -> None:
     """Serve a node in the foreground until interrupted (``fusetrack serve``)."""
+    tls = tls_options(tls_cert, tls_key)  # checked before the log is opened
     node = build_node(cfg, log_path)
     http = tcp_socket(host, http_port)
     udp = udp_socket(host, udp_port) if udp_port is not None else None
     app = create_app(node, udp)
-    where = f"http://{host}:{http.getsockname()[1]}/"
+    where = f"{'https' if tls else 'http'}://{host}:{http.getsockname()[1]}/"
     print(f"fusion node: dashboard {where}", flush=True)  # the address the user opens: stdout
     if udp is not None:
         log.info("fusion node: listening for UDP on udp://%s:%d", host, udp.getsockname()[1])
     if node.resumed_ticks and node.log is not None:
         log.info("fusion node: resumed %d ticks from %s", node.resumed_ticks, node.log.path)
-    server = uvicorn.Server(uvicorn.Config(app, **uvicorn_options(node)))
+    server = uvicorn.Server(uvicorn.Config(app, **uvicorn_options(node), **tls))
     try:
         server.run(sockets=[http])
     finally:

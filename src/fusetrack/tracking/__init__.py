@@ -8,7 +8,7 @@ Williams 2015) and :class:`SingleTargetTracker` (any filter as a one-track track
 one interface (:class:`Tracker`: ``initial_state / step``)."""
 
 from .deleters import AnyOf, CovarianceDeleter, Deleter, ExistenceDeleter, MissedCountDeleter
-from .existence import predict_existence, update_existence
+from .existence import predict_existence, update_existence, update_existences
 from .initiators import (
     Initiator,
     InverseMeasurementPrior,
@@ -17,7 +17,7 @@ from .initiators import (
 )
 from .mcmcda_tracker import MCMCDATracker, MCMCDATrackerState
 from .mht_tracker import MHTTracker, MHTTrackerState
-from .mixing import combine_hypotheses
+from .mixing import combine_hypotheses, combine_stacked
 from .phd_initiator import PHDBirthState, PHDInitiator
 from .phd_tracker import PHDTracker, PHDTrackerState
 from .pmb import PMBDensity, PMBFilter
@@ -60,6 +60,8 @@ __all__ = [
     "belief_summary",
     "cardinality_distribution",
     "combine_hypotheses",
+    "combine_stacked",
     "predict_existence",
     "update_existence",
+    "update_existences",
 ]

@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 MAX_EXISTENCE = 1.0 - 1e-9
 
@@ -41,9 +42,18 @@ def update_existence(
         if len(log_likelihood_ratios)
         else 0.0
     )
-    delta = detection_gate - total
-    denominator = 1.0 - delta * existence
-    if denominator <= 0.0:  # r^- = 1 and delta = 1: a certain target certainly missed
-        return 0.0
-    r = (1.0 - delta) * existence / denominator
-    return float(min(max(r, 0.0), MAX_EXISTENCE))
+    return float(update_existences(existence, detection_gate, total))
+
+
+def update_existences(
+    existence: ArrayLike, detection_gate: float, likelihood_ratio_sum: ArrayLike
+) -> NDArray[np.float64]:
+    """:func:`update_existence` of many tracks at once: ``r^-`` ``(n,)`` and each track's
+    ``sum_j l_j`` ``(n,)`` (0 for a missed track) give ``r^+`` ``(n,)``."""
+    r = np.asarray(existence, dtype=float)
+    delta = detection_gate - np.asarray(likelihood_ratio_sum, dtype=float)
+    denominator = 1.0 - delta * r
+    # denominator <= 0: r^- = 1 and delta = 1, a certain target certainly missed
+    safe = np.where(denominator > 0.0, denominator, 1.0)
+    updated = np.minimum(np.maximum((1.0 - delta) * r / safe, 0.0), MAX_EXISTENCE)
+    return np.asarray(np.where(denominator > 0.0, updated, 0.0))

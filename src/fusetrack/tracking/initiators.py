@@ -163,6 +163,7 @@ class InverseMeasurementPrior:
     sensors: Mapping[str, SensorModel] | Sequence[SensorModel]
     unobserved: Gaussian
     _inverses: dict[str, _Inverse] = field(init=False, repr=False)
+    _covs: dict[str, NDArray[np.float64]] = field(init=False, repr=False)  # with the sensor's R
 
     def __post_init__(self) -> None:
         if not isinstance(self.unobserved, Gaussian) or self.unobserved.mean.ndim != 1:
@@ -173,17 +174,25 @@ class InverseMeasurementPrior:
         dim = self.unobserved.dim
         inverses = {str(s.sensor_id): _invert_linear(s, dim) for s in items}
         object.__setattr__(self, "_inverses", inverses)
+        covs = {sid: self._covariance(inv, inv.noise) for sid, inv in inverses.items()}
+        object.__setattr__(self, "_covs", covs)
 
-    def __call__(self, measurement: Measurement) -> Gaussian | None:
-        inv = self._inverses.get(measurement.sensor_id)
-        if inv is None:
-            return None
-        r = inv.noise if measurement.covariance is None else measurement.covariance
-        mean = self.unobserved.mean.copy()
+    def _covariance(self, inv: _Inverse, r: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The new track's covariance for a measurement with noise covariance ``r``."""
         cov = self.unobserved.cov.copy()
         o = inv.observed
         cov[o, :] = 0.0
         cov[:, o] = 0.0
-        mean[o] = inv.pinv @ (np.asarray(measurement.value, float) - inv.offset)
         cov[np.ix_(o, o)] = inv.pinv @ r @ inv.pinv.T
-        return Gaussian(mean, 0.5 * (cov + cov.T))
+        return np.asarray(0.5 * (cov + cov.T))
+
+    def __call__(self, measurement: Measurement) -> Gaussian | None:
+        sid = measurement.sensor_id
+        inv = self._inverses.get(sid)
+        if inv is None:
+            return None
+        own = measurement.covariance
+        cov = self._covs[sid].copy() if own is None else self._covariance(inv, own)
+        mean = self.unobserved.mean.copy()
+        mean[inv.observed] = inv.pinv @ (np.asarray(measurement.value, float) - inv.offset)
+        return Gaussian(mean, cov)

@@ -75,6 +75,15 @@ class MHTTracker(MultiTargetTracker):
         if not isinstance(associator, TrackOrientedMHT):
             raise ConfigError(invalid("associator", associator, "a TrackOrientedMHT"))
         super().__init__(filter, sensors, associator, *args, **kw)
+        if self.birth_only_sensors:
+            raise ConfigError(
+                invalid(
+                    "birth_only_sensors",
+                    sorted(self.birth_only_sensors),
+                    "none with a TrackOrientedMHT (MultiTargetTracker with a single-scan"
+                    " associator has them)",
+                )
+            )
 
     def initial_state(self) -> MHTTrackerState:
         """No families, no leaves, no scan yet."""

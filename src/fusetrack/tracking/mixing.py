@@ -15,6 +15,9 @@ Beliefs that are not :class:`~fusetrack.core.Gaussian` (particles, grids, model-
 beliefs) are not mixed: the track keeps the posterior of its most probable hypothesis (the
 first of equals). A particle filter may resample inside each update, so the hypotheses'
 particle sets need not share their states, and a mixture would multiply the particle count.
+
+:func:`combine_stacked` is the same combination for many Gaussian tracks at once, on arrays: the
+predictions ``(T, d)``, the gated pairs' posteriors ``(P, d)`` and the weights ``(T, M + 1)``.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from ..association import PairPosteriors
 from ..core import ConfigError, Gaussian, invalid
 
 
@@ -55,3 +59,26 @@ def combine_hypotheses(beliefs: Sequence[Any], probabilities: Sequence[float]) -
     spread = means - mean
     cov = np.einsum("j,jde->de", p, covs) + np.einsum("j,jd,je->de", p, spread, spread)
     return Gaussian(mean, 0.5 * (cov + cov.T))
+
+
+def combine_stacked(prior: Gaussian, posteriors: PairPosteriors, weights: np.ndarray) -> Gaussian:
+    """:func:`combine_hypotheses` of ``T`` Gaussian tracks at once (Bar-Shalom, Daum & Huang
+    2009, Eqs. 39-40). ``prior`` ``(T, d)``: the predictions (the missed hypotheses);
+    ``posteriors``: track row ``rows[p]`` updated with measurement ``cols[p]``; ``weights``
+    ``(T, M + 1)``: each track's normalised hypothesis weights (last column: missed), positive
+    only on pairs in ``posteriors`` and the missed column. A track with one hypothesis of
+    weight 1 gets its belief exactly (``0 x + 1 y = y``). Returns the ``(T, d)`` mixture."""
+    rows, post = posteriors.rows, posteriors.stacked
+    w_pair = weights[rows, posteriors.cols]  # (P,)
+    w_missed = weights[:, -1]  # (T,)
+    mean = np.zeros_like(prior.mean)
+    np.add.at(mean, rows, w_pair[:, None] * post.mean)
+    mean += w_missed[:, None] * prior.mean
+    spread_pair = post.mean - mean[rows]
+    spread_missed = prior.mean - mean
+    cov = np.zeros_like(prior.cov)
+    outer_pair = spread_pair[:, :, None] * spread_pair[:, None, :]
+    np.add.at(cov, rows, w_pair[:, None, None] * (post.cov + outer_pair))
+    outer_missed = spread_missed[:, :, None] * spread_missed[:, None, :]
+    cov += w_missed[:, None, None] * (prior.cov + outer_missed)
+    return Gaussian(mean, 0.5 * (cov + np.swapaxes(cov, -1, -2)))

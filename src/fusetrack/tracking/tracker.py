@@ -21,9 +21,17 @@ measurement per sensor, but may give one to each):
 4. the measurements still left may start tentative tracks (``initiator.birth`` for each, or a
    scan-level initiator's ``births``, e.g. :class:`~fusetrack.tracking.PHDInitiator`).
 
-For the Kalman family the predictions of all tracks, and the updates of all gated pairs of a
-sensor, are one batched filter call each (:mod:`fusetrack.association.batch`), and the gate of
-all pairs a few array operations, so a scan of thousands of false alarms stays cheap.
+For the Kalman family a scan runs on arrays (:mod:`fusetrack.association.batch`): the
+predictions of all tracks are one batched filter call, all tracks are gated and scored against
+a sensor's measurements once (one batched update of the gated pairs, whose posteriors stay
+stacked; the confirmed and the tentative pass take their blocks), the associator answers with
+a weight matrix when it can (``association_weights``), and the PDA mixture and the existence
+of all tracks are one array pass each (:func:`.mixing.combine_stacked`,
+:func:`.existence.update_existences`); any other filter goes track by track, with the same
+results. So a scan of thousands of false alarms stays cheap.
+
+A sensor in ``birth_only_sensors`` only starts tracks: its measurements inside a live track's
+gate start nothing, the others go to the initiator; no track is updated by it.
 
 After the scan every track counts a hit or a miss (none when no sensor looked); the initiator
 confirms or drops tentative tracks (M-of-N), the deleter ends confirmed ones. Everything lives in
@@ -83,12 +91,16 @@ from numpy.typing import ArrayLike
 from ..association import (
     Association,
     Associator,
+    PairPosteriors,
     ScanLikelihoods,
-    SingleHypothesis,
     TrackOrientedMHT,
-    hypotheses_of,
-    predict_many,
+    batchable,
+    gate_threshold,
+    hypothesis_weights,
+    mahalanobis_squared,
+    predict_stacked,
     scan_likelihoods,
+    stack_gaussians,
 )
 from ..core import (
     ConfigError,
@@ -105,9 +117,9 @@ from ..core import (
 )
 from ..filters import as_sensor_map, validate_measurement
 from .deleters import Deleter
-from .existence import predict_existence, update_existence
+from .existence import predict_existence, update_existences
 from .initiators import Initiator
-from .mixing import combine_hypotheses
+from .mixing import combine_hypotheses, combine_stacked
 from .state import LiveTrack, TrackerState, TrackerStats
 
 TIME_TOLERANCE = 1e-9  # measurements closer in time than this form one scan
@@ -161,6 +173,61 @@ def _check_association(associator: Any, association: Association, n: int) -> Non
                 f" (got indices {bad}, probabilities {probs})",
             )
         )
+
+
+def _birth_only(value: Any, sensors: Collection[str]) -> frozenset[str]:
+    """``birth_only_sensors`` as a set of known sensor ids, else :class:`ConfigError`."""
+    if isinstance(value, str) or not isinstance(value, Iterable):
+        raise ConfigError(invalid("birth_only_sensors", value, "a collection of sensor ids"))
+    ids = list(value)
+    unknown = [s for s in ids if s not in sensors]
+    if unknown:
+        raise ConfigError(
+            invalid("birth_only_sensors", ids, f"ids of the sensors {sorted(sensors)}")
+        )
+    return frozenset(ids)
+
+
+def _checked_weights(associator: Any, answer: Any, shape: tuple[int, int]) -> np.ndarray:
+    """An associator's ``association_weights`` answer: ``(T, M + 1)`` finite weights >= 0 and
+    unassociated indices in ``[0, M)``, else :class:`ConfigError`."""
+    t, m = shape
+    weights = np.asarray(getattr(answer, "weights", None), dtype=float)
+    left = list(getattr(answer, "unassociated", ()))
+    if (
+        weights.shape != (t, m + 1)
+        or not np.isfinite(weights).all()
+        or (weights < 0).any()
+        or not all(0 <= k < m for k in left)
+    ):
+        raise ConfigError(
+            invalid(
+                "associator",
+                associator,
+                f"AssociationWeights with finite weights >= 0 of shape ({t}, {m + 1}) and"
+                f" unassociated indices in [0, {m})",
+            )
+        )
+    return weights
+
+
+def _normalised_rows(weights: np.ndarray) -> np.ndarray:
+    """Each row of ``weights`` ``(T, M + 1)`` divided by its sum; a row of zeros (no
+    hypothesis with positive weight) becomes missed with weight 1."""
+    total = weights.sum(axis=1, keepdims=True)
+    out = np.divide(weights, total, out=np.zeros_like(weights), where=total > 0)
+    out[total[:, 0] <= 0, -1] = 1.0
+    return out
+
+
+def _all_finite(measurements: Sequence[Measurement]) -> bool:
+    """True when every measurement (vector values, checked) has finite values and none has
+    its own covariance (one array test for the common scan; else :func:`_usable` each)."""
+    if any(m.covariance is not None for m in measurements):
+        return False
+    return not measurements or bool(
+        np.isfinite(np.concatenate([m.value for m in measurements])).all()
+    )
 
 
 def _usable(m: Measurement) -> bool:
@@ -221,6 +288,13 @@ class MultiTargetTracker:
         ``"raise"`` (default): a measurement of a sensor not in ``sensors`` raises
         :class:`~fusetrack.core.UnknownSensorError` before any work; ``"skip"``: it is left out
         and counted in ``state.stats.skipped_unknown_sensor`` (a live feed with other sensors).
+    birth_only_sensors:
+        ids of sensors whose measurements only start tracks: a measurement inside the gate of
+        a live track (confirmed or tentative, as predicted or updated by the sensors before it
+        in the scan) starts nothing, one outside every gate goes to the initiator, and no track
+        is updated, counted as hit or missed, or has its existence changed by such a sensor
+        (e.g. triangulated points that start trackers of bearings). Their ``p_detect`` and
+        ``clutter_density`` are not needed.
     """
 
     def __new__(cls, *args: Any, **kw: Any) -> MultiTargetTracker:
@@ -247,6 +321,7 @@ class MultiTargetTracker:
         *,
         survival_probability: float = 0.99,
         unknown_sensors: Literal["raise", "skip"] = "raise",
+        birth_only_sensors: Collection[str] = (),
     ) -> None:
         _require(
             filter, "filter", ("predict", "update", "update_with_likelihood"), "a LikelihoodFilter"
@@ -271,12 +346,18 @@ class MultiTargetTracker:
                 )
             )
         self.filter = filter
+        # each sensor's report length (validate_measurement's m): the fast path of the checks
+        self._value_sizes = {
+            sid: int(getattr(s, "value_size", s.dim)) for sid, s in self.sensors.items()
+        }
         self.associator = associator
         self.initiator = initiator
         self.deleter = deleter
-        self.p_detect = _per_sensor("p_detect", p_detect, self.sensors, 0.0, 1.0)
+        self.birth_only_sensors = _birth_only(birth_only_sensors, self.sensors)
+        associating = [s for s in self.sensors if s not in self.birth_only_sensors]
+        self.p_detect = _per_sensor("p_detect", p_detect, associating, 0.0, 1.0)
         self.clutter_density = _per_sensor(
-            "clutter_density", clutter_density, self.sensors, 0.0, math.inf
+            "clutter_density", clutter_density, associating, 0.0, math.inf
         )
         self.gate_probability = _in_range("gate_probability", gate_probability, 0.0, 1.0)
         self.survival_probability = _in_range(
@@ -316,9 +397,13 @@ class MultiTargetTracker:
     def _check_measurements(self, measurements: Iterable[Measurement]) -> None:
         """Unknown sensors (unless skipped), wrong sizes and non-vector values raise
         :class:`MeasurementError`."""
+        sizes = self._value_sizes
         for m in self._known(measurements):
+            value = m.value
+            if isinstance(value, np.ndarray) and value.shape == (sizes.get(m.sensor_id),):
+                continue  # a vector of its sensor's size: nothing below would raise
             validate_measurement(m, self.sensors)
-            if not isinstance(m.value, np.ndarray) or m.value.ndim != 1:
+            if not isinstance(value, np.ndarray) or value.ndim != 1:
                 raise MeasurementError(
                     invalid(
                         f"value.shape (sensor {m.sensor_id!r}, time={m.time})",
@@ -370,10 +455,13 @@ class MultiTargetTracker:
         the stats with this scan counted. A measurement with a NaN or infinite value or
         covariance is skipped and counted; its sensor counts as having looked only when it is in
         ``scanned`` or sent a usable measurement too (a corrupt report is no evidence of a miss)."""
-        unknown = sum(m.sensor_id not in self.sensors for m in measurements)
-        usable = [
-            j for j, m in enumerate(measurements) if m.sensor_id in self.sensors and _usable(m)
-        ]
+        known = [j for j, m in enumerate(measurements) if m.sensor_id in self.sensors]
+        unknown = len(measurements) - len(known)
+        usable = (
+            known
+            if _all_finite([measurements[j] for j in known])
+            else [j for j in known if _usable(measurements[j])]
+        )
         skipped = len(measurements) - unknown - len(usable)
         reporting = list(dict.fromkeys(measurements[j].sensor_id for j in usable))
         silent = {m.sensor_id for m in measurements} - set(reporting)
@@ -410,19 +498,28 @@ class MultiTargetTracker:
         """
         t = self._check_scan(state, time, measurements, rng, scanned)
         usable, order, stats = self._screen(state.stats, measurements, scanned)
-        tracks = {tr.id: tr for tr in self._predict(state.tracks, t, rng)}
+        predicted, stacked = self._predict(state.tracks, t, rng)
+        tracks = {tr.id: tr for tr in predicted}
         records = {i: _ScanRecord() for i in tracks}
         births = _Births(state.next_id, state.initiator_state)
         for sid in order:
             cols = [j for j in usable if measurements[j].sensor_id == sid]
-            for confirmed in (True, False):
-                ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
-                cols = self._associate(tracks, records, ids, measurements, cols, sid, rng)
+            if sid in self.birth_only_sensors:
+                cols = self._outside_gates(tracks.values(), measurements, cols, sid)
+            else:
+                shared = self._score_once(tracks, measurements, cols, sid, rng, stacked)
+                stacked = None  # the tracks change below: the next sensor stacks them anew
+                for confirmed in (True, False):
+                    ids = [i for i, tr in tracks.items() if tr.confirmed == confirmed]
+                    cols = self._associate(
+                        tracks, records, ids, measurements, cols, sid, rng, shared
+                    )
             for tr, j in self._births(births, t, sid, [measurements[j] for j in cols], rng):
                 tracks[tr.id] = tr
                 records[tr.id] = _ScanRecord(True, [] if j is None else [(cols[j], 1.0)])
         stats = stats.add(births=births.next_id - state.next_id)
-        survivors, stats = self._settle(tracks, records, t, state.next_id, bool(order), stats)
+        looked = any(sid not in self.birth_only_sensors for sid in order)
+        survivors, stats = self._settle(tracks, records, t, state.next_id, looked, stats)
         return TrackerState(survivors, t, births.next_id, stats, births.initiator_state)
 
     def _settle(
@@ -459,23 +556,32 @@ class MultiTargetTracker:
 
     def _predict(
         self, tracks: Sequence[LiveTrack], time: float, rng: np.random.Generator | None
-    ) -> list[LiveTrack]:
+    ) -> tuple[list[LiveTrack], Gaussian | None]:
         """The tracks predicted to ``time`` (those of one time in one batched call,
-        :func:`~fusetrack.association.predict_many`), their existence with ``P_S``."""
+        :func:`~fusetrack.association.predict_stacked`), their existence with ``P_S``; and
+        the predictions as one batched Gaussian when one call predicted them all (else None)."""
         out = list(tracks)
         due: dict[float, list[int]] = {}
         for k, tr in enumerate(tracks):
             if time - tr.time > TIME_TOLERANCE:
                 due.setdefault(tr.time, []).append(k)
+        stacked = None
         for t0, ks in due.items():
-            beliefs = predict_many(self.filter, [tracks[k].belief for k in ks], time - t0, rng)
-            for k, belief in zip(ks, beliefs):
+            before = [tracks[k].belief for k in ks]
+            stacked = predict_stacked(self.filter, before, time - t0, rng)
+            beliefs = (
+                stacked.unstack()
+                if stacked is not None
+                else [self.filter.predict(b, time - t0, rng) for b in before]
+            )
+            for k, belief in zip(ks, beliefs, strict=True):
                 out[k] = tracks[k].evolve(
                     belief=belief,
                     time=time,
                     existence=predict_existence(tracks[k].existence, self.survival_probability),
                 )
-        return out
+        all_in_one = len(due) == 1 and len(next(iter(due.values()))) == len(tracks)
+        return out, stacked if all_in_one else None
 
     def _births(
         self,
@@ -498,14 +604,16 @@ class MultiTargetTracker:
         else:
             started = [(self.initiator.birth(m), j) for j, m in enumerate(leftover)]
         out = []
+        initialize = getattr(self.filter, "initialize", None)
         for belief, j in started:
             if belief is None:
                 continue
-            initialize = getattr(self.filter, "initialize", None)
             if isinstance(belief, Gaussian) and callable(initialize):
                 belief = initialize(belief, rng)
-            track = LiveTrack(births.next_id, belief, time, time, time)
-            out.append((track.evolve(existence=self.birth_existence), j))
+            track = LiveTrack(
+                births.next_id, belief, time, time, time, existence=self.birth_existence
+            )
+            out.append((track, j))
             births.next_id += 1
         return out
 
@@ -518,74 +626,170 @@ class MultiTargetTracker:
         cols: list[int],
         sensor_id: str,
         rng: np.random.Generator | None,
+        shared: _SharedScores | None = None,
     ) -> list[int]:
         """Associate the tracks ``ids`` with the measurements ``cols`` (all of ``sensor_id``),
-        update them in ``tracks`` and ``records``; return the columns left unassociated."""
+        update them in ``tracks`` and ``records``; return the columns left unassociated. Their
+        scores come from ``shared`` when given (:meth:`_score_once`), else are computed here."""
         if not ids:
             return cols
         p_d = self.p_detect[sensor_id]
         chosen = [measurements[j] for j in cols]
-        scores, posteriors = self._score(ids, [tracks[i].belief for i in ids], chosen, p_d, rng)
-        association = self._associate_gated(scores, rng)
-        for row, i in enumerate(ids):
-            hyps = [h for h in hypotheses_of(association, i) if h.probability > 0]
-            hyps = hyps or [SingleHypothesis(i, None, 1.0)]  # no weight anywhere: missed
-            tracks[i] = self._apply(tracks[i], row, hyps, scores, posteriors, chosen, p_d, rng)
-            total = sum(h.probability for h in hyps)
-            used = [
-                (cols[h.measurement], h.probability / total)
-                for h in hyps
-                if h.measurement is not None
-            ]
-            records[i].used.extend(used)
-            records[i].detected |= sum(p for _, p in used) >= 0.5
-        return [cols[k] for k in association.unassociated]
+        before = [tracks[i] for i in ids]
+        prior = None
+        if shared is None:
+            scores, posteriors = self._score(ids, [tr.belief for tr in before], chosen, p_d, rng)
+        else:
+            prior, scores, posteriors = shared.restrict(ids, cols)
+        weights, left = self._associate_gated(scores, rng)
+        beliefs = self._combine(before, weights, posteriors, chosen, rng, prior)
+        existence = update_existences(
+            [tr.existence for tr in before],
+            p_d * self.gate_probability,
+            _likelihood_ratio_sums(scores, weights),
+        )
+        for i, tr, belief, r in zip(ids, before, beliefs, existence.tolist(), strict=True):
+            tracks[i] = tr.evolve(belief=belief, existence=r)
+        used_rows, used_cols = np.nonzero(weights[:, :-1])
+        used: dict[int, list[tuple[int, float]]] = {}
+        for row, k, w in zip(
+            used_rows.tolist(), used_cols.tolist(), weights[used_rows, used_cols].tolist()
+        ):
+            used.setdefault(row, []).append((cols[k], w))
+        for row, pairs in used.items():  # the tracks that took measurements
+            record = records[ids[row]]
+            record.used.extend(pairs)
+            record.detected |= sum(p for _, p in pairs) >= 0.5
+        return [cols[k] for k in left]
+
+    def _outside_gates(
+        self,
+        tracks: Iterable[LiveTrack],
+        measurements: Sequence[Measurement],
+        cols: list[int],
+        sensor_id: str,
+    ) -> list[int]:
+        """The measurements ``cols`` (of a birth-only sensor) outside every track's
+        ``gate_probability`` gate (:func:`~fusetrack.association.mahalanobis_squared`)."""
+        beliefs = [tr.belief for tr in tracks]
+        if not beliefs or not cols:
+            return cols
+        sensor = self.sensors[sensor_id]
+        d2 = mahalanobis_squared(sensor, beliefs, [measurements[j] for j in cols])
+        inside = d2 <= gate_threshold(self.gate_probability, sensor.dim)
+        return [cols[k] for k in np.flatnonzero(~inside.any(axis=0)).tolist()]
+
+    def _score_once(
+        self,
+        tracks: Mapping[int, LiveTrack],
+        measurements: Sequence[Measurement],
+        cols: list[int],
+        sensor_id: str,
+        rng: np.random.Generator | None,
+        stacked: Gaussian | None = None,
+    ) -> _SharedScores | None:
+        """All the tracks scored against all of one sensor's measurements ``cols`` in one
+        batch, for the confirmed and then the tentative tracks' association to take their
+        blocks from (a pair's score and posterior do not depend on the other pairs). Only for
+        a batched Gaussian filter (:func:`~fusetrack.association.batchable`, deterministic);
+        None for any other, whose pairs are scored pass by pass (a random filter draws only
+        for the pairs it is given). ``stacked``: the tracks' beliefs as one batch, if at hand."""
+        if not tracks or not cols:
+            return None
+        if stacked is None:
+            beliefs = [tr.belief for tr in tracks.values()]
+            if not batchable(self.filter, beliefs):
+                return None
+            stacked = stack_gaussians(beliefs)
+        chosen = [measurements[j] for j in cols]
+        ids = list(tracks)
+        scores, posteriors = self._score(ids, stacked, chosen, self.p_detect[sensor_id], rng)
+        return _SharedScores(ids, cols, stacked, scores, posteriors)
+
+    def _combine(
+        self,
+        tracks: Sequence[LiveTrack],
+        weights: np.ndarray,
+        posteriors: Mapping[tuple[int, int], Any],
+        chosen: Sequence[Measurement],
+        rng: np.random.Generator | None,
+        prior: Gaussian | None = None,
+    ) -> list[Any]:
+        """Each track's belief after its hypotheses (row ``weights[row]``): the posterior of
+        each measurement (the prediction when missed) combined (:mod:`.mixing`). Gaussian
+        tracks whose pairs were updated in one batch are combined in one array pass
+        (:func:`.mixing.combine_stacked`; ``prior``: their beliefs stacked, if at hand), the
+        others one by one."""
+        if isinstance(posteriors, PairPosteriors):
+            outside = weights[:, :-1] > 0  # weight on a pair outside the gate: one by one
+            outside[posteriors.rows, posteriors.cols] = False
+            if not outside.any():
+                if prior is None:
+                    prior = stack_gaussians([tr.belief for tr in tracks])
+                return combine_stacked(prior, posteriors, weights).unstack()
+        out = []
+        for row, tr in enumerate(tracks):
+            ks = np.flatnonzero(weights[row]).tolist()  # measurements, then missed (the last)
+            beliefs = []
+            for k in ks:
+                post = None if k == len(chosen) else posteriors.get((row, k))
+                if post is None and k < len(chosen):  # the associator chose outside the gate
+                    post = self.filter.update(tr.belief, [chosen[k]], rng)
+                beliefs.append(tr.belief if post is None else post)
+            out.append(combine_hypotheses(beliefs, weights[row, ks].tolist()))
+        return out
 
     def _associate_gated(
         self, scores: ScanLikelihoods, rng: np.random.Generator | None
-    ) -> Association:
-        """The associator on the gated block only: the tracks with a measurement in their gate
-        against the measurements in some gate. The others drop out of every joint event's
-        score as constant factors (a track without a gated measurement is missed, a measurement
-        in no gate is clutter; Bar-Shalom, Daum & Huang 2009's validation matrix), so the
-        answer is the same, and a scan of thousands of false alarms far from the tracks costs
-        the associator nothing."""
+    ) -> tuple[np.ndarray, list[int]]:
+        """``(weights (T, M + 1), unassociated columns)``: each track's normalised hypothesis
+        weights (last column: missed) from the associator on the gated block only: the tracks
+        with a measurement in their gate against the measurements in some gate. The others
+        drop out of every joint event's score as constant factors (a track without a gated
+        measurement is missed, a measurement in no gate is clutter; Bar-Shalom, Daum & Huang
+        2009's validation matrix), so the answer is the same, and a scan of thousands of false
+        alarms far from the tracks costs the associator nothing. An associator with
+        ``association_weights`` answers with the matrix, any other with an
+        :class:`~fusetrack.association.Association` (:func:`hypothesis_weights`)."""
+        t, m = scores.shape
         gated = np.isfinite(scores.log_likelihood)
         rows = np.flatnonzero(gated.any(axis=1))
         cols = np.flatnonzero(gated.any(axis=0))
-        m = scores.shape[1]
+        weights = np.zeros((t, m + 1))
+        weights[:, m] = 1.0
         if not rows.size:
-            return Association({}, tuple(range(m)))
+            return weights, list(range(m))
         block = ScanLikelihoods(
             tuple(scores.track_ids[r] for r in rows),
             scores.log_likelihood[np.ix_(rows, cols)],
             scores.log_missed[rows],
             scores.log_clutter[cols],
         )
-        inner = self.associator.associate(block, rng)
-        _check_association(self.associator, inner, cols.size)
-        col = cols.tolist()
-        hypotheses = {
-            i: tuple(
-                h
-                if h.measurement is None
-                else SingleHypothesis(h.track_id, col[h.measurement], h.probability)
-                for h in hs
+        as_matrix = getattr(self.associator, "association_weights", None)
+        if callable(as_matrix):
+            answer = as_matrix(block, rng)
+            inner, left = (
+                _checked_weights(self.associator, answer, block.shape),
+                answer.unassociated,
             )
-            for i, hs in inner.hypotheses.items()
-        }
+        else:
+            association = self.associator.associate(block, rng)
+            _check_association(self.associator, association, cols.size)
+            inner = hypothesis_weights(association, block.track_ids, cols.size)
+            left = association.unassociated
+        weights[np.ix_(rows, np.append(cols, m))] = _normalised_rows(inner)
+        col = cols.tolist()
         in_no_gate = set(range(m)) - set(col)
-        left = sorted(in_no_gate | {col[k] for k in inner.unassociated})
-        return Association(hypotheses, tuple(left), inner.info)
+        return weights, sorted(in_no_gate | {col[k] for k in left})
 
     def _score(
         self,
         ids: Sequence[int],
-        beliefs: Sequence[Any],
+        beliefs: Sequence[Any] | Gaussian,
         chosen: Sequence[Measurement],
         p_detect: float,
         rng: np.random.Generator | None,
-    ) -> tuple[ScanLikelihoods, dict[tuple[int, int], Any]]:
+    ) -> tuple[ScanLikelihoods, Mapping[tuple[int, int], Any]]:
         """:func:`~fusetrack.association.scan_likelihoods` of ``beliefs`` (rows ``ids``) against
         one sensor's measurements ``chosen``, with the gated pairs' posteriors."""
         return scan_likelihoods(
@@ -602,43 +806,11 @@ class MultiTargetTracker:
             validated=True,  # step: _check_measurements and _screen did it
         )
 
-    def _apply(
-        self,
-        track: LiveTrack,
-        row: int,
-        hyps: Sequence[SingleHypothesis],
-        scores: ScanLikelihoods,
-        posteriors: Mapping[tuple[int, int], Any],
-        chosen: Sequence[Measurement],
-        p_detect: float,
-        rng: np.random.Generator | None,
-    ) -> LiveTrack:
-        """The track (row ``row`` of the scores) after its hypotheses: the belief of each (the
-        prediction when missed) combined (:func:`.mixing.combine_hypotheses`), and its
-        existence updated with the likelihood ratios of their measurements (IPDA)."""
-        beliefs, log_ratios = [], []
-        for h in hyps:
-            k = h.measurement
-            if k is None:
-                beliefs.append(track.belief)
-                continue
-            post = posteriors.get((row, k))
-            if post is None:  # the associator chose a pair outside the gate
-                post = self.filter.update(track.belief, [chosen[k]], rng)
-            beliefs.append(post)
-            log_ratios.append(float(scores.log_likelihood[row, k] - scores.log_clutter[k]))
-        return track.evolve(
-            belief=combine_hypotheses(beliefs, [h.probability for h in hyps]),
-            existence=update_existence(
-                track.existence, p_detect * self.gate_probability, log_ratios
-            ),
-        )
-
     @staticmethod
     def _count(track: LiveTrack, record: _ScanRecord, time: float, newborn: bool) -> LiveTrack:
         """The track's hit and miss counts after the scan (a new track's birth is its first hit)."""
-        used = tuple(j for j, _ in record.used)
-        probabilities = tuple(p for _, p in record.used)
+        used = tuple([j for j, _ in record.used])
+        probabilities = tuple([p for _, p in record.used])
         if newborn:
             return track.evolve(measurements=used, probabilities=probabilities)
         if record.detected:
@@ -741,6 +913,46 @@ class MultiTargetTracker:
                     scans.append((float(t), []))
             scans.sort(key=lambda s: s[0])
         return scans
+
+
+def _likelihood_ratio_sums(scores: ScanLikelihoods, weights: np.ndarray) -> np.ndarray:
+    """``(T,)``: each track's ``sum_j l_j`` over the measurements its hypotheses used
+    (:mod:`.existence`; ``l_j = exp(log P_D p(z_j | track) - log kappa_j)``, 0 outside the gate)."""
+    rows, cols = np.nonzero(weights[:, :-1])
+    ratios = np.exp(scores.log_likelihood[rows, cols] - scores.log_clutter[cols])
+    return np.bincount(rows, weights=ratios, minlength=weights.shape[0])
+
+
+@dataclass
+class _SharedScores:
+    """One sensor's scores of all the tracks ``ids`` against its measurements ``cols``
+    (:meth:`MultiTargetTracker._score_once`)."""
+
+    ids: list[int]
+    cols: list[int]
+    prior: Gaussian  # the tracks' beliefs, a row per track
+    scores: ScanLikelihoods
+    posteriors: Mapping[tuple[int, int], Any]
+
+    def restrict(
+        self, ids: Sequence[int], cols: Sequence[int]
+    ) -> tuple[Gaussian, ScanLikelihoods, Mapping[tuple[int, int], Any]]:
+        """The beliefs, scores and posteriors of the tracks ``ids`` against the measurements
+        ``cols`` (both in the order of ``self.ids`` and ``self.cols``)."""
+        row_of = {i: r for r, i in enumerate(self.ids)}
+        col_of = {j: c for c, j in enumerate(self.cols)}
+        rows = [row_of[i] for i in ids]
+        ks = [col_of[j] for j in cols]
+        s = self.scores
+        scores = ScanLikelihoods(
+            tuple(s.track_ids[r] for r in rows),
+            s.log_likelihood[np.ix_(rows, ks)],
+            s.log_missed[rows],
+            s.log_clutter[ks],
+        )
+        assert isinstance(self.posteriors, PairPosteriors)  # _score_once: a batched filter
+        prior = Gaussian(self.prior.mean[rows], self.prior.cov[rows])
+        return prior, scores, self.posteriors.restrict(rows, ks, s.shape)
 
 
 @dataclass

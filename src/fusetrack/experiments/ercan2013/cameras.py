@@ -14,7 +14,7 @@ from typing import Any
 
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from .common import Timed, curve_plot, fmt, md, mean_std, room_plot, sizes, timed_monte_carlo
 from .scenes import square_scene
 from .simulation import DEFAULTS, run_tracking, simulate_world
@@ -148,6 +148,19 @@ def _cv_ordered(s: _Series) -> pd.Series:
     return (s.pivot["perfect"] <= cv_mean) & (cv_mean <= s.pivot["none"])
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "rmse_occ_intermediate": "calibration",  # sigma_psi was chosen to reach 6.67
+        "C3_ordering_printed": "diagnostic",  # readings of C3_ordering
+        "C3_ordering_constant_velocity": "diagnostic",
+        "E1_wall_minutes": "beyond",  # issue 4's speed bar
+        "C3_*": "paper",
+        "rmse_max": "paper",
+    }
+)
+
+
 def _trend_claims(ctx: RunContext, s: _Series) -> list[Claim]:
     """C3: RMSE_tr falls with cameras, the priors order the curves, all below RMSE_max, spread."""
     pivot, rmse_max = s.pivot, s.rmse_max
@@ -160,7 +173,7 @@ def _trend_claims(ctx: RunContext, s: _Series) -> list[Claim]:
         )
         need = -0.5 if ctx.quick else -0.7
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"C3_decreasing_{p}",
                 f"{PRIORS[p]}: mean RMSE_tr falls as cameras are added (Spearman rho of k vs RMSE_tr)",
                 "decreasing",
@@ -173,7 +186,7 @@ def _trend_claims(ctx: RunContext, s: _Series) -> list[Claim]:
     share = float(ordered.mean())
     need_share = 0.6 if ctx.quick else 0.75
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C3_ordering",
             "at each camera count, RMSE_tr(perfect) <= RMSE_tr(6.67) <= RMSE_tr(none) (share of camera counts)",
             "all camera counts",
@@ -185,7 +198,7 @@ def _trend_claims(ctx: RunContext, s: _Series) -> list[Claim]:
     big = pivot[pivot.index >= 2]
     worst = float(big.to_numpy().max())
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C3_below_rmse_max",
             "with k >= 2 cameras every curve is below the dotted RMSE_max line (largest mean RMSE_tr / RMSE_max)",
             "below (dotted line 24.4)",
@@ -196,7 +209,7 @@ def _trend_claims(ctx: RunContext, s: _Series) -> list[Claim]:
     )
     std = s.table.groupby("prior")["std"].mean()
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C3_spread_grows",
             "the run-to-run spread of RMSE_tr grows as prior information falls (mean std, none / perfect)",
             "> 1",
@@ -212,7 +225,7 @@ def _setup_claims(s: _Series) -> list[Claim]:
     """RMSE_max of the room and RMSE_occ of the intermediate priors against the paper's."""
     rmse_max, rmse_occ = s.rmse_max, s.rmse_occ
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "rmse_max",
             "RMSE_max of the setup (object assumed at the room centre, per-coordinate RMS)",
             24.4,
@@ -220,7 +233,7 @@ def _setup_claims(s: _Series) -> list[Claim]:
             "+-15%",
             abs(rmse_max / 24.4 - 1) <= 0.15,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "rmse_occ_intermediate",
             f"RMSE_occ of the intermediate priors (sigma_psi = {SIGMA_PSI:g}, random-walk Kalman filters)",
             6.67,
@@ -245,7 +258,7 @@ def _variant_claims(ctx: RunContext, s: _Series) -> list[Claim]:
     cv_occ = float(s.cv["rmse_occ"].mean())
     cv_nees = float(s.cv["prior_nees"].mean())
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "C3_ordering_printed",
             "as C3_ordering, with the likelihood exactly as printed (floor 0, full rectangles), "
             f"at k in {list(printed_ks)}",
@@ -254,7 +267,7 @@ def _variant_claims(ctx: RunContext, s: _Series) -> list[Claim]:
             f">= {need_share}",
             float(hard_ordered.mean()) >= need_share,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C3_ordering_constant_velocity",
             "as C3_ordering, with the intermediate priors from constant-velocity Kalman filters "
             f"(sigma_psi = {SIGMA_PSI_CV:g}, RMSE_occ {fmt(cv_occ)}, squared error / claimed variance "
@@ -273,7 +286,7 @@ def _claims(ctx: RunContext, s: _Series, cost: dict[str, Any]) -> list[Claim]:
     wall_main = cost["wall_seconds_paper_configurations_prorated"]
     if not ctx.quick:
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 "E1_wall_minutes",
                 "issue 4 bar: the full-size E1 (5 runs x 4000 steps, k = 1..8, three prior levels) "
                 "in under 15 minutes on this 2-core machine (wall minutes of the paper's "

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from .common import SizeOptions, curve_plot, fmt, md, mean_std, room_plot, size_options, smoke
 from .scenes import lab_scene
 from .simulation import run_tracking, simulate_world
@@ -98,6 +98,16 @@ def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Lab:
     return _Lab(df, e7, e8, df[df["series"] == "all"]["rmse_tr"])
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "rmse_occ_lab": "calibration",  # the prior noise was chosen to reach 12.1
+        "rmse_max_lab": "paper",
+        "C11_*": "paper",
+    }
+)
+
+
 def _fig14_claims(lab: _Lab) -> list[Claim]:
     """C11 on Fig. 14: fewer errors with more cameras and better priors, but not by much."""
     p7 = lab.e7.pivot(index="k", columns="series", values="mean")
@@ -118,13 +128,13 @@ def _fig14_claims(lab: _Lab) -> list[Claim]:
         ).median()
     )
     return [
-        Claim("C11_fig14_decreasing", "Fig. 14: mean RMSE falls as cameras are added (worst Spearman rho over the three prior levels)",
+        CLAIM_KINDS.claim("C11_fig14_decreasing", "Fig. 14: mean RMSE falls as cameras are added (worst Spearman rho over the three prior levels)",
               "decreasing", min(rho), "<= -0.5", min(rho) <= -0.5),
-        Claim("C11_fig14_priors_help", "Fig. 14: better priors give lower mean RMSE (mean over k: none / perfect)",
+        CLAIM_KINDS.claim("C11_fig14_priors_help", "Fig. 14: better priors give lower mean RMSE (mean over k: none / perfect)",
               "> 1", float(avg7["none"] / avg7["perfect"]), "> 1", avg7["none"] > avg7["perfect"]),
-        Claim("C11_fig14_ordering", "Fig. 14: perfect <= 12.1 in <= none at each k (share of k)", "mostly", order,
+        CLAIM_KINDS.claim("C11_fig14_ordering", "Fig. 14: perfect <= 12.1 in <= none at each k (share of k)", "mostly", order,
               ">= 0.5", order >= 0.5),
-        Claim("C11_fig14_not_substantial", "Fig. 14: the difference between prior levels is not substantial against the spread "
+        CLAIM_KINDS.claim("C11_fig14_not_substantial", "Fig. 14: the difference between prior levels is not substantial against the spread "
               "(median over k of (none - perfect) / larger std)", "not substantial", small, "<= 2", small <= 2),
     ]  # fmt: skip
 
@@ -141,17 +151,17 @@ def _fig15_claims(lab: _Lab) -> list[Claim]:
         / max(float(np.maximum(s8["greedy"], s8["brute"]).mean()), 1e-12)
     )
     return [
-        Claim("C11_fig15_greedy_brute", "Fig. 15: greedy close to brute force (largest |mean difference| / mean std)", "< 1",
+        CLAIM_KINDS.claim("C11_fig15_greedy_brute", "Fig. 15: greedy close to brute force (largest |mean difference| / mean std)", "< 1",
               gap_gb, "< 1", gap_gb < 1),
-        Claim("C11_fig15_greedy_beats", "Fig. 15: greedy better than fixed, random and closest (mean over k, best heuristic / greedy)",
+        CLAIM_KINDS.claim("C11_fig15_greedy_beats", "Fig. 15: greedy better than fixed, random and closest (mean over k, best heuristic / greedy)",
               "> 1", float(avg8[["fixed", "random", "closest"]].min() / avg8["greedy"]), "> 1",
               avg8["greedy"] < avg8[["fixed", "random", "closest"]].min()),
-        Claim("C11_fig15_large_variance", "Fig. 15: the variations of the RMSEs are large (mean std / mean RMSE, greedy)",
+        CLAIM_KINDS.claim("C11_fig15_large_variance", "Fig. 15: the variations of the RMSEs are large (mean std / mean RMSE, greedy)",
               "large", float(s8["greedy"].mean() / avg8["greedy"]), ">= 0.1", s8["greedy"].mean() / avg8["greedy"] >= 0.1),
-        Claim("rmse_occ_lab", "RMSE_occ of the Gaussian priors (inches)", 12.1,
+        CLAIM_KINDS.claim("rmse_occ_lab", "RMSE_occ of the Gaussian priors (inches)", 12.1,
               float(df.loc[df["prior"] == "gaussian", "rmse_occ"].mean()), "+-15%",
               abs(float(df.loc[df["prior"] == "gaussian", "rmse_occ"].mean()) / 12.1 - 1) <= 0.15),
-        Claim("rmse_max_lab", "RMSE_max of the object's path (inches)", 77.5, float(df["rmse_max"].mean()), "+-5%",
+        CLAIM_KINDS.claim("rmse_max_lab", "RMSE_max of the object's path (inches)", 77.5, float(df["rmse_max"].mean()), "+-5%",
               abs(float(df["rmse_max"].mean()) / 77.5 - 1) <= 0.05),
     ]  # fmt: skip
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext, run_seed
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, run_seed
 from .cameras import SIGMA_PSI
 from .common import curve_plot, md, mean_std, smoke
 from .simulation import run_tracking
@@ -44,6 +44,14 @@ def _relative_table(df: pd.DataFrame) -> tuple[pd.DataFrame, float]:
     return table, base
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C7_*": "paper",
+    }
+)
+
+
 def _claims(piv: pd.DataFrame, ks: list[int]) -> list[Claim]:
     """C7: the Gaussian-prior likelihood grows about linearly in the cameras, not as 2^N."""
     kmax = max(ks)
@@ -51,7 +59,7 @@ def _claims(piv: pd.DataFrame, ks: list[int]) -> list[Claim]:
     growth_n = float(piv.loc[kmax, "none"] / piv.loc[2, "none"])
     exp_growth = 2.0 ** (kmax - 2)
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "C7_far_below_exponential",
             f"likelihood time with Gaussian priors, k = {kmax} over k = 2",
             f"significantly lower than 2^N ({exp_growth:g}x)",
@@ -59,7 +67,7 @@ def _claims(piv: pd.DataFrame, ks: list[int]) -> list[Claim]:
             f"< {exp_growth / 4:g} (a quarter of the exponential)",
             growth_g < exp_growth / 4,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C7_close_to_linear",
             f"growth with Gaussian priors close to linear in N (k = {kmax} over k = 2; linear = {kmax / 2:g})",
             f"~{kmax / 2:g}",
@@ -67,7 +75,7 @@ def _claims(piv: pd.DataFrame, ks: list[int]) -> list[Claim]:
             f"<= {kmax:g} (twice linear)",
             growth_g <= kmax,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C7_tracks_no_prior",
             "growth with Gaussian priors close to that of the no-prior likelihood (ratio of the two growths)",
             "close",

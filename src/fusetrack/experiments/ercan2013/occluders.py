@@ -13,12 +13,21 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from .common import curve_plot, fmt, md, mean_std, sizes
 from .simulation import DEFAULTS, run_tracking
 
 M_FULL = (0, 5, 10, 20, 40, 60, 80, 100, 150, 200, 300)
 M_QUICK = (0, 20, 60, 300)
+
+
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C6_*_printed": "diagnostic",  # C6 with the likelihood as printed (a reading)
+        "C6_*": "paper",
+    }
+)
 
 
 def _gap_claims(gap: np.ndarray, m: np.ndarray, suffix: str, variant: str) -> list[Claim]:
@@ -27,7 +36,7 @@ def _gap_claims(gap: np.ndarray, m: np.ndarray, suffix: str, variant: str) -> li
     peak = int(np.argmax(gap))
     top = max(gap[peak], 1e-12)
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             f"C6_small_at_few{suffix}",
             f"with the fewest occluders the value of priors is small{variant} (gap at min M / largest gap)",
             "~0",
@@ -35,7 +44,7 @@ def _gap_claims(gap: np.ndarray, m: np.ndarray, suffix: str, variant: str) -> li
             "<= 0.5",
             gap[0] <= 0.5 * gap[peak],
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             f"C6_peak_inside{suffix}",
             f"the gap RMSE_tr(none) - RMSE_tr(perfect) peaks at a moderate number of occluders{variant} (M at the peak)",
             "moderate M",
@@ -43,7 +52,7 @@ def _gap_claims(gap: np.ndarray, m: np.ndarray, suffix: str, variant: str) -> li
             "strictly between the smallest and largest M",
             0 < peak < len(gap) - 1,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             f"C6_falls_after{suffix}",
             f"the gap shrinks again for many occluders{variant} (gap at max M / largest gap)",
             "< 1",

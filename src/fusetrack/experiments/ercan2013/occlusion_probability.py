@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from ...world import (
     OccluderPriors,
     occlusion_probability,
@@ -211,12 +211,23 @@ def _estimate(ctx: RunContext) -> _Checks:
     return _Checks(n_points, n_mc, n_check, cases, rows, form_gap, pmf, hard)
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C1_exact_isotropic": "diagnostic",  # our isotropic priors
+        "C1_frame_free_equals_eq7": "diagnostic",  # our form against Eq. 7
+        "C1_most_within_3sigma": "paper",
+        "C2_pmf_sums_to_one": "paper",
+    }
+)
+
+
 def _claims(c: _Checks) -> list[Claim]:
     """C1 (Eq. 7 against Monte Carlo, frame-free form) and C2 (p(eta | u) sums to one)."""
     frac4, frac1, form_gap = c.cases[4.0].within, c.cases[1.0].within, c.form_gap
     pmf_gap, hard_gap = c.pmf[0], c.hard[0]
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "C1_most_within_3sigma",
             "alpha = 4, D = 3.33 > sigma = 2: most points' Eq. 7 lies within +-3 MC std of the Monte Carlo q",
             "most of 16,000 points",
@@ -224,7 +235,7 @@ def _claims(c: _Checks) -> list[Claim]:
             ">= 0.5 of the points",
             frac4 >= 0.5,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C1_exact_isotropic",
             "alpha = 1 (isotropic prior, as our Kalman priors): Eq. 7 agrees with Monte Carlo up to MC error",
             "exact (no cross term)",
@@ -232,7 +243,7 @@ def _claims(c: _Checks) -> list[Claim]:
             ">= 0.98 within +-3 MC std",
             frac1 >= 0.98,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C1_frame_free_equals_eq7",
             "the frame-free form used by the tracker equals Eq. 7 as printed (max |difference|)",
             0.0,
@@ -240,7 +251,7 @@ def _claims(c: _Checks) -> list[Claim]:
             "<= 1e-6 (table-lookup normal CDF)",
             form_gap <= 1e-6,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C2_pmf_sums_to_one",
             "p(eta | u) from Eqs. 8-9 with the partition sums to 1 over all 2^K patterns (max |sum - 1|, "
             "before the clamp to [0, 1])",

@@ -15,7 +15,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from .common import (
     PRINTED_PREFIX,
     curve_plot,
@@ -135,9 +135,21 @@ def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Sweep:
     return _Sweep(results, df, hard, _curve(df), _curve(hard), sv, sv_table)
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C4_*_printed": "diagnostic",  # readings: the likelihood as printed, sigma_v = 2
+        "C4_*_sigma_v_2": "diagnostic",
+        "C4_*": "paper",
+        "C12_priors_worthwhile": "paper",
+        "rmse_max_open": "paper",
+    }
+)
+
+
 def _relative(cid: str, statement: str, paper: float, ours: float, tol: float) -> Claim:
     """A claim that ``ours`` is within ``tol`` (relative) of the paper's number."""
-    return Claim(
+    return CLAIM_KINDS.claim(
         cid,
         statement,
         paper,
@@ -174,7 +186,7 @@ def _main_claims(w: _Sweep, tol: float) -> list[Claim]:
             gain_real,
             tol,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C4_std_gain",
             "std of RMSE_tr over runs, no information / perfect information",
             3.4,
@@ -182,7 +194,7 @@ def _main_claims(w: _Sweep, tol: float) -> list[Claim]:
             "> 1 (the paper's 3.4 is from 5 runs; a ratio of standard deviations of 5 runs is itself very noisy)",
             std_ratio > 1,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C4_ordering",
             "mean RMSE_tr does not fall as the priors get worse (Spearman rho of RMSE_occ vs RMSE_tr)",
             "increasing",
@@ -190,7 +202,7 @@ def _main_claims(w: _Sweep, tol: float) -> list[Claim]:
             ">= 0.5",
             rho >= 0.5,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C12_priors_worthwhile",
             "conclusion: at realistic prior accuracy the gain over no priors is modest (<= 2.34x)",
             "~1.94x",

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from .common import (
     PRINTED_PREFIX,
     fmt,
@@ -169,6 +169,17 @@ def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Tradeoff:
     return _Tradeoff(df_all, df, table, hard_table, curve, hard_curve, rmse_max, perfect_k4, scaled)
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C5_monotone_scaled_target": "diagnostic",  # readings of C5
+        "C5_no_prior_needed_printed": "diagnostic",
+        "C5_monotone": "paper",
+        "C5_no_prior_needed": "paper",
+    }
+)
+
+
 def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
     """C5: the tolerated RMSE_occ does not fall with cameras; enough cameras need no priors."""
     curve, rmse_max, scaled, hard_curve = t.curve, t.rmse_max, t.scaled, t.hard_curve
@@ -177,7 +188,7 @@ def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
     share = float(steps_ok.mean()) if len(steps_ok) else float("nan")
     top = float(vals[-1])
     claims = [
-        Claim(
+        CLAIM_KINDS.claim(
             "C5_monotone",
             "the prior RMSE tolerated at RMSE_tr = 3 does not fall as cameras are added (share of steps in k)",
             "non-decreasing",
@@ -185,7 +196,7 @@ def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
             ">= 0.75 (dips under 10% of RMSE_max allowed)",
             share >= 0.75,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C5_no_prior_needed",
             "with enough cameras no prior information is needed (tolerated RMSE_occ at the largest k / RMSE_max)",
             1.0,
@@ -197,7 +208,7 @@ def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
     scaled_vals = curve[f"tolerated at scaled target {scaled:.2f}"].fillna(-1.0).to_numpy()
     scaled_ok = np.diff(scaled_vals) >= -0.1 * rmse_max
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C5_monotone_scaled_target",
             f"as C5_monotone, at the target scaled to our tracker ({scaled:.2f})",
             "non-decreasing",
@@ -208,7 +219,7 @@ def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
     )
     hard_top = float(hard_curve.get(ks[-1], float("nan")))
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C5_no_prior_needed_printed",
             "as C5_no_prior_needed, with the likelihood as printed (hard zeros, full rectangles)",
             1.0,

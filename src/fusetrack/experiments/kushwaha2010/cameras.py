@@ -20,11 +20,9 @@ import numpy as np
 import pandas as pd
 
 from ...core import Measurement, filter_step
-from ...evaluation import Claim, Outcome, RunContext, plots
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...filters import (
     GMM3_BYTES,
-    STATE_BYTES,
-    WEIGHT_BYTES,
     CameraNetwork,
     ImagePlaneTracker,
     Particle3DTracker,
@@ -291,31 +289,29 @@ def _means(df: pd.DataFrame) -> pd.DataFrame:
     return table.reindex([*TRACKERS, "T4-eq103", *ABLATIONS])
 
 
-def _t0_formula_bytes(n_particles: int, cameras: int) -> int:
-    return STATE_BYTES + WEIGHT_BYTES * n_particles * cameras  # C = |chi| + M N |w|
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "?_gap_one_camera": "diagnostic",  # checks of our set-up against the paper's
+        "?_small_target": "diagnostic",
+        "a_*": "paper",
+        "b_*": "paper",
+    },
+    retired=(
+        "a_t0_bytes_formula",
+        "b_t0_bytes_formula",
+    ),  # held by construction, removed
+)
 
 
-def _bandwidth_claims(
-    df: pd.DataFrame, table: pd.DataFrame, n_particles: int, prefix: str
-) -> list[Claim]:
-    t0 = df[df.tracker == "T0"]
-    rows4 = t0[t0.cameras_used == 4]
-    measured = int(rows4["bytes"].iloc[0]) if len(rows4) else None
-    expect = _t0_formula_bytes(n_particles, 4)
-    claims = [
-        Claim(
-            f"{prefix}t0_bytes_formula",
-            f"T0 sends 80 + 8 M N bytes per step (a step with N = 4 cameras, M = {n_particles})",
-            f"{_t0_formula_bytes(1000, 4)} B for M = 1000, N = 4 ('32 kb', i.e. 32 kB)",
-            measured,
-            f"exactly {expect}",
-            measured == expect,
-        )
-    ]
+def _bandwidth_claims(table: pd.DataFrame, prefix: str) -> list[Claim]:
+    """Table 12's bandwidth ranking. (T0's bytes per step against 80 + 8 M N is not a claim:
+    the byte count is computed by that formula.)"""
+    claims = []
     others = table.loc[["T1", "T2", "T3", "T4"], "bytes_per_step"]
     ratio = float(table.loc["T0", "bytes_per_step"] / others.max())
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             f"{prefix}t0_bandwidth_highest",
             "T0's bandwidth is far above T1-T4's (Table 12: T0 VERY HIGH; T1, T4 MEDIUM; T2, T3 LOW)",
             "VERY HIGH vs MEDIUM/LOW",
@@ -327,7 +323,7 @@ def _bandwidth_claims(
     inn = table.loc[["T2", "T3"], "link_bytes_per_step"].max()
     base = table.loc[["T1", "T4"], "link_bytes_per_step"].min()
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             f"{prefix}in_network_cheaper",
             "in-network aggregation (T2, T3) costs fewer bytes on the network's links than sending "
             "every camera's mixture to the base (T1, T4) (Table 12: LOW vs MEDIUM)",
@@ -444,7 +440,7 @@ def outcome_a(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     """Claims, figures and report of setup A from its rows (also usable on a saved parquet)."""
     table = _means(df)
     claims = _claims_a(table)
-    claims += _bandwidth_claims(df, table, int(df.n_particles.iloc[0]), "a_")
+    claims += _bandwidth_claims(table, "a_")
     figs = _figures(ctx, df, table, "a")
     return Outcome(df, claims, _text_a(df, table, figs), int(df.experiment_run.nunique()))
 
@@ -453,7 +449,7 @@ def _claims_a(table: pd.DataFrame) -> list[Claim]:
     """Setup A's accuracy claims: the paper's ranking (Figs 48-49) and rotation."""
     e = table["err3d"]
     claims = [
-        Claim(
+        CLAIM_KINDS.claim(
             "a_t0_best",
             "setup A: T0 has the lowest average 3-D error of all trackers",
             "T0 best (Figs 48-49)",
@@ -461,7 +457,7 @@ def _claims_a(table: pd.DataFrame) -> list[Claim]:
             "T0 < min(P, T1, T2, T3, T4)",
             bool(e["T0"] < e[["P", "T1", "T2", "T3", "T4"]].min()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "a_image_plane_beat_kernel",
             "setup A: the image-plane trackers T3/T4 beat the kernel-density trackers T1/T2",
             "T0 > T3/T4 > T1/T2 > P",
@@ -469,7 +465,7 @@ def _claims_a(table: pd.DataFrame) -> list[Claim]:
             "mean(T3, T4) < mean(T1, T2)",
             bool(e[["T3", "T4"]].mean() < e[["T1", "T2"]].mean()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "a_p_worst",
             "setup A: the 2-D + ray-intersection baseline P is outperformed by all other trackers",
             "P worst",
@@ -477,7 +473,7 @@ def _claims_a(table: pd.DataFrame) -> list[Claim]:
             "P > max(T0..T4)",
             bool(e["P"] > e[["T0", "T1", "T2", "T3", "T4"]].max()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "a_2d_same_ranking",
             "setup A: the 2-D reprojection error ranks T0 best as the 3-D error does",
             "same trend for 3-D and 2-D error",
@@ -487,7 +483,7 @@ def _claims_a(table: pd.DataFrame) -> list[Claim]:
                 table.loc["T0", "err2d"] < table.loc[["P", "T1", "T2", "T3", "T4"], "err2d"].min()
             ),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "a_rotation_hurts",
             "setup A: for almost all trackers the rotating target is tracked worse than the fixed one",
             "rotating worse for almost all trackers",
@@ -504,7 +500,7 @@ def _claims_a(table: pd.DataFrame) -> list[Claim]:
             )
             >= 4,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "a_t1_t2_close",
             "setup A: in-network aggregation costs little accuracy: T2 within 25 % of T1",
             "T2 slightly better than T1",
@@ -573,7 +569,7 @@ def outcome_b(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     table = _means(df)
     pre, post = _gap_errors(df)
     claims = _claims_b(df, table, pre, post)
-    claims += _bandwidth_claims(df, table, int(df.n_particles.iloc[0]), "b_")
+    claims += _bandwidth_claims(table, "b_")
     figs = _figures(ctx, df, table, "b")
     body = _text_b(df, table, pre, post, figs)
     return Outcome(df, claims, body, int(df.experiment_run.nunique()))
@@ -610,7 +606,7 @@ def _claims_b(
         int(pix[pix.t == GAP_START].participating.max()) if (pix.t == GAP_START).any() else -1
     )
     claims = [
-        Claim(
+        CLAIM_KINDS.claim(
             "b_kernel_best",
             "setup B: the 3-D kernel-density trackers T1/T2 beat every other tracker",
             "T1/T2 far better than any other, then T0 (Fig. 56)",
@@ -618,7 +614,7 @@ def _claims_b(
             "max(T1, T2) < min(P, T0, T3, T4)",
             bool(e[["T1", "T2"]].max() < e[["P", "T0", "T3", "T4"]].min()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "b_t0_second",
             "setup B: T0 comes next, ahead of P, T3 and T4",
             "T0 after T1/T2; P/T3/T4 poor",
@@ -626,7 +622,7 @@ def _claims_b(
             "T0 < min(P, T3, T4)",
             bool(e["T0"] < e[["P", "T3", "T4"]].min()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "b_p_poor",
             "setup B: the baseline P is worse than every 3-D-model tracker",
             "P poor",
@@ -634,7 +630,7 @@ def _claims_b(
             "P > max(T0..T4)",
             bool(e["P"] > e[["T0", "T1", "T2", "T3", "T4"]].max()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "b_t2_recovers",
             f"setup B: after the one-camera gap (steps {GAP_START}-{GAP_START + 1}) T2 re-converges",
             "T2 re-converges as soon as a second camera participates",
@@ -642,7 +638,7 @@ def _claims_b(
             f"mean error at steps {GAP_START + 4}-{GAP_START + 12} <= 2 x (steps {GAP_START - 8}-{GAP_START - 1}) + 0.1 m",
             bool(recovered["T2"]),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "b_t0_does_not_recover",
             "setup B: after the gap T0 does not re-converge",
             "T0 does not re-converge",
@@ -650,7 +646,7 @@ def _claims_b(
             "the same test fails for T0",
             bool(not recovered["T0"]),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "b_gap_one_camera",
             f"setup B: exactly one camera sees the target at step {GAP_START}",
             "1 participating camera at step 21, 2+ at step 23",
@@ -658,7 +654,7 @@ def _claims_b(
             "1",
             gap_cams == 1,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "b_small_target",
             "setup B: the target covers < 1 % of the image pixels at almost all steps",
             "< 1 % (< 800 px of 320 x 240) at almost all steps",
@@ -666,7 +662,7 @@ def _claims_b(
             "share of steps with < 1 % >= 0.9",
             share_small >= 0.9,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "b_rotation_3d",
             "setup B: rotation raises the 3-D error (averaged over the 3-D-model trackers T0-T4)",
             "rotation slightly increases the 3-D error",

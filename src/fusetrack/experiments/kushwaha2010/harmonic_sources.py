@@ -30,7 +30,7 @@ from pydantic import Field
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import spearmanr
 
-from ...evaluation import Claim, ExperimentOptions, Outcome, RunContext, plots
+from ...evaluation import Claim, ClaimKinds, ExperimentOptions, Outcome, RunContext, plots
 from ...perception import (
     AcousticNetwork,
     BeamformModel,
@@ -372,10 +372,26 @@ def _summarise(df: pd.DataFrame) -> _Summary:
     )
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "f0_discrimination_0p1hz_60_pairs": "diagnostic",  # a reading: N_PSD is not given
+        "f0_*": "paper",
+        "error_*": "paper",
+        "unresolved_at_0p2m": "paper",
+        "resolved_above_0p5m": "paper",
+        "single_source_accuracy_above_5m": "paper",
+        "graceful_with_harmonicity": "paper",
+        "beamform_*": "paper",
+        "more_psd_pairs_lower_error": "paper",
+    }
+)
+
+
 def _frequency_claims(s: _Summary, loose: float) -> list[Claim]:
     """Fig. 29 and the ML fundamentals' spread."""
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "f0_discrimination_0p1hz",
             "two sources whose fundamentals (40–60 Hz) are 0.1 Hz apart are both estimated within "
             "0.05 Hz, with the 30 PSD pairs the node sends (share of runs)",
@@ -384,7 +400,7 @@ def _frequency_claims(s: _Summary, loose: float) -> list[Claim]:
             f">= {0.8 / loose:.1f}",
             s.resolved[30] >= 0.8 / loose,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "f0_discrimination_0p1hz_60_pairs",
             "the same with 60 PSD pairs sent (Table 10 gives no N_PSD for the simulations)",
             "discriminated at 0.1 Hz",
@@ -392,7 +408,7 @@ def _frequency_claims(s: _Summary, loose: float) -> list[Claim]:
             f">= {0.8 / loose:.1f}",
             s.resolved[60] >= 0.8 / loose,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "f0_spread_below_0p01hz",
             "ML fundamentals (two sources, 25 dB) spread less than 0.01 Hz about the truth "
             f"(RMS of errors below 0.5 Hz; {s.gross:.0%} of fundamentals off by more)",
@@ -417,7 +433,7 @@ def _sweep_claims(s: _Summary, loose: float) -> list[Claim]:
     small = rel[rel.index <= 0.2]
     big = rel[rel.index > 0.5]
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "error_grows_with_sources",
             "the error grows about exponentially from 1 to 4 sources (log-error linear in M)",
             "≈ exponential growth",
@@ -430,7 +446,7 @@ def _sweep_claims(s: _Summary, loose: float) -> list[Claim]:
             f"slope > 0 and R² >= {0.8 / loose:.1f}",
             slope > 0 and r2 >= 0.8 / loose,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "error_falls_with_snr",
             "the error falls with SNR (7 dB worse than 25 dB)",
             "decreasing in 7–52 dB",
@@ -438,7 +454,7 @@ def _sweep_claims(s: _Summary, loose: float) -> list[Claim]:
             "err(7) > err(25)",
             float(by_snr.loc[7.0]) > float(by_snr.loc[25.0]),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "error_flat_above_25db",
             "the error is about constant above 25 dB (max/min of the mean error over 25–52 dB)",
             "≈ constant above 25 dB",
@@ -446,7 +462,7 @@ def _sweep_claims(s: _Summary, loose: float) -> list[Claim]:
             f"<= {1.5 * loose:.1f}",
             flat <= 1.5 * loose,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "unresolved_at_0p2m",
             "at 0.1 and 0.2 m separation the error is of the order of the separation (error/separation)",
             "same order as the separation",
@@ -454,7 +470,7 @@ def _sweep_claims(s: _Summary, loose: float) -> list[Claim]:
             ">= 0.3",
             bool(np.all(small >= 0.3)),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "resolved_above_0p5m",
             "above 0.5 m the error is a small fraction of the separation (max error/separation)",
             "small fraction",
@@ -462,7 +478,7 @@ def _sweep_claims(s: _Summary, loose: float) -> list[Claim]:
             f"<= {0.2 * loose:.1f}",
             float(big.max()) <= 0.2 * loose,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "single_source_accuracy_above_5m",
             "above 5 m separation the mean error equals the single-source error (ratio)",
             "≈ 1",
@@ -482,7 +498,7 @@ def _robustness_claims(s: _Summary, loose: float) -> list[Claim]:
         else -1.0
     )
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "graceful_with_harmonicity",
             "the error decreases as harmonicity rises (err(0.4) > err(1.0))",
             "decreasing, graceful",
@@ -490,7 +506,7 @@ def _robustness_claims(s: _Summary, loose: float) -> list[Claim]:
             "err(0.4) > err(1.0)",
             float(by_h.iloc[0]) > float(by_h.iloc[-1]),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "beamform_unaffected_to_beta1",
             "beamform localisation is not affected up to β = 1 (err(β=1)/err(β=0))",
             "unaffected up to 1.0",
@@ -498,7 +514,7 @@ def _robustness_claims(s: _Summary, loose: float) -> list[Claim]:
             f"<= {1.5 * loose:.1f}",
             s.r_bf1 <= 1.5 * loose,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "beamform_degrades_beyond_beta1",
             "beyond β = 1 the beamform error rises rapidly (err(β=3)/err(β=0))",
             "rises rapidly after 1.0",
@@ -506,7 +522,7 @@ def _robustness_claims(s: _Summary, loose: float) -> list[Claim]:
             ">= 2",
             s.r_bf3 >= 2.0,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "beamform_more_robust_than_ebl",
             "beamform localisation copes with directivity better than EBL (error at β = 1)",
             "BF < EBL under directivity",
@@ -518,7 +534,7 @@ def _robustness_claims(s: _Summary, loose: float) -> list[Claim]:
             "err_BF(1) < err_EBL(1)",
             float(bf.loc[1.0]) < float(ebl.loc[1.0]),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "more_psd_pairs_lower_error",
             "more PSD pairs give a lower error; few pairs are poor (err(10 pairs) > err(30 pairs))",
             "decreasing in N_PSD",

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ...evaluation import Claim, Outcome, RunContext, plots
+from ...evaluation import ClaimKinds, Outcome, RunContext, plots
 from .scene import (
     all_likelihoods,
     audio_prior,
@@ -73,6 +73,17 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        # the dissertation does not quantify time sync (spec 003, A-III-18): the spec's checks
+        "small_offset_harmless": "diagnostic",
+        "residual_far_below_period": "diagnostic",
+        "offset_hurts_tracking": "diagnostic",
+    }
+)
+
+
 def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=10, quick=2)
     df = ctx.monte_carlo(run_once, [{}], runs, desc="passes")
@@ -81,7 +92,7 @@ def run(ctx: RunContext) -> Outcome:
     worst_us = float(res.max_abs_us.max())
     err = trk.groupby(["offset", "variant"])["error"].mean().unstack("variant")
     claims = [
-        Claim(
+        CLAIM_KINDS.claim(
             "residual_far_below_period",
             "after hop translation, gateway translation and RBS the residual timestamp error is far below the 250 ms fusion period (spec: < 1 ms)",
             "µs over several hops (companion paper); < 1 ms",
@@ -89,7 +100,7 @@ def run(ctx: RunContext) -> Outcome:
             "1000 µs",
             worst_us < 1000.0,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "offset_hurts_tracking",
             "unsynchronised timestamps (±1 s per node) raise the AVCP tracking error",
             "error grows with offset",
@@ -97,7 +108,7 @@ def run(ctx: RunContext) -> Outcome:
             "err(1 s) > err(0) + 0.5 m",
             bool(err["AVCP"].loc[1.0] > err["AVCP"].loc[0.0] + 0.5),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "small_offset_harmless",
             "an offset of 0.1 s (under half the fusion period) costs less than 1 m for AVCP",
             "(spec 003 §2.4)",

@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from pydantic import Field, field_validator
 
-from ...evaluation import Claim, ExperimentOptions, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, ExperimentOptions, Outcome, RunContext
 from ...evaluation.plots import save
 from ...filters import turn_models
 from ...management import AcousticTracker, CooperationPolicy, run_cooperation, run_periodic_batch
@@ -299,6 +299,18 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C7_*": "paper",
+        "C8_*": "paper",
+        "C9_*": "paper",
+        "C10_*": "paper",
+        "C11_*": "paper",
+    }
+)
+
+
 def _sweep_section(ctx: RunContext, e32: pd.DataFrame, tv_sweep: list[int]) -> tuple[Claim, str]:
     """C8 and the E3.2 report section (Figs. 3-5/3-6) from the per-trial rows of the sweep."""
     e32 = e32.assign(T_v=e32["policy"].str.split().str[1].astype(int))
@@ -311,7 +323,7 @@ def _sweep_section(ctx: RunContext, e32: pd.DataFrame, tv_sweep: list[int]) -> t
     e32m["trials"] = per_trial.groupby("T_v").size()
     avg = e32m["average"]
     falls = bool(avg.loc[tv_sweep[0]] < avg.loc[tv_sweep[-1]])
-    claim = Claim(
+    claim = CLAIM_KINDS.claim(
         "C8_periodic_falls",
         "periodic cooperation: average RMS at T_v = 1 below that at T_v = 100 (sigma^2 = 5), "
         f"{int(e32m['trials'].min())} trials per T_v",
@@ -469,7 +481,7 @@ def _noise_claim(obj: pd.DataFrame) -> tuple[Claim, pd.DataFrame]:
     e31["average"] = e31.mean(axis=1)
     rising = bool(e31["average"].iloc[-1] > e31["average"].iloc[0])
     return (
-        Claim(
+        CLAIM_KINDS.claim(
             "C7_rises_with_noise",
             "acoustic-only average RMS at sigma^2 = 5 exceeds that at sigma^2 = 0 (O1, O2, O3 at 5 beside the paper)",
             {"sigma2=5": PAPER_E31},
@@ -512,7 +524,7 @@ def _table31_claims(
 
     equiv = {c: equivalent_tv(c) for c in ("O1", "O2", "O3", "average")}
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C9_trigger_beats_none",
             "triggered cooperation cuts the average RMS of no cooperation (Table 3.1a)",
             {"none": PAPER_T31["none"][3], "trigger": PAPER_T31["trig"][3]},
@@ -525,7 +537,7 @@ def _table31_claims(
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C9_fewer_camera_uses",
             "periodic T_v giving the triggering RMS is shorter than the mean triggered period (triggering needs fewer camera uses; Table 3.1b)",
             {"periodic-equivalent": PAPER_TV_EQUIV[3], "triggered": PAPER_TV_TRIG},
@@ -537,7 +549,7 @@ def _table31_claims(
     abl = {a: float(tab.loc[a, "average"]) for a in ablations[:3]}
     base = float(tab.loc["trigger", "average"])
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C10_each_condition_helps",
             "removing any one trigger condition raises the average RMS (trigger without count / gate / ellipse vs all)",
             "each condition catches cases the others miss",
@@ -567,7 +579,7 @@ def _room_claims(df: pd.DataFrame) -> tuple[list[Claim], _Room]:
         near_ratio[s] = (float(p[near].mean()), float(p[~near].mean()))
         coop_less[s] = (float(prob[(s, True)].mean()), float(prob[(s, False)].mean()))
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C11_triggers_at_events",
             "with cooperation, trigger probability is higher within -0.2..+0.6 s of silence/appearance/disappearance events than elsewhere (per sensor: near, elsewhere)",
             "triggers cluster at events",
@@ -577,7 +589,7 @@ def _room_claims(df: pd.DataFrame) -> tuple[list[Claim], _Room]:
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C11_fewer_persistent",
             "mean trigger probability with cooperation below that without (per sensor: with, without)",
             "fewer persistent triggers with cooperation",

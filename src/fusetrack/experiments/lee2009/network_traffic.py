@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from ...evaluation.plots import save
 from ...management import PROTOCOLS, NetworkConfig, simulate_traffic
 
@@ -86,6 +86,14 @@ def _configs(rounds: int, alphas: list[float], sizes: list[int]) -> list[dict[st
     return configs
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C18_*": "paper",
+    }
+)
+
+
 def _claims(
     e2e: pd.Series, s1a: pd.DataFrame, s1s: pd.DataFrame, alphas: list[float]
 ) -> tuple[list[Claim], dict[str, dict[str, float]]]:
@@ -94,7 +102,7 @@ def _claims(
     grow_alpha = float(s1a["RBVC"].iloc[-1] / s1a["RBVC"].iloc[0])
     grow_size = float(s1s["RBVC"].loc[400] / s1s["RBVC"].loc[40])
     claims: list[Claim] = [
-        Claim(
+        CLAIM_KINDS.claim(
             "C18_s1_rbvc_faster",
             "Scenario 1 (objects in R1 only): RBVC end-to-end delay below SBVC at every alpha",
             "RBVC < SBVC",
@@ -105,7 +113,7 @@ def _claims(
             "all alpha",
             bool((s1a["RBVC"] < s1a["SBVC"]).all()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C18_s2_s3_sbvc_faster",
             "Scenarios 2 and 3 (objects everywhere): SBVC below RBVC",
             "SBVC < RBVC",
@@ -113,7 +121,7 @@ def _claims(
             "both",
             all(base[s]["SBVC"] < base[s]["RBVC"] for s in ("S2", "S3")),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C18_s3_below_s2",
             "Scenario 3 (cameras next to the server) delay below Scenario 2 for SBVC; for RBVC the paper's own table has S3 >= S2 (sum of visual sensing 7.08 vs 7.00)",
             {"SBVC": "S3 < S2 (1.41 < 2.69)", "RBVC": "S3 >= S2 (7.08 >= 7.00)"},
@@ -121,7 +129,7 @@ def _claims(
             "SBVC S3 < S2 and RBVC S3 >= S2",
             base["S3"]["SBVC"] < base["S2"]["SBVC"] and base["S3"]["RBVC"] >= base["S2"]["RBVC"],
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C18_image_size_dominates",
             "delay grows with alpha and far more with image size (RBVC, S1: x alpha 0.1->0.5, x image 40->400 KB)",
             "image size dominates",

@@ -29,6 +29,7 @@ from pydantic import Field
 
 from ...evaluation import (
     Claim,
+    ClaimKinds,
     ExperimentOptions,
     Outcome,
     RunContext,
@@ -320,6 +321,22 @@ def _rmse(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
     return g
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C1_closed_form": "diagnostic",  # our closed form against Monte Carlo
+        "C5_3d_filter_above_bound": "diagnostic",  # sanity of the bounds
+        "C6_s4_above_bound": "diagnostic",
+        "C1_*": "paper",
+        "C2_*": "paper",
+        "C3_*": "paper",
+        "C4_*": "paper",
+        "C5_*": "paper",
+        "C6_*": "paper",
+    }
+)
+
+
 def _variance_part(ctx: RunContext) -> tuple[list[Claim], str, pd.DataFrame]:
     rng = np.random.default_rng([ctx.seed, 20])
     n_mc = 20_000 if ctx.quick else 100_000
@@ -354,7 +371,7 @@ def _variance_part(ctx: RunContext) -> tuple[list[Claim], str, pd.DataFrame]:
     yz_below_inside = int(np.sum((df.cf_yz < 1) & inside))
     yz_below_outside = float(np.mean((df.cf_yz < 1)[~inside]))
     claims = [
-        Claim(
+        CLAIM_KINDS.claim(
             "C1_closed_form",
             "closed-form projected variances match Monte Carlo of Eq. 2.1 (max relative deviation)",
             "MC only (Figs. 2-2, 2-3)",
@@ -362,7 +379,7 @@ def _variance_part(ctx: RunContext) -> tuple[list[Claim], str, pd.DataFrame]:
             f"<= {tol_rel:.3f}",
             rel.max() <= tol_rel,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C1_xy_equal",
             "sigma_xy^2 = sigma^2 (Monte Carlo, max |var_xy/sigma^2 - 1|)",
             "sigma_xy^2 = sigma^2",
@@ -370,7 +387,7 @@ def _variance_part(ctx: RunContext) -> tuple[list[Claim], str, pd.DataFrame]:
             f"<= {5 * math.sqrt(2 / n_mc):.3f}",
             xy_dev <= 5 * math.sqrt(2 / n_mc),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C1_yz_region",
             "grid points with 45 < phi < 135 deg where var_yz < sigma^2 (text: yz smaller there)",
             "yz < sigma^2 for 45 <= phi <= 135",
@@ -481,7 +498,7 @@ def _table_claims(rm: pd.DataFrame, quick: bool) -> list[Claim]:
         for i in range(4)
     ]
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C2_table21_values",
             f"Table 2.1 RMSEs (x, y, z, avg; equal and weighted) within +-{tol:.0%} of the paper",
             PAPER_T21,
@@ -492,7 +509,7 @@ def _table_claims(rm: pd.DataFrame, quick: bool) -> list[Claim]:
     )
     ratio21 = float(t21.loc["weighted", "average"] / t21.loc["equal", "average"])
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C2_weighted_close_to_equal",
             "with correct models weighted and equal combining give averages within 10 %",
             round(1.2957 / 1.3358, 4),
@@ -503,7 +520,7 @@ def _table_claims(rm: pd.DataFrame, quick: bool) -> list[Claim]:
     )
     ratio22 = float(t22.loc["equal", "y"] / t22.loc["weighted", "y"])
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C3_weighted_robust",
             "yz filter mismatched (CV, steps 50-99): y RMSE equal / weighted",
             round(17.3250 / 0.6243, 2),
@@ -513,7 +530,7 @@ def _table_claims(rm: pd.DataFrame, quick: bool) -> list[Claim]:
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C3_weighted_not_worse",
             "yz filter mismatched: weighted average RMSE <= equal average RMSE",
             "1.3044 <= 6.8997",
@@ -529,7 +546,7 @@ def _table_claims(rm: pd.DataFrame, quick: bool) -> list[Claim]:
 def _weight_sum_claim(ws: pd.DataFrame) -> Claim:
     """C4: Fig. 2-7."""
     larger = bool((ws["yz plane (PPS)"] > ws["direct 3-D"]).all())
-    return Claim(
+    return CLAIM_KINDS.claim(
         "C4_weight_sums",
         "selected-plane (yz) weight sums exceed the direct 3-D filter's at every noise level (Fig. 2-7)",
         "PPS > 3-D at every variance",
@@ -571,7 +588,7 @@ def _single_sensor_claims(
         d3_rmse = float(srm_prior.loc[(name, "direct 3-D"), "average"])
         above.append((name, round(d3_rmse, 4), round(float(d3_b), 4)))
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C5_pps_rmse_vs_3d",
             "PPS (literal) average RMSE <= direct 3-D average RMSE in Scenarios 1-3 (scenario, PPS, 3-D)",
             "PPS outperforms direct 3-D",
@@ -581,7 +598,7 @@ def _single_sensor_claims(
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C5_pps_bound_vs_3d",
             "time-averaged CRLB of the PPS selected planes (fused on the shared axis) <= 3-D CRLB (scenario, PPS, 3-D)",
             "selected-plane bounds below 3-D",
@@ -591,7 +608,7 @@ def _single_sensor_claims(
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C5_3d_filter_above_bound",
             "direct 3-D filter time-averaged RMSE (started from a prior draw) >= its time-averaged CRLB "
             "(scenario, RMSE, bound; sanity of the bound)",
@@ -627,7 +644,7 @@ def _multisensor_claims(
         )
     }
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C6_multisensor_bound",
             "two-sensor CRLB (S4, extended PPS: selected pairs fused on the shared axis) below the "
             "single-sensor PPS bound of S3 (time-averaged, mean over axes, m; 3-D bounds beside)",
@@ -639,7 +656,7 @@ def _multisensor_claims(
     )
     s4_rmse = float(srm_prior.loc[("S4", "PPS literal"), "average"])
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C6_s4_above_bound",
             "S4 extended PPS (literal) time-averaged RMSE, started from a prior draw, >= its two-sensor "
             "time-averaged CRLB (RMSE, bound; sanity of the bound)",
@@ -650,7 +667,7 @@ def _multisensor_claims(
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C6_multisensor",
             "extended PPS with two sensors (S4, literal) beats single-sensor PPS (S3): avg RMSE S4 / S3 "
             "(and S4 min-variance / S3)",

@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from ...evaluation.plots import save
 from ...world import NavigationResult, PotentialField, navigate
 
@@ -67,6 +67,14 @@ def _path_rows(results: Mapping[str, NavigationResult]) -> list[dict[str, Any]]:
     return rows
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C15_*": "paper",
+    }
+)
+
+
 def _claims(
     forces: Mapping[tuple[float, float], float],
     delta: float,
@@ -75,7 +83,7 @@ def _claims(
     """C15: forces, zero-force distance, collision, oscillation, escape."""
     std, mod, esc, esc3 = (results[k] for k in list(VARIANTS)[:4])
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "C15_forces",
             "signed total force along the diagonal at (12,12), (10,10), (9,9)",
             list(PAPER_FORCES.values()),
@@ -83,7 +91,7 @@ def _claims(
             "+-0.01",
             all(abs(forces[p] - v) <= 0.01 for p, v in PAPER_FORCES.items()),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C15_delta",
             "zero-force distance delta from the obstacle (text: 1.27, from the rounded 8.9)",
             1.27,
@@ -91,7 +99,7 @@ def _claims(
             "< s_r T_s = 1.414",
             delta < math.sqrt(2),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C15_collision_step4",
             "standard field: the robot passes (11,11), (10,10), (9,9) and collides at step 4",
             4,
@@ -99,7 +107,7 @@ def _claims(
             "== 4",
             std.collided_at == 4,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C15_modified_oscillates",
             "modified field (Eq. 5.24): no collision, (9,9) <-> (10,10) oscillation detected by Eq. 5.26",
             "oscillation, no collision",
@@ -111,7 +119,7 @@ def _claims(
             "oscillation detected, no collision",
             mod.collided_at is None and mod.oscillation_at is not None,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C15_escape_reaches_goal",
             "escape (heading turned by theta_osc) reaches the goal without collision (r = 0 and r = 0.3)",
             "escape",

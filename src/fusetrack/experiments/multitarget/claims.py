@@ -52,7 +52,7 @@ def summary_table(df: pd.DataFrame) -> pd.DataFrame:
 def _claim(
     kind: str, cid: str, statement: str, expected: str, ours: Any, tol: str, holds: bool
 ) -> Claim:
-    return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds))
+    return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds), kind)
 
 
 def claim_kinds(claims: Sequence[Claim]) -> dict[str, str]:

@@ -9,8 +9,8 @@
 * ``grid+JPDA`` -- the fused likelihood of the bearings on Kushwaha's grid, its peaks
   (:mod:`.grid_peaks`) as position measurements of the JPDA tracker;
 * ``direct`` -- the JPDA tracker fed the bearings themselves (extended Kalman filter, one
-  :class:`~fusetrack.sensors.Bearing` per array); candidates only *start* tracks
-  (:class:`BirthOnly`), they never update one.
+  :class:`~fusetrack.sensors.Bearing` per array); candidates only *start* tracks (the
+  tracker's ``birth_only_sensors``), they never update one.
 
 Clutter densities: each pair's (or the grid's) mean number of points per scan over the run,
 divided by the field's area -- every point counted as clutter, an upper bound the tracker
@@ -20,19 +20,15 @@ could estimate itself; bearings: ``clutter / 2 pi`` per radian.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ...association import (
     MCMCDA,
-    Association,
     GlobalNearestNeighbour,
     JointProbabilisticDataAssociation,
     MCMCDAConfig,
-    ScanLikelihoods,
-    SingleHypothesis,
 )
 from ...core import Gaussian, Measurement, Track
 from ...filters import ExtendedKalmanFilter, KalmanFilter
@@ -54,29 +50,6 @@ METHODS = ("GNN", "JPDA", "MCMCDA", "grid+JPDA", "direct")
 Q_ACCEL = 0.5  # white-noise acceleration PSD of the trackers' CV model (m^2/s^3)
 VELOCITY_STD = 3.0  # prior std of a new track's velocity (m/s)
 EXISTENCE_FLOOR = 0.1  # a confirmed track whose existence probability falls below ends
-BIRTH_ONLY_PD = 1e-9  # P_D of a sensor that only starts tracks
-
-
-@dataclass(frozen=True)
-class BirthOnly:
-    """An associator for trackers in which some sensors only start tracks.
-
-    A scan whose every track has miss probability ~1 (its sensor's ``P_D`` is
-    :data:`BIRTH_ONLY_PD`) comes from a birth-only sensor: every track is missed (so it is not
-    updated, and a miss at such ``P_D`` leaves it unchanged) and only the measurements outside
-    every track's gate are left to start tracks. Any other scan goes to ``inner``."""
-
-    inner: Any
-
-    def associate(
-        self, scores: ScanLikelihoods, rng: np.random.Generator | None = None
-    ) -> Association:
-        if not np.all(scores.log_missed > -1e-6):
-            return self.inner.associate(scores, rng)
-        gated = np.isfinite(scores.log_likelihood).any(axis=0)
-        free = tuple(int(j) for j in np.flatnonzero(~gated))
-        missed = {i: (SingleHypothesis(i, None, 1.0),) for i in scores.track_ids}
-        return Association(missed, free)
 
 
 def _pair_ids(scene: Scene) -> list[str]:
@@ -95,8 +68,10 @@ def _tracker(
     associator: Any,
     p_detect: Mapping[str, float],
     clutter: Mapping[str, float],
+    birth_only: Sequence[str] = (),
 ) -> MultiTargetTracker:
-    """The tracker every method but MCMCDA uses: 3-of-4 confirmation, 4 misses in a row end."""
+    """The tracker every method but MCMCDA uses: 3-of-4 confirmation, 4 misses in a row end;
+    the sensors ``birth_only`` only start tracks."""
     unobserved = Gaussian(np.zeros(4), np.diag([0.0, 0.0, VELOCITY_STD**2, VELOCITY_STD**2]))
     prior = InverseMeasurementPrior(births, unobserved)
     return MultiTargetTracker(
@@ -107,6 +82,7 @@ def _tracker(
         AnyOf(MissedCountDeleter(4), ExistenceDeleter(EXISTENCE_FLOOR)),
         p_detect,
         clutter,
+        birth_only_sensors=birth_only,
     )
 
 
@@ -146,8 +122,10 @@ def mcmcda_tracks(
     n_targets: int,
     rng: np.random.Generator,
 ) -> list[Track]:
-    """Online MCMCDA on the pooled candidates of every scan (as ``kushwaha2010-mcmcda``)."""
+    """Online MCMCDA on the pooled candidates of every scan (as ``kushwaha2010-mcmcda``), each
+    candidate with its own triangulation covariance (gate, track score, new-track prior)."""
     obs = [np.array([c.point for c in cs]).reshape(-1, 2) for cs in candidates]
+    covs = [np.array([c.cov for c in cs]).reshape(-1, 2, 2) for cs in candidates]
     n_pairs = len(_pair_ids(scene))
     stds = [np.sqrt(np.trace(c.cov) / 2) for cs in candidates for c in cs]
     config = MCMCDAConfig(
@@ -164,8 +142,8 @@ def mcmcda_tracks(
     )
     tracker = MCMCDA(config)
     state = tracker.initial_state()
-    for y in obs:
-        state = tracker.step(state, y, rng)
+    for y, cov in zip(obs, covs):
+        state = tracker.step(state, y, rng, cov)
     out = []
     for ident, (steps, pos) in tracker.tracks(tracker.finish(state)).items():
         ok = steps < truth.times.size
@@ -200,13 +178,12 @@ def direct_tracks(
         ConstantVelocity(ndim=2, q=Q_ACCEL), [*bearings.values(), *births.values()]
     )
     sensors: dict[str, Any] = {**bearings, **births}
-    p_d = dict.fromkeys(bearings, scene.p_detect) | dict.fromkeys(births, BIRTH_ONLY_PD)
+    p_d = dict.fromkeys(bearings, scene.p_detect)
     clutter = dict.fromkeys(bearings, max(scene.clutter, 0.05) / (2 * np.pi))
-    clutter |= dict.fromkeys(births, 1.0 / scene.area)
     zs: list[Measurement] = []
     for t, scan, cs in zip(truth.times, scans, candidates):
         zs += [Measurement(float(t), sid, [z]) for sid in bearings for z in scan[sid]]
         zs += as_measurements(float(t), cs)
-    assoc = BirthOnly(JointProbabilisticDataAssociation())
-    tracker = _tracker(ekf, sensors, births, assoc, p_d, clutter)
+    assoc = JointProbabilisticDataAssociation()
+    tracker = _tracker(ekf, sensors, births, assoc, p_d, clutter, birth_only=list(births))
     return tracker.run(zs, rng, times=truth.times)

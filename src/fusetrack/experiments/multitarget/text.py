@@ -51,8 +51,10 @@ def _methods_text(n_mc: int) -> str:
   tracker could measure itself); 3-of-4 confirmation, deletion after 4 misses in a row or
   existence probability < 0.1.
 * **MCMCDA**: `association.MCMCDA` as `kushwaha2010-mcmcda` runs it, on the candidates of all
-  pairs pooled per scan, {n_mc} iterations per scan, window 12 scans; its observation noise is
-  one isotropic σ (the median candidate σ), its false-alarm rate the mean number of candidates
+  pairs pooled per scan, {n_mc} iterations per scan, window 12 scans; each candidate's
+  observation noise is its own triangulation covariance (in the gate, the track score and a
+  new track's prior; earlier versions used one isotropic σ, the median candidate σ), its
+  false-alarm rate the mean number of candidates
   per scan minus the number of targets. Its tracks are the committed ones (an observation's
   track is fixed when it leaves the window: a 3-s fixed-lag decision), the others' are filtered
   online.
@@ -130,7 +132,7 @@ Candidates per scan (a candidate within {opts.mot_threshold:g} m of a target cou
   per-pair position trackers see each pair's ghosts as detections of that pair and keep them
   as long as that pair keeps reporting them.
 * MCMCDA sees up to one point per pair for every target and treats the extra ones as false
-  alarms; its isotropic observation noise ignores the elongated triangulation covariances.
+  alarms (one observation per target per scan is its model).
 * Limits: straight paths, a constant detection probability, clutter uniform on the circle,
   bearings merged only within 2°, no array position or clock errors.
 """

@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from ...evaluation.plots import save
 from ...sensors import NferTagSimulator, fit_position_fix
 
@@ -100,37 +100,23 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     return rows
 
 
-def _claims(tab: dict[str, Any], df: pd.DataFrame, tol: float) -> list[Claim]:
-    """H7: Table 5.1's summary recomputed, the simulated tag's error statistics, x over y."""
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "H7-sim-*": "calibration",  # the simulated tag is tuned to Table 5.1
+    }
+)
+
+
+def _claims(df: pd.DataFrame, tol: float) -> list[Claim]:
+    """H7: the simulated tag's error statistics against Table 5.1 (the tag is tuned to them).
+    Not claims, as they hold by construction: Table 5.1's mean and std recomputed from its own
+    typed points (the report shows them), and x dominating y in the calibration fit, which
+    follows from the simulator's bias setting."""
     sim_mean = float(df["err"].mean())
     sim_std = float(df["err"].std(ddof=1))
-    cal = df.groupby("run")[["cal_std_x", "cal_std_y"]].first().mean()
     return [
-        Claim(
-            "H7-table-mean",
-            "Table 5.1 recomputed: mean error at the six test points (m)",
-            0.458,
-            tab["mean"],
-            "0.0005",
-            abs(tab["mean"] - 0.458) < 5e-4,
-        ),
-        Claim(
-            "H7-table-std",
-            "Table 5.1 recomputed: standard deviation (sample, ddof = 1) (m)",
-            0.273,
-            tab["std_sample"],
-            "0.0005",
-            abs(tab["std_sample"] - 0.273) < 5e-4,
-        ),
-        Claim(
-            "H7-table-errors",
-            "Table 5.1 recomputed: largest per-point difference from the printed errors (m)",
-            "0.588, 0.339, 0.465, 0.920, 0.301, 0.136",
-            float(np.abs(tab["errors"] - TABLE_5_1_ERROR).max()),
-            "0.0005",
-            float(np.abs(tab["errors"] - TABLE_5_1_ERROR).max()) < 5e-4,
-        ),
-        Claim(
+        CLAIM_KINDS.claim(
             "H7-sim-mean",
             "simulated NFER tag (correlated bias + white + quantisation): mean test-point error (m)",
             0.458,
@@ -138,21 +124,13 @@ def _claims(tab: dict[str, Any], df: pd.DataFrame, tol: float) -> list[Claim]:
             tol,
             abs(sim_mean - 0.458) < tol,
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "H7-sim-std",
             "simulated NFER tag: standard deviation of the test-point errors (m)",
             0.273,
             sim_std,
             tol,
             abs(sim_std - 0.273) < tol,
-        ),
-        Claim(
-            "H7-x-dominates",
-            "x error dominates y error (Table 5.1 per-axis sample std 0.535 / 0.182; simulated calibration fit)",
-            "x > y",
-            float(cal["cal_std_x"] / cal["cal_std_y"]),
-            "> 1",
-            cal["cal_std_x"] > cal["cal_std_y"],
         ),
     ]
 
@@ -246,6 +224,6 @@ def run(ctx: RunContext) -> Outcome:
     tab = table_summary()
     df = ctx.monte_carlo(run_once, [{"samples_per_point": 5}], runs)
     tol = 0.06 if ctx.quick else 0.04
-    claims = _claims(tab, df, tol)
+    claims = _claims(df, tol)
     fig_name = _figure(ctx, tab, df, runs)
     return Outcome(df, claims, _report(tab, df, runs, fig_name), runs)

@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from ...evaluation.plots import save
 from .scenario import METHOD_NAMES, run_once
 
@@ -134,6 +134,15 @@ def _sweep_rate_offset(df: pd.DataFrame) -> tuple[pd.DataFrame, ...]:
     return sweep, rate, off, off_w
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "consistency": "diagnostic",  # NEES: not in the thesis
+        "H*": "paper",
+    }
+)
+
+
 def _h1_h2_claims(tables: dict[str, pd.Series]) -> list[Claim]:
     """H1 (joint beats the tag alone, S1 and S2) and H2 (visual EKF as good without occlusion)."""
     claims: list[Claim] = []
@@ -141,7 +150,7 @@ def _h1_h2_claims(tables: dict[str, pd.Series]) -> list[Claim]:
         m = tables[case]
         ratio = float(min(m["B1"], m["B2"]) / m["J"])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"H1-{case}",
                 f"{case}: the joint tracker beats the RFID tracker (raw and KF) by >= 5x (mean error after burn-in)",
                 "J better than RFID [PROTO J 0.025-0.028 m vs B2 ~0.30 m]",
@@ -153,7 +162,7 @@ def _h1_h2_claims(tables: dict[str, pd.Series]) -> list[Claim]:
     m = tables["S1"]
     rel = float(abs(m["B4"] - m["J"]) / m["J"])
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "H2",
             "S1 (no occlusion): the visual EKF is about as good as the joint tracker, |B4 - J| / J",
             "visual 'as good as the joint tracker'",
@@ -163,7 +172,7 @@ def _h1_h2_claims(tables: dict[str, pd.Series]) -> list[Claim]:
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "H2-raw",
             "S1: the raw visual measurement (B3) is noisier than the joint tracker, B3 / J",
             "visual 'much more noisy' (S2)",
@@ -182,7 +191,7 @@ def _h3_claims(tables: dict[str, pd.Series]) -> list[Claim]:
         w = tables[case]
         ratio = float(w["B5"] / w["J"])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"H3-{case}",
                 f"{case} (3-step occlusion): joint beats switching to the wireless tracker in the window, B5 / J",
                 "combined more accurate than switching [PROTO 0.051 vs 0.305 m]",
@@ -193,7 +202,7 @@ def _h3_claims(tables: dict[str, pd.Series]) -> list[Claim]:
         )
         rel = float(abs(w["B4"] - w["J"]) / w["J"])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"H3-{case}-B4",
                 f"{case}: in a short occlusion the visual EKF is about as good as the joint one, |B4 - J| / J",
                 "J ~ B4 (spec)",
@@ -215,7 +224,7 @@ def _h4_claims(df: pd.DataFrame, tables: dict[str, pd.Series]) -> list[Claim]:
         jj = d[d["method"] == "J"].groupby("step")["err"].mean()
         slope = float(np.polyfit(b4.index.to_numpy(float), b4.to_numpy(), 1)[0])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"H4-{case}-diverges",
                 f"{case} (15-step occlusion): the visual EKF's error grows through the window (slope, m/step)",
                 "'the visual tracker diverges gradually'",
@@ -225,7 +234,7 @@ def _h4_claims(df: pd.DataFrame, tables: dict[str, pd.Series]) -> list[Claim]:
             )
         )
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"H4-{case}-mean",
                 f"{case}: joint beats the visual EKF in the window, B4 / J (mean)",
                 "'the joint wireless and visual tracker performs better'",
@@ -236,7 +245,7 @@ def _h4_claims(df: pd.DataFrame, tables: dict[str, pd.Series]) -> list[Claim]:
         )
         last = float(b4.iloc[-1] / jj.iloc[-1])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"H4-{case}-last",
                 f"{case}: joint beats the visual EKF at the last occluded step, B4 / J",
                 "J better",
@@ -255,7 +264,7 @@ def _sweep_claims(sweep: pd.DataFrame, q: bool) -> list[Claim]:
     tol = 0.02 if q else 0.01
     widens = bool(np.all(np.diff(gap) > -tol)) and gap[-1] > gap[0]
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "H4-sweep",
             "occlusion-length sweep L = 3..60 (CA): the gap B4 - J in the window widens with L (m, at L = 60)",
             "[PROTO gap 0.00 at L=3 .. 2.73 m at L=60]",
@@ -266,7 +275,7 @@ def _sweep_claims(sweep: pd.DataFrame, q: bool) -> list[Claim]:
     )
     bounded = float(sweep["J"].max())
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "H4-sweep-bounded",
             "sweep: the joint tracker's window error stays bounded near the RFID KF level (max over L, m)",
             "[PROTO <= 0.27 m]",
@@ -284,7 +293,7 @@ def _rate_offset_claims(rate: pd.DataFrame, off: pd.DataFrame, off_w: pd.DataFra
     for k in rate.index:
         r = float(rate.loc[k, "B4"] / rate.loc[k, "J"])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"H12-k{k}".replace(" ", ""),
                 f"RFID only every {k}th frame, 15-step occlusion: joint not worse than the visual EKF in the window, B4 / J",
                 "J <= B4 [PROTO k=5: CA 0.199/0.216 ... CV slightly worse]",
@@ -296,7 +305,7 @@ def _rate_offset_claims(rate: pd.DataFrame, off: pd.DataFrame, off_w: pd.DataFra
     delta = float(abs(off.loc[10, "J"] - off.loc[0, "J"]))
     delta_w = float(abs(off_w.loc[10, "J"] - off_w.loc[0, "J"]))
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "H11",
             "event-driven tag clock with 20 ms jitter: a 10 ms clock offset changes the joint error by < 1 cm (whole run, m)",
             "NTP 'within 10 ms' is enough",
@@ -306,7 +315,7 @@ def _rate_offset_claims(rate: pd.DataFrame, off: pd.DataFrame, off_w: pd.DataFra
         )
     )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "H11-window",
             "... and inside the 15-step occlusion, where the tag carries the estimate (m)",
             "NTP 'within 10 ms' is enough",
@@ -323,7 +332,7 @@ def _consistency_claim(df: pd.DataFrame) -> Claim:
     nees = float(
         df[(df["case"] == "S1") & (df["method"] == "J") & (df["step"] >= BURN_IN)]["nees"].mean()
     )
-    return Claim(
+    return CLAIM_KINDS.claim(
         "consistency",
         "S1: the joint EKF's mean position NEES (2 = consistent)",
         "not in the thesis",

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from ...filters import (
     ExtendedKalmanFilter,
     ProposalParticleFilter,
@@ -184,11 +184,20 @@ def scenario_table(d: pd.DataFrame, rm: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame({"RMSE t>30": late, "RMSE all t": rm.mean(), "seconds/run": secs})
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C4_*": "paper",
+    }
+)
+
+
 def scenario_claims(s: str, rm: pd.DataFrame) -> list[Claim]:
     """C4: the ordering of Figs 10/12 after t = 30, and (E2) the EKF's divergence."""
     late = rm.loc[rm.index > 30].mean()
     claims = [
         order_claim(
+            CLAIM_KINDS,
             f"C4_order_{s}",
             f"{s}: position RMSE(t) averaged over t > 30: PF-SP-PEKF < bootstrap < EKF (Fig {10 if s == 'E2' else 12})",
             "PF-SP-PEKF < bootstrap < EKF",
@@ -199,7 +208,7 @@ def scenario_claims(s: str, rm: pd.DataFrame) -> list[Claim]:
     if s == "E2":
         grow = float(rm["EKF"].iloc[-1] / rm["EKF"].loc[30])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 "C4_ekf_diverges",
                 "E2: the EKF loses the target after t = 30 (its error grows)",
                 "error grows dramatically",

@@ -137,8 +137,19 @@ def ordering_holds(values: pd.Series, order: Sequence[str]) -> bool:
     return all(a < b for a, b in itertools.pairwise(v))
 
 
+def join_with_relations(values: Sequence[float], texts: Sequence[str]) -> str:
+    """``texts`` joined by the true relation of consecutive ``values`` (``<``, ``=`` or ``>``), so
+    that a printed ordering never claims one the numbers do not have."""
+    out = [texts[0]]
+    for a, b, text in zip(values[:-1], values[1:], texts[1:]):
+        out.append(f"{'<' if a < b else '>' if a > b else '='} {text}")
+    return " ".join(out)
+
+
 def fmt_order(values: pd.Series, order: Sequence[str]) -> str:
-    return " < ".join(f"{k} {float(values[k]):.3g}" for k in order)
+    """``"A 1.23 < B 4.56 > C 2.1"``: ``values`` in ``order``, with their true relations."""
+    v = [float(values[k]) for k in order]
+    return join_with_relations(v, [f"{k} {x:.3g}" for k, x in zip(order, v)])
 
 
 def timed_mm(

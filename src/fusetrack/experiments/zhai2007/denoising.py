@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
 from ...perception import (
     RasterParticleFilter,
     add_mixed_noise,
@@ -167,6 +167,14 @@ def comparison(ctx: RunContext, df: pd.DataFrame) -> Comparison:
     )
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C16_*": "paper",
+    }
+)
+
+
 def claims_isnr(main: pd.Series) -> list[Claim]:
     """C16 at q1 = 1000: the paper's ISNRs (±1.5 dB), TI thresholding helps, hard beats soft."""
     claims = []
@@ -174,7 +182,7 @@ def claims_isnr(main: pd.Series) -> list[Claim]:
     for (im, m), p in PAPER.items():
         o = float(main.loc[(im, m)])
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"C16_{im}_{m.replace(' ', '_')}",
                 f"{im if im != 'lena' else 'Lena (astronaut substitute)'}: ISNR of {m}",
                 p,
@@ -185,7 +193,7 @@ def claims_isnr(main: pd.Series) -> list[Claim]:
         )
     for im in ("lena", "cameraman"):
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"C16_{im}_ti_helps",
                 f"{im}: PF + TI hard thresholding beats the PF alone",
                 "PF+TI > PF",
@@ -195,7 +203,7 @@ def claims_isnr(main: pd.Series) -> list[Claim]:
             )
         )
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C16_hard_beats_soft",
             "cameraman: hard thresholding beats soft (5.47 vs 3.50 dB)",
             "hard > soft",
@@ -214,7 +222,7 @@ def claim_residual(df: pd.DataFrame) -> Claim:
         float(k["pf_residual_excess_kurtosis"].mean()),
         float(k["noise_excess_kurtosis"].mean()),
     )
-    return Claim(
+    return CLAIM_KINDS.claim(
         "C16_gaussian_like_residual",
         "the PF removes the heavy-tailed part: its residual is 'Gaussian-like'",
         "Gaussian-like",

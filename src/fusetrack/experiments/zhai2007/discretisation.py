@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots, run_seed
 from ...filters import (
     DiscretisationProposal,
     ExtendedKalmanFilter,
@@ -326,6 +326,7 @@ def run(ctx: RunContext) -> Outcome:
     avg16 = rmse_by_method(df16, "sq_pos_err")
     claims.append(
         order_claim(
+            CLAIM_KINDS,
             "E16_order",
             "discretisation PF < bootstrap(200) < EKF in position RMSE (Figs 53-54)",
             "new PF < bootstrap < EKF",
@@ -349,6 +350,16 @@ def run(ctx: RunContext) -> Outcome:
     return Outcome(df, claims, body, runs16, beyond_the_paper=cmp.summary)
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "E15_along_bearing": "paper",
+        "E16_order": "paper",
+        "C14_*": "paper",
+    }
+)
+
+
 def claim_e15(demo: Mapping[str, Any]) -> Claim:
     """E15: after one bearing the particles' bearing residuals spread about one sigma, less than
     the (one-step-ahead) prior's (Fig 52)."""
@@ -359,7 +370,7 @@ def claim_e15(demo: Mapping[str, Any]) -> Claim:
     ]
     spread = float(np.std(resid) / 0.01)
     prior_spread = float(np.std(prior_resid) / 0.01)
-    return Claim(
+    return CLAIM_KINDS.claim(
         "E15_along_bearing",
         "after one bearing the particles lie along the measured bearing (Fig 52)",
         "concentrated along the bearing",
@@ -408,7 +419,7 @@ def claims_e17(df17: pd.DataFrame, tab: Mapping[tuple[str, str], pd.DataFrame]) 
     for (s, c), d in df17.groupby(["scenario", "case"]):
         pos = tab[(s, c)]["pos"]
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"C14_{s}{c}",
                 f"{s} case {c}: discretisation MMPF position RMSE < CA bootstrap's (Figs 58-72)",
                 "MMPF < bootstrap",
@@ -420,7 +431,7 @@ def claims_e17(df17: pd.DataFrame, tab: Mapping[tuple[str, str], pd.DataFrame]) 
         if s == "S2":
             win = rmse_by_method(d[d["step"].between(20, 25)], "sq_pos_err")
             claims.append(
-                Claim(
+                CLAIM_KINDS.claim(
                     f"C14_{s}{c}_turn",
                     f"S2 case {c}: MMPF beats the bootstrap during the turn (t = 20-25)",
                     "MMPF < bootstrap",

@@ -18,12 +18,12 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots, run_seed
 from ...filters import IndependenceMove, MHPriorMove, ProposalParticleFilter, RandomWalkMove
 from ...motion import ScalarBenchmark
 from ...sensors import Power
 from . import scalar
-from .common import timed_sis
+from .common import join_with_relations, timed_sis
 from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators
 from .equal_time import EqualTime
 
@@ -153,6 +153,15 @@ def summarise(df: pd.DataFrame) -> dict[str, pd.DataFrame]:
     }
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "mis_acceptance_reported": "diagnostic",  # the thesis does not report it
+        "C15_*": "paper",
+    }
+)
+
+
 def claims_table15(df: pd.DataFrame, tab: Mapping[str, pd.DataFrame]) -> list[Claim]:
     """C15: Table 15's ordering per N, the moves' paired gain over the PF, the PF's MSE falling
     with N, and the MIS acceptance rate."""
@@ -160,11 +169,14 @@ def claims_table15(df: pd.DataFrame, tab: Mapping[str, pd.DataFrame]) -> list[Cl
     claims: list[Claim] = []
     for n in NS:
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"C15_order_N{n}",
                 f"N={n}: MSE PF > PF-MH > PF-MIS > PF-RWM (Table 15)",
                 " > ".join(f"{m} {PAPER.loc[n, m]:.3f}" for m in reversed(PAPER_ORDER)),
-                " > ".join(f"{m} {mse.loc[n, m]:.3f}" for m in reversed(PAPER_ORDER)),
+                join_with_relations(
+                    [float(mse.loc[n, m]) for m in reversed(PAPER_ORDER)],
+                    [f"{m} {mse.loc[n, m]:.3f}" for m in reversed(PAPER_ORDER)],
+                ),
                 "strict ordering of means",
                 all(mse.loc[n, a] < mse.loc[n, b] for a, b in itertools.pairwise(PAPER_ORDER)),
             )
@@ -172,7 +184,7 @@ def claims_table15(df: pd.DataFrame, tab: Mapping[str, pd.DataFrame]) -> list[Cl
     claims += claims_paired_gain(df)
     falls = all(mse.loc[a, "PF"] > mse.loc[b, "PF"] for a, b in itertools.pairwise(NS))
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "C15_pf_falls_with_n",
             "the PF's MSE falls as N grows (Table 15, column PF)",
             ", ".join(f"{v:.3f}" for v in PAPER["PF"]),
@@ -183,7 +195,7 @@ def claims_table15(df: pd.DataFrame, tab: Mapping[str, pd.DataFrame]) -> list[Cl
     )
     mis_acc = float(tab["acc"]["PF-MIS"].mean())
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "mis_acceptance_reported",
             "the MIS with N(0, 0.15) proposals has a low acceptance rate (spec Sec. 3, Alg. 10)",
             "not reported",
@@ -206,7 +218,7 @@ def claims_paired_gain(df: pd.DataFrame) -> list[Claim]:
         mean_d, se_d = d.mean(), d.std() / np.sqrt(d.count())
         z = (mean_d / se_d).min()
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"C15_{m}_beats_PF",
                 f"{m} reduces the PF's MSE at every N, beyond Monte Carlo noise (paired z > 2)",
                 "reduction at every N: "

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots, run_seed
 from ...filters import (
     InteractingMultipleModel,
     MultipleModelParticleFilter,
@@ -31,7 +31,7 @@ from ...filters import (
 )
 from ...motion import ConstantVelocity, ManeuverTurn
 from ...sensors import Bearing
-from .common import timed_gaussian, timed_mm, timed_sis, track_rows
+from .common import join_with_relations, timed_gaussian, timed_mm, timed_sis, track_rows
 from .comparators import UPF_NOTE, Comparison, Scenario, run_comparators
 from .equal_time import EqualTime
 from .reporting import plot_rmse, plot_run_tracks, rmse_by_method, rmse_by_step
@@ -346,20 +346,32 @@ def run(ctx: RunContext) -> Outcome:
 E8_ORDER = ["MMPF multi-sensor (fused)", "MMPF single sensor", "bootstrap single sensor"]
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C10_ccw_peak_sigma0.005": "diagnostic",  # a reading: the paper's sigma is 0.05
+        "C9_*": "paper",
+        "C10_*": "paper",
+        "C11_*": "paper",
+        "E6_circles": "paper",
+    }
+)
+
+
 def claims_e5(shares: np.ndarray) -> list[Claim]:
     """C9: the shares after 20 steps order as 1 > 2 > 3 > 4 and equal Pi_A's stationary law."""
     stat = stationary_distribution(PI_A)
     last = shares[-1]
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "C9_order",
             "model probabilities under Pi_A order as 1 > 2 > 3 > 4 (Fig 25)",
             "1 > 2 > 3 > 4",
-            " > ".join(f"{v:.4f}" for v in last),
+            join_with_relations(list(last), [f"{v:.4f}" for v in last]),
             "strict",
             bool(np.all(np.diff(last) < 0)),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C9_stationary",
             "the shares after 20 steps equal the stationary distribution of Pi_A",
             [round(float(v), 4) for v in stat],
@@ -402,7 +414,7 @@ def claim_e6(tracks: Mapping[str, np.ndarray]) -> Claim:
         )
         for k, tr in tracks.items()
     )
-    return Claim(
+    return CLAIM_KINDS.claim(
         "E6_circles",
         "a CT model at speed 1 drives a circle of radius 1/a_m (Fig 26)",
         "circles",
@@ -437,7 +449,7 @@ def claim_e7(df7: pd.DataFrame, sig: float, p_t: pd.DataFrame) -> Claim:
     peak_top = p_t.loc[peak_t].idxmax()
     per_run_peak = mm7.loc[mm7.groupby("run")["p_CCW"].idxmax(), "step"]
     frac = float(per_run_peak.between(7, 9).mean())
-    return Claim(
+    return CLAIM_KINDS.claim(
         f"C10_ccw_peak_sigma{sig:g}",
         f"bearing sigma {sig:g} rad: the CCW model's share peaks at the turn (t = 7-9) and leads there (Fig 28)",
         "t = 7",
@@ -479,11 +491,13 @@ def figure_e7(
 def claim_e8(df8: pd.DataFrame) -> Claim:
     """C11: fused multi-sensor MMPF < single-sensor MMPF < single-model bootstrap (Fig 30)."""
     avg8 = rmse_by_method(df8, "sq_pos_err")
-    return Claim(
+    return CLAIM_KINDS.claim(
         "C11_order",
         "multi-sensor MMPF < single-sensor MMPF < single-model bootstrap (Fig 30)",
         "multi < single MMPF < bootstrap",
-        " < ".join(f"{avg8[m]:.2f}" for m in E8_ORDER),
+        join_with_relations(
+            [float(avg8[m]) for m in E8_ORDER], [f"{avg8[m]:.2f}" for m in E8_ORDER]
+        ),
         "strict (position RMSE)",
         bool(avg8[E8_ORDER[0]] < avg8[E8_ORDER[1]] < avg8[E8_ORDER[2]]),
     )

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian
-from ...evaluation import Claim, Outcome, RunContext, run_seed
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, run_seed
 from ...filters import CPFSPProposal, ProposalParticleFilter
 from ...management import activation_radius, active_sensors, intensity_weights
 from ...motion import ConstantVelocity, CoordinatedTurn
@@ -282,13 +282,24 @@ def summarise(df: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "C5_*": "paper",
+        "C6_*": "paper",
+        "C7_*": "paper",
+        "C8_*": "paper",
+    }
+)
+
+
 def quarter_claim(
     claim_id: str, statement: str, paper: str, cp: pd.Series, bs: pd.Series, stat: str
 ) -> Claim:
     """CPF-SP's RMSE ``stat`` (``mean`` or ``var`` over runs) below a quarter of the
     bootstrap's in x and in y (Table 5)."""
     x, y = f"RMSE x {stat}", f"RMSE y {stat}"
-    return Claim(
+    return CLAIM_KINDS.claim(
         claim_id,
         statement,
         paper,
@@ -323,7 +334,7 @@ def claims_table5(summ: pd.DataFrame) -> list[Claim]:
             bs,
             "var",
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C6_threshold_78",
             "CPF-SP at the 78% threshold is similar to 75%",
             "similar",
@@ -345,7 +356,7 @@ def claims_scenarios(df: pd.DataFrame) -> list[Claim]:
     )
     s3 = rmse_by_method(df[(df["scenario"] == "S3") & (df["step"] > 30)], "sq_vel")
     return [
-        Claim(
+        CLAIM_KINDS.claim(
             "C7_loss",
             "S2: the bootstrap loses the target in > 80% of runs, CPF-SP never (loss: final error > 150 m)",
             "bootstrap > 0.8, CPF-SP 0",
@@ -353,7 +364,7 @@ def claims_scenarios(df: pd.DataFrame) -> list[Claim]:
             "bootstrap > 0.8 and CPF-SP <= 0.05",
             bool(loss["bootstrap (2000)"] > 0.8 and loss["CPF-SP (200)"] <= 0.05),
         ),
-        Claim(
+        CLAIM_KINDS.claim(
             "C8_acceleration_change",
             "S3: after the switch CPF-SP's velocity RMSE is far below the bootstrap's",
             "bootstrap misses the change",

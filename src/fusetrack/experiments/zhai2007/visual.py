@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from ...core import Gaussian, Track
-from ...evaluation import Claim, Outcome, RunContext, plots, run_seed
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots, run_seed
 from ...filters import (
     GalerkinProposal,
     InteractingMultipleModel,
@@ -407,6 +407,17 @@ def _fmt(summary: pd.DataFrame, exp: str, method: str) -> str:
     return f"{method}: lost {r['loss rate']:.0%}, RMSE {r['mean RMSE (px)']:.3g} px"
 
 
+# Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
+CLAIM_KINDS = ClaimKinds(
+    {
+        "E*_keeps_lock": "paper",
+        "E*_beats_baseline": "paper",
+        "E10_rmse": "paper",
+        "E18-1_grey_lost_at_70": "paper",
+    }
+)
+
+
 def build_claims(summary: pd.DataFrame, quick: bool) -> list[Claim]:
     keep = 0.5 if quick else 0.1  # "keeps lock in every run": loss rate at most this
     claims: list[Claim] = []
@@ -414,7 +425,7 @@ def build_claims(summary: pd.DataFrame, quick: bool) -> list[Claim]:
         new = NEW_METHOD[exp]
         r = summary.loc[(exp, new)]
         claims.append(
-            Claim(
+            CLAIM_KINDS.claim(
                 f"{exp}_keeps_lock",
                 f"{exp} ({scene}): {new} keeps lock in every run -- {statement}",
                 "kept in every shown realisation (qualitative)",
@@ -426,7 +437,7 @@ def build_claims(summary: pd.DataFrame, quick: bool) -> list[Claim]:
         if exp in BASELINE:
             old = BASELINE[exp]
             claims.append(
-                Claim(
+                CLAIM_KINDS.claim(
                     f"{exp}_beats_baseline",
                     f"{exp} ({scene}): {new} tracks better than {old}",
                     f"{new} keeps lock, {old} does not",
@@ -437,7 +448,7 @@ def build_claims(summary: pd.DataFrame, quick: bool) -> list[Claim]:
             )
     e10 = summary.loc["E10"]
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "E10_rmse",
             "E10: MMPF-SP has lower location and velocity RMSE than condensation over the runs (Figs 37-38)",
             "MMPF-SP below condensation in both",
@@ -454,7 +465,7 @@ def build_claims(summary: pd.DataFrame, quick: bool) -> list[Claim]:
     g1 = summary.loc[("E18-1", "bootstrap grey cue")]
     fl = g1["median first loss"]
     claims.append(
-        Claim(
+        CLAIM_KINDS.claim(
             "E18-1_grey_lost_at_70",
             "E18 case 1: the bootstrap with the grey template alone loses the target at about frame 70",
             "lost at ~frame 70",

@@ -154,9 +154,13 @@ function showHealth() {
     : "<tr><td>none</td></tr>";
 }
 
+// a node with readers configured needs a token: open the dashboard as /?token=READER_TOKEN
+const token = new URLSearchParams(location.search).get("token");
+const auth = token ? `?token=${encodeURIComponent(token)}` : "";
+
 async function poll() {
   try {
-    const [s, h] = await Promise.all([fetch("/sensors"), fetch("/health")]);
+    const [s, h] = await Promise.all([fetch(`/sensors${auth}`), fetch(`/health${auth}`)]);
     const sj = await s.json();
     state.area = sj.area; state.sensors = sj.sensors; state.health = await h.json();
     showSensors(); showHealth(); draw();
@@ -166,7 +170,7 @@ async function poll() {
 }
 
 function connect() {
-  const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws/tracks`);
+  const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws/tracks${auth}`);
   ws.onmessage = (ev) => {
     const msg = JSON.parse(ev.data);
     if (msg.type === "hello") {
