@@ -1,8 +1,9 @@
-"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track-video``, ``serve``,
-``replay``, ``log check|recover``, ``reproduce [NAME ...|--all]`` and ``reports tally``;
-``--version``, ``-v``/``-q`` (the ``logging`` level; before or after any subcommand), ``run NAME
---help`` (the experiment's own options). Progress goes to stderr (a bar on a terminal, plain lines
-elsewhere); colour only on a terminal and never with ``NO_COLOR``."""
+"""``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track``,
+``make-sample``, ``track-video``, ``serve``, ``replay``, ``log check|recover``, ``reproduce
+[NAME ...|--all]`` and ``reports tally``; ``--version``, ``-v``/``-q`` (the ``logging`` level;
+before or after any subcommand), ``run NAME --help`` (the experiment's own options). Progress
+goes to stderr (a bar on a terminal, plain lines elsewhere); colour only on a terminal and never
+with ``NO_COLOR``."""
 
 from __future__ import annotations
 
@@ -134,6 +135,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_live_options(demo)
     add_service_parsers(sub)
     add_track_video_parser(sub)
+    _add_track_parsers(sub)
     add_reproduce_parser(sub)
     add_reports_parser(sub)
     _verbosity_after_subcommands(parser)
@@ -148,6 +150,29 @@ def _verbosity_after_subcommands(parser: argparse.ArgumentParser) -> None:
                 if "--verbose" not in command._option_string_actions:
                     _add_verbosity(command, argparse.SUPPRESS)
                 _verbosity_after_subcommands(command)
+
+
+def _add_track_parsers(sub: Any) -> None:
+    """``track`` (scene YAML -> tracks, report, animation) and ``make-sample``."""
+    from .tools import add_make_sample_parser, add_track_parser
+
+    add_track_parser(sub)
+    add_make_sample_parser(sub)
+
+
+def _run_track_commands(args: argparse.Namespace) -> int | None:
+    """Run ``track`` or ``make-sample``; None for any other command."""
+    if args.command == "track":
+        from .tools import run_track_command
+
+        _check_output_dir(args.out)
+        return run_track_command(args)
+    if args.command == "make-sample":
+        from .tools import run_make_sample_command
+
+        _check_output_dir(args.out)
+        return run_make_sample_command(args)
+    return None
 
 
 def _print_summary(summary: dict, out: Path) -> None:
@@ -238,6 +263,8 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .service import run_service_command
 
         return run_service_command(args)
+    if (status := _run_track_commands(args)) is not None:
+        return status
     if args.command == "track-video":
         from .tools import run_track_video_command
 

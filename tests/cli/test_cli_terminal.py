@@ -57,6 +57,8 @@ REQUIRED = {  # the least each subcommand needs to parse
     "demo": [],
     "serve": ["--config", "n.yaml"],
     "replay": ["demo", "--to", "udp://127.0.0.1:9000", "--config", "n.yaml"],
+    "track": ["scene.yaml", "--out", "o"],
+    "make-sample": [],
     "track-video": ["v.mp4", "--radio", "r.csv", "--calibration", "c.yaml", "--out", "o"],
     "log": ["check", "node.sqlite"],
     "reproduce": ["--all", "--out", "o"],

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..sensors import NferTagSimulator, ground_homography, plane_homography
+from ..sensors import NferTagSimulator, PinholeCamera, ground_homography, plane_homography
 from ..world import Person, RoomRenderer, Walk, single_person_walk, write_video
 
 
@@ -23,16 +23,19 @@ def write_recording(
     fps: float = 15.0,
     tag_every: int = 3,
     video_name: str = "video.avi",
+    camera: PinholeCamera | None = None,
+    min_area: int | None = None,
 ) -> dict[str, Any]:
     """Render ``n_empty`` frames of the empty room then a person walking for ``n_frames``; write
     ``video.avi`` (lossless), ``tags.csv`` (5 Hz simulated NFER tag), ``camera.yaml`` and
-    ``truth.csv`` into ``out``. Returns the paths."""
+    ``truth.csv`` into ``out``. ``camera``: the renderer's (default: 640x480, Nott 2009 spec);
+    ``min_area``: the blob area (px) written into the calibration. Returns the paths."""
     import yaml
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
-    renderer = RoomRenderer()
+    renderer = RoomRenderer() if camera is None else RoomRenderer(camera=camera)
     walk = single_person_walk(fps, n_frames)
     shifted = Walk(walk.times + n_empty / fps, walk.xy)  # on the video clock
     person = Person(shifted)
@@ -56,6 +59,8 @@ def write_recording(
         "background_frames": n_empty,
         "subject_tag": "subject",
     }
+    if min_area is not None:
+        cal["min_area"] = int(min_area)
     (out / "camera.yaml").write_text(yaml.safe_dump(cal))
     pd.DataFrame(
         {
