@@ -20,6 +20,8 @@ from .commands import add_live_options as add_live_options
 from .commands import add_service_parsers as add_service_parsers
 from .commands import run_service_command as run_service_command
 from .config import NetworkConfig as NetworkConfig
+from .config import SensorConfig as SensorConfig
+from .config import TrackerConfig as TrackerConfig
 from .config import load_config as load_config
 from .config import parse_config as parse_config
 from .engine import FusionEngine as FusionEngine

@@ -6,6 +6,7 @@ from __future__ import annotations
 import logging
 import socket
 import ssl
+import sys
 import threading
 import time
 from pathlib import Path
@@ -14,6 +15,7 @@ from typing import Any
 import uvicorn
 
 from ..core import ConfigError, invalid
+from ..evaluation import colour_enabled
 from .app import create_app
 from .config import NetworkConfig
 from .log import DurableLog
@@ -45,9 +47,11 @@ def tcp_socket(host: str, port: int) -> socket.socket:
 
 def uvicorn_options(node: FusionNode) -> dict[str, Any]:
     """The HTTP server's settings: a WebSocket frame is refused above ``limits.max_message_bytes``
-    before it is buffered (uvicorn's default buffers 16 MiB first, issue 18)."""
+    before it is buffered (uvicorn's default buffers 16 MiB first, issue 18); log colours only
+    on a terminal and never with ``NO_COLOR`` (uvicorn's own default ignores ``NO_COLOR``)."""
     return {
         "log_level": "warning",
+        "use_colors": colour_enabled(sys.stderr),
         "ws": "websockets-sansio",
         "ws_max_size": node.cfg.limits.max_message_bytes,
     }

@@ -26,8 +26,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from ..core import ConfigError, invalid
-from ..service import NetworkConfig, parse_config
-from ..service.config import SensorConfig, TrackerConfig
+from ..service import NetworkConfig, SensorConfig, TrackerConfig, parse_config
 
 SUFFIXES = {
     ".wav": "wav",
