@@ -171,7 +171,7 @@ def run_fuzz(cfg: NetworkConfig, examples: int) -> dict[str, Any]:
             outcomes = node.ingest_payload(body, encoding, "array-west")
         else:
             key = keys["array-west"] if how != "forged" else b"forged-key-%07d" % (salt % 10**7)
-            frame = bytearray(seal("array-west", key, body, encoding))
+            frame = bytearray(seal("array-west", key, body, encoding, sent=node.wall()))
             if how == "flipped":
                 frame[salt % len(frame)] ^= 1 + salt % 255
             outcomes = node.ingest_frame(bytes(frame), f"10.0.{salt % 256}.1")
@@ -250,7 +250,7 @@ def run_mutations(cfg: NetworkConfig, n: int, seed: int = 0) -> dict[str, Any]:
             outcomes = node.ingest_payload(body, encoding, "array-west")
         else:
             inputs["frame"] += 1
-            frame = seal("array-west", keys["array-west"], body, encoding)
+            frame = seal("array-west", keys["array-west"], body, encoding, sent=node.wall())
             outcomes = node.ingest_frame(frame, "10.0.0.1")
         _accounted(node, before, outcomes)
     return _summary(node, inputs)
