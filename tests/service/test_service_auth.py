@@ -219,7 +219,8 @@ def test_a_captured_frame_is_refused_after_a_restart_without_a_log(network):
 def test_version_1_frames_need_a_log_and_every_frame_ages_out(tmp_path, network):
     """A version-1 frame has no send time: a node with a log (whose replay windows survive a
     restart) accepts it, and refuses its replay after the restart; a node without a log refuses
-    it as ``legacy_frame``. With or without a log, a frame sent longer ago than
+    it as ``legacy_frame``. A node that resumed its log accepts a recent frame sent before the
+    restart; one on a new log does not. With or without a log, a frame sent longer ago than
     ``limits.max_frame_age`` is ``stale``."""
     from fusetrack.service.log import DurableLog
 
@@ -242,6 +243,11 @@ def test_version_1_frames_need_a_log_and_every_frame_ages_out(tmp_path, network)
     refused = bare.ingest_frame(_frame(network, "array-west", 1, version=1))
     assert refused[0].reason == "legacy_frame" and "version-1" in refused[0].detail
     assert bare.rejected == {"legacy_frame": 1}
+    # a new log has no windows to restore: frames sent before the node started are refused as
+    # without a log (an earlier node without a log may have seen them); version 1 is accepted
+    fresh = FusionNode(network, wall=lambda: clock[0], log=DurableLog(tmp_path / "new.sqlite"))
+    assert fresh.ingest_frame(_frame(network, "array-west", 1, sent=1050.0))[0].reason == "stale"
+    assert fresh.ingest_frame(_frame(network, "array-west", 2, version=1))[0].accepted
 
 
 def test_frame_age_must_exceed_the_clock_skew(network):

@@ -130,16 +130,17 @@ def open_frame(frame: bytes, keys: Mapping[str, bytes]) -> Frame:
 class FrameFreshness:
     """Which authentic UDP frames are recent enough to be new (issue 18, item 5).
 
-    The sequence windows catch a replay only while they remember the frame. A node with a
-    durable log (``remembers``) rebuilds them on restart; one without starts them empty, so it
-    refuses any frame sent before it started (``started``, less ``max_clock_skew`` for senders
-    whose clocks run behind): it cannot know whether it saw it. Every node refuses a frame sent
-    more than ``max_age`` seconds before its wall clock (``stale``: a captured frame is
-    replayable for that long at most) or more than ``max_clock_skew`` after it (``clock_skew``:
-    such a frame would stay fresh too long). A version-1 frame has no send time: accepted where
-    the windows remember (its replay is a ``replay``), refused elsewhere (``legacy_frame``).
+    The sequence windows catch a replay only while they remember the frame. A node that resumed
+    from its durable log has them back; one without a log (or on a new log) starts them empty,
+    so it refuses any frame sent before it started (``started``, less ``max_clock_skew`` for
+    senders whose clocks run behind; None: the windows were restored): it cannot know whether
+    it saw it. Every node refuses a frame sent more than ``max_age`` seconds before its wall
+    clock (``stale``: a captured or withheld frame is usable for that long at most) or more
+    than ``max_clock_skew`` after it (``clock_skew``: such a frame would stay fresh too long).
+    A version-1 frame has no send time: a node with a log (``legacy``, whose windows survive
+    its restarts) accepts it, its replay being a ``replay``; others refuse it (``legacy_frame``).
 
-    >>> f = FrameFreshness(started=100.0, remembers=False, max_age=30.0, max_clock_skew=2.0)
+    >>> f = FrameFreshness(started=100.0, legacy=False, max_age=30.0, max_clock_skew=2.0)
     >>> f.check(99.0, now=101.0), f.check(101.5, now=101.0)
     (None, None)
     >>> def reason(sent):
@@ -151,15 +152,15 @@ class FrameFreshness:
     ('stale', 'clock_skew', 'legacy_frame', 'stale')
     """
 
-    started: float
-    remembers: bool
+    started: float | None
+    legacy: bool
     max_age: float
     max_clock_skew: float
 
     def check(self, sent: float | None, now: float) -> None:
         """Raise :class:`Rejected` unless a frame sent at ``sent`` may be new at ``now``."""
         if sent is None:
-            if not self.remembers:
+            if not self.legacy:
                 raise Rejected(
                     "legacy_frame",
                     "a version-1 frame has no send time and this node has no log, so it cannot "
@@ -179,12 +180,12 @@ class FrameFreshness:
                 f"frame sent at {sent:.3f} s, {now - sent:.3f} s ago "
                 f"(limits.max_frame_age: {self.max_age:g} s)",
             )
-        if not self.remembers and sent < self.started - self.max_clock_skew:
+        if self.started is not None and sent < self.started - self.max_clock_skew:
             raise Rejected(
                 "stale",
                 f"frame sent at {sent:.3f} s, before this node started at {self.started:.3f} s "
-                f"(less {self.max_clock_skew:g} s of clock skew); without a log it cannot tell "
-                "a replay: run with a log",
+                f"(less {self.max_clock_skew:g} s of clock skew) with no log to resume: it "
+                "cannot tell a replay (run the node with a log)",
             )
 
 

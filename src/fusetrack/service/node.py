@@ -174,6 +174,7 @@ class FusionNode:
         start = fusion.start
         if fusion.clock == "wall":
             start = math.floor(self.started * fusion.rate_hz) / fusion.rate_hz
+        logged = None
         if log is not None:
             log.check_config(cfg.fingerprint())
             logged = log.meta("start")
@@ -182,8 +183,11 @@ class FusionNode:
             else:
                 start = float(logged)
         self.log = log
-        self.freshness = FrameFreshness(  # a log restores the replay windows (:meth:`resume`)
-            self.started, log is not None, cfg.limits.max_frame_age, cfg.limits.max_clock_skew
+        self.freshness = FrameFreshness(  # a resumed log restores the replay windows
+            None if logged is not None else self.started,
+            log is not None,
+            cfg.limits.max_frame_age,
+            cfg.limits.max_clock_skew,
         )
         self.aligner = Aligner(
             [s.id for s in cfg.sensors],
