@@ -721,6 +721,43 @@ def camera_likelihood_kernel(
 
 
 @numba.njit(cache=True, nogil=True)
+def prior_draw_hits_kernel(
+    x: np.ndarray, mu: np.ndarray, chol: np.ndarray, z: np.ndarray, diameter: float
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
+    """Monte Carlo check of Eq. 7 (Ercan et al. 2013, App. C), camera at the origin: for each
+    point ``x[p]`` the share of the prior draws ``mu[p] + chol[p] z[p, n]`` whose centre lies in
+    the rectangle ``A(x)`` (along the sight line in ``[0, |x|]``, across within ``D/2``) and the
+    share within ``D/2`` of the segment origin -> ``x`` (the disc touches the sight line)."""
+    P, N = z.shape[0], z.shape[1]
+    half = 0.5 * diameter
+    rect = np.zeros(P)
+    disk = np.zeros(P)
+    for p in range(P):
+        x0, x1 = x[p, 0], x[p, 1]
+        r = math.hypot(x0, x1)
+        u0, u1 = x0 / r, x1 / r
+        len2 = x0 * x0 + x1 * x1
+        n_rect = 0
+        n_disk = 0
+        for n in range(N):
+            z0, z1 = z[p, n, 0], z[p, n, 1]
+            d0 = mu[p, 0] + (chol[p, 0, 0] * z0 + chol[p, 0, 1] * z1)
+            d1 = mu[p, 1] + (chol[p, 1, 0] * z0 + chol[p, 1, 1] * z1)
+            along = d0 * u0 + d1 * u1
+            across = d1 * u0 - d0 * u1
+            if along >= 0.0 and along <= r and abs(across) <= half:
+                n_rect += 1
+            t = (d0 * x0 + d1 * x1) / len2 if len2 > 0.0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            e0, e1 = d0 - t * x0, d1 - t * x1
+            if math.sqrt(e0 * e0 + e1 * e1) < half:
+                n_disk += 1
+        rect[p] = n_rect / N
+        disk[p] = n_disk / N
+    return rect, disk
+
+
+@numba.njit(cache=True, nogil=True)
 def points_in_polygon_kernel(points: np.ndarray, v: np.ndarray) -> np.ndarray:  # pragma: no cover
     """Even-odd test of ``points (n, 2)`` against polygon ``v``: the arithmetic of
     :func:`fusetrack.world.geometry.points_in_polygon`, one loop."""
