@@ -555,6 +555,16 @@ def _inclusion_exclusion(
             if nz == 1:
                 p1 *= _clamped(s[a] + qa[0, a])
         return min(max((p0 - p1 if nz == 1 else p0) * common, 0.0), 1.0)
+    # no factor leaves [0, 1] when even the largest sums (all occluded cameras) stay below 1
+    # by more than the rounding of the Gray-code path: then the clamps are skipped
+    free = True
+    for a in range(na):
+        f = 1.0 - s[a]
+        for b in range(nz):
+            f -= qa[b, a]
+        if f <= 1e-9:
+            free = False
+            break
     total = 0.0
     in_b = 0
     for base in range(0, 1 << nz, 4):
@@ -573,10 +583,16 @@ def _inclusion_exclusion(
             s2 = s1 + g2 * qa[1, a]
             s3 = s2 + g3 * qa[0, a]
             s[a] = s3
-            p0 *= _clamped(s0)
-            p1 *= _clamped(s1)
-            p2 *= _clamped(s2)
-            p3 *= _clamped(s3)
+            if free:
+                p0 *= 1.0 - s0
+                p1 *= 1.0 - s1
+                p2 *= 1.0 - s2
+                p3 *= 1.0 - s3
+            else:
+                p0 *= _clamped(s0)
+                p1 *= _clamped(s1)
+                p2 *= _clamped(s2)
+                p3 *= _clamped(s3)
         # subset sizes of the block alternate in parity: base even/odd, then odd/even, ...
         total += -p0 if odd0 else p0
         total += p1 if odd0 else -p1
