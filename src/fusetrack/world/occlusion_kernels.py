@@ -9,7 +9,7 @@ for L = 1000 particles, 8 cameras and 40 occluders take about a millisecond with
 priors instead of tens. With wide priors (sigma_psi = 32 in ``ercan2013-tradeoff``) nothing can
 be skipped: about 210 of the 320 (camera, occluder) pairs of a particle have q > 0, four normal
 CDF lookups each, and the inclusion-exclusion over ~4 occluded cameras has ~30 terms of 40
-factors; about 4.5 ms per call (of which ~3.2 ms q, ~1 ms inclusion-exclusion).
+factors; about 4.5 ms per call (of which ~3.2 ms q, ~0.8 ms inclusion-exclusion).
 """
 
 from __future__ import annotations
