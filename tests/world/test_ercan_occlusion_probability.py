@@ -156,3 +156,44 @@ def test_singular_and_invalid_prior_covariances():
         OccluderPriors(np.zeros((1, 2)), np.array([[[1.0, 0.0], [0.0, -2.0]]]))
     with pytest.raises(ConfigError, match="symmetric"):
         OccluderPriors(np.zeros((1, 2)), np.array([[[1.0, 0.5], [0.0, 1.0]]]))
+
+
+def test_prior_draw_hits_rectangle_and_disc_events():
+    """The Monte Carlo events of App. C by hand (camera at the origin, object at (10, 0), D = 3.33):
+    a centre on the sight line is in both; 3 units beside it (> D/2) in neither; 1 unit past the
+    object in the disc event only (the rectangle ends at the object); 1.5 units behind the camera
+    in the disc event only too."""
+    from fusetrack.world import prior_draw_hits_kernel
+
+    centres = np.array([[5.0, 0.0], [5.0, 3.0], [11.0, 0.0], [-1.5, 0.0]])
+    x = np.tile([10.0, 0.0], (4, 1))
+    chol = np.tile(np.eye(2), (4, 1, 1))
+    z = np.zeros((4, 1, 2))
+    rect, disk = prior_draw_hits_kernel(x, centres, chol, z, D)
+    np.testing.assert_array_equal(rect, [1.0, 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(disk, [1.0, 0.0, 1.0, 1.0])
+
+
+def test_prior_draw_hits_match_numpy_draws():
+    """Shares of the draws ``mu + chol z`` equal a NumPy count of the same events."""
+    from fusetrack.world import prior_draw_hits_kernel
+
+    rng = np.random.default_rng(4)
+    n_pts, n = 6, 2000
+    x = rng.uniform(5, 30, (n_pts, 2))
+    mu = x * rng.uniform(0.2, 0.9, (n_pts, 1)) + rng.normal(0, 2, (n_pts, 2))
+    chol = np.linalg.cholesky(np.stack([random_prior(rng, 4.0) for _ in range(n_pts)]))
+    z = rng.standard_normal((n_pts, n, 2))
+    draws = mu[:, None, :] + np.einsum("pij,pnj->pni", chol, z)
+    r = np.hypot(x[:, 0], x[:, 1])
+    u = x / r[:, None]
+    along = np.einsum("pni,pi->pn", draws, u)
+    across = draws[..., 1] * u[:, None, 0] - draws[..., 0] * u[:, None, 1]
+    rect = np.mean((along >= 0) & (along <= r[:, None]) & (np.abs(across) <= D / 2), axis=1)
+    t = np.clip(np.einsum("pni,pi->pn", draws, x) / (r * r)[:, None], 0, 1)
+    dist = np.linalg.norm(draws - t[..., None] * x[:, None, :], axis=-1)
+    disk = np.mean(dist < D / 2, axis=1)
+    got_rect, got_disk = prior_draw_hits_kernel(x, mu, chol, z, D)
+    np.testing.assert_allclose(got_rect, rect, atol=1.5 / n)  # a draw on an edge may round apart
+    np.testing.assert_allclose(got_disk, disk, atol=1.5 / n)
+    assert 0 < rect.mean() < 1 and np.all(disk >= rect - 1.5 / n)

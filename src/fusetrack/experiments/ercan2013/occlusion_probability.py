@@ -27,7 +27,7 @@ from ...world import (
     occlusion_probability,
     occlusion_probability_eq7,
     pattern_probability,
-    segment_point_distance,
+    prior_draw_hits_kernel,
 )
 from .common import fmt, md, smoke
 
@@ -55,7 +55,8 @@ def random_configs(n: int, alpha: float, rng: np.random.Generator) -> dict[str, 
 def monte_carlo(
     cfg: dict[str, np.ndarray], n: int, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray]:
-    """MC estimates of the rectangle and the disc events, ``n`` prior draws per configuration."""
+    """MC estimates of the rectangle and the disc events, ``n`` prior draws per configuration
+    (one fused pass over the draws: :func:`~fusetrack.world.prior_draw_hits_kernel`)."""
     x, mu, cov = cfg["x"], cfg["mu"], cfg["cov"]
     chol = np.linalg.cholesky(cov)
     rect, disk = np.empty(len(x)), np.empty(len(x))
@@ -63,16 +64,7 @@ def monte_carlo(
     for a in range(0, len(x), chunk):
         b = min(len(x), a + chunk)
         z = rng.standard_normal((b - a, n, 2))
-        draws = mu[a:b, None, :] + np.einsum("pij,pnj->pni", chol[a:b], z)
-        r = np.hypot(x[a:b, 0], x[a:b, 1])
-        u = x[a:b] / r[:, None]
-        along = np.einsum("pni,pi->pn", draws, u)
-        across = draws[..., 1] * u[:, None, 0] - draws[..., 0] * u[:, None, 1]
-        rect[a:b] = np.mean(
-            (along >= 0) & (along <= r[:, None]) & (np.abs(across) <= DIAMETER / 2), axis=1
-        )
-        dist = segment_point_distance(np.zeros(2), x[a:b, None, :], draws)
-        disk[a:b] = np.mean(dist < DIAMETER / 2, axis=1)
+        rect[a:b], disk[a:b] = prior_draw_hits_kernel(x[a:b], mu[a:b], chol[a:b], z, DIAMETER)
     return rect, disk
 
 
