@@ -295,7 +295,7 @@ REGISTRY: dict[str, ExperimentInfo] = {
         ExperimentInfo(
             "multitarget-benchmark",
             "multitarget.benchmark:run",
-            "Beyond the papers: GNN, JPDA, MHT, MCMCDA and GM-PHD on targets born and dying, "
+            "Beyond the papers: GNN, JPDA, MHT, MCMCDA, GM-PHD and PMB on targets born and dying, "
             "position + range-bearing sensors, P_D 0.9, sparse/dense Poisson clutter, crossings; "
             "GOSPA, OSPA(2), CLEAR MOT, cardinality",
             "fusetrack (issue 17)",

@@ -175,6 +175,7 @@ def _simulation_statistics(
 def _diagnostic_claims(df: pd.DataFrame, opts: Options, k: float) -> list[Claim]:
     """The simulation draws what it says; every tracker does better than reporting nothing."""
     expected, ours, stats_ok = _simulation_statistics(df, opts, k)
+    ours = {key: float(v) for key, v in ours.items()}  # plain floats in summary.json
     empty = {s: _empty_gospa(df, s, opts.gospa_c) for s in ("sparse", "dense", "crossing")}
     worst = {
         s: max(float(values(df, s, t, "gospa").mean()) for t in df.tracker.unique()) for s in empty

@@ -75,6 +75,47 @@ densities (library's public API only):
   Bernoullis with existence above 0.5."""
 
 
+def _part(df: pd.DataFrame, scenario: str, tracker: str, metric: str) -> float:
+    sel = df[(df.scenario == scenario) & (df.tracker == tracker)]
+    return float(sel[metric].astype(float).mean())
+
+
+def _more(a: float, b: float) -> str:
+    return "more" if a > b else "less" if a < b else "as much"
+
+
+def _measured_reading(df: pd.DataFrame) -> str:
+    """Where the GOSPA differences of the comparison claims come from, from this run's parts
+    (every comparison word is computed from the numbers it stands beside)."""
+    p = lambda s, t, m: _part(df, s, t, m)  # noqa: E731
+    jm, gm = p("dense", "JPDA", "missed"), p("dense", "GNN", "missed")
+    jf, gf = p("dense", "JPDA", "false"), p("dense", "GNN", "false")
+    jn, gn = p("dense", "JPDA", "n_tracks"), p("dense", "GNN", "n_tracks")
+    ml, jl = p("crossing", "MHT", "localisation"), p("crossing", "JPDA", "localisation")
+    mi, ji = p("crossing", "MHT", "id_switches"), p("crossing", "JPDA", "id_switches")
+    pm, hm = p("dense", "PMB", "missed"), p("dense", "GM-PHD", "missed")
+    return (
+        "* Where the differences come from (means over runs; GOSPA parts in m²). Dense clutter: "
+        f"JPDA misses {_more(jm, gm)} than GNN ({jm:.0f} vs {gm:.0f}) and keeps "
+        f"{_more(jf, gf)} false tracks ({jf:.0f} vs {gf:.0f}; {jn:.1f} vs {gn:.1f} tracks per "
+        "run). With the same confirmation rule, JPDA's soft updates and existence keep "
+        "tentative tracks started on clutter alive longer than GNN's hard ones; the textbook "
+        "advantage of JPDA is in keeping established tracks through clutter. Crossing: MHT's "
+        f"localisation part is {ml:.0f} against JPDA's {jl:.0f} and it switches identities "
+        f"{mi:.2f} times per run against {ji:.2f} (with `n_scan = 3` and at most 10 hypotheses "
+        "its hard decisions at ±10° crossings are made before the targets separate). Lowest "
+        f"mean GOSPA per scenario: {_best(df)}. The PMB filter's missed part in dense clutter "
+        f"is {pm:.0f} against the GM-PHD's {hm:.0f} (a Bernoulli per potential target keeps "
+        "its existence through a missed detection; the PHD's weight can drop below the "
+        "extraction threshold and the track fragments)."
+    )
+
+
+def _best(df: pd.DataFrame) -> str:
+    means = df.groupby(["scenario", "tracker"], sort=False)["gospa"].mean()
+    return ", ".join(f"{s} {means[s].idxmin()}" for s in df.scenario.unique())
+
+
 def _metrics_text(opts: Options) -> str:
     return f"""Metrics per run: GOSPA (c = {opts.gospa_c:g} m, p = 2, α = 2) at every scan and
 its time average, as `mean_t d_t²` parts (localisation / missed / false, m²) and the root
@@ -131,6 +172,7 @@ CLEAR MOT:
   is the same for GNN, JPDA and MHT.
 * GOSPA's missed part includes each target's first scans before its track is confirmed (4 of
   5 scans for GNN/JPDA/MHT; the PHD needs its weight above 0.5), so it is never 0.
+{_measured_reading(df)}
 * MCMCDA sees the position reports only (half the information of the others) and its tracks
   are fixed-lag decisions; its numbers are not a like-for-like comparison.
 * The PHD's two sensors are applied one after the other (the iterated corrector, Mahler 2007
