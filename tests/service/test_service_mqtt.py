@@ -1,0 +1,261 @@
+"""The MQTT bridge against a real broker (amqtt, started by the fixture in its own process on a
+free port): sealed readings of two nodes in (JSON and MessagePack), tracks out, forgeries
+refused and counted, a broker restart survived."""
+
+from __future__ import annotations
+
+import json
+import math
+import socket
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+
+import httpx
+import pytest
+
+from fusetrack.core import ConfigError
+from fusetrack.service import FusionNode, encode_message, parse_config, seal
+from fusetrack.service.config import MqttConfig
+from fusetrack.service.replay import demo_scenario
+from fusetrack.service.schema import SensorMessage, reading_from_vector
+from fusetrack.service.server import RunningNode, build_node
+
+paho = pytest.importorskip("paho.mqtt.client")
+pytest.importorskip("amqtt.broker")
+from paho.mqtt.enums import CallbackAPIVersion  # noqa: E402
+
+BROKER = """
+import asyncio, sys
+from amqtt.broker import Broker
+
+async def main():
+    broker = Broker({
+        "listeners": {"default": {"type": "tcp", "bind": "127.0.0.1:%s" % sys.argv[1]}},
+        "plugins": {"amqtt.plugins.authentication.AnonymousAuthPlugin": {"allow_anonymous": True}},
+    })
+    await broker.start()
+    print("ready", flush=True)
+    await asyncio.Event().wait()
+
+asyncio.run(main())
+"""
+
+SENDERS = ("array-west", "tag-reader")  # two nodes: mic_west's bearings, the tag's fixes
+
+
+class Broker:
+    """An amqtt broker in a child process; :meth:`restart` kills it and starts a new one on the
+    same port (the bridge's connection drops, its session is gone)."""
+
+    def __init__(self) -> None:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            self.port = s.getsockname()[1]
+        self.proc: subprocess.Popen[str] | None = None
+
+    def start(self) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", BROKER, str(self.port)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+        )
+        assert self.proc.stdout is not None
+        assert self.proc.stdout.readline().strip() == "ready", "the broker did not start"
+
+    def stop(self) -> None:
+        if self.proc is not None:
+            self.proc.kill()
+            self.proc.wait(timeout=10)
+            self.proc = None
+
+    def restart(self) -> None:
+        self.stop()
+        self.start()
+
+
+@pytest.fixture
+def broker() -> Iterator[Broker]:
+    b = Broker()
+    b.start()
+    yield b
+    b.stop()
+
+
+def _client(broker: Broker, name: str, on_connect: Callable[..., None] | None = None) -> object:
+    client = paho.Client(CallbackAPIVersion.VERSION2, client_id=name, protocol=paho.MQTTv311)
+    client.reconnect_delay_set(0.1, 0.5)
+    if on_connect is not None:
+        client.on_connect = on_connect
+    client.connect_async("127.0.0.1", broker.port)
+    client.loop_start()
+    return client
+
+
+def _wait(what: Callable[[], bool], timeout: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not what():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.05)
+
+
+def _with_mqtt(network, broker: Broker, **extra):
+    section = {
+        "port": broker.port,
+        "subscribe": ["sensors/+/readings"],
+        "publish_tracks": "fusetrack/tracks",
+        "client_id": "fusetrack-test-node",
+        "reconnect_min": 0.1,
+        "reconnect_max": 0.5,
+        **extra,
+    }
+    return network.model_copy(update={"mqtt": MqttConfig.model_validate(section)})
+
+
+def _sealed(network, readings, first_seq=1, key=None):
+    """(node, frame) per reading: odd ones in JSON, even ones in MessagePack."""
+    owner, keys = network.owner(), network.keys()
+    kinds = {s.id: s.kind for s in network.sensors}
+    out = []
+    for i, r in enumerate(readings):
+        node = owner[r.sensor]
+        m = SensorMessage(
+            node=node,
+            seq=first_seq + i,
+            sensor=r.sensor,
+            time=r.time,
+            reading=reading_from_vector(kinds[r.sensor], r.value),
+        )
+        encoding = "json" if i % 2 else "msgpack"
+        out.append((node, seal(node, key or keys[node], encode_message(m, encoding), encoding)))
+    return out
+
+
+def _publish(sender, frames) -> None:
+    for node, frame in frames:
+        sender.publish(f"sensors/{node}/readings", frame, qos=1).wait_for_publish(5)
+
+
+def test_readings_in_tracks_out_forgeries_counted_broker_restart_survived(network, broker):
+    cfg = _with_mqtt(network, broker)
+    scn = demo_scenario(network, seed=0, duration=8.0)
+    owner = network.owner()
+    readings = [r for r in scn.readings if owner[r.sensor] in SENDERS]
+    split = 4.25  # readings before it, the broker restarts, the rest after it
+    before = [r for r in readings if r.time < split]
+    after = [r for r in readings if r.time >= split]
+    frames = _sealed(network, readings)
+    first, rest = frames[: len(before)], frames[len(before) :]
+
+    ticks: list[dict] = []
+    lock = threading.Lock()
+
+    def on_tick(client, userdata, message) -> None:
+        with lock:
+            ticks.append(json.loads(message.payload))
+
+    def listen(client, userdata, flags, reason, properties) -> None:
+        client.subscribe("fusetrack/tracks", qos=1)
+
+    with RunningNode(build_node(cfg), udp_port=None) as running:
+        health = lambda: httpx.get(running.url + "/health").json()  # noqa: E731
+        reader = _client(broker, "tracks-reader", listen)
+        reader.on_message = on_tick
+        sender = _client(broker, "sensor-sender")
+        _wait(lambda: health()["mqtt"]["connected"] and reader.is_connected())
+        _wait(lambda: sender.is_connected())
+
+        _publish(sender, first)
+        forged = _sealed(network, before[:1], first_seq=1000, key=b"not-the-key-of-this-node")
+        _publish(sender, forged)
+        _wait(lambda: health()["mqtt"]["received"] == len(first) + 1)
+        h = health()
+        assert h["mqtt"]["accepted"] == len(first) and h["accepted"] == len(first)
+        assert h["mqtt"]["refused"] == {"bad_mac": 1} and h["rejected"] == {"bad_mac": 1}
+        _wait(lambda: len(ticks) > 0)  # the stream paused: the node fused what came
+
+        broker.restart()
+        _wait(lambda: health()["mqtt"]["connections"] == 2 and health()["mqtt"]["connected"])
+        _wait(lambda: reader.is_connected() and sender.is_connected())
+        with lock:
+            seen = len(ticks)
+        _publish(sender, rest)
+        _wait(lambda: health()["accepted"] == len(readings))
+        last = math.floor(after[-1].time * network.fusion.rate_hz + 1e-9)
+        _wait(lambda: bool(ticks) and ticks[-1]["tick"] >= last)
+        h = health()
+        reader.loop_stop()
+        sender.loop_stop()
+
+    assert h["mqtt"]["accepted"] == len(readings) and h["mqtt"]["refused"] == {"bad_mac": 1}
+    assert h["mqtt"]["published"] >= len(ticks) and h["mqtt"]["publish_dropped"] == 0
+    later = ticks[seen:]
+    assert later, "no tracks arrived after the broker restarted"
+    got = ticks[-1]
+    assert got["type"] == "tick" and got["track"] == got["tracks"][0]
+    fused = {s for t in ticks for s in (t["track"] or {}).get("sensors", [])}
+    assert fused == {"mic_west", "tag"}  # both nodes' readings were fused
+    k = int(abs(scn.truth_times - got["time"]).argmin())
+    assert math.dist(got["track"]["position"], scn.truth[k, :2]) < 3.0
+
+
+def test_a_reading_is_acknowledged_only_once_it_is_in_the_log(
+    network, broker, tmp_path, monkeypatch
+):
+    """QoS 1: the bridge's PUBACK to the broker (after which the broker forgets the message)
+    goes out only once the node has ingested the reading and committed its log: at each
+    acknowledgement, another reader of the log already sees the reading."""
+    path = tmp_path / "node.sqlite"
+    cfg = _with_mqtt(network, broker, publish_tracks=None)
+    cfg = cfg.model_copy(update={"log": cfg.log.model_copy(update={"path": str(path)})})
+    readings = demo_scenario(network, seed=0, duration=3.0).readings
+    frames = _sealed(network, [r for r in readings if r.sensor == "mic_west"])
+    logged_at_ack: list[int] = []
+    real_ack = paho.Client.ack
+
+    def ack(client, mid, qos):
+        with sqlite3.connect(path) as db:
+            logged_at_ack.append(db.execute("SELECT COUNT(*) FROM messages").fetchone()[0])
+        return real_ack(client, mid, qos)
+
+    monkeypatch.setattr(paho.Client, "ack", ack)
+    node = build_node(cfg)
+    with RunningNode(node, udp_port=None):
+        sender = _client(broker, "sensor-sender")
+        _wait(lambda: sender.is_connected() and node.mqtt_status()["connected"])
+        _publish(sender, frames)
+        _wait(lambda: len(logged_at_ack) == len(frames))
+        sender.loop_stop()
+    assert logged_at_ack == list(range(1, len(frames) + 1))
+    again = FusionNode(cfg, log=build_node(cfg).log)  # redelivered after a crash: a replay
+    assert [o.reason for o in again.ingest_frame(frames[0][1])] == ["replay"]
+
+
+@pytest.mark.parametrize(
+    "section, field",
+    [
+        ({"subscribe": ["a/#/b"]}, "subscribe topic"),
+        ({"subscribe": ["a/b+"]}, "subscribe topic"),
+        ({"publish_tracks": "tracks/+"}, "publish_tracks"),
+        ({}, "subscribe"),
+        ({"subscribe": ["a"], "password": "x"}, "username"),
+        ({"subscribe": ["a"], "port": 70000}, "mqtt.port"),
+        ({"subscribe": ["a"], "tls": {"cert_file": "c.pem"}}, "key_file"),
+        ({"subscribe": ["a"], "username": "u", "password_env": "FT_UNSET_MQTT_PW"}, "password_env"),
+        ({"subscribe": ["a"], "qos": 3}, "mqtt.qos"),
+        ({"subscribe": ["a"], "topics": ["a"]}, "mqtt.topics"),
+    ],
+)
+def test_bad_mqtt_sections_are_refused_naming_the_field(network, section, field):
+    data = network.model_dump(mode="json", exclude={"mqtt"})
+    with pytest.raises(ConfigError, match=field.replace("+", r"\+")):
+        parse_config({**data, "mqtt": section})
+
+
+def test_the_mqtt_section_does_not_change_the_fingerprint(network, broker):
+    """A log written without the bridge resumes with it (and the other way round)."""
+    assert _with_mqtt(network, broker).fingerprint() == network.fingerprint()
