@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import socket
 import sqlite3
 import subprocess
@@ -259,3 +260,44 @@ def test_bad_mqtt_sections_are_refused_naming_the_field(network, section, field)
 def test_the_mqtt_section_does_not_change_the_fingerprint(network, broker):
     """A log written without the bridge resumes with it (and the other way round)."""
     assert _with_mqtt(network, broker).fingerprint() == network.fingerprint()
+
+
+def test_serve_starts_the_bridge_and_stops_cleanly(network, broker, tmp_path):
+    """``fusetrack serve --config X`` with an ``mqtt`` section: readings over MQTT are accepted;
+    Ctrl-C (SIGINT) stops the node and the bridge: the CLI's 130 (128 + SIGINT), no traceback."""
+    import yaml
+
+    config = tmp_path / "network.yaml"
+    data = _with_mqtt(network, broker).model_dump(mode="json", exclude_none=True)
+    config.write_text(yaml.safe_dump(data))
+    argv = ["serve", "--config", str(config), "--port", "0", "--udp-port", "-1"]
+    code = "import sys; from fusetrack.cli import main; sys.exit(main(sys.argv[1:]))"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", code, *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        url = proc.stdout.readline().split()[-1]  # "fusion node: dashboard http://HOST:PORT/"
+
+        def health() -> dict:
+            try:  # the address is printed just before the server listens
+                return httpx.get(url + "health").json()
+            except httpx.ConnectError:
+                return {"mqtt": {"connected": False}}
+
+        _wait(lambda: health()["mqtt"]["connected"], timeout=20.0)
+        sender = _client(broker, "sensor-sender")
+        _wait(lambda: sender.is_connected())
+        readings = demo_scenario(network, seed=0, duration=1.0).readings
+        _publish(sender, _sealed(network, readings[:1]))
+        _wait(lambda: health()["mqtt"]["accepted"] == 1)
+        sender.loop_stop()
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=15) == 130
+        assert "Traceback" not in (proc.stderr.read() if proc.stderr else "")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
