@@ -12,8 +12,8 @@ lock out every sender on the broker); each costs one HMAC.
 
 **Acknowledgement.** The client acknowledges by hand (paho's ``manual_ack``): with QoS 1 or 2 a
 message is acknowledged to the broker only after the node has ingested it and committed its
-durable log, so a message the broker counts as delivered is accepted and logged (or refused
-for good: a refusal is final and acknowledged too). A message that was not acknowledged when
+durable log, so a message the broker counts as delivered is accepted and logged, or refused
+and counted (a refusal is final and acknowledged too, ``overload`` included, as over UDP). A message that was not acknowledged when
 the connection dropped is delivered again by the broker (``clean_session: false``) and, if it
 had been accepted, refused as a ``replay``.
 
@@ -62,6 +62,7 @@ class MqttBridge:
         self.client.on_connect = self._on_connect
         self.client.on_disconnect = self._on_disconnect
         self.client.on_message = self._on_message
+        self.client.on_subscribe = self._on_subscribe
         self.connected = False
         self.generation = 0  # connections so far: an ack is only sent on the connection it came on
         self.received = 0
@@ -122,7 +123,14 @@ class MqttBridge:
         self.connected = True
         log.info("mqtt: connected to %s:%d", self.cfg.host, self.cfg.port)
         if self.cfg.subscribe:
-            client.subscribe([(topic, self.cfg.qos) for topic in self.cfg.subscribe])
+            topics: list[tuple[str, int]] = [(t, self.cfg.qos) for t in self.cfg.subscribe]
+            client.subscribe(topics)
+
+    def _on_subscribe(self, _c: Any, _u: Any, _mid: int, reasons: list[Any], _p: Any) -> None:
+        refused = [t for t, r in zip(self.cfg.subscribe, reasons, strict=False) if r.is_failure]
+        if refused:
+            self.last_error = f"the broker refused the subscription to {refused}"
+            log.warning("mqtt: %s", self.last_error)
 
     def _on_disconnect(self, _c: Any, _u: Any, _f: Any, reason: Any, _p: Any) -> None:
         self.connected = False
