@@ -167,7 +167,7 @@ def test_readings_in_tracks_out_forgeries_counted_broker_restart_survived(networ
         reader = _client(broker, "tracks-reader", listen)
         reader.on_message = on_tick
         sender = _client(broker, "sensor-sender")
-        _wait(lambda: health()["mqtt"]["connected"] and reader.is_connected())
+        _wait(lambda: health()["mqtt"]["subscribed"] and reader.is_connected())
         _wait(lambda: sender.is_connected())
 
         _publish(sender, first)
@@ -180,7 +180,7 @@ def test_readings_in_tracks_out_forgeries_counted_broker_restart_survived(networ
         _wait(lambda: len(ticks) > 0)  # the stream paused: the node fused what came
 
         broker.restart()
-        _wait(lambda: health()["mqtt"]["connections"] == 2 and health()["mqtt"]["connected"])
+        _wait(lambda: health()["mqtt"]["connections"] == 2 and health()["mqtt"]["subscribed"])
         _wait(lambda: reader.is_connected() and sender.is_connected())
         with lock:
             seen = len(ticks)
@@ -227,7 +227,7 @@ def test_a_reading_is_acknowledged_only_once_it_is_in_the_log(
     node = build_node(cfg)
     with RunningNode(node, udp_port=None):
         sender = _client(broker, "sensor-sender")
-        _wait(lambda: sender.is_connected() and node.mqtt_status()["connected"])
+        _wait(lambda: sender.is_connected() and node.mqtt_status()["subscribed"])
         _publish(sender, frames)
         _wait(lambda: len(logged_at_ack) == len(frames))
         sender.loop_stop()
@@ -286,9 +286,9 @@ def test_serve_starts_the_bridge_and_stops_cleanly(network, broker, tmp_path):
             try:  # the address is printed just before the server listens
                 return httpx.get(url + "health").json()
             except httpx.ConnectError:
-                return {"mqtt": {"connected": False}}
+                return {"mqtt": {"subscribed": False}}
 
-        _wait(lambda: health()["mqtt"]["connected"], timeout=20.0)
+        _wait(lambda: health()["mqtt"]["subscribed"], timeout=20.0)
         sender = _client(broker, "sensor-sender")
         _wait(lambda: sender.is_connected())
         readings = demo_scenario(network, seed=0, duration=1.0).readings

@@ -26,8 +26,9 @@ most ``max_queued``) and sent on reconnection.
 connection. Messages are handed from paho's thread to the node's event loop
 (``call_soon_threadsafe``): the node itself is only ever touched from its loop.
 
-``/health`` shows the bridge under ``mqtt``: connected, connections, received, accepted,
-refused (by reason), published and publish_dropped.
+``/health`` shows the bridge under ``mqtt``: connected, subscribed (the broker granted the
+subscriptions), connections, received, accepted, refused (by reason), published,
+publish_dropped and the last error.
 """
 
 from __future__ import annotations
@@ -64,6 +65,7 @@ class MqttBridge:
         self.client.on_message = self._on_message
         self.client.on_subscribe = self._on_subscribe
         self.connected = False
+        self.subscribed = False  # the broker granted every subscription on this connection
         self.generation = 0  # connections so far: an ack is only sent on the connection it came on
         self.received = 0
         self.accepted = 0
@@ -104,6 +106,7 @@ class MqttBridge:
         return {
             "broker": f"{self.cfg.host}:{self.cfg.port}",
             "connected": self.connected,
+            "subscribed": self.subscribed,
             "connections": self.generation,
             "received": self.received,
             "accepted": self.accepted,
@@ -122,6 +125,7 @@ class MqttBridge:
         self.generation += 1
         self.connected = True
         log.info("mqtt: connected to %s:%d", self.cfg.host, self.cfg.port)
+        self.subscribed = not self.cfg.subscribe  # nothing to subscribe to: nothing to wait for
         if self.cfg.subscribe:
             topics: list[tuple[str, int]] = [(t, self.cfg.qos) for t in self.cfg.subscribe]
             client.subscribe(topics)
@@ -131,9 +135,10 @@ class MqttBridge:
         if refused:
             self.last_error = f"the broker refused the subscription to {refused}"
             log.warning("mqtt: %s", self.last_error)
+        self.subscribed = not refused
 
     def _on_disconnect(self, _c: Any, _u: Any, _f: Any, reason: Any, _p: Any) -> None:
-        self.connected = False
+        self.connected = self.subscribed = False
         if reason.is_failure:
             self.last_error = f"disconnected: {reason}"
             log.warning("mqtt: lost the broker (%s); reconnecting", reason)
