@@ -301,3 +301,40 @@ def test_serve_starts_the_bridge_and_stops_cleanly(network, broker, tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+def test_the_bridge_waits_for_a_broker_that_is_not_up_yet(network):
+    """The first connection is retried too: a node started before its broker connects later."""
+    broker = Broker()
+    node = build_node(_with_mqtt(network, broker))
+    try:
+        with RunningNode(node, udp_port=None):
+            time.sleep(0.3)
+            assert not node.mqtt_status()["connected"]
+            broker.start()
+            _wait(lambda: node.mqtt_status()["subscribed"])
+            assert node.mqtt_status()["connections"] == 1
+    finally:
+        broker.stop()
+
+
+def test_unreadable_tls_files_are_a_config_error(network, tmp_path):
+    from fusetrack.service.mqtt import MqttBridge
+
+    junk = tmp_path / "ca.pem"
+    junk.write_text("not a certificate")
+    section = {"subscribe": ["a"], "tls": {"ca_file": str(junk)}}
+    cfg = network.model_copy(update={"mqtt": MqttConfig.model_validate(section)})
+    with pytest.raises(ConfigError, match=r"mqtt\.tls.*readable PEM"):
+        MqttBridge(FusionNode(cfg), cfg.mqtt)
+
+
+def test_tls_paths_are_relative_to_the_config_file(network, tmp_path):
+    from fusetrack.service import load_config
+
+    data = network.model_dump(mode="json", exclude={"mqtt"})
+    data["mqtt"] = {"subscribe": ["a"], "tls": {"ca_file": "certs/ca.pem"}}
+    (tmp_path / "network.yaml").write_text(json.dumps(data))  # JSON is YAML
+    cfg = load_config(tmp_path / "network.yaml")
+    assert cfg.mqtt is not None and cfg.mqtt.tls is not None
+    assert cfg.mqtt.tls.ca_file == str(tmp_path / "certs" / "ca.pem")

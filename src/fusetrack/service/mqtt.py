@@ -73,6 +73,7 @@ class MqttBridge:
         self.published = 0
         self.publish_dropped = 0
         self.last_error = ""
+        self.stopping = False
         self.publisher: asyncio.Task[None] | None = None
         self.queue: asyncio.Queue[str] | None = None
 
@@ -91,7 +92,9 @@ class MqttBridge:
         return self
 
     async def stop(self) -> None:
-        """Stop publishing, disconnect cleanly and join paho's thread."""
+        """Stop publishing, disconnect cleanly and join paho's thread. What arrives from now on
+        is left unacknowledged: the broker delivers it again to the next session."""
+        self.stopping = True
         if self.publisher is not None:
             self.publisher.cancel()
             with contextlib.suppress(asyncio.CancelledError):
@@ -153,6 +156,8 @@ class MqttBridge:
     # -- the node's event loop ---------------------------------------------------------------
     def _ingest(self, frame: bytes, mid: int, qos: int, generation: int) -> None:
         """Ingest one frame, commit the log, then acknowledge (QoS 1/2)."""
+        if self.stopping:
+            return
         outcomes = self.node.ingest_frame(frame)
         self.node.commit()
         self.received += 1
