@@ -311,7 +311,7 @@ def test_the_bridge_waits_for_a_broker_that_is_not_up_yet(network):
     node = build_node(_with_mqtt(network, broker))
     try:
         with RunningNode(node, udp_port=None):
-            time.sleep(0.3)
+            _wait(lambda: node.mqtt_status()["last_error"].startswith("cannot reach"))
             assert not node.mqtt_status()["connected"]
             broker.start()
             _wait(lambda: node.mqtt_status()["subscribed"])

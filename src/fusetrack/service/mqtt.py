@@ -66,6 +66,7 @@ class MqttBridge:
         self.client.on_disconnect = self._on_disconnect
         self.client.on_message = self._on_message
         self.client.on_subscribe = self._on_subscribe
+        self.client.on_connect_fail = self._on_connect_fail
         self.connected = False
         self.subscribed = False  # the broker granted every subscription on this connection
         self.generation = 0  # connections so far: an ack is only sent on the connection it came on
@@ -137,6 +138,11 @@ class MqttBridge:
         if self.cfg.subscribe:
             topics: list[tuple[str, int]] = [(t, self.cfg.qos) for t in self.cfg.subscribe]
             client.subscribe(topics)
+
+    def _on_connect_fail(self, _c: Any, _u: Any) -> None:
+        if not self.last_error.startswith("cannot reach"):
+            log.warning("mqtt: cannot reach %s:%d; retrying", self.cfg.host, self.cfg.port)
+        self.last_error = f"cannot reach the broker {self.cfg.host}:{self.cfg.port}"
 
     def _on_subscribe(self, _c: Any, _u: Any, _mid: int, reasons: list[Any], _p: Any) -> None:
         refused = [t for t, r in zip(self.cfg.subscribe, reasons, strict=False) if r.is_failure]
