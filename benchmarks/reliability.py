@@ -11,6 +11,8 @@ The same runs as ``tests/reliability/`` (:mod:`reliability_harness` there), larg
 * ``--kills`` SIGKILLs of a serving process fed over HTTP (up to ``--rate`` messages/s), each
   at a random moment, restarting on the same log: acknowledged readings missing from the log,
   and whether replaying the log gives the published tracks;
+* ``--captured`` sealed UDP frames captured and replayed into nodes restarted with and without
+  a log, with their version-1 copies (issue 18, item 5);
 * ``--flood`` legitimate UDP readings with ``--factor`` forged frames each from another address:
   the share accepted and the datagrams not accounted for.
 """
@@ -35,6 +37,7 @@ from reliability_harness import (  # noqa: E402
     run_fuzz,
     run_http_fuzz,
     run_mutations,
+    run_restart_replay,
 )
 
 from fusetrack.service.replay import demo_network  # noqa: E402
@@ -54,6 +57,7 @@ TESTED = """\
 | 3 | forged UDP frames from one sender: 27,453 of 60,000 legitimate readings accepted, loss not in /health | a source failing authentication `limits.auth_failure_burst` times is dropped before its HMAC is computed (HTTP: 429); `/health`: `dropped_unauthenticated`, `rate_limited`, `udp_dropped` | `tests/service/test_service_auth.py::test_a_forged_flood_...`, `..._get_429_...`, `..._kernel_drops_...`; the flood run below |
 | 4 | damaged, foreign or locked logs gave raw tracebacks; another config resumed silently | a ConfigError naming the log and the way out; the config fingerprint; `fusetrack log check`, `log recover`; `log.durability: full` | `tests/service/test_service_node.py::test_damaged_foreign_and_directory_logs_...`, `tests/service/test_service_log_repair.py` |
 | 5 | strings accepted as numbers, `bearer` refused, 16 MB WebSocket buffering, unlimited subscribers, no TLS or read protection, Ctrl-C traceback | strict schema, case-insensitive scheme, `ws_max_size`, `limits.max_subscribers`, `--tls-cert/--tls-key`, `readers`, exit 130 | `tests/service/test_service_schema.py`, `test_service_node.py`, `test_service_access.py`, `tests/cli` |
+| 5 | without `--log` a captured UDP frame was accepted again after a restart | UDP frame version 2 carries its send time under the HMAC; a node without a log refuses frames sent before it started (`stale`) and version-1 frames (`legacy_frame`); any node refuses frames older than `limits.max_frame_age` (`stale`) or ahead by more than `limits.max_clock_skew` (`clock_skew`) | `tests/service/test_service_auth.py::test_a_captured_frame_is_refused_after_a_restart_without_a_log`, `..._version_1_frames_need_a_log_...`; the restart run below |
 | 6 | CLI paths failing after the work, unknown keys ignored, replay tracebacks | checked before work, refused with the valid keys | `tests/service/test_service_cli.py`, `tests/cli` |
 """
 
@@ -69,6 +73,9 @@ def report(args: argparse.Namespace, got: dict[str, Any]) -> str:
     for run in (fuzz, mut):
         for reason, n in run["rejected"].items():
             reasons[reason] = reasons.get(reason, 0) + n
+    restart = got["restart_replay"]
+    replays_accepted = sum(r.get("accepted", 0) for r in restart["replayed"].values())
+    replays_accepted += restart["legacy_no_log"].get("accepted", 0)
     lost = chaos["acknowledged_missing"] + flood["uncounted"]
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     return f"""# Reliability of the live node
@@ -145,6 +152,26 @@ HTTP `POST /ingest` in batches at up to {args.rate:g} messages/s, killed with SI
         )
     }
 
+## Captured frames replayed after a restart: {replays_accepted} accepted
+
+{restart["captured"]:,} sealed UDP frames (version 2, sent 1 ms apart) were captured on their
+way to two nodes, one with a durable log and one without, which accepted them; both were
+restarted {restart["gap_s"]:g} s later and every captured frame was replayed into each, and a
+version-1 copy of each (no send time) into the one without a log; then one fresh frame per
+sensor node went to both.
+
+{
+        _table(
+            [
+                ("accepted before the restart (both nodes)", f"{restart['accepted_before']:,}"),
+                ("replayed into the node without a log", restart["replayed"]["no log"]),
+                ("replayed into the node restarted on its log", restart["replayed"]["log"]),
+                ("version-1 copies into the node without a log", restart["legacy_no_log"]),
+                ("fresh frames afterwards (without / with a log)", restart["fresh"]),
+            ]
+        )
+    }
+
 ## Unauthenticated flood at {args.factor}x the legitimate rate
 
 {flood["legitimate"]:,} legitimate UDP readings from 127.0.0.1 at up to {
@@ -173,6 +200,9 @@ garbage), into a node in this process.
 
 ## Limits
 
+- A node without a log that restarts within `limits.max_clock_skew` seconds of stopping may
+  accept once a frame sent in those last seconds (it cannot know whether it saw it; with a
+  log it can).
 - UDP source addresses can be forged: a flood that spoofs a sensor node's own address gets that
   node's datagrams dropped with it (counted as `rate_limited`); HTTP clients are limited only on
   failed tokens, so a valid token always passes.
@@ -193,6 +223,7 @@ def main() -> None:
     p.add_argument("--kills", type=int, default=20)
     p.add_argument("--rate", type=float, default=1000.0, help="messages/s (chaos and flood)")
     p.add_argument("--flood", type=int, default=5000, help="legitimate readings in the flood")
+    p.add_argument("--captured", type=int, default=5000, help="frames replayed after restarts")
     p.add_argument("--factor", type=int, default=10, help="forged frames per legitimate one")
     p.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "RELIABILITY.md")
     args = p.parse_args()
@@ -205,6 +236,7 @@ def main() -> None:
     got["http"] = run_http_fuzz(cfg, args.http, seed=1)
     with tempfile.TemporaryDirectory() as tmp:
         got["chaos"] = run_chaos(cfg, Path(tmp), args.kills, args.rate, seed=1)
+        got["restart_replay"] = run_restart_replay(cfg, args.captured, Path(tmp))
     got["flood"] = run_flood(cfg, args.flood, args.factor, args.rate)
     got["seconds"] = time.monotonic() - t0
     args.out.write_text(report(args, got))

@@ -9,6 +9,8 @@
 * :func:`run_chaos`: a node served by a process forked from a fork server, fed over HTTP at a steady rate, killed
   with SIGKILL at random moments and restarted on its log: every acknowledged reading is in
   the log and replaying the log gives the published tracks.
+* :func:`run_restart_replay`: captured UDP frames replayed into nodes restarted with and
+  without a log (issue 18, item 5): none accepted; fresh frames still are.
 * :func:`run_flood`: legitimate UDP readings with ``factor`` times as many forged frames from
   another address: the share of legitimate readings accepted and every datagram accounted for.
 """
@@ -171,7 +173,7 @@ def run_fuzz(cfg: NetworkConfig, examples: int) -> dict[str, Any]:
             outcomes = node.ingest_payload(body, encoding, "array-west")
         else:
             key = keys["array-west"] if how != "forged" else b"forged-key-%07d" % (salt % 10**7)
-            frame = bytearray(seal("array-west", key, body, encoding))
+            frame = bytearray(seal("array-west", key, body, encoding, sent=node.wall()))
             if how == "flipped":
                 frame[salt % len(frame)] ^= 1 + salt % 255
             outcomes = node.ingest_frame(bytes(frame), f"10.0.{salt % 256}.1")
@@ -250,7 +252,7 @@ def run_mutations(cfg: NetworkConfig, n: int, seed: int = 0) -> dict[str, Any]:
             outcomes = node.ingest_payload(body, encoding, "array-west")
         else:
             inputs["frame"] += 1
-            frame = seal("array-west", keys["array-west"], body, encoding)
+            frame = seal("array-west", keys["array-west"], body, encoding, sent=node.wall())
             outcomes = node.ingest_frame(frame, "10.0.0.1")
         _accounted(node, before, outcomes)
     return _summary(node, inputs)
@@ -430,6 +432,70 @@ def run_chaos(
         "logged": len(logged),
         "ticks": len(published),
         "replay_equal": replayed == published,
+    }
+
+
+# -- captured frames replayed after a restart -----------------------------------------------
+
+
+def run_restart_replay(
+    cfg: NetworkConfig, n: int, log_dir: Path, gap: float = 5.0, seed: int = 0
+) -> dict[str, Any]:
+    """Issue 18, item 5: ``n`` sealed UDP frames (sent 1 ms apart) captured on their way to two
+    nodes, one with a durable log and one without; both restarted ``gap`` wall seconds later and
+    every captured frame replayed into each, and their version-1 copies (no send time) into the
+    one without a log; then one fresh frame per sensor node. Returns the outcomes by reason."""
+    clock = [1000.0]
+    keys = cfg.keys()
+    seq: Counter[str] = Counter()
+    path = log_dir / "restart-replay.sqlite"
+
+    def frame(who: str, sensor: str, t: float, reading: Any, version: int = 2) -> bytes:
+        m = SensorMessage(node=who, seq=seq[who], sensor=sensor, time=t, reading=reading)
+        body = encode_message(m, "msgpack")
+        return seal(who, keys[who], body, "msgpack", sent=clock[0], version=version)
+
+    bare = FusionNode(cfg, wall=lambda: clock[0])
+    logged = FusionNode(cfg, wall=lambda: clock[0], log=DurableLog(path))
+    captured, legacy, accepted = [], [], 0
+    todo = readings(cfg, n, seed)
+    for who, sensor, t, reading in todo:
+        seq[who] += 1
+        captured.append(frame(who, sensor, t, reading))
+        legacy.append(frame(who, sensor, t, reading, version=1))
+        accepted += bare.ingest_frame(captured[-1])[0].accepted
+        accepted += logged.ingest_frame(captured[-1])[0].accepted
+        clock[0] += 0.001
+    logged.commit()
+    assert logged.log is not None
+    logged.log.close()
+    clock[0] += gap
+    bare = FusionNode(cfg, wall=lambda: clock[0])
+    logged = FusionNode(cfg, wall=lambda: clock[0], log=DurableLog(path))
+
+    def outcomes(node: FusionNode, frames: list[bytes]) -> dict[str, int]:
+        got = Counter(o.reason or "accepted" for f in frames for o in node.ingest_frame(f))
+        return dict(sorted(got.items()))
+
+    replayed = {"no log": outcomes(bare, captured), "log": outcomes(logged, captured)}
+    legacy_no_log = outcomes(bare, legacy)
+    fresh: dict[str, bytes] = {}  # one new frame per sensor node
+    t_fresh = todo[0][2]  # a reading time both nodes' data clocks allow (none has fused yet)
+    for who, sensor, _, reading in todo:
+        if who not in fresh:
+            seq[who] += 1
+            fresh[who] = frame(who, sensor, t_fresh, reading)
+    frames = list(fresh.values())
+    fresh_outcomes = {"no log": outcomes(bare, frames), "log": outcomes(logged, frames)}
+    assert logged.log is not None
+    logged.log.close()
+    return {
+        "captured": n,
+        "accepted_before": accepted,
+        "replayed": replayed,
+        "legacy_no_log": legacy_no_log,
+        "fresh": fresh_outcomes,
+        "gap_s": gap,
     }
 
 

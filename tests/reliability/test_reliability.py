@@ -11,6 +11,7 @@ from reliability_harness import (
     run_fuzz,
     run_http_fuzz,
     run_mutations,
+    run_restart_replay,
 )
 
 
@@ -52,6 +53,20 @@ def test_kill_9_loses_no_acknowledged_reading_and_the_log_replays(network, tmp_p
     assert got["acknowledged"] > 100
     assert got["acknowledged_missing"] == 0
     assert got["resumed_ticks"] == got["ticks"] > 0 and got["replay_equal"]
+
+
+def test_captured_frames_replayed_after_a_restart_are_refused_with_or_without_a_log(
+    network, tmp_path
+):
+    """Issue 18, item 5: 300 captured frames replayed into a node restarted 5 s later without a
+    log are refused as stale, and as replays by one restarted on its log; their version-1
+    copies are refused as legacy_frame without a log; fresh frames are accepted by both."""
+    got = run_restart_replay(network, n=300, log_dir=tmp_path)
+    assert got["accepted_before"] == 2 * 300
+    assert got["replayed"] == {"no log": {"stale": 300}, "log": {"replay": 300}}
+    assert got["legacy_no_log"] == {"legacy_frame": 300}
+    n_nodes = len(network.nodes)
+    assert got["fresh"] == {"no log": {"accepted": n_nodes}, "log": {"accepted": n_nodes}}
 
 
 def test_an_unauthenticated_flood_at_ten_times_the_rate_starves_nothing(network):

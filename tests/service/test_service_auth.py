@@ -24,13 +24,30 @@ KEYS = {"west": b"k" * 16, "east": b"e" * 20}
 
 
 def test_frame_layout_and_tag_are_the_documented_hmac_sha256():
-    frame = seal("west", KEYS["west"], b'{"a":1}', "json")
-    head = b"FT\x01j\x04west"
+    frame = seal("west", KEYS["west"], b'{"a":1}', "json", sent=1_764_000_000.25)
+    # version 2: the send time, 1_764_000_000_250_000 microseconds, big-endian, under the tag
+    head = b"FT\x02j\x04west" + (1_764_000_000_250_000).to_bytes(8, "big")
     assert frame.startswith(head) and frame.endswith(b'{"a":1}')
     tag = frame[len(head) : len(head) + 32]
     assert tag == hmac.new(b"k" * 16, head + b'{"a":1}', hashlib.sha256).digest()
-    assert open_frame(frame, KEYS) == ("west", "json", b'{"a":1}')
+    assert open_frame(frame, KEYS) == ("west", "json", b'{"a":1}', 1_764_000_000.25)
     assert open_frame(seal("east", KEYS["east"], b"\x90", "msgpack"), KEYS)[1] == "msgpack"
+    # version 1 (no send time) still opens; its send time is None
+    old = seal("west", KEYS["west"], b'{"a":1}', "json", version=1)
+    head = b"FT\x01j\x04west"
+    assert old[len(head) : len(head) + 32] == hmac.digest(b"k" * 16, head + b'{"a":1}', "sha256")
+    assert open_frame(old, KEYS) == ("west", "json", b'{"a":1}', None)
+
+
+def test_a_changed_send_time_breaks_the_tag():
+    """The send time is authenticated: moving it forward to make a captured frame fresh again
+    is a forgery."""
+    frame = bytearray(seal("west", KEYS["west"], b"x", "json", sent=1000.0))
+    frame[9 + 7] ^= 0x40  # the send time's last byte (+64 microseconds)
+    with pytest.raises(Rejected, match="bad_mac"):
+        open_frame(bytes(frame), KEYS)
+    with pytest.raises(ValueError, match=r"sent=-1\.0 is invalid"):
+        seal("west", KEYS["west"], b"x", sent=-1.0)
 
 
 @pytest.mark.parametrize("where", [0, 3, 5, 12, 40, -1])
@@ -84,12 +101,12 @@ def test_bearer_tokens_are_derived_not_the_key():
     assert node_of_token("0" * 64, tokens) is None
 
 
-def _frame(network, node, seq, sensor="mic_west", time=1.0, key=None):
+def _frame(network, node, seq, sensor="mic_west", time=1.0, key=None, sent=None, version=2):
     m = SensorMessage(
         node=node, seq=seq, sensor=sensor, time=time, reading=reading_from_vector("bearing", [0.2])
     )
     k = key if key is not None else network.keys()[node]
-    return seal(node, k, encode_message(m, "msgpack"), "msgpack")
+    return seal(node, k, encode_message(m, "msgpack"), "msgpack", sent=sent, version=version)
 
 
 def test_node_accepts_counts_replays_and_forgeries(network):
@@ -144,11 +161,12 @@ def test_a_forged_flood_from_one_source_is_dropped_unchecked_and_counted(
     monkeypatch.setattr(
         node_module, "open_frame", lambda f, k: checked.append(1) or real_open(f, k)
     )
-    forged = _frame(network, "array-west", 10**6, key=b"attacker-key-0000")
+    forged = _frame(network, "array-west", 10**6, key=b"attacker-key-0000", sent=clock[0])
     for seq in range(1, 201):  # 10 forged frames per valid one, all in the same wall second
         for _ in range(10):
             assert not node.ingest_frame(forged, "203.0.113.9")[0].accepted
-        ok = node.ingest_frame(_frame(network, "array-west", seq, time=seq * 0.01), "10.0.0.1")
+        frame = _frame(network, "array-west", seq, time=seq * 0.01, sent=clock[0])
+        ok = node.ingest_frame(frame, "10.0.0.1")
         assert ok[0].accepted
     assert node.rejected == {"bad_mac": 50, "rate_limited": 1950}
     assert len(checked) == 50 + 200  # the blocked source's frames were never authenticated
@@ -161,6 +179,85 @@ def test_a_forged_flood_from_one_source_is_dropped_unchecked_and_counted(
     clock[0] += 0.1
     assert node.ingest_frame(forged, "203.0.113.9")[0].reason == "bad_mac"
     assert node.ingest_frame(forged, "203.0.113.9")[0].reason == "rate_limited"
+
+
+def test_a_captured_frame_is_refused_after_a_restart_without_a_log(network):
+    """Issue 18, item 5: the replay windows live in memory, so a node restarted without a log
+    accepted a captured frame again. A node without a log now refuses any frame sent before it
+    started (less ``limits.max_clock_skew``); fresh frames, and senders whose clocks are off by
+    less than the skew, still get through."""
+    clock = [1000.0]
+    first = FusionNode(network, wall=lambda: clock[0])
+    captured = _frame(network, "array-west", 7, sent=clock[0])
+    assert first.ingest_frame(captured)[0].accepted
+    assert first.ingest_frame(captured)[0].reason == "replay"
+    clock[0] = 1010.0  # killed, restarted without a log 10 s later (age < max_frame_age)
+    node = FusionNode(network, wall=lambda: clock[0])
+    skew = network.limits.max_clock_skew
+    clock[0] = 1011.0
+    replayed = node.ingest_frame(captured)
+    assert not replayed[0].accepted and replayed[0].reason == "stale"
+    assert "before this node started" in replayed[0].detail
+    # the sender's next frame; a sender whose clock runs behind by just under the skew, right
+    # after the restart; one ahead by just under the skew
+    assert node.ingest_frame(_frame(network, "array-west", 8, sent=1011.0))[0].accepted
+    behind = _frame(network, "array-east", 1, sensor="mic_east", sent=1010.0 - 0.9 * skew)
+    assert node.ingest_frame(behind)[0].accepted
+    ahead = _frame(network, "array-west", 9, sent=1011.0 + 0.9 * skew)
+    assert node.ingest_frame(ahead)[0].accepted
+    # further off than the skew: refused, counted
+    too_far = _frame(network, "array-west", 10, sent=1011.0 + 1.5 * skew)
+    assert node.ingest_frame(too_far)[0].reason == "clock_skew"
+    too_old = _frame(network, "array-east", 2, sensor="mic_east", sent=1010.0 - 1.5 * skew)
+    assert node.ingest_frame(too_old)[0].reason == "stale"
+    assert node.rejected == {"stale": 2, "clock_skew": 1}
+    assert sum(node.accepted.values()) == 3
+    text = node.metrics_text().decode()
+    assert 'fusetrack_messages_rejected_total{reason="stale"} 2.0' in text
+
+
+def test_version_1_frames_need_a_log_and_every_frame_ages_out(tmp_path, network):
+    """A version-1 frame has no send time: a node with a log (whose replay windows survive a
+    restart) accepts it, and refuses its replay after the restart; a node without a log refuses
+    it as ``legacy_frame``. A node that resumed its log accepts a recent frame sent before the
+    restart; one on a new log does not. With or without a log, a frame sent longer ago than
+    ``limits.max_frame_age`` is ``stale``."""
+    from fusetrack.service.log import DurableLog
+
+    clock = [1000.0]
+    path = tmp_path / "n.sqlite"
+    first = FusionNode(network, wall=lambda: clock[0], log=DurableLog(path))
+    old = _frame(network, "array-west", 3, version=1)
+    assert first.ingest_frame(old)[0].accepted
+    first.commit()
+    first.log.close()
+    clock[0] = 1060.0
+    resumed = FusionNode(network, wall=lambda: clock[0], log=DurableLog(path))
+    assert resumed.ingest_frame(old)[0].reason == "replay"  # the log restored its window
+    # with a log, a frame sent before the restart is accepted if it is new and recent
+    assert resumed.ingest_frame(_frame(network, "array-west", 4, sent=1059.0))[0].accepted
+    age = network.limits.max_frame_age
+    late = _frame(network, "array-west", 5, sent=1060.0 - 1.01 * age)
+    assert resumed.ingest_frame(late)[0].reason == "stale"
+    bare = FusionNode(network, wall=lambda: clock[0])
+    refused = bare.ingest_frame(_frame(network, "array-west", 1, version=1))
+    assert refused[0].reason == "legacy_frame" and "version-1" in refused[0].detail
+    assert bare.rejected == {"legacy_frame": 1}
+    # a new log has no windows to restore: frames sent before the node started are refused as
+    # without a log (an earlier node without a log may have seen them); version 1 is accepted
+    fresh = FusionNode(network, wall=lambda: clock[0], log=DurableLog(tmp_path / "new.sqlite"))
+    assert fresh.ingest_frame(_frame(network, "array-west", 1, sent=1050.0))[0].reason == "stale"
+    assert fresh.ingest_frame(_frame(network, "array-west", 2, version=1))[0].accepted
+
+
+def test_frame_age_must_exceed_the_clock_skew(network):
+    from fusetrack.core import ConfigError
+    from fusetrack.service.config import parse_config
+
+    data = network.model_dump()
+    data["limits"].update(max_frame_age=2.0, max_clock_skew=5.0)
+    with pytest.raises(ConfigError, match="max_frame_age=2 is invalid: expected more than"):
+        parse_config(data)
 
 
 def test_http_clients_that_keep_failing_get_429_valid_tokens_still_pass(network):

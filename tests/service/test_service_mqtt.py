@@ -1,6 +1,6 @@
 """The MQTT bridge against a real broker (amqtt, started by the fixture in its own process on a
-free port): sealed readings of two nodes in (JSON and MessagePack), tracks out, forgeries
-refused and counted, a broker restart survived."""
+free port): sealed readings of two nodes in (JSON and MessagePack), tracks out, forged and stale
+frames refused and counted, a broker restart survived, acknowledgements after the log commit."""
 
 from __future__ import annotations
 
@@ -117,7 +117,7 @@ def _with_mqtt(network, broker: Broker, **extra):
     return network.model_copy(update={"mqtt": MqttConfig.model_validate(section)})
 
 
-def _sealed(network, readings, first_seq=1, key=None):
+def _sealed(network, readings, first_seq=1, key=None, sent=None):
     """(node, frame) per reading: odd ones in JSON, even ones in MessagePack."""
     owner, keys = network.owner(), network.keys()
     kinds = {s.id: s.kind for s in network.sensors}
@@ -132,7 +132,8 @@ def _sealed(network, readings, first_seq=1, key=None):
             reading=reading_from_vector(kinds[r.sensor], r.value),
         )
         encoding = "json" if i % 2 else "msgpack"
-        out.append((node, seal(node, key or keys[node], encode_message(m, encoding), encoding)))
+        payload = encode_message(m, encoding)
+        out.append((node, seal(node, key or keys[node], payload, encoding, sent=sent)))
     return out
 
 
@@ -149,8 +150,6 @@ def test_readings_in_tracks_out_forgeries_counted_broker_restart_survived(networ
     split = 4.25  # readings before it, the broker restarts, the rest after it
     before = [r for r in readings if r.time < split]
     after = [r for r in readings if r.time >= split]
-    frames = _sealed(network, readings)
-    first, rest = frames[: len(before)], frames[len(before) :]
 
     ticks: list[dict] = []
     lock = threading.Lock()
@@ -170,13 +169,18 @@ def test_readings_in_tracks_out_forgeries_counted_broker_restart_survived(networ
         _wait(lambda: health()["mqtt"]["subscribed"] and reader.is_connected())
         _wait(lambda: sender.is_connected())
 
+        frames = _sealed(network, readings)  # sent now: after the node started (not stale)
+        first, rest = frames[: len(before)], frames[len(before) :]
         _publish(sender, first)
         forged = _sealed(network, before[:1], first_seq=1000, key=b"not-the-key-of-this-node")
         _publish(sender, forged)
-        _wait(lambda: health()["mqtt"]["received"] == len(first) + 1)
+        old = _sealed(network, before[:1], first_seq=2000, sent=time.time() - 3600)
+        _publish(sender, old)  # authentic, but held back an hour: refused as over UDP
+        _wait(lambda: health()["mqtt"]["received"] == len(first) + 2)
         h = health()
         assert h["mqtt"]["accepted"] == len(first) and h["accepted"] == len(first)
-        assert h["mqtt"]["refused"] == {"bad_mac": 1} and h["rejected"] == {"bad_mac": 1}
+        refused = {"bad_mac": 1, "stale": 1}
+        assert h["mqtt"]["refused"] == refused and h["rejected"] == refused
         _wait(lambda: len(ticks) > 0)  # the stream paused: the node fused what came
 
         broker.restart()
@@ -192,7 +196,7 @@ def test_readings_in_tracks_out_forgeries_counted_broker_restart_survived(networ
         reader.loop_stop()
         sender.loop_stop()
 
-    assert h["mqtt"]["accepted"] == len(readings) and h["mqtt"]["refused"] == {"bad_mac": 1}
+    assert h["mqtt"]["accepted"] == len(readings) and h["mqtt"]["refused"] == refused
     assert h["mqtt"]["published"] >= len(ticks) and h["mqtt"]["publish_dropped"] == 0
     later = ticks[seen:]
     assert later, "no tracks arrived after the broker restarted"
@@ -214,7 +218,7 @@ def test_a_reading_is_acknowledged_only_once_it_is_in_the_log(
     cfg = _with_mqtt(network, broker, publish_tracks=None)
     cfg = cfg.model_copy(update={"log": cfg.log.model_copy(update={"path": str(path)})})
     readings = demo_scenario(network, seed=0, duration=3.0).readings
-    frames = _sealed(network, [r for r in readings if r.sensor == "mic_west"])
+    readings = [r for r in readings if r.sensor == "mic_west"]
     logged_at_ack: list[int] = []
     real_ack = paho.Client.ack
 
@@ -228,6 +232,7 @@ def test_a_reading_is_acknowledged_only_once_it_is_in_the_log(
     with RunningNode(node, udp_port=None):
         sender = _client(broker, "sensor-sender")
         _wait(lambda: sender.is_connected() and node.mqtt_status()["subscribed"])
+        frames = _sealed(network, readings)
         _publish(sender, frames)
         _wait(lambda: len(logged_at_ack) == len(frames))
         sender.loop_stop()

@@ -12,6 +12,8 @@ a running node. See the README's service section.
 from .alignment import Aligner as Aligner
 from .alignment import Reading as Reading
 from .alignment import SensorBuffer as SensorBuffer
+from .auth import Frame as Frame
+from .auth import FrameFreshness as FrameFreshness
 from .auth import SequenceWindow as SequenceWindow
 from .auth import bearer_token as bearer_token
 from .auth import open_frame as open_frame

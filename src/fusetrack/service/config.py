@@ -529,6 +529,32 @@ class LimitsConfig(_Section):
     auth_failures_per_second: float = Field(
         default=10.0, gt=0.0, le=1e6, description="refill rate of a source's failures"
     )
+    max_frame_age: float = Field(
+        default=30.0,
+        gt=0.0,
+        le=86400.0,
+        description="UDP frames sent longer ago than this (seconds, by the node's wall clock) "
+        "are refused as stale: a captured frame is replayable for this long at most",
+    )
+    max_clock_skew: float = Field(
+        default=2.0,
+        ge=0.0,
+        le=3600.0,
+        description="how far (seconds) a sender's clock may be off the node's: frames sent "
+        "further ahead are refused (clock_skew); without a log, frames sent before the node "
+        "started, less this, are refused (stale)",
+    )
+
+    @model_validator(mode="after")
+    def _age_covers_skew(self) -> LimitsConfig:
+        """A sender whose clock runs ``max_clock_skew`` behind must still have frames fresh."""
+        if self.max_frame_age <= self.max_clock_skew:
+            raise ValueError(
+                f"limits.max_frame_age={self.max_frame_age:g} is invalid: expected more than "
+                f"limits.max_clock_skew={self.max_clock_skew:g} (a sender whose clock runs "
+                "behind by the skew would have every frame refused as stale)"
+            )
+        return self
 
 
 class LogConfig(_Section):

@@ -2,11 +2,12 @@
 
 **Authentication.** Every MQTT message the bridge ingests is one sealed frame, byte for byte the
 UDP datagram format (:func:`.auth.seal`: the node's id, the payload's encoding, JSON or
-MessagePack, and an HMAC-SHA256 tag under that node's key). The broker is only a relay: who may
+MessagePack, the send time and an HMAC-SHA256 tag under that node's key). The broker is only a relay: who may
 publish on a topic is the broker's business (its ACLs), whether a reading is authentic is the
 node's, checked with the same key and the same rules as over UDP
 (:meth:`.node.FusionNode.ingest_frame`). A forged or altered frame is refused (``bad_mac``,
-``unknown_node``, ``bad_frame``) and counted. Every message reaches the node through the one
+``unknown_node``, ``bad_frame``) and counted, and so is a stale one (``stale``: e.g. held by
+the broker for longer than ``limits.max_frame_age`` while the node was away). Every message reaches the node through the one
 broker connection, so refusals are not charged to a source address (one forger would otherwise
 lock out every sender on the broker); each costs one HMAC.
 

@@ -5,8 +5,9 @@ HTTP/WebSocket after the bearer token named the node):
 
 1. a source address that has failed authentication too often (``limits.auth_failure_burst``,
    refilled at ``auth_failures_per_second``) is dropped first, unchecked (``rate_limited``);
-   then authenticated (UDP: the frame's HMAC, :mod:`.auth`), size-checked, parsed and
-   validated against the schema (:mod:`.schema`);
+   then authenticated (UDP: the frame's HMAC, :mod:`.auth`; its send time must be recent and,
+   on a node without a log, not before the node started: :class:`.auth.FrameFreshness`),
+   size-checked, parsed and validated against the schema (:mod:`.schema`);
 2. checked against the network: the message's node is the authenticated one, its sequence
    number is new (replays refused), the sensor exists, belongs to that node, is of the kind
    the message says, the value has the sensor's size, the time is not beyond the clock by more
@@ -37,7 +38,14 @@ from prometheus_client import Counter as PromCounter
 
 from ..core import ConfigError, invalid
 from .alignment import Aligner
-from .auth import FailureLimiter, Rejected, SequenceWindow, node_of_token, open_frame
+from .auth import (
+    FailureLimiter,
+    FrameFreshness,
+    Rejected,
+    SequenceWindow,
+    node_of_token,
+    open_frame,
+)
 from .config import FUSED_KINDS, NetworkConfig
 from .engine import build_engine
 from .log import DurableLog, reading_of, replay_ticks
@@ -52,6 +60,9 @@ REJECTION_REASONS: tuple[str, ...] = (
     "bad_mac",
     "unauthorized",
     "rate_limited",
+    "legacy_frame",
+    "stale",
+    "clock_skew",
     "unauthorized_read",
     "too_many_subscribers",
     "malformed",
@@ -164,6 +175,7 @@ class FusionNode:
         start = fusion.start
         if fusion.clock == "wall":
             start = math.floor(self.started * fusion.rate_hz) / fusion.rate_hz
+        logged = None
         if log is not None:
             log.check_config(cfg.fingerprint())
             logged = log.meta("start")
@@ -172,6 +184,12 @@ class FusionNode:
             else:
                 start = float(logged)
         self.log = log
+        self.freshness = FrameFreshness(  # a resumed log restores the replay windows
+            None if logged is not None else self.started,
+            log is not None,
+            cfg.limits.max_frame_age,
+            cfg.limits.max_clock_skew,
+        )
         self.aligner = Aligner(
             [s.id for s in cfg.sensors],
             fusion.rate_hz,
@@ -248,9 +266,13 @@ class FusionNode:
         if len(frame) > self.cfg.limits.max_message_bytes:
             return [self.refuse_unauthenticated(source, "oversized", f"{len(frame)} bytes")]
         try:
-            node, encoding, payload = open_frame(frame, self.keys)
+            node, encoding, payload, sent = open_frame(frame, self.keys)
         except Rejected as err:
             return [self.refuse_unauthenticated(source, err.reason, err.detail)]
+        try:  # authentic, but perhaps captured and replayed (issue 18): refused unparsed
+            self.freshness.check(sent, self.wall())
+        except Rejected as err:
+            return [self.reject(err.reason, err.detail)]
         return self.ingest_payload(payload, encoding, node)
 
     def ingest_payload(self, payload: bytes, encoding: str, node: str) -> list[Outcome]:
