@@ -34,6 +34,7 @@ from fastapi import Depends, FastAPI, HTTPException, Request, WebSocket, WebSock
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from pydantic.json_schema import models_json_schema
 
+from .mqtt import MqttBridge
 from .node import FusionNode, Outcome
 from .schema import MessageBatch, SensorMessage, TrackState, message_json_schema
 from .udp import UdpListener
@@ -82,12 +83,14 @@ async def _read_limited(request: Request, limit: int) -> bytes | None:
 
 
 def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> FastAPI:
-    """The ASGI application of ``node`` (and its UDP listener on ``udp_socket``, if given)."""
+    """The ASGI application of ``node`` (and its UDP listener on ``udp_socket``, if given; and
+    its MQTT bridge, :mod:`.mqtt`, when the config has an ``mqtt`` section)."""
+    bridge = MqttBridge(node, node.cfg.mqtt) if node.cfg.mqtt is not None else None
     app = FastAPI(
         title="fusetrack fusion node",
         version="1",
         summary="Sensor nodes stream readings; the node fuses them and publishes tracks.",
-        lifespan=_lifespan(node, udp_socket),
+        lifespan=_lifespan(node, udp_socket, bridge),
     )
     app.state.node = node
     _reading_routes(app, node)
@@ -97,14 +100,16 @@ def create_app(node: FusionNode, udp_socket: socket.socket | None = None) -> Fas
 
 
 def _lifespan(
-    node: FusionNode, udp_socket: socket.socket | None
+    node: FusionNode, udp_socket: socket.socket | None, bridge: MqttBridge | None = None
 ) -> Callable[[FastAPI], contextlib.AbstractAsyncContextManager[None]]:
-    """Runs the tick loop (and the UDP listener) while the app serves."""
+    """Runs the tick loop (and the UDP listener, and the MQTT bridge) while the app serves."""
     poll = min(0.05, node.cfg.fusion.period / 4)
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         listener = UdpListener(node, udp_socket).start() if udp_socket is not None else None
+        if bridge is not None:
+            bridge.start()
 
         async def ticker() -> None:
             while True:
@@ -130,6 +135,8 @@ def _lifespan(
                 await task
             if listener is not None:
                 listener.close()
+            if bridge is not None:
+                await bridge.stop()
             node.commit()
 
     return lifespan

@@ -19,7 +19,9 @@ log = logging.getLogger(__name__)
 
 def add_service_parsers(sub: Any) -> None:
     """The ``serve``, ``log`` and ``replay`` subcommands (``fusetrack.cli`` calls this)."""
-    serve = sub.add_parser("serve", help="run a live fusion node (HTTP/WebSocket + UDP)")
+    serve = sub.add_parser(
+        "serve", help="run a live fusion node (HTTP/WebSocket, UDP; MQTT with an mqtt section)"
+    )
     serve.add_argument("--config", type=Path, required=True, help="network YAML")
     serve.add_argument("--host", default="127.0.0.1", help="address to listen on")
     serve.add_argument("--port", type=int, default=8000, help="HTTP/WebSocket port")

@@ -568,6 +568,100 @@ class LogConfig(_Section):
     durability: Literal["normal", "full"] = "normal"
 
 
+def _topic_problem(topic: str, wildcards: bool) -> str | None:
+    """Why ``topic`` is not a valid MQTT topic (a filter when ``wildcards``), or None
+    (MQTT 3.1.1 §4.7: ``+`` a whole level, ``#`` the last level; no NUL; at most 65535 bytes)."""
+    if not topic or len(topic.encode()) > 65535 or "\0" in topic:
+        return "1 to 65535 UTF-8 bytes without NUL"
+    levels = topic.split("/")
+    if not wildcards:
+        return "a topic without + or # wildcards" if {"+", "#"} & set(topic) else None
+    for i, level in enumerate(levels):
+        if ("+" in level and level != "+") or ("#" in level and level != "#"):
+            return "wildcards + and # filling a whole level"
+        if level == "#" and i != len(levels) - 1:
+            return "# only as the last level"
+    return None
+
+
+class MqttTlsConfig(_Section):
+    """TLS to the broker: ``ca_file`` (PEM; the system's CAs when absent) and, for brokers that
+    authenticate clients by certificate, ``cert_file`` and ``key_file`` (relative paths are
+    relative to the config file)."""
+
+    ca_file: str | None = None
+    cert_file: str | None = None
+    key_file: str | None = None
+
+    @model_validator(mode="after")
+    def _pair(self) -> MqttTlsConfig:
+        if (self.cert_file is None) != (self.key_file is None):
+            raise ValueError("give cert_file and key_file together, or neither")
+        return self
+
+
+class MqttConfig(_Section):
+    """The MQTT bridge (:mod:`.mqtt`): the node subscribes to ``subscribe`` (topic filters) and
+    ingests each message's payload as a sealed frame (:func:`.auth.seal`, the UDP frame format:
+    per-node HMAC, JSON or MessagePack inside); it publishes each tick's tracks (the
+    ``/ws/tracks`` JSON) to ``publish_tracks``. ``qos`` is used for both; with QoS 1 or 2 a
+    message is acknowledged to the broker only once the node has ingested and logged it.
+    ``clean_session: false`` keeps the session (subscriptions, QoS 1/2 messages queued while
+    the node is away) on the broker under ``client_id``. MQTT 3.1.1."""
+
+    host: str = Field(default="127.0.0.1", min_length=1)
+    port: int = Field(default=1883, ge=1, le=65535)
+    subscribe: list[str] = Field(default=[], max_length=100)
+    publish_tracks: str | None = None
+    qos: Literal[0, 1, 2] = 1
+    retain_tracks: bool = False
+    client_id: str = Field(default="fusetrack-node", pattern=r"^[A-Za-z0-9_.\-]{1,64}$")
+    clean_session: bool = False
+    keepalive: int = Field(default=30, ge=5, le=3600, description="seconds")
+    username: str | None = None
+    password: str | None = None
+    password_env: str | None = None
+    tls: MqttTlsConfig | None = None
+    reconnect_min: float = Field(default=0.5, gt=0.0, le=60.0, description="s, first retry")
+    reconnect_max: float = Field(default=30.0, gt=0.0, le=3600.0, description="s, doubling cap")
+    max_queued: int = Field(
+        default=1000, ge=1, le=1_000_000, description="track messages queued while disconnected"
+    )
+
+    @model_validator(mode="after")
+    def _valid(self) -> MqttConfig:
+        if not self.subscribe and self.publish_tracks is None:
+            raise ValueError("give subscribe (topics to ingest) or publish_tracks, or both")
+        for topic in self.subscribe:
+            problem = _topic_problem(topic, wildcards=True)
+            if problem:
+                raise ValueError(f"subscribe topic {topic!r} is invalid: expected {problem}")
+        if self.publish_tracks is not None:
+            problem = _topic_problem(self.publish_tracks, wildcards=False)
+            if problem:
+                raise ValueError(
+                    f"publish_tracks={self.publish_tracks!r} is invalid: expected {problem}"
+                )
+        if self.password is not None and self.password_env is not None:
+            raise ValueError("give password or password_env, not both")
+        if (self.password is not None or self.password_env is not None) and not self.username:
+            raise ValueError("a password needs a username")
+        if self.reconnect_min > self.reconnect_max:
+            raise ValueError("reconnect_min must be at most reconnect_max")
+        return self
+
+    def secret(self) -> str | None:
+        """The broker password (inline or from the environment variable ``password_env``)."""
+        if self.password_env is None:
+            return self.password
+        value = os.environ.get(self.password_env)
+        if value is None:
+            raise ConfigError(
+                invalid("mqtt.password_env", self.password_env, "a set environment variable")
+            )
+        return value
+
+
 class NetworkConfig(_Section):
     """The whole node: sensors, nodes and their keys, fusion, tracker, limits, durable log."""
 
@@ -582,6 +676,9 @@ class NetworkConfig(_Section):
     tracker: TrackerConfig
     limits: LimitsConfig = LimitsConfig()
     log: LogConfig = LogConfig()
+    mqtt: MqttConfig | None = Field(
+        default=None, description="the MQTT bridge (subscribe to readings, publish tracks)"
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -620,10 +717,10 @@ class NetworkConfig(_Section):
         return {n.id: n.secret() for n in self.nodes}
 
     def fingerprint(self) -> str:
-        """SHA-256 of everything that decides the tracks (all but ``log``, ``limits`` and
-        ``readers``): a
-        durable log records it and refuses to resume under another config."""
-        body = self.model_dump_json(exclude={"log", "limits", "readers"})
+        """SHA-256 of everything that decides the tracks (all but ``log``, ``limits``,
+        ``readers`` and ``mqtt``): a durable log records it and refuses to resume under another
+        config."""
+        body = self.model_dump_json(exclude={"log", "limits", "readers", "mqtt"})
         return hashlib.sha256(body.encode()).hexdigest()
 
     def tokens(self) -> dict[str, str]:
@@ -652,6 +749,11 @@ def parse_config(data: Mapping[str, Any], source: str = "config") -> NetworkConf
             f"{source}: "
             + invalid("readers", readers, "ids and keys of their own (not a node's, unique)")
         )
+    if cfg.mqtt is not None:
+        try:
+            cfg.mqtt.secret()  # an unset password_env is reported now, not at connection
+        except ConfigError as err:
+            raise ConfigError(f"{source}: {err}") from None
     try:
         models = cfg.sensor_models()
     except ConfigError as err:
@@ -781,4 +883,13 @@ def load_config(path: str | Path) -> NetworkConfig:
     if cfg.log.path is not None and not Path(cfg.log.path).is_absolute():
         log = cfg.log.model_copy(update={"path": str(p.parent / cfg.log.path)})
         cfg = cfg.model_copy(update={"log": log})
+    if cfg.mqtt is not None and cfg.mqtt.tls is not None:
+        tls = cfg.mqtt.tls
+        files = {
+            name: str(p.parent / value)
+            for name in ("ca_file", "cert_file", "key_file")
+            if (value := getattr(tls, name)) is not None and not Path(value).is_absolute()
+        }
+        mqtt = cfg.mqtt.model_copy(update={"tls": tls.model_copy(update=files)})
+        cfg = cfg.model_copy(update={"mqtt": mqtt})
     return cfg

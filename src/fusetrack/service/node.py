@@ -169,6 +169,7 @@ class FusionNode:
             cfg.limits.auth_failures_per_second, cfg.limits.auth_failure_burst
         )
         self.udp_dropped: Callable[[], int | None] = lambda: None  # set by the UDP listener
+        self.mqtt_status: Callable[[], dict[str, Any] | None] = lambda: None  # the MQTT bridge
         self.started = wall()
         fusion = cfg.fusion
         start = fusion.start
@@ -571,6 +572,7 @@ class FusionNode:
             "dropped_unauthenticated": sum(self.rejected[r] for r in UNAUTHENTICATED_REASONS),
             "rate_limited": self.rejected["rate_limited"],
             "udp_dropped": self.udp_dropped(),
+            "mqtt": self.mqtt_status(),
             "buffered": self.aligner.pending,
             "superseded": self.aligner.superseded,
             "dropped": sum(b.dropped for b in self.aligner.buffers.values()),

@@ -1,5 +1,6 @@
 """Running a fusion node: in the foreground (``fusetrack serve``) or in a background thread
-(``fusetrack demo --live``, the end-to-end tests) on uvicorn, with its UDP listener."""
+(``fusetrack demo --live``, the end-to-end tests) on uvicorn, with its UDP listener (and its
+MQTT bridge when the config has an ``mqtt`` section, :mod:`.mqtt`)."""
 
 from __future__ import annotations
 
@@ -145,6 +146,15 @@ def serve(
     print(f"fusion node: dashboard {where}", flush=True)  # the address the user opens: stdout
     if udp is not None:
         log.info("fusion node: listening for UDP on udp://%s:%d", host, udp.getsockname()[1])
+    if cfg.mqtt is not None:
+        m = cfg.mqtt
+        log.info(
+            "fusion node: MQTT bridge to %s:%d (readings from %s, tracks to %s)",
+            m.host,
+            m.port,
+            ", ".join(m.subscribe) or "no topic",
+            m.publish_tracks or "no topic",
+        )
     if node.resumed_ticks and node.log is not None:
         log.info("fusion node: resumed %d ticks from %s", node.resumed_ticks, node.log.path)
     server = uvicorn.Server(uvicorn.Config(app, **uvicorn_options(node), **tls))
