@@ -242,10 +242,15 @@ def test_a_shared_phd_label_stays_with_the_heaviest_component():
         labels=[4, 4, 4, 2],
         next_label=9,
     )
-    out = _distinct_labels(v, 0.5)
+    out = _distinct_labels(v, threshold=0.5)
     # 0.9 keeps 4, 0.8 keeps 2, 0.7 gets a fresh 9; 0.3 is below the threshold: unchanged
     assert out.labels.tolist() == [4, 9, 4, 2] and out.next_label == 10
-    assert _distinct_labels(PhdIntensity([0.9], [[0.0, 0.0]], [np.eye(2)]), 0.5).labels == [0]
+    assert _distinct_labels(
+        PhdIntensity([0.9], [[0.0, 0.0]], [np.eye(2)]), threshold=0.5
+    ).labels == [0]
+    # with the CPHD: the `top` heaviest (the MAP count), whatever their weights
+    assert _distinct_labels(v, top=2).labels.tolist() == [4, 4, 4, 2]
+    assert _distinct_labels(v, top=3).labels.tolist() == [4, 9, 4, 2]
 
 
 # -- one target ------------------------------------------------------------------------------

@@ -85,3 +85,28 @@ def test_pmb_tracker_runs_through_the_same_loop():
     generic = run_tracker(PMBTracker(pmb), _recording(), times=np.arange(12.0))
     for a, b in zip(tracks, generic):
         np.testing.assert_array_equal(a.means, b.means)
+
+
+def test_cphd_filter_as_a_tracker_keeps_the_map_count_of_tracks():
+    from fusetrack.filters import GMCPHDFilter
+
+    motion = ConstantVelocity(ndim=2, q=0.5)
+    cphd = GMCPHDFilter(motion, [TAG], _birth(), detection_probability=0.95, clutter_intensity=1e-4)
+    tracker = PHDTracker(cphd, max_count=20)
+    state = tracker.initial_state()
+    assert state.intensity.map_count == 0 and state.intensity.max_count == 20
+    zs = _recording()
+    for t in np.arange(12.0):
+        state = tracker.step(state, float(t), [m for m in zs if m.time == t])
+    assert state.intensity.map_count == 2 and len(state.confirmed) == 2
+    assert len({tr.id for tr in state.confirmed}) == 2
+    for s, v in zip(STARTS, VEL):  # one track on each target at the end
+        assert min(np.linalg.norm(tr.belief.mean[:2] - (s + v * 11)) for tr in state.confirmed) < 3
+    assert len(tracker.run(zs, times=np.arange(12.0))) >= 2
+
+
+def test_phd_tracker_refuses_other_filters():
+    from fusetrack.core import ConfigError
+
+    with pytest.raises(ConfigError, match="GMPHDFilter or a GMCPHDFilter"):
+        PHDTracker(object())  # type: ignore[arg-type]
