@@ -4,6 +4,7 @@ model, beside the variant's arithmetic (issue 21, item 2).
     python benchmarks/filters.py [--N 1000 10000 100000] [--steps 5] [--repeats 2]
                                  [--variants NAME ...] [--budget 480] [--threads T]
                                  [--json] [--save | --out PATH]
+    python benchmarks/filters.py --table benchmarks/results/filters.json   # README table
 
 Families and models (scenario builders imported from the experiments / other benchmarks, not
 re-written):
@@ -35,7 +36,8 @@ the algorithm as the paper states it, a transcendental function (exp, log, atan2
 normal/uniform draw counted as one operation, per-step work shared by all particles (an EKF
 bank, a grid FFT) divided by N. ``ns_per_op`` = measured CPU per particle / operations: a
 variant "at its arithmetic" has about the bootstrap's ns per operation; one far above it spends
-its time elsewhere (Python, allocation, memory traffic).
+its time elsewhere (Python, allocation, memory traffic). ``above_arithmetic`` = (CPU time over
+the baseline's) / (operations over the baseline's): 1 at the baseline's cost per operation.
 
 Peers: Stone Soup 1.9.1 has no unscented-proposal or grid/partitioned-proposal particle filter
 (``stonesoup.updater.particle``: plain, Gromov-flow, multi-model, Rao-Blackwellised, Bernoulli,
@@ -393,7 +395,39 @@ def _row(
         row[f"{clock}_relative_to_baseline"] = (
             _results.ratio(t[clock], base[clock]) if base else None
         )
+    # how far above its arithmetic: CPU ratio to the baseline over the operations' ratio (1 =
+    # each operation costs what the baseline's do)
+    row["above_arithmetic"] = _results.ratio(row["cpu_relative_to_baseline"], ops / base_ops)
     return row
+
+
+def markdown(doc: dict[str, Any]) -> str:
+    """The README's table from a results file: one line per variant, N = 10^3, 10^4, 10^5."""
+    rows = [r for r in doc["results"] if "variant" in r]
+    sizes = sorted({r["N"] for r in rows})
+    by = {(r["variant"], r["N"]): r for r in rows}
+    head = ["family", "variant", "ops/particle (N = 1e4)"]
+    for n in sizes:
+        head += [f"ns/particle N={n:.0e}", "x base", "x arith"]
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * 2 + "---:|" * (len(head) - 2)]
+    for name in dict.fromkeys(r["variant"] for r in rows):
+        first = next(r for r in rows if r["variant"] == name)
+        ops = operations(name, 10_000)
+        cells = [first["family"], name, f"{ops:.0f}"]
+        for n in sizes:
+            r = by.get((name, n))
+            if r is None:
+                cells += ["skipped", "", ""]
+                continue
+            rel = r["cpu_relative_to_baseline"]
+            above = _results.ratio(rel, r["ops_relative_to_baseline"])
+            cells += [
+                f"{r['cpu_ns_per_particle']:.0f}",
+                f"{rel:.1f}" if rel is not None else "",
+                f"{above:.1f}" if above is not None else "",
+            ]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
 
 
 def _line(r: dict[str, Any]) -> str:
@@ -416,7 +450,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--budget", type=float, default=480.0, help="CPU seconds for all timings")
     ap.add_argument("--json", action="store_true")
     _results.add_arguments(ap)
+    ap.add_argument("--table", type=Path, default=None, help="print a results file as markdown")
     args = ap.parse_args(argv)
+    if args.table is not None:
+        print(markdown(_results.load(args.table)))
+        return 0
     if args.threads is not None and args.threads < 1:
         ap.error("--threads must be >= 1")
     if min(args.N) < 1 or args.steps < 1 or args.repeats < 1:

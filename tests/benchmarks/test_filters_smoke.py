@@ -30,6 +30,9 @@ def test_one_variant_per_family_runs(capsys, tmp_path):
     doc = json.loads(out.read_text())
     assert doc["metadata"]["command"].startswith("python benchmarks/filters.py")
     assert doc["results"][-1]["skipped"] == []
+    assert all(r["above_arithmetic"] is not None for r in rows if "variant" in r)
+    table = filters.markdown(doc).splitlines()
+    assert len(table) == 2 + len(timed) and "| kushwaha2010 | detection-function PF |" in table[-1]
 
 
 def test_operation_counts_follow_the_algorithms():
