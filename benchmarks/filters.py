@@ -300,7 +300,8 @@ def _kushwaha_case(detection: bool) -> Case:
                 ]
                 for t in range(steps)
             ]
-            belief0 = DetectionParticleFilter.initial_belief(filt, pos, 8.0, rng)  # type: ignore[arg-type]
+            # the same initial cloud (initial_belief only uses the shared engine's helpers)
+            belief0 = DetectionParticleFilter.initial_belief(filt, pos, 8.0, rng)
 
         def run() -> object:
             b = belief0
