@@ -52,3 +52,20 @@ def test_two_bearings_localise_the_target_and_the_filter_is_pure():
     assert np.isfinite(ll) and np.linalg.norm(position_estimate(b2)[0] - target) < 0.8
     with pytest.raises(MeasurementError, match="sensor_id"):
         pf.update(b1, [Measurement(0.0, "nobody", values)])
+
+
+@pytest.mark.parametrize("heading", [0.3, -2.0])  # theta + pi below 0 / above 2 pi
+@pytest.mark.parametrize("sampling", [BEAMS, AngularSampling.camera_bins(1.0, 160)])
+def test_one_pass_log_likelihood_is_the_log_of_the_likelihood(sampling, heading):
+    """The kernel path of a sampled detection function gives exactly log(likelihood), for
+    wrapped beams and for bins held at their ends, over batched particles, and 0 (the neutral
+    value) for a flat function."""
+    rng = np.random.default_rng(0)
+    sensor = DetectionFunctionSensor("A", (5.0, 4.0), heading, sampling=sampling)
+    z = 1.0 + rng.random(sampling.size)
+    x = rng.normal(10.0, 8.0, (3, 500, 4))
+    expected = np.log(np.maximum(sensor.likelihood(z, x[..., :2]), 1e-300))
+    got = sensor.log_likelihood(z, x)
+    assert got.shape == (3, 500)
+    np.testing.assert_array_equal(got, expected)
+    assert np.all(sensor.log_likelihood(np.full(sampling.size, 2.0), x) == 0.0)

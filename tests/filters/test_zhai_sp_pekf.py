@@ -7,7 +7,14 @@ from fusetrack.core import Filter, Gaussian, Measurement
 from fusetrack.core.errors import UnknownSensorError
 from fusetrack.filters import KalmanFilter, run_filter
 from fusetrack.filters.sis import ProposalParticleFilter
-from fusetrack.filters.sp_pekf import BankState, SPPEKFBank, SPPEKFProposal, repair_covariance
+from fusetrack.filters.sp_pekf import (
+    BankState,
+    SPPEKFBank,
+    SPPEKFProposal,
+    gaussian_draw,
+    gaussian_draw_rows,
+    repair_covariance,
+)
 from fusetrack.motion import ConstantVelocity
 from fusetrack.sensors import PositionFix
 
@@ -112,3 +119,22 @@ def test_the_bank_is_a_filter_and_predict_carries_the_channel_weights():
     np.testing.assert_allclose(silent.mean, pred.mean, atol=1e-12)
     with pytest.raises(UnknownSensorError, match="sensor_id"):
         bank.update(pred, [Measurement(1.0, "nobody", [0.0])])
+
+
+@pytest.mark.parametrize("batch", [(), (3,)])
+def test_drawing_chosen_rows_gives_those_rows_of_the_full_draw(batch):
+    """gaussian_draw_rows (MMPF-SP: each particle drawn from its own regime's bank only) returns
+    exactly the chosen rows of gaussian_draw and leaves the generator where it leaves it."""
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(*batch, 4, 4))
+    cov = a @ np.swapaxes(a, -1, -2) + np.eye(4)
+    mean = rng.normal(size=(*batch, 4))
+    rows = rng.random((*batch, 200)) < 0.3
+    full, g_full = gaussian_draw(mean, cov, 200, np.random.default_rng(5)), np.random.default_rng(5)
+    g_rows = np.random.default_rng(5)
+    x, log_q = gaussian_draw_rows(mean, cov, rows, g_rows)
+    gaussian_draw(mean, cov, 200, g_full)
+    assert x.shape == (rows.sum(), 4)
+    np.testing.assert_array_equal(x, full[0][rows])
+    np.testing.assert_array_equal(log_q, full[1][rows])
+    assert g_rows.random() == g_full.random()

@@ -39,7 +39,7 @@ from ..motion import MarkovSwitching
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
 from .proposals import Array, LogLikelihood, ProposalContext, Zs
 from .sis import ProposalParticleFilter
-from .sp_pekf import BankState, SPPEKFBank, gaussian_draw
+from .sp_pekf import BankState, SPPEKFBank, gaussian_draw_rows
 
 IntArray = NDArray[np.intp]
 
@@ -232,10 +232,11 @@ class RegimeSwitchingProposal:
             predicted = steppers[r].predict(banks[r], dt, rng)  # type: ignore[arg-type]
             bs = steppers[r].update_aligned(predicted, zs)  # Eq. 54
             banks[r] = bs
-            draw, log_q = gaussian_draw(bs.mean, bs.total_cov, prev.shape[-2], rng)
-            x = np.where(sel[..., None], draw, x)
-            lt = np.asarray(model.log_density(draw, prev, dt))
-            log_r = np.where(sel, lt - log_q, log_r)  # Eq. 53 (likelihood added by the filter)
+            # only regime r's particles are drawn from bank r (the generator advances by all N)
+            draw, log_q = gaussian_draw_rows(bs.mean, bs.total_cov, sel, rng)
+            x[sel] = draw
+            lt = np.asarray(model.log_density(draw, prev[sel], dt))
+            log_r[sel] = lt - log_q  # Eq. 53 (likelihood added by the filter)
         return x, log_r, RegimeState(modes, len(self.models), tuple(banks))
 
     def _from_cells(

@@ -271,14 +271,42 @@ def gaussian_draw(
     ``jitter`` on the diagonal keeps a (nearly) singular covariance usable.
     """
     d = mean.shape[-1]
-    scale = np.maximum(np.trace(cov, axis1=-2, axis2=-1) / d, 1e-300)
-    c = cov + (jitter * scale)[..., None, None] * np.eye(d)
-    L = np.linalg.cholesky(c)
+    L, logdet = _jittered_factor(cov, jitter)
     e = rng.standard_normal((*mean.shape[:-1], n, d))
     x = mean[..., None, :] + np.einsum("...ij,...nj->...ni", L, e)
-    logdet = 2.0 * np.sum(np.log(np.diagonal(L, axis1=-2, axis2=-1)), axis=-1)
     log_q = -0.5 * (np.sum(e * e, axis=-1) + logdet[..., None] + d * _LOG_2PI)
     return x, log_q
+
+
+def gaussian_draw_rows(
+    mean: Array, cov: Array, rows: NDArray[np.bool_], rng: np.random.Generator, jitter: float = 1e-9
+) -> tuple[Array, Array]:
+    """The rows ``rows (..., n)`` of :func:`gaussian_draw` ``(mean, cov, n, rng)``: the same
+    normals are drawn (the generator advances as there), only the chosen rows are transformed.
+
+    Returns ``x (M, d)``, ``log q (M,)`` for the ``M`` true entries of ``rows`` in C order (what
+    ``array[rows]`` selects), so that a caller drawing each particle from one of several
+    Gaussians pays the transform once per particle, not once per Gaussian.
+    """
+    d = mean.shape[-1]
+    L, logdet = _jittered_factor(cov, jitter)
+    e = rng.standard_normal((*mean.shape[:-1], rows.shape[-1], d))[rows]
+    batch = (*mean.shape[:-1], rows.shape[-1])
+    if mean.ndim == 1:  # one Gaussian: no per-row copies of its factor
+        x = mean + np.einsum("ij,nj->ni", L, e)
+    else:
+        Ls = np.broadcast_to(L[..., None, :, :], (*batch, d, d))[rows]
+        x = np.broadcast_to(mean[..., None, :], (*batch, d))[rows] + np.einsum("nij,nj->ni", Ls, e)
+    ld = np.broadcast_to(logdet[..., None], batch)[rows]
+    return x, -0.5 * (np.sum(e * e, axis=-1) + ld + d * _LOG_2PI)
+
+
+def _jittered_factor(cov: Array, jitter: float) -> tuple[Array, Array]:
+    """Cholesky factor of ``cov`` plus a relative ``jitter`` on the diagonal, and its log det."""
+    d = cov.shape[-1]
+    scale = np.maximum(np.trace(cov, axis1=-2, axis2=-1) / d, 1e-300)
+    L = np.linalg.cholesky(cov + (jitter * scale)[..., None, None] * np.eye(d))
+    return L, 2.0 * np.sum(np.log(np.diagonal(L, axis1=-2, axis2=-1)), axis=-1)
 
 
 @dataclass

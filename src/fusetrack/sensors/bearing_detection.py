@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core import MeasurementError, invalid
 from .detection_function import AngularSampling, interpolate
+from .detection_kernel import log_sampled_detection
 
 Array = NDArray[np.float64]
 
@@ -77,5 +78,30 @@ class DetectionFunctionSensor:
         return np.asarray(interpolate(self.sampling, density, theta) + self.floor / (2 * np.pi))
 
     def log_likelihood(self, z: ArrayLike, x: ArrayLike) -> Array:
-        """``log λ̃(θ(x))`` for particles ``x (..., >= 2)`` (Kushwaha 2010, Eq. 30 factor)."""
-        return np.log(np.maximum(self.likelihood(z, np.asarray(x, float)[..., :2]), 1e-300))
+        """``log λ̃(θ(x))`` for particles ``x (..., >= 2)`` (Kushwaha 2010, Eq. 30 factor).
+
+        A sampled function (beams) takes one pass of :func:`.detection_kernel.log_sampled_detection`
+        (the same numbers as ``log(likelihood(z, x))``)."""
+        xy = np.asarray(x, float)[..., :2]
+        v = np.asarray(z, float)
+        if self.sampling is None or v.ndim != 1 or xy.ndim < 1 or xy.shape[-1] != 2:
+            return np.log(np.maximum(self.likelihood(v, xy), 1e-300))
+        self.sampling.check(v)
+        v = v - v.min()
+        total = v.sum()
+        if not total > 0:
+            return np.zeros(xy.shape[:-1])
+        s = self.sampling
+        flat = np.ascontiguousarray(xy.reshape(-1, 2))
+        out = log_sampled_detection(
+            flat,
+            float(self.position[0]),
+            float(self.position[1]),
+            float(self.heading),
+            float(s.start),
+            float(s.step),
+            v / (total * s.step),
+            bool(s.periodic),
+            float(self.floor / (2 * np.pi)),
+        )
+        return out.reshape(xy.shape[:-1])
