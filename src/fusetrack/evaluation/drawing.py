@@ -166,7 +166,7 @@ def _camera_fields(cameras: Any) -> list[tuple[np.ndarray, float, float]]:
 def draw_scene(
     ax: plt.Axes,
     room: Any = None,
-    occluders: Sequence[ArrayLike | tuple[ArrayLike, float]] = (),
+    occluders: Sequence[Any] = (),  # polygons (k, 2) or (centre, radius) discs
     cameras: Any = (),
     sensors: Sequence[tuple[str, ArrayLike]] = (),
     *,
