@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
 
 import matplotlib
 
@@ -13,28 +12,38 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .drawing import (
+    distinct_style,
+    draw_covariance_ellipse,
+    draw_grid_belief,
+    draw_particles,
+    draw_scene,
+    draw_tracks,
+    figure,
+    label_axes,
+)
+
+__all__ = [
+    "distinct_style",
+    "draw_covariance_ellipse",
+    "draw_grid_belief",
+    "draw_particles",
+    "draw_scene",
+    "draw_tracks",
+    "figure",
+    "label_axes",
+    "plot_series",
+    "plot_trajectories",
+    "save",
+    "shade_intervals",
+]
+
 
 def save(fig: plt.Figure, path: Path) -> Path:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
-
-
-_LINESTYLES = ("-", "--", "-.", ":")
-_MARKERS = ("o", "s", "^", "D", "v", "x", "P", "*")
-
-
-def distinct_style(index: int, n_points: int) -> dict[str, Any]:
-    """Colour, line style and sparse markers of the ``index``-th curve: curves that lie on top
-    of each other (filters that agree) stay distinguishable, also in grey-scale print."""
-    return {
-        "color": f"C{index % 10}",
-        "linestyle": _LINESTYLES[index % len(_LINESTYLES)],
-        "marker": _MARKERS[index % len(_MARKERS)],
-        "markevery": max(1, n_points // 12) + index,  # offset so the markers do not coincide
-        "markersize": 4,
-    }
 
 
 def shade_intervals(

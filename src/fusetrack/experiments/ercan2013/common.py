@@ -16,7 +16,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from matplotlib.patches import Circle, Polygon, Wedge
 from pydantic import Field
 
 from ...core import ConfigError, invalid
@@ -196,36 +195,18 @@ def room_plot(
     fov_length: float | None = None,
 ) -> Path:
     """The room, its cameras with numbered field-of-view wedges, occluders, object and track."""
-    fig, ax = plt.subplots(figsize=(6.0, 6.0))
-    room = scene.room
-    ax.add_patch(Polygon(room.boundary, closed=True, fill=False, lw=2))
-    for o in room.static_occluders:
-        ax.add_patch(Polygon(o, closed=True, color="k"))
-    x0, x1, y0, y1 = room.bounding_box
-    reach = fov_length or 0.18 * max(x1 - x0, y1 - y0)
-    cams = scene.cameras
-    for i in range(len(cams)):
-        c = cams.positions[i]
-        yaw, half = np.degrees(cams.yaws[i]), np.degrees(cams.fovs[i]) / 2
-        ax.add_patch(Wedge(c, reach, yaw - half, yaw + half, alpha=0.12, color="tab:blue"))
-        ax.plot(*c, "s", color="tab:blue", ms=6)
-        ax.annotate(str(i + 1), c, textcoords="offset points", xytext=(4, 4), fontsize=9)
-    if occluders is not None:
-        for p in occluders:
-            ax.add_patch(Circle(p, scene.diameter / 2, color="tab:gray", alpha=0.8))
+    fig, axes = plots.figure(1, 1, size=(6.0, 6.0))
+    ax = axes[0, 0]
+    discs = [(p, scene.diameter / 2) for p in occluders] if occluders is not None else []
+    plots.draw_scene(ax, scene.room, occluders=discs, cameras=scene.cameras, fov_length=fov_length)
     if truth is not None:
         ax.plot(truth[:, 0], truth[:, 1], "-", color="tab:green", lw=1.2, label="object path")
     if estimate is not None:
-        ax.plot(estimate[:, 0], estimate[:, 1], "-", color="tab:red", lw=0.8, label="estimate")
+        ax.plot(estimate[:, 0], estimate[:, 1], "--", color="tab:red", lw=0.8, label="estimate")
     if obj is not None:
         ax.plot(*obj, "*", color="tab:red", ms=12, label="object")
-    pad = 0.05 * max(x1 - x0, y1 - y0)
-    ax.set_xlim(x0 - pad, x1 + pad)
-    ax.set_ylim(y0 - pad, y1 + pad)
-    ax.set_aspect("equal")
-    ax.set_title(title)
-    if truth is not None or obj is not None:
-        ax.legend(fontsize=8, loc="upper right")
+    plots.label_axes(ax, title=title)
+    ax.legend(fontsize=8, loc="upper right")
     return plots.save(fig, path)
 
 

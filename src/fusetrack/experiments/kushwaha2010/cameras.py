@@ -359,17 +359,16 @@ def _figures(ctx: RunContext, df: pd.DataFrame, table: pd.DataFrame, setup: str)
 
     fig, ax = plt.subplots(figsize=(7, 3.6))
     run0 = df[df.experiment_run == 0]
-    for name in TRACKERS:
+    for k, name in enumerate(TRACKERS):
         d = run0[run0.tracker == name]
-        ax.plot(d.t, d.err3d, label=name)
+        ax.plot(d.t, d.err3d, label=name, lw=1.1, **plots.distinct_style(k, len(d)))
     ax.set_yscale("log")
-    ax.set_xlabel("time step")
-    ax.set_ylabel("3-D error (m)")
+    plots.label_axes(ax, "time step", "3-D error (m)")
     ax2 = ax.twinx()
     d = run0[run0.tracker == "T0"]
     ax2.step(d.t, d.participating, "k--", where="mid", alpha=0.5, label="participating cameras")
     ax2.set_ylabel("participating cameras")
-    ax.legend(fontsize=7, ncol=3)
+    ax.legend(handles=[*ax.get_lines(), *ax2.get_lines()], fontsize=7, ncol=3)
     ax.set_title(f"Setup {setup.upper()}, run 0: error and participating cameras (Figs 47/53)")
     names.append(plots.save(fig, ctx.figure_path(f"error_vs_time_{setup}")).name)
 

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import linear_sum_assignment
 
+from ...core import Track
 from ...evaluation import (
     Claim,
     ClaimKinds,
@@ -212,26 +213,19 @@ on its best piece.
 
 
 def _figure(ctx: RunContext, tracks: dict[int, Any], truth_rows: Any) -> Any:
-    import matplotlib.pyplot as plt
-
     truth = np.array(truth_rows)
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
+    fig, axes2 = plots.figure(1, 2, size=(10, 3.6))
+    axes = axes2[0]
+    found = [Track(np.asarray(times, float), np.asarray(pos, float), id=k)
+             for k, (times, pos) in tracks.items()]  # fmt: skip
+    plots.draw_tracks(axes[0], found, truth=[truth[:, i, :2] for i in range(truth.shape[1])])
     for i in range(truth.shape[1]):
-        axes[0].plot(truth[:, i, 0], truth[:, i, 1], "k-", lw=2)
-        axes[1].plot(0.25 * np.arange(len(truth)), truth[:, i, 0], "k-", lw=2)
-    for k, (times, pos) in tracks.items():
-        p = np.asarray(pos)
-        axes[0].plot(p[:, 0], p[:, 1], "o-", ms=3, label=f"track {k}")
-        axes[1].plot(0.25 * np.asarray(times), p[:, 0], "o-", ms=3)
+        axes[1].plot(0.25 * np.arange(len(truth)), truth[:, i, 0], "k-", lw=2, alpha=0.6)
+    for k, track in enumerate(found):
+        axes[1].plot(0.25 * track.times, track.means[:, 0], **plots.distinct_style(k, len(track)))
     axes[0].set_xlim(0, 35)
     axes[0].set_ylim(0, 20)
-    axes[0].set_xlabel("x (m)")
-    axes[0].set_ylabel("y (m)")
-    axes[0].set_title("MCMCDA tracks (Fig. 26a analogue), truth in black")
+    plots.label_axes(axes[0], title="MCMCDA tracks (Fig. 26a analogue), truth in black")
     axes[0].legend(fontsize=7)
-    axes[1].set_xlabel("time (s)")
-    axes[1].set_ylabel("x (m)")
-    axes[1].set_title("x against time (Fig. 26b analogue)")
-    for ax in axes:
-        ax.grid(alpha=0.3)
+    plots.label_axes(axes[1], "time (s)", "x (m)", title="x against time (Fig. 26b analogue)")
     return plots.save(fig, ctx.figure_path("crossing_tracks"))
