@@ -15,8 +15,7 @@ import numpy as np
 from matplotlib.patches import Circle, Ellipse, Polygon, Wedge
 from numpy.typing import ArrayLike
 
-from ..core import GridBelief, Particles, Track
-from ..core.errors import ShapeError, invalid
+from ..core import GridBelief, Particles, ShapeError, Track, invalid
 
 _LINESTYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "^", "D", "v", "x", "P", "*")
