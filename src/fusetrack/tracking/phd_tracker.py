@@ -22,7 +22,7 @@ from ..filters import (
     extract_states,
 )
 from .protocol import TrackView
-from .recording import run_tracker
+from .recording import run_tracker, with_silent_sensors
 
 
 @dataclass(frozen=True)
@@ -93,15 +93,9 @@ class PHDTracker:
     ) -> PHDTrackerState:
         dt = 0.0 if state.time is None else max(0.0, time - state.time)
         v: Any = self.filter.predict(state.intensity, dt, rng)  # type: ignore[arg-type]
-        heard = {m.sensor_id for m in measurements}
-        sensors = self._phd.sensors
-        looked = sensors if scanned is None else scanned
-        silent = [
-            Measurement(time, sid, np.full(int(getattr(s, "value_size", s.dim)), np.nan))
-            for sid, s in sensors.items()
-            if sid in looked and sid not in heard
-        ]
-        v = self.filter.update(v, [*measurements, *silent], rng)
+        v = self.filter.update(
+            v, with_silent_sensors(measurements, self._phd.sensors, time, scanned), rng
+        )
         if isinstance(v, CphdBelief):
             v = CphdBelief(_distinct_labels(v.intensity, top=v.map_count), v.cardinality)
             extracted = extract_cphd_states(v)

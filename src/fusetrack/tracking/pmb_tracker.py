@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core import ConfigError, Gaussian, Measurement, Track, check_probability, invalid
 from .pmb import PMBDensity, PMBFilter
 from .protocol import TrackView
-from .recording import run_tracker
+from .recording import run_tracker, with_silent_sensors
 
 EXTRACTIONS = ("threshold", "map")
 
@@ -78,14 +78,9 @@ class PMBTracker:
     ) -> PMBTrackerState:
         dt = 0.0 if state.time is None else max(0.0, time - state.time)
         density = self.filter.predict(state.density, dt, rng)
-        heard = {m.sensor_id for m in measurements}
-        looked = self.filter.sensors if scanned is None else scanned
-        silent = [
-            Measurement(time, sid, np.full(int(getattr(s, "value_size", s.dim)), np.nan))
-            for sid, s in self.filter.sensors.items()
-            if sid in looked and sid not in heard
-        ]
-        density = self.filter.update(density, [*measurements, *silent], rng)
+        density = self.filter.update(
+            density, with_silent_sensors(measurements, self.filter.sensors, time, scanned), rng
+        )
         ids = dict(state.ids)
         tracks = []
         for i in self.extracted(density):

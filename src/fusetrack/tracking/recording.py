@@ -6,7 +6,7 @@ keeps its own richer history (the measurements each track used); the random-fini
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from typing import Any, Literal
 
 import numpy as np
@@ -67,6 +67,25 @@ def ordered_scans(
     )
     ordered = order_by_time([ms[k] for k in index], "reject")
     return ms, scan_groups(ordered, index, times)
+
+
+def with_silent_sensors(
+    measurements: Sequence[Measurement],
+    sensors: Mapping[str, Any],
+    time: float,
+    scanned: Collection[str] | None,
+) -> list[Measurement]:
+    """``measurements`` plus a NaN reading at ``time`` for every sensor in ``scanned`` (default
+    all of ``sensors``) that sent nothing: it looked and saw nothing (the random-finite-set
+    filters' missed-detection term)."""
+    heard = {m.sensor_id for m in measurements}
+    looked = sensors if scanned is None else scanned
+    silent = [
+        Measurement(time, sid, np.full(int(getattr(s, "value_size", s.dim)), np.nan))
+        for sid, s in sensors.items()
+        if sid in looked and sid not in heard
+    ]
+    return [*measurements, *silent]
 
 
 def run_tracker(
