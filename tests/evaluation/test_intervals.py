@@ -8,7 +8,10 @@ import pytest
 from fusetrack.evaluation import (
     interval_values,
     mean_interval,
+    median_interval,
+    median_shown_positive,
     paired_interval,
+    paired_median_interval,
     shown_positive,
     within_margin,
 )
@@ -42,3 +45,21 @@ def test_within_margin_needs_the_whole_interval_inside():
     assert not within_margin((1.0, 0.25), 1.1, 0.3)
     assert not within_margin((float("nan"), 0.0), 1.0, 1.0)
     assert interval_values((1.23456, math.inf)) == [1.235, math.inf]
+
+
+def test_median_interval_by_order_statistics():
+    # n = 15: P(Bin(15, 1/2) <= 3) = 0.0176 <= 0.025 < P(<= 4) = 0.0592, so [x_(4), x_(12)]
+    med, lo, hi = median_interval(np.arange(1.0, 16.0))
+    assert (med, lo, hi) == (8.0, 4.0, 12.0)
+    # n = 6: P(<= 0) = 1/64 <= 0.025: [min, max]; n = 5: 1/32 > 0.025: nothing is shown
+    assert median_interval([3.0, 1.0, 2.0, 6.0, 5.0, 4.0]) == (3.5, 1.0, 6.0)
+    assert median_interval([1.0, 2.0, 3.0, 4.0, 5.0])[1:] == (-math.inf, math.inf)
+
+
+def test_paired_median_ignores_one_diverged_run():
+    a = np.full(12, 1.0)
+    b = np.full(12, 0.8)
+    b[0] = 50.0  # one run of b diverged: the mean says b is worse, the typical run says better
+    assert not shown_positive(paired_interval(b, a))
+    assert median_shown_positive(paired_median_interval(a, b))
+    assert not median_shown_positive(paired_median_interval(b, a))

@@ -13,7 +13,10 @@ from .crlb import (
 from .intervals import (
     interval_values,
     mean_interval,
+    median_interval,
+    median_shown_positive,
     paired_interval,
+    paired_median_interval,
     shown_positive,
     within_margin,
 )
@@ -89,6 +92,8 @@ __all__ = [
     "interval_values",
     "load_yaml",
     "mean_interval",
+    "median_interval",
+    "median_shown_positive",
     "nees",
     "nis",
     "ospa",
@@ -97,6 +102,7 @@ __all__ = [
     "ospa_components",
     "ospa_over_time",
     "paired_interval",
+    "paired_median_interval",
     "parse_options",
     "peak_memory_mb",
     "plane_crlb",

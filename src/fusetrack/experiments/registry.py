@@ -278,6 +278,13 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. V (seed 003)",
         ),
         ExperimentInfo(
+            "kushwaha2010-cameras-area",
+            "kushwaha2010.camera_area:run",
+            "Kushwaha 2010 Ch. V conclusion (H19): T2 against T3 as the target's pixel share "
+            "shrinks (setup A, target scaled), where they cross over",
+            "Kushwaha 2010 Ch. V (seed 003)",
+        ),
+        ExperimentInfo(
             "lee2009-periodic-sweep",
             "lee2009.camera_triggering:run_sweep",
             "Lee 2009 E3.2 (Fig. 3-6): periodic camera cooperation, error against the camera period, 1,000 trials",

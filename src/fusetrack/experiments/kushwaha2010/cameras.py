@@ -73,10 +73,13 @@ SETUPS = {
 }
 
 
-@lru_cache(maxsize=1)
-def appearance_model() -> tuple[EllipsoidTarget, AppearanceModel]:
-    """The synthetic target and its 26-view reference model (rendered, Eqs. 66-69)."""
-    target = EllipsoidTarget()
+@lru_cache(maxsize=8)
+def appearance_model(
+    target: EllipsoidTarget | None = None,
+) -> tuple[EllipsoidTarget, AppearanceModel]:
+    """The synthetic target (default: setup A/B's) and its 26-view reference model (rendered,
+    Eqs. 66-69)."""
+    target = EllipsoidTarget() if target is None else target
     views = cube_viewpoints()
     images, centres, shapes = reference_views(target, views)
     return target, appearance_model_from_views(images, centres, shapes, views)
@@ -134,8 +137,21 @@ def render_scene(config: Mapping[str, Any], rng: np.random.Generator) -> Scene:
     hidden = gap_mask(
         cams, target, truth.positions, truth.quaternions, range(GAP_START, GAP_START + gap)
     )
+    return scene_from_truth(cams, target, model, truth, setup.base, rng, hidden)
+
+
+def scene_from_truth(
+    cams: list[EllipsoidCamera],
+    target: EllipsoidTarget,
+    model: AppearanceModel,
+    truth: Trajectory,
+    base: tuple[float, float, float],
+    rng: np.random.Generator,
+    hidden: np.ndarray | None = None,
+) -> Scene:
+    """Render ``truth`` in every camera (``hidden[t, n]``: occluded) and build the network."""
     frames = render_frames(cams, target, truth, rng, hidden=hidden)
-    net = CameraNetwork.build(cams, model, target.semi_axes, setup.base)
+    net = CameraNetwork.build(cams, model, target.semi_axes, base)
     measurements = [
         net.measurements(float(t), [features_from_rgb(img) for img in row])
         for t, row in enumerate(frames.images)
@@ -184,6 +200,7 @@ def error_rows(
 ) -> list[dict[str, Any]]:
     """One row per step (and per estimate: T4 adds its Eq. 103 closed form) with the errors."""
     frames, truth, cams = scene.frames, scene.truth, scene.cameras
+    image_pixels = int(np.prod(cams[0].size))
     rows: list[dict[str, Any]] = []
     for t, belief in enumerate(beliefs, start=1):
         estimates = {
@@ -205,7 +222,7 @@ def error_rows(
                     "err2d": float(np.mean(err2d)) if err2d else np.nan,
                     "participating": len(seen),
                     "pixel_fraction": float(
-                        frames.target_pixels[t, seen].mean() / IMAGE_PIXELS if len(seen) else 0.0
+                        frames.target_pixels[t, seen].mean() / image_pixels if len(seen) else 0.0
                     ),
                     "bytes": int(belief.sent.bytes_sent) if own else np.nan,
                     "link_bytes": int(belief.sent.link_bytes) if own else np.nan,
