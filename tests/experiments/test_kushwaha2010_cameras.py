@@ -45,3 +45,30 @@ def test_gap_leaves_exactly_one_camera():
     assert frames.participating[GAP_START].sum() == 1
     assert frames.participating[GAP_START + 1].sum() == 1
     assert frames.participating[GAP_START - 1].sum() >= 2
+
+
+def _synthetic_b(errors: dict[str, np.ndarray]) -> pd.DataFrame:
+    """Rows of setup B (every step 1-39 of each run) with a constant error per run and tracker."""
+    rows = [
+        {"tracker": k, "experiment_run": r, "rotating": r >= 10, "t": t, "err3d": float(e[r])}
+        for k, e in errors.items()
+        for r in range(len(e))
+        for t in range(1, 40)
+    ]
+    return pd.DataFrame(rows)
+
+
+def test_median_claims_see_the_typical_run_past_one_diverged_run():
+    from fusetrack.experiments.kushwaha2010.cameras import _median_claims_b
+
+    n = 15
+    errors = {"P": np.full(n, 0.9), "T0": np.full(n, 0.2), "T3": np.full(n, 0.5)}
+    errors |= {"T1": np.full(n, 0.1), "T2": np.full(n, 0.1), "T4": np.full(n, 0.4)}
+    errors["T1"][3] = 8.0  # one diverged run: T1's mean (0.63) is above T0's, T3's and T4's
+    claims = {c.id: c for c in _median_claims_b(_synthetic_b(errors))}
+    assert claims["b_kernel_best_median"].holds
+    assert claims["b_t0_second_median"].holds and claims["b_p_poor_median"].holds
+    errors["T1"][:6] = 0.3  # T1 behind T0 in 6 of 15 runs: the median still ahead, not shown
+    assert not {c.id: c for c in _median_claims_b(_synthetic_b(errors))}[
+        "b_kernel_best_median"
+    ].holds
