@@ -204,3 +204,41 @@ def test_factorised_powers_fill_a_harmonic_a_node_did_not_send():
     filled, grid = factorised_powers(f0, powers, freqs)
     np.testing.assert_allclose(filled[:, 0, :], full, rtol=1e-6)
     np.testing.assert_allclose(grid[0, 0], [50.0, 100.0, 150.0, 200.0])
+
+
+def test_range_aware_powers_follow_the_hypothesised_ranges():
+    """A-IV-7's source-level variant: with PSD powers that decay as 1/r² from the source, the
+    range-aware share at the true position is the exact Eq. 56 share; elsewhere its levels follow
+    the ranges from the hypothesised position, not the PSD's."""
+    from fusetrack.perception.source_localisation.harmonic import _Posterior
+
+    rng = np.random.default_rng(10)
+    net = AcousticNetwork(SENSORS)
+    (s,) = random_sources(1, rng, avoid=SENSORS, f0s=[83.0], positions=[[3.0, 1.5]])
+    lam2 = 1.0 / np.hypot(*(net.positions - s.position).T) ** 2
+    powers = (lam2[:, None] * s.energies[None, :])[:, None, :]  # (K, M=1, H)
+    freqs = np.broadcast_to(s.frequencies, powers.shape)
+    B = np.ones((4, 36))
+    ranged = _Posterior(net, B, powers, freqs, BeamformModel(powers="range-aware"), None)
+    fixed = _Posterior(net, B, powers, freqs, BeamformModel(), None)
+    np.testing.assert_allclose(ranged.share(0, s.position), fixed.share(0, s.position), rtol=1e-9)
+    elsewhere = np.array([8.0, 4.0])
+    r2 = np.hypot(*(net.positions - elsewhere).T) ** 2
+    # ranged / fixed at node k = L / r_k(elsewhere)² / λ_k² (fixed keeps the PSD's λ_k²)
+    per_node = ranged.share(0, elsewhere).mean(-1) / fixed.share(0, elsewhere).mean(-1)
+    level = per_node * r2 * lam2
+    np.testing.assert_allclose(level / level[0], 1.0, rtol=1e-9)
+    assert np.ptp(per_node) > 0.5 * per_node.max()
+
+
+def test_range_aware_localises_two_sources_without_directivity():
+    rng = np.random.default_rng(8)
+    net = AcousticNetwork(SENSORS)
+    srcs = random_sources(
+        2, rng, avoid=SENSORS, f0s=[71.3, 118.6], positions=[[2.5, 1.5], [7.5, 3.5]]
+    )
+    feats = _features(srcs, net, rng)
+    first = localise(net, feats, 2, rng, model=BeamformModel(n_samples=20))
+    model = BeamformModel(n_samples=20, powers="range-aware")
+    res = localise(net, feats, 2, rng, model=model, f0_init=first.f0, start=first.positions)
+    assert match_error(res.positions, [s.position for s in srcs])[0] < 0.3

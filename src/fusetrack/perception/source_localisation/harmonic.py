@@ -33,6 +33,10 @@ Where this departs from the printed equations (spec 003 §5, A-IV-*):
   per-node powers are fitted as ``λ_k² ψ_h`` over all nodes (:func:`factorised_powers`: Eq. 43 per
   node treats a harmonic a node did not send as silent); and each Gibbs sweep ends with Metropolis
   swaps of two sources' positions, which coordinate-wise moves cannot make.
+* ``powers="range-aware"`` (A-IV-7's alternative): the harmonic energies are a source-level
+  spectrum decaying as ``1/r²`` from the hypothesised position, ``λ_k^(m)² ψ_h = L_m ψ̂_h^(m) / r_km²``,
+  with ``ψ̂^(m)`` the shape of the factorised spectrum and ``L_m`` the least-squares level of the
+  PSD powers given the ranges; the model then reads range as well as bearing from the levels.
 """
 
 from __future__ import annotations
@@ -82,8 +86,9 @@ class BeamformModel:
     """Settings of the localisation step: the ``field_box`` (uniform prior), relative beamform
     noise ``rel_sigma`` (``σ_B,k = rel_sigma · std_α B_k``), the initial grid step (m), Gibbs
     samples, slice width (m), the shared-harmonic power rule, and whether the per-node harmonic
-    powers are read as Eq. 43 prints them (``"per-node"``) or fitted as ``λ_k² ψ_h``
-    (``"factorised"``, :func:`factorised_powers`)."""
+    powers are read as Eq. 43 prints them (``"per-node"``), fitted as ``λ_k² ψ_h``
+    (``"factorised"``, :func:`factorised_powers`) or tied to each source's range
+    (``"range-aware"``: ``L_m ψ̂_h / r_km²``, A-IV-7; ranges floored at ``min_range`` m)."""
 
     field_box: tuple[float, float, float, float] = (0.0, 10.0, 0.0, 5.0)
     rel_sigma: float = 0.05
@@ -91,7 +96,8 @@ class BeamformModel:
     n_samples: int = 40
     width: float = 1.0
     shared_power: Literal["paper", "incoherent"] = "paper"
-    powers: Literal["per-node", "factorised"] = "factorised"
+    powers: Literal["per-node", "factorised", "range-aware"] = "factorised"
+    min_range: float = 0.1
     min_share: float = 0.01
     prior_sigma: float = 1.0  # m: N(X | X_{t-1}, prior_sigma² I) when a previous estimate is given
 
@@ -122,13 +128,24 @@ class _Posterior:
         self.om = beamforms - beamforms.mean(-1, keepdims=True)  # centred observations
         self.ss_o = (self.om * self.om).sum(-1)
         self.evaluations = 0
+        self.levels = powers.sum(-1)  # (K, M): each source's harmonic power at each node
+        if model.powers == "range-aware":  # one spectrum shape per source, the same at every node
+            shape = powers.sum(0) / np.maximum(powers.sum(axis=(0, 2)), 1e-300)[:, None]  # (M, H)
+            powers = np.broadcast_to(shape, powers.shape)
         self.models = [
             SourceBeamform(network, powers[:, m], freqs[:, m]) for m in range(powers.shape[1])
         ]
 
     def share(self, m: int, x: ArrayLike) -> Array:
         self.evaluations += int(np.prod(np.shape(x)[:-1], dtype=int))
-        return self.models[m](x)
+        out = self.models[m](x)
+        if self.cfg.powers != "range-aware":
+            return out
+        xa = np.asarray(x, float)[..., None, :]
+        r = np.maximum(np.sqrt(((xa - self.net.positions) ** 2).sum(-1)), self.cfg.min_range)
+        g = r**-2  # (..., K): 1/r² decay from the hypothesised position
+        level = (g * self.levels[:, m]).sum(-1) / (g * g).sum(-1)  # least-squares L_m
+        return np.asarray(out * (level[..., None] * g)[..., None])
 
     def energy(self, total: Array, x_all: Array) -> Array:
         """``Σ_k ℓ_k`` plus the prior, for summed shares ``total (..., K, Q)`` and positions
@@ -163,10 +180,12 @@ def localise(
     model: BeamformModel = BeamformModel(),
     f0_init: ArrayLike | None = None,
     previous: ArrayLike | None = None,
+    start: ArrayLike | None = None,
 ) -> LocalisationResult:
     """Algorithm 1 for one time step: ML fundamentals from the PSDs, then the MAP positions from the
     beamforms by Gibbs sampling with slice-sampled coordinates (``model.n_samples`` sweeps), started
-    from a greedy grid search. ``previous (M, 2)`` is ``X_{t-1}`` (adds its Gaussian prior)."""
+    from a greedy grid search, or from ``start (M, 2)`` (e.g. another model's estimate) where that
+    has the lower ``-log p``. ``previous (M, 2)`` is ``X_{t-1}`` (adds its Gaussian prior)."""
     if len(features) != network.n_sensors:
         raise ShapeError(invalid("len(features)", len(features), f"{network.n_sensors} sensors"))
     if n_sources < 1:
@@ -179,13 +198,18 @@ def localise(
         psds, n_sources, rng, model=frequency_model, n_samples=model.n_samples, init=f0_init
     )
     powers, freqs = harmonic_powers(freq.f0, psds, frequency_model, model.shared_power)
-    if model.powers == "factorised":
+    if model.powers in ("factorised", "range-aware"):
         powers, freqs = factorised_powers(freq.f0, powers, freqs)
     share = powers.sum(axis=(0, 2))
     supported = share > model.min_share * max(float(share.sum()), 1e-300)
     prev = None if previous is None else np.asarray(previous, float).reshape(n_sources, 2)
     post = _Posterior(network, B, powers, freqs, model, prev)
     X, shares = _initial_positions(post, share, prev)
+    if start is not None:
+        X1 = np.asarray(start, float).reshape(n_sources, 2)
+        shares1 = np.stack([post.share(m, X1[m]) for m in range(n_sources)])
+        if post.energy(shares1.sum(0), X1) < post.energy(shares.sum(0), X):
+            X, shares = X1, shares1
     best_X, best, samples = _gibbs_positions(post, X, shares, rng)
     return LocalisationResult(
         freq.f0,
