@@ -285,6 +285,13 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. V (seed 003)",
         ),
         ExperimentInfo(
+            "kushwaha2010-cameras-gap",
+            "kushwaha2010.camera_gap:run",
+            "Kushwaha 2010 Ch. V setup B at QVGA (Fig. 53, H20): the target leaves all views but "
+            "one for two steps; does T2 re-converge and T0 not?",
+            "Kushwaha 2010 Ch. V (seed 003)",
+        ),
+        ExperimentInfo(
             "lee2009-periodic-sweep",
             "lee2009.camera_triggering:run_sweep",
             "Lee 2009 E3.2 (Fig. 3-6): periodic camera cooperation, error against the camera period, 1,000 trials",

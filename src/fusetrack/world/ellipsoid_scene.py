@@ -93,13 +93,15 @@ def smooth_trajectory(
     turn_sd: float = 0.25,
     rotation_deg: float = 0.0,
     start: ArrayLike | None = None,
+    heading: float | None = None,
 ) -> Trajectory:
     """A smooth random path in the box ``[low, high]`` at ``speed`` m/step (spec Sec. 3.7).
 
     The heading turns by ``N(0, turn_sd^2)`` rad per step and is steered back towards the box
     centre near its walls; the height drifts slowly. With ``rotation_deg > 0`` the target turns by
     that angle per step about a random fixed body axis (the "rotating target" runs), otherwise
-    it keeps a random initial orientation.
+    it keeps a random initial orientation. ``start`` and ``heading`` (rad) fix the first position
+    and direction of travel (default: random).
     """
     lo = np.asarray(low, float)
     hi = np.asarray(high, float)
@@ -108,7 +110,8 @@ def smooth_trajectory(
     centre = 0.5 * (lo + hi)
     pos = np.empty((steps, 3))
     pos[0] = rng.uniform(lo + 0.2 * (hi - lo), hi - 0.2 * (hi - lo)) if start is None else start
-    heading = rng.uniform(-np.pi, np.pi)
+    drawn = rng.uniform(-np.pi, np.pi)
+    heading = drawn if heading is None else float(heading)
     climb = 0.0
     margin = 0.15 * (hi - lo)
     for t in range(1, steps):
