@@ -115,15 +115,17 @@ class VehiclePass:
     speed: float
     f0: float = 50.0
     grey: float = 40.0
+    engine_offset: float = 1.5  # m ahead of the centre of mass
 
     def centre(self, t: NDArray[np.float64] | float) -> NDArray[np.float64]:
         tt = np.asarray(t, float)
         return np.stack([self.x0 + self.speed * tt, np.full_like(tt, self.lane_y)], axis=-1)
 
     def engine(self, t: NDArray[np.float64] | float) -> NDArray[np.float64]:
-        """The engine (the acoustic source) sits 1.5 m ahead of the centre of mass."""
+        """The engine (the acoustic source) sits ``engine_offset`` (1.5 m) ahead of the centre
+        of mass."""
         c = self.centre(t)
-        c[..., 0] += 1.5 * np.sign(self.speed)
+        c[..., 0] += self.engine_offset * np.sign(self.speed)
         z = np.full((*c.shape[:-1], 1), ENGINE_HEIGHT)
         return np.concatenate([c, z], axis=-1)
 
@@ -184,6 +186,8 @@ class SceneConfig:
     false_video_peak: tuple[float, float, float, float] | None = None
     second_source: tuple[float, float] | None = None  # a stationary sound source (x, y)
     beam_alpha: float = 0.5
+    filter_band: tuple[float, float] | None = (100.0, 4000.0)  # band-pass before beamforming (Hz)
+    engine_offset: float = 1.5  # the engine's distance ahead of the centre of mass (m)
     quantise_audio: bool = True  # send λ as the FPGA does: 32-bit sums, 16-bit on the radio
     preroll: float = (
         0.5  # seconds simulated before the vehicle enters the field (smoothing warm-up)
@@ -334,7 +338,7 @@ def tick_likelihoods(layout: Layout, taken: dict[str, Packet]) -> SensorLikeliho
 def _audio_threshold(layout: Layout, config: SceneConfig, rng: np.random.Generator) -> float:
     """99th percentile of max_θ λ over target-free windows (spec 003 §2.5 step 5, [C])."""
     noise_std = 0.1 / 10 ** (config.snr_db / 20)
-    bf = Beamformer(alpha=0.0)
+    bf = Beamformer(alpha=0.0, filter_band=config.filter_band)
     n = bf.window + bf.preroll
     maxima = [bf.energies(noise_std * pink_noise((4, n), rng)).max() for _ in range(24)]
     return float(np.quantile(maxima, 0.99) * 1.5)
@@ -452,7 +456,7 @@ def _audio_packets(
     noise_std = 0.1 / 10 ** (config.snr_db / 20)
     for n_idx, (sid, x, y, heading) in enumerate(layout.audio):
         mics = np.column_stack([array.world_positions((x, y), heading), np.full(4, MIC_HEIGHT)])
-        bf = Beamformer(array, alpha=config.beam_alpha)
+        bf = Beamformer(array, alpha=config.beam_alpha, filter_band=config.filter_band)
         n = bf.window + bf.preroll
         phase = rng.uniform(0, DT)
         ticks = np.arange(t_sim0 + phase, t_end + DT, DT)
@@ -540,6 +544,7 @@ def simulate_single_pass(
     vehicle = random_pass(rng, layout.grid)
     t0, t1 = vehicle.field_interval(layout.grid)
     config = SceneConfig() if scene is None else scene(t0, t1)
+    vehicle = replace(vehicle, engine_offset=config.engine_offset)
     rec = simulate_recording(layout, [vehicle], t0, t1 + tail, config, rng)
     truth = np.array([tr[0] for tr in rec.truth()])
     return SinglePass(vehicle, t0, t1, rec, truth)
