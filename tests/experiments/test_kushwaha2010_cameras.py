@@ -25,7 +25,7 @@ def test_tiny_run_has_every_tracker_and_t0_bytes():
         "rotating": True,
     }
     df = pd.DataFrame(run_once(cfg, 7))
-    assert set(df.tracker) == {*TRACKERS, *ABLATIONS, "T4-eq103"}
+    assert set(df.tracker) == {*TRACKERS, *ABLATIONS, "T4-eq103", "T0-MLE", "T0-MAP"}
     assert np.all(np.isfinite(df.err3d)) and np.all(df.t.isin([1, 2]))
     t0 = df[df.tracker == "T0"]
     assert np.all(t0["bytes"] == 80 + 8 * 50 * t0.cameras_used)
@@ -72,3 +72,26 @@ def test_median_claims_see_the_typical_run_past_one_diverged_run():
     assert not {c.id: c for c in _median_claims_b(_synthetic_b(errors))}[
         "b_kernel_best_median"
     ].holds
+
+
+def test_t0_mle_and_map_are_fused_particles():
+    """Eqs. 83-84: the particle of largest fused weight, and of largest weight x prior."""
+    import numpy as np
+
+    from fusetrack.experiments.kushwaha2010.cameras import render_scene, trackers
+    from fusetrack.filters import TrackerSettings
+
+    scene = render_scene({"setup": "a", "steps": 2, "rotating": False}, np.random.default_rng(2))
+    t0 = trackers(scene.net, TrackerSettings(n_particles=40, n_particles_2d=20))["T0"]
+    truth = scene.truth
+    prior = t0.initial_belief(
+        truth.positions[0], truth.velocities[0], truth.quaternions[0], scene.measurements[0]
+    )
+    post = t0.update(
+        t0.predict(prior, 1.0, np.random.default_rng(0)),
+        scene.measurements[1],
+        np.random.default_rng(1),
+    )
+    states, logw = post.particles.states, post.particles.log_weights
+    np.testing.assert_array_equal(post.extra["MLE"], states[np.argmax(logw)])
+    assert any(np.array_equal(post.extra["MAP"], x) for x in states)

@@ -490,7 +490,11 @@ class Particle3DTracker(_ModalTracker):
             nbytes = STATE_BYTES + WEIGHT_BYTES * s.n_particles * len(used)
             links = STATE_BYTES + sum(WEIGHT_BYTES * s.n_particles * hops(parent, n) for n in used)
             sent = Communication(nbytes, links, len(used))
-            return Fusion(w @ states, used, sent, particles)  # MMSE, Eq. 82
+            # MMSE (Eq. 82) is the estimate; MLE (Eq. 83) and MAP (Eq. 84, the prior N(x0, Σ0)
+            # being the proposal the particles were drawn from) ride along as extras
+            log_prior = -0.5 * np.sum((states - x0) ** 2, axis=1) / s.sigma**2
+            extra = {"MLE": states[np.argmax(total)], "MAP": states[np.argmax(total + log_prior)]}
+            return Fusion(w @ states, used, sent, particles, extra=extra)
         mixtures = {}
         for n in used:
             w = np.exp(logw[n] - logw[n].max())
