@@ -292,6 +292,13 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. V (seed 003)",
         ),
         ExperimentInfo(
+            "kushwaha2010-cameras-occlusion",
+            "kushwaha2010.camera_occlusion:run",
+            "Kushwaha 2010 Ch. V FGH #2 analogue (H24): an occluder crosses two cameras' views for "
+            "five frames; T2 tracks on without re-initialisation?",
+            "Kushwaha 2010 Ch. V (seed 003)",
+        ),
+        ExperimentInfo(
             "lee2009-periodic-sweep",
             "lee2009.camera_triggering:run_sweep",
             "Lee 2009 E3.2 (Fig. 3-6): periodic camera cooperation, error against the camera period, 1,000 trials",

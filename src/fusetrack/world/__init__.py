@@ -19,6 +19,7 @@ from .ellipsoid_scene import cube_viewpoints as cube_viewpoints
 from .ellipsoid_scene import perimeter_cameras as perimeter_cameras
 from .ellipsoid_scene import reference_views as reference_views
 from .ellipsoid_scene import render_frames as render_frames
+from .ellipsoid_scene import render_target as render_target
 from .ellipsoid_scene import smooth_trajectory as smooth_trajectory
 from .geometry import rectangle as rectangle
 from .geometry import segment_point_distance as segment_point_distance

@@ -11,7 +11,7 @@ T0-T4 and the baseline P on the same frames (``fusetrack.filters.smart_camera_tr
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
@@ -161,9 +161,13 @@ def scene_from_truth(
     base: tuple[float, float, float],
     rng: np.random.Generator,
     hidden: np.ndarray | None = None,
+    paint: Callable[[Frames], None] | None = None,
 ) -> Scene:
-    """Render ``truth`` in every camera (``hidden[t, n]``: occluded) and build the network."""
+    """Render ``truth`` in every camera (``hidden[t, n]``: occluded; ``paint``: draws more into
+    the frames, e.g. an occluder) and build the network."""
     frames = render_frames(cams, target, truth, rng, hidden=hidden)
+    if paint is not None:
+        paint(frames)
     net = CameraNetwork.build(cams, model, target.semi_axes, base)
     measurements = [
         net.measurements(float(t), [features_from_rgb(img) for img in row])
