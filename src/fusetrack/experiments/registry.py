@@ -299,6 +299,13 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. V (seed 003)",
         ),
         ExperimentInfo(
+            "kushwaha2010-outdoor-triangle",
+            "kushwaha2010.outdoor_triangle:run",
+            "Kushwaha 2010 Ch. IV outdoor experiment, simulated (Fig. 34b, H17): three nodes in a "
+            "9.144 m triangle, two harmonic sources 0.5-8 m apart",
+            "Kushwaha 2010 Ch. IV (seed 003)",
+        ),
+        ExperimentInfo(
             "lee2009-periodic-sweep",
             "lee2009.camera_triggering:run_sweep",
             "Lee 2009 E3.2 (Fig. 3-6): periodic camera cooperation, error against the camera period, 1,000 trials",
