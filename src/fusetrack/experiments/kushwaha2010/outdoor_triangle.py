@@ -112,7 +112,7 @@ def _claims(runs: pd.DataFrame) -> list[Any]:
 
 def run(ctx: RunContext) -> Outcome:
     n_runs = ctx.n_runs(full=12, quick=1)
-    seps = (0.5, 2.0, 8.0) if ctx.quick else SEPARATIONS
+    seps = (0.5, 8.0) if ctx.quick else SEPARATIONS
     gibbs = 10 if ctx.quick else 40
     configs = [{"separation": s, "gibbs_samples": gibbs} for s in seps]
     df = ctx.monte_carlo(run_once, configs, n_runs, desc="separations")
