@@ -430,7 +430,6 @@ class GaussianFilter:
         new_mean, new_cov, ll = out
         return new_mean, new_cov, (ll if want_loglik else np.zeros(()))
 
-
     def _many_readings_update(
         self, mean: Array, cov: Array, checked: ValidatedMeasurement
     ) -> tuple[Array, Array, Array] | None:
