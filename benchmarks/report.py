@@ -65,12 +65,20 @@ COMMANDS: list[tuple[str, list[str], int]] = [
      ["zhai2007_speed.py", "--N", "200", "1000", "4000", "--steps", "30", "--repeats", "3"], 8),
     ("step_floor.json", ["step_floor.py", "--repeats", "30", "--stonesoup"], 3),
 ]  # fmt: skip
-# the node at 100 / 1000 / 10000 readings per second (service_load.py writes its own --out)
+# the node at 1000 / 10000 readings per second (service_load.py writes its own --out)
 NODE_COMMANDS: list[tuple[str, list[str], int]] = [
-    (f"service_rate_{n * r}.json",
-     ["service_load.py", "--nodes", str(n), "--rate", str(r), "--duration", "120",
-      "--alignment", "closest"], 3)
-    for n, r in ((10, 10), (100, 10), (1000, 10))
+    ("service_rate_1000_closest_60s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "10", "--duration", "60",
+      "--alignment", "closest"], 2),
+    ("service_rate_1000_all_60s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "10", "--duration", "60",
+      "--alignment", "all"], 2),
+    ("service_rate_10000_1000x10_600s.json",
+     ["service_load.py", "--nodes", "1000", "--rate", "10", "--duration", "600",
+      "--alignment", "closest"], 11),
+    ("service_rate_10000_100x100_600s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "100", "--duration", "600",
+      "--alignment", "closest"], 11),
 ]  # fmt: skip
 
 LEGACY_MULTITARGET = {  # the JSON-lines runs of issue 17, oldest first: when (benchmarks/README.md)
@@ -445,33 +453,78 @@ def node_section(results: Path, fig: Path) -> list[str]:
     files = sorted(results.glob("service_*.json"))
     docs = [(p.name, _results.load(p)["results"][0], _results.load(p)["metadata"]) for p in files]
     curve = [d for d in docs if d[0].startswith("service_rate_")] or docs
-    series: dict[str, list] = {}
+    latency: dict[str, list] = {}
+    accepted: dict[str, list] = {}
     for _, r, _ in curve:
-        rate = r["nodes"] * r["rate_per_node"]
+        offered, what = r["nodes"] * r["rate_per_node"], f"{r['alignment']}"
         for q in ("p50", "p99"):
-            series.setdefault(f"tick latency {q} ({r['alignment']})", []).append(
-                (rate, r["tick_latency_ms"][q] / 1e3)
+            latency.setdefault(f"tick {q} ({what})", []).append(
+                (offered, r["tick_latency_ms"][q] / 1e3)
             )
-    plot(fig, [{"title": "live node: tick latency vs readings per second", "xlabel":
-                "readings per second", "ylabel": "seconds", "series": series}])  # fmt: skip
-    out = [f"![tick latency vs rate]({fig.name})", "",
+        got = r.get("accepted_per_s", r["accepted"] / r["duration_s"])
+        accepted.setdefault(f"accepted ({what})", []).append((offered, got))
+        accepted.setdefault("offered", []).append((offered, offered))
+    plot(fig, [
+        {"title": "live node: tick latency vs offered readings/s", "xlabel": "offered readings/s",
+         "ylabel": "seconds", "series": latency},
+        {"title": "live node: accepted vs offered readings/s", "xlabel": "offered readings/s",
+         "ylabel": "readings/s", "series": accepted,
+         "styles": {"offered": {"linestyle": "--", "marker": "", "color": "grey"}}},
+    ])  # fmt: skip
+    out = [f"![tick latency and accepted rate vs offered rate]({fig.name})", "",
            "No peer: no other library runs a networked fusion node. Wall clock by nature "
-           "(latency); the node's CPU per tick beside it.", "",
-           "| file | date | nodes x rate = readings/s | alignment | faults | s | lost | "
-           "tick p50 / p99 / max | compute ms/tick | node cpu ms/tick | memory MB first -> last |",
-           "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+           "(latency); the node's CPU beside it, and the load generator's own CPU share (it runs "
+           "on the same 2 cores). Load: 1-minute load average at the start -> end of the run. "
+           "Lost: sent - accepted - refused (UDP: the kernel dropped them when the node's socket "
+           "buffer was full).", "",
+           "| file | date | nodes x rate = offered/s | alignment | faults | s | accepted/s | lost "
+           "| tick p50 / p99 / max | compute ms/tick | node cpu ms/tick | node / generator cpu "
+           "share | memory MB first -> last | load |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for name, r, meta in docs:
         lat = r["tick_latency_ms"]
         cpu = r.get("node_cpu_ms_per_tick")
+        load = meta.get("load", {})
+        load_cell = (
+            f"{load['start'][0]:.1f} -> {load['end'][0]:.1f}"
+            if load
+            else f"{r['load_average'][0]:.1f} (end)"
+        )
+        share = " / ".join(
+            f"{r[k]:.2f}" if k in r else "-" for k in ("node_cpu_share", "generator_cpu_share")
+        )
         out.append(
             f"| `{name}` | {meta.get('date', '-')} | {r['nodes']} x {r['rate_per_node']:g} = "
             f"{r['nodes'] * r['rate_per_node']:g} | {r['alignment']} | {r['faults']} | "
-            f"{r['duration_s']:g} | {r['lost']} | {lat['p50']:.0f} / {lat['p99']:.0f} / "
+            f"{r['duration_s']:g} | {r.get('accepted_per_s', r['accepted'] / r['duration_s']):.0f} "
+            f"| {r['lost']} | {lat['p50']:.0f} / {lat['p99']:.0f} / "
             f"{lat['max']:.0f} ms | {r['tick_compute_ms_mean']:.1f} | "
-            f"{'-' if cpu is None else f'{cpu:.1f}'} | "
-            f"{r['memory_mb']['first']:.0f} -> {r['memory_mb']['last']:.0f} |"
+            f"{'-' if cpu is None else f'{cpu:.1f}'} | {share} | "
+            f"{r['memory_mb']['first']:.0f} -> {r['memory_mb']['last']:.0f} | {load_cell} |"
         )
     return [*out, ""]
+
+
+def node_headline(results: Path) -> list[str]:
+    """README's line on the node: its newest runs at the highest offered rate."""
+    rows = []
+    for p in sorted(results.glob("service_rate_*.json")):
+        doc = _results.load(p)
+        rows.append((p.name, doc["results"][0], doc["metadata"]))
+    if not rows:
+        return []
+    top = max(r["nodes"] * r["rate_per_node"] for _, r, _ in rows)
+    cells = []
+    for name, r, meta in rows:
+        if r["nodes"] * r["rate_per_node"] != top:
+            continue
+        load = meta.get("load", {}).get("end", [float("nan")])[0]
+        cells.append(
+            f"{r['nodes']} x {r['rate_per_node']:g}/s {r['alignment']}, {r['duration_s']:g} s: "
+            f"accepted {r['accepted_per_s']:.0f}/s, tick p99 {r['tick_latency_ms']['p99']:.0f} ms "
+            f"at load {load:.1f} (`results/{name}`, {_date({'metadata': meta})})"
+        )
+    return [f"* live node, {top:,.0f} readings/s offered: " + "; ".join(cells)]
 
 
 def floor_section(doc: dict, name: str) -> list[str]:
@@ -543,6 +596,7 @@ def headline(results: Path) -> list[str]:
             f"{', '.join(cells)} (`results/{name}`, {_date(doc)})"
         )
     out += _multitarget_headline(results)
+    out += node_headline(results)
     return out or ["* no results committed yet: `python benchmarks/report.py --rerun`"]
 
 
