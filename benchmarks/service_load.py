@@ -296,7 +296,7 @@ def run(args, cfg, node, url, udp_port, rng) -> int:
         z = (z + math.pi) % (2 * math.pi) - math.pi
         drop = rng.random(args.nodes) < 0.2 if args.faults else None
         for i in range(args.nodes):
-            stamp = stamp0
+            stamp = time.time()  # each node's own clock reading: no two readings share a time
             if args.faults:
                 if i < 10 and 0.20 <= frac < 0.35:
                     continue  # disconnected
