@@ -119,4 +119,13 @@ def ekf_bearing_steps(
     return Gaussian(x, p), time
 
 
-__all__ = ["ekf_bearing_steps"]
+def compile_bearing_steps() -> None:
+    """Compile the loop now (a few seconds to a minute on first use, then cached on disk): a
+    node calls it before it serves, so that its first ticks are not held up by the compiler."""
+    d = 4
+    _steps(np.zeros(d), np.eye(d), np.eye(d)[None], np.zeros((1, d, d)), np.ones(1, np.bool_),
+           np.array([[1.0, 1.0, 0.0]]), np.zeros(1, np.int64), np.ones(1, np.int64),
+           np.zeros(1), np.ones(1))  # fmt: skip
+
+
+__all__ = ["compile_bearing_steps", "ekf_bearing_steps"]

@@ -47,8 +47,10 @@ from ..filters import (
     ExtendedKalmanFilter,
     GMPHDFilter,
     GridFilter,
+    KalmanFilter,
     PhdIntensity,
     UnscentedKalmanFilter,
+    compile_bearing_steps,
     ekf_bearing_steps,
 )
 from ..tracking import (
@@ -226,6 +228,9 @@ class FusionEngine:
         self.state = self.tracker.initial_state()
         self.time = float(start)
         self.resets = 0  # estimates that were not finite (never published)
+        if type(self.filter) in (ExtendedKalmanFilter, KalmanFilter) and self.method == "none":
+            if cfg.fusion.alignment == "all":  # the loop of _bearing_steps, compiled before use
+                compile_bearing_steps()
 
     @property
     def belief(self) -> Any:
