@@ -103,12 +103,15 @@ def ekf_bearing_steps(
     for i, m in enumerate(measurements):
         s = filt.sensors.get(m.sensor_id)
         value = m.value
-        if type(s) is not Bearing or m.covariance is not None or np.shape(value) != (1,):
+        plain = isinstance(s, Bearing) and type(s) is Bearing  # a subclass may differ
+        if not plain or m.covariance is not None or np.shape(value) != (1,):
             return None
+        assert isinstance(s, Bearing)
         if m.time - time > tolerance:
             dt = m.time - time
             f[i], q[i], predict[i], time = transition(dt), motion.noise_cov(dt), True, m.time
-        sensor[i] = (s.position[0], s.position[1], s.heading)
+        position = np.asarray(s.position, dtype=float)
+        sensor[i] = (position[0], position[1], s.heading)
         ix[i], iy[i] = s.position_index[0], s.position_index[1]
         z[i], var[i] = value[0], s.sigma**2
     if not np.isfinite(z).all():
