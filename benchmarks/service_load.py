@@ -111,6 +111,10 @@ def _num(v: float | None) -> str:
     return "–" if v is None else f"{v:.0f}"
 
 
+def _share(v: float | None) -> str:
+    return "–" if v is None else f"{v:.2f}"
+
+
 def write_report(results: list[Path], out: Path) -> None:
     """A markdown table of result files (``--report``): the numbers as measured."""
     rows = []
@@ -121,9 +125,11 @@ def write_report(results: list[Path], out: Path) -> None:
         rows.append(
             f"| {path.name} | {r['nodes']} x {r['rate_per_node']:g}/s, {r['fusion_hz']:g} Hz, "
             f"{r['alignment']}, {r['duration_s']:g} s{' + faults' if r['faults'] else ''} "
-            f"| {r['sent']} | {r['accepted']} | {sum(r['refused'].values())} | {r['lost']} "
+            f"| {r['sent']} | {r['accepted']} | {r['accepted'] / r['duration_s']:.0f} "
+            f"| {sum(r['refused'].values())} | {r['lost']} "
             f"| {r['ticks']} / {r['ticks_expected']} | {r['tick_compute_ms_mean']:.0f} "
             f"| {_num(r.get('node_cpu_ms_per_tick'))} "
+            f"| {_share(r.get('node_cpu_share'))} / {_share(r.get('generator_cpu_share'))} "
             f"| {lat['p50']:.0f} / {lat['p99']:.0f} / {lat['max']:.0f} "
             f"| {mem['first']:.0f} → {mem['last']:.0f} (max {mem['max']:.0f}) "
             f"| {r['position_rmse_m']:.2f} | {r['node_catch_up_after_last_send_s']:.1f} "
@@ -140,11 +146,12 @@ def write_report(results: list[Path], out: Path) -> None:
         else:
             rows[-1] += " |"
     head = (
-        "| run | load | sent | accepted | refused | lost | ticks / due | tick compute (ms, mean) "
-        "| node CPU per tick (ms, all work) "
+        "| run | load | sent | accepted | accepted/s | refused | lost | ticks / due "
+        "| tick compute (ms, mean) | node CPU per tick (ms, all work) "
+        "| CPU share: node / generator "
         "| tick latency p50 / p99 / max (ms) | node RSS (MiB) | position RMSE (m) "
         "| catch-up after last send (s) | load avg (1 min) | faults seen |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     )
     out.write_text(
         "# Fusion node under load (written by `benchmarks/service_load.py --report`)\n\n"
