@@ -449,6 +449,13 @@ def filters_section(doc: dict, name: str, fig: Path) -> list[str]:
     return out
 
 
+def _accepted_rate(r: dict) -> float | None:
+    """Accepted readings per second of a node run (older files: from the count, or none)."""
+    if "accepted_per_s" in r:
+        return float(r["accepted_per_s"])
+    return r["accepted"] / r["duration_s"] if "accepted" in r else None
+
+
 def node_section(results: Path, fig: Path) -> list[str]:
     files = sorted(results.glob("service_*.json"))
     docs = [(p.name, _results.load(p)["results"][0], _results.load(p)["metadata"]) for p in files]
@@ -461,8 +468,7 @@ def node_section(results: Path, fig: Path) -> list[str]:
             latency.setdefault(f"tick {q} ({what})", []).append(
                 (offered, r["tick_latency_ms"][q] / 1e3)
             )
-        got = r.get("accepted_per_s", r["accepted"] / r["duration_s"])
-        accepted.setdefault(f"accepted ({what})", []).append((offered, got))
+        accepted.setdefault(f"accepted ({what})", []).append((offered, _accepted_rate(r)))
         accepted.setdefault("offered", []).append((offered, offered))
     plot(fig, [
         {"title": "live node: tick latency vs offered readings/s", "xlabel": "offered readings/s",
@@ -485,24 +491,29 @@ def node_section(results: Path, fig: Path) -> list[str]:
         lat = r["tick_latency_ms"]
         cpu = r.get("node_cpu_ms_per_tick")
         load = meta.get("load", {})
-        load_cell = (
-            f"{load['start'][0]:.1f} -> {load['end'][0]:.1f}"
-            if load
-            else f"{r['load_average'][0]:.1f} (end)"
-        )
+        if load:
+            load_cell = f"{load['start'][0]:.1f} -> {load['end'][0]:.1f}"
+        elif "load_average" in r:
+            load_cell = f"{r['load_average'][0]:.1f} (end)"
+        else:
+            load_cell = "-"
         share = " / ".join(
             f"{r[k]:.2f}" if k in r else "-" for k in ("node_cpu_share", "generator_cpu_share")
         )
         out.append(
             f"| `{name}` | {meta.get('date', '-')} | {r['nodes']} x {r['rate_per_node']:g} = "
             f"{r['nodes'] * r['rate_per_node']:g} | {r['alignment']} | {r['faults']} | "
-            f"{r['duration_s']:g} | {r.get('accepted_per_s', r['accepted'] / r['duration_s']):.0f} "
+            f"{r['duration_s']:g} | {_num0(_accepted_rate(r))} "
             f"| {r['lost']} | {lat['p50']:.0f} / {lat['p99']:.0f} / "
             f"{lat['max']:.0f} ms | {r['tick_compute_ms_mean']:.1f} | "
             f"{'-' if cpu is None else f'{cpu:.1f}'} | {share} | "
             f"{r['memory_mb']['first']:.0f} -> {r['memory_mb']['last']:.0f} | {load_cell} |"
         )
     return [*out, ""]
+
+
+def _num0(v: float | None) -> str:
+    return "-" if v is None else f"{v:.0f}"
 
 
 def node_headline(results: Path) -> list[str]:
@@ -521,7 +532,7 @@ def node_headline(results: Path) -> list[str]:
         load = meta.get("load", {}).get("end", [float("nan")])[0]
         cells.append(
             f"{r['nodes']} x {r['rate_per_node']:g}/s {r['alignment']}, {r['duration_s']:g} s: "
-            f"accepted {r['accepted_per_s']:.0f}/s, tick p99 {r['tick_latency_ms']['p99']:.0f} ms "
+            f"accepted {_num0(_accepted_rate(r))}/s, tick p99 {r['tick_latency_ms']['p99']:.0f} ms "
             f"at load {load:.1f} (`results/{name}`, {_date({'metadata': meta})})"
         )
     return [f"* live node, {top:,.0f} readings/s offered: " + "; ".join(cells)]

@@ -71,6 +71,7 @@ def _synthetic(results: Path) -> None:
     (results / "service_rate_1000.json").write_text(json.dumps({
         "nodes": 100, "rate_per_node": 10.0, "alignment": "closest", "faults": False,
         "duration_s": 60.0, "lost": 0, "tick_compute_ms_mean": 3.0, "node_cpu_ms_per_tick": 9.5,
+        "accepted_per_s": 998.0, "node_cpu_share": 0.04, "generator_cpu_share": 0.05,
         "tick_latency_ms": {"p50": 6.0, "p99": 21.0, "max": 30.0},
         "memory_mb": {"first": 250.0, "last": 260.0, "max": 261.0}, "metadata": META}))  # fmt: skip
 
@@ -98,7 +99,8 @@ def test_report_is_generated_from_the_results_files(tmp_path: Path) -> None:
     assert "| 10 | 10 ms / 10 ms | 4 ms / 5 ms | 2.5x / 2.0x | True | 1.0 |" in text
     assert "| GNN | 50 | 10 | 5 ms (5 ms) | 150 ms (155 ms) | 30.0x / 31.0x |" in text
     assert "| UPF | 1 ms / 1 ms (10.0x / 5.0x) | 1 ms / 1 ms (10.0x / 5.0x) |" in text
-    assert "100 x 10 = 1000 | closest | False | 60 | 0 | 6 / 21 / 30 ms | 3.0 | 9.5 |" in text
+    assert "100 x 10 = 1000 | closest | False | 60 | 998 | 0 | 6 / 21 / 30 ms | 3.0 | 9.5 | " \
+           "0.04 / 0.05 |" in text  # fmt: skip
     assert "load 1.5 -> 2.5" in text and "threads 1" in text and "Test CPU" in text
     assert "python benchmarks/pf_bearing.py" in text  # the commands that regenerate the files
     # README: the block between the markers is replaced, the rest kept
@@ -109,6 +111,8 @@ def test_report_is_generated_from_the_results_files(tmp_path: Path) -> None:
            "RMSE disagrees, no ratio" in new  # fmt: skip
     assert "EKF 50.0x wall / 50.0x cpu, UKF differs from FilterPy" in new
     assert "GNN 30.0x cpu / 31.0x wall" in new
+    assert "live node, 1,000 readings/s offered: 100 x 10/s closest, 60 s: accepted 998/s, " \
+           "tick p99 21 ms" in new  # fmt: skip
 
 
 def test_report_without_results_still_writes_the_regeneration_commands(tmp_path: Path) -> None:
