@@ -65,7 +65,8 @@ COMMANDS: list[tuple[str, list[str], int]] = [
      ["zhai2007_speed.py", "--N", "200", "1000", "4000", "--steps", "30", "--repeats", "3"], 8),
     ("step_floor.json", ["step_floor.py", "--repeats", "30", "--stonesoup"], 3),
 ]  # fmt: skip
-# the node at 1000 / 10000 readings per second (service_load.py writes its own --out)
+# the node at 1000 to 10000 readings per second (service_load.py writes its own --out; the
+# 10,000/s files committed so far are 90 s runs, service_rate_10000_*_90s.json: SERVICE.md)
 NODE_COMMANDS: list[tuple[str, list[str], int]] = [
     ("service_rate_1000_closest_60s.json",
      ["service_load.py", "--nodes", "100", "--rate", "10", "--duration", "60",
@@ -73,6 +74,15 @@ NODE_COMMANDS: list[tuple[str, list[str], int]] = [
     ("service_rate_1000_all_60s.json",
      ["service_load.py", "--nodes", "100", "--rate", "10", "--duration", "60",
       "--alignment", "all"], 2),
+    ("service_rate_3000_closest_60s.json",
+     ["service_load.py", "--nodes", "300", "--rate", "10", "--duration", "60",
+      "--alignment", "closest"], 2),
+    ("service_rate_5000_closest_60s.json",
+     ["service_load.py", "--nodes", "500", "--rate", "10", "--duration", "60",
+      "--alignment", "closest"], 2),
+    ("service_batch10_10000_100x100_60s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "100", "--duration", "60", "--batch", "10",
+      "--alignment", "closest"], 2),
     ("service_rate_10000_1000x10_600s.json",
      ["service_load.py", "--nodes", "1000", "--rate", "10", "--duration", "600",
       "--alignment", "closest"], 11),
