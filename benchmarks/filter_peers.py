@@ -276,14 +276,11 @@ class StoneSoupRunner:
 
     def cleanup(self) -> None:
         """Empty the predictors' LRU caches of whole particle sets (outside the clock)."""
-        for fn in (
-            type(self.predictor).predict,
-            getattr(self.updater, "predict_measurement", None),
-        ):
-            wrapped = getattr(fn, "__wrapped__", fn)
-            for f in (fn, wrapped):
-                if hasattr(f, "cache_clear"):
-                    f.cache_clear()
+        fns = [type(self.predictor).predict, getattr(self.updater, "predict_measurement", None)]
+        for f in [*fns, *(getattr(fn, "__wrapped__", None) for fn in fns)]:
+            clear = getattr(f, "cache_clear", None)
+            if clear is not None:
+                clear()
 
 
 class ParticlesRunner:

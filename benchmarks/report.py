@@ -531,17 +531,17 @@ def _variants_figure(doc: dict, peers: dict | None, fig: Path) -> None:
     ]  # fmt: skip
     if peers:
         series: dict[str, list] = {}
-        styles: dict[str, dict] = {}
+        peer_styles: dict[str, dict] = {}
         for i, v in enumerate(dict.fromkeys(r["variant"] for r, _ in _peer_rows(peers))):
             vr = [r for r in peers["results"] if r.get("variant") == v]
             for lib in dict.fromkeys(k for r in vr for k in r["cpu_seconds_per_step"]):
                 label = f"{v}: {lib}"
                 series[label] = [(r["N"], r["cpu_seconds_per_step"].get(lib)) for r in vr]
-                styles[label] = {"color": f"C{i}",
+                peer_styles[label] = {"color": f"C{i}",
                                  "linestyle": "-" if lib == "fusetrack" else "--",
                                  "marker": {"fusetrack": "o", "stonesoup": "s"}.get(lib, "^")}  # fmt: skip
         panels.append({"title": "against the peers (cpu)", "xlabel": "particles N",
-                       "ylabel": "CPU seconds per step", "series": series, "styles": styles})  # fmt: skip
+                       "ylabel": "CPU seconds per step", "series": series, "styles": peer_styles})  # fmt: skip
     plot(fig, panels)
 
 
@@ -555,7 +555,7 @@ def variants_section(doc: dict, peers: dict | None, fig: Path) -> list[str]:
            "`filters.py`); 'arith' = (CPU over the baseline's) / (operations over the "
            "baseline's), 1 where each operation costs what the baseline's do.", ""]  # fmt: skip
     out += [*variants_table(doc), ""]
-    tail = next((r for r in doc["results"] if "skipped" in r), {})
+    tail: dict = next((r for r in doc["results"] if "skipped" in r), {})
     for s in tail.get("skipped", []):
         out.append(f"* skipped {s['variant']} at N = {s['N']:,}: predicted "
                    f"{s['predicted_cpu_seconds']:.0f} CPU s over its share of the budget")  # fmt: skip
@@ -564,7 +564,7 @@ def variants_section(doc: dict, peers: dict | None, fig: Path) -> list[str]:
     out += ["", "Against the peers' own implementations, on the Zhai 2007 E2/E13 model "
             "(`filter_peers.py`): " + provenance(peers, "filter_peers.json"), ""]  # fmt: skip
     out += [*peers_table(peers), ""]
-    ptail = next((r for r in peers["results"] if "no_peer" in r), {})
+    ptail: dict = next((r for r in peers["results"] if "no_peer" in r), {})
     timed = dict.fromkeys((r["variant"], r["peers"]) for r in peers["results"] if "variant" in r)
     out += [f"* {variant}: {what}" for variant, what in timed]
     for s in ptail.get("skipped", []):
