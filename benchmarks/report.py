@@ -21,8 +21,7 @@ exists, wall and CPU time, and the file, date, load and threads of the run it co
 7. every Zhai 2007 filter at small N and claim C18 (``zhai2007_speed.json``, else
    ``zhai2007_speed_c18.json``);
 8. PMMH against ``particles`` and the limit reference (``pmmh.json``);
-9. the live node's tick latency against its readings per second (every ``service_*.json``;
-   the curve: the median over the runs without injected faults at each rate);
+9. the live node's tick latency against its readings per second (``service_*.json``);
 10. the floor of a step (``step_floor.json``).
 
 A ratio is printed only where the script found the libraries in agreement (``"agree"`` not
@@ -32,7 +31,6 @@ false, ``_results.py``); a configuration that disagrees says so instead.
 from __future__ import annotations
 
 import argparse
-import statistics
 import subprocess
 import sys
 from collections.abc import Iterable
@@ -71,9 +69,9 @@ COMMANDS: list[tuple[str, list[str], int]] = [
     ("filter_peers.json",
      ["filter_peers.py", "--N", "1000", "10000", "100000", "--steps", "10", "--repeats", "5",
       "--threads", "1"], 10),
+    ("pmmh.json", ["pmmh.py", "--iterations", "300", "--threads", "1"], 3),
     ("zhai2007_speed.json",
      ["zhai2007_speed.py", "--N", "200", "1000", "4000", "--steps", "30", "--repeats", "3"], 8),
-    ("pmmh.json", ["pmmh.py", "--iterations", "300", "--threads", "1"], 3),
     ("step_floor.json", ["step_floor.py", "--repeats", "30", "--stonesoup"], 3),
 ]  # fmt: skip
 # the node at 100 / 1000 / 10000 readings per second (service_load.py writes its own --out)
@@ -608,28 +606,19 @@ def pmmh_section(doc: dict, name: str, fig: Path) -> list[str]:
     return [*out, "", "One N measured: each library is one point per panel.", ""]
 
 
-def node_curve(docs: list[tuple[str, dict, dict]]) -> dict[str, list]:
-    """Tick latency p50 / p99 against readings per second: per alignment, runs without injected
-    faults, the median over the runs at each rate (every run is listed in the table)."""
-    by: dict[tuple[str, str, float], list[float]] = {}
-    for _, r, _ in docs:
-        if r.get("faults"):
-            continue
-        rate = r["nodes"] * r["rate_per_node"]
-        for q in ("p50", "p99"):
-            by.setdefault((r["alignment"], q, rate), []).append(r["tick_latency_ms"][q] / 1e3)
-    series: dict[str, list] = {}
-    for (align, q, rate), v in sorted(by.items()):
-        series.setdefault(f"tick latency {q} ({align})", []).append((rate, statistics.median(v)))
-    return series
-
-
 def node_section(results: Path, fig: Path) -> list[str]:
     files = sorted(results.glob("service_*.json"))
     docs = [(p.name, _results.load(p)["results"][0], _results.load(p)["metadata"]) for p in files]
-    plot(fig, [{"title": "live node: tick latency (median of the runs without faults)",
-                "xlabel": "readings per second", "ylabel": "seconds",
-                "series": node_curve(docs)}])  # fmt: skip
+    curve = [d for d in docs if d[0].startswith("service_rate_")] or docs
+    series: dict[str, list] = {}
+    for _, r, _ in curve:
+        rate = r["nodes"] * r["rate_per_node"]
+        for q in ("p50", "p99"):
+            series.setdefault(f"tick latency {q} ({r['alignment']})", []).append(
+                (rate, r["tick_latency_ms"][q] / 1e3)
+            )
+    plot(fig, [{"title": "live node: tick latency vs readings per second", "xlabel":
+                "readings per second", "ylabel": "seconds", "series": series}])  # fmt: skip
     out = [f"![tick latency vs rate]({fig.name})", "",
            "No peer: no other library runs a networked fusion node. Wall clock by nature "
            "(latency); the node's CPU per tick beside it.", "",
@@ -718,8 +707,8 @@ def headline(results: Path) -> list[str]:
             f"* {big} Kalman tracks in one batch against {big} FilterPy filters: "
             f"{', '.join(cells)} (`results/{name}`, {_date(doc)})"
         )
-    out += _multitarget_headline(results)
     out += _filters_headline(results)
+    out += _multitarget_headline(results)
     return out or ["* no results committed yet: `python benchmarks/report.py --rerun`"]
 
 
