@@ -152,14 +152,15 @@ def hide_unused(axes: np.ndarray, used: int) -> None:
 def distinct_style(index: int, n_points: int) -> dict[str, Any]:
     """Colour, line style and markers of the ``index``-th curve: curves that lie on top of
     each other (filters that agree) stay distinguishable, also in grey-scale print. Long curves
-    carry about 12 markers, offset per curve so they do not coincide; short ones one per point."""
+    carry about 12 markers, offset per curve so they do not coincide; short ones one per point,
+    the later curves' markers smaller so that coinciding ones nest instead of hiding."""
     step = max(1, n_points // 12)
     return {
         "color": f"C{index % 10}",
         "linestyle": _LINESTYLES[index % len(_LINESTYLES)],
         "marker": _MARKERS[index % len(_MARKERS)],
         "markevery": (index % step, step),
-        "markersize": 4,
+        "markersize": 6.0 - index % 4,
     }
 
 
@@ -192,7 +193,7 @@ def curve(
         return ax.plot(*args, label=label, **style)[0]
     err = _series(yerr, xs.size, f"{label}: yerr.shape")
     style.pop("markevery", None)
-    return ax.errorbar(*args, yerr=err, capsize=3, label=label, **style)
+    return ax.errorbar(xs, ys, yerr=err, fmt=fmt or "", capsize=3, label=label, **style)
 
 
 def curves(
