@@ -286,10 +286,12 @@ def bars(
 def histogram(
     ax: Axes, values: ArrayLike, *, label: str, bins: Any = 30, index: int = 0, **kw: Any
 ) -> None:
-    """A labelled, density-normalised histogram of ``values`` in colour ``index``."""
+    """A labelled, density-normalised histogram of ``values`` in colour and (for outlines,
+    ``histtype="step"``) line style ``index``; non-finite values are dropped."""
     v = np.asarray(values, float).ravel()
     v = v[np.isfinite(v)]
-    opts = {"density": True, "alpha": 0.55, "color": f"C{index % 10}", **kw}
+    opts = {"density": True, "alpha": 0.55, "color": f"C{index % 10}",
+            "linestyle": _LINESTYLES[index % len(_LINESTYLES)], **kw}  # fmt: skip
     ax.hist(v, bins=bins, label=label, **opts)
 
 
@@ -337,9 +339,12 @@ def contour_lines(
     ax.clabel(lines, fmt="%.2f", fontsize=8)
 
 
-def show_image(ax: Axes, image: ArrayLike, *, title: str = "", cmap: str | None = None) -> None:
-    """A camera frame or mask without axes (pixel coordinates, row 0 on top)."""
-    ax.imshow(np.asarray(image), cmap=cmap)
+def show_image(
+    ax: Axes, image: ArrayLike, *, title: str = "", cmap: str | None = None, **kw: Any
+) -> None:
+    """A camera frame or mask without axes (pixel coordinates, row 0 on top); ``kw`` e.g.
+    ``vmin``, ``vmax``, ``extent``."""
+    ax.imshow(np.asarray(image), cmap=cmap, **kw)
     ax.axis("off")
     if title:
         ax.set_title(title, fontsize=9)
