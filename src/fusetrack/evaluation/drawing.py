@@ -268,9 +268,11 @@ def bars(
     *,
     errors: Mapping[str, ArrayLike] | None = None,
     width: float = 0.8,
+    rotation: float = 0.0,
 ) -> None:
-    """Grouped bar chart: for each of ``groups`` (x tick labels) one bar per series of
-    ``values`` (e.g. methods), each series labelled and told apart by colour and hatch."""
+    """Grouped bar chart: for each of ``groups`` (x tick labels, turned by ``rotation``
+    degrees) one bar per series of ``values`` (e.g. methods), each series labelled and told
+    apart by colour and hatch."""
     n = len(groups)
     xs = np.arange(n)
     w = width / max(1, len(values))
@@ -280,7 +282,8 @@ def bars(
         e = None if err is None else _series(err, n, f"{name}: errors.shape")
         ax.bar(xs + (k - (len(values) - 1) / 2) * w, y, w, yerr=e, capsize=3, label=name,
                color=f"C{k % 10}", hatch=_HATCHES[k % len(_HATCHES)], edgecolor="k", lw=0.5)  # fmt: skip
-    ax.set_xticks(xs, list(groups))
+    ax.set_xticks(xs, list(groups), rotation=rotation, ha="right" if rotation else "center")
+    ax.margins(y=0.15)  # headroom for the legend
 
 
 def histogram(
