@@ -10,7 +10,7 @@ from __future__ import annotations
 import shutil
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import matplotlib
 
@@ -31,6 +31,7 @@ _LINESTYLES = ("-", "--", "-.", ":")
 _MARKERS = ("o", "s", "^", "D", "v", "x", "P", "*")
 _HATCHES = ("", "//", "..", "xx", "\\\\", "--", "++", "oo")
 LEGEND = {"fontsize": 8, "framealpha": 0.7}
+Share = bool | Literal["none", "all", "row", "col"]  # axes sharing, as Matplotlib takes it
 
 # --- figures -------------------------------------------------------------------------------
 
@@ -40,8 +41,8 @@ def figure(
     cols: int = 1,
     *,
     size: tuple[float, float] | None = None,
-    sharex: bool | str = False,
-    sharey: bool | str = False,
+    sharex: Share = False,
+    sharey: Share = False,
     projection: str | None = None,
 ) -> tuple[Figure, np.ndarray]:
     """A figure with a ``rows`` x ``cols`` grid of axes (always a 2-D array) in the common
@@ -70,8 +71,8 @@ def panels(
     n: int,
     *,
     size: tuple[float, float] | None = None,
-    sharex: bool | str = False,
-    sharey: bool | str = False,
+    sharex: Share = False,
+    sharey: Share = False,
 ) -> tuple[Figure, np.ndarray]:
     """A figure with ``n`` axes side by side (a 1-D array)."""
     fig, axes = figure(1, n, size=size, sharex=sharex, sharey=sharey)
@@ -97,7 +98,7 @@ def write_animation(
     frames: Sequence[Any],
     path: Path,
     *,
-    fps: float,
+    fps: int,
     mp4: bool = False,
 ) -> Path:
     """Call ``draw(frame)`` for each frame and write the result: an MP4 when ``mp4`` and
@@ -227,7 +228,7 @@ def reference_line(
     *,
     axis: str = "y",
     color: str = "k",
-    linestyle: str = ":",
+    linestyle: str | tuple[float, tuple[float, ...]] = ":",
     lw: float = 1.0,
 ) -> None:
     """A labelled horizontal (``axis="y"``) or vertical (``"x"``) line, e.g. a bound or a
@@ -326,7 +327,7 @@ def colour_map(
         lo = max(float(np.nanmin(zz)), 1e-3) if log else float(np.nanmin(zz))
         hi = float(np.nanmax(zz))
         levels = np.geomspace(lo, hi, filled_levels) if log else np.linspace(lo, hi, filled_levels)
-        art = ax.contourf(x, y, zz, levels=levels, norm=norm, cmap=cmap, **kw)
+        art: Any = ax.contourf(x, y, zz, levels=levels, norm=norm, cmap=cmap, **kw)
     else:
         art = ax.imshow(zz, origin="lower", extent=extent, norm=norm, cmap=cmap,
                         aspect="auto", **kw)  # fmt: skip
