@@ -74,7 +74,7 @@ def scene_figure(
     fig, ax = plots.panel(size=(6, 6))
     _axes_scene(ax, scene, net, truth)
     for r in _fixes(readings):
-        ax.plot(r.values[:, 0], r.values[:, 1], ".", ms=4, alpha=0.6, label=f"{r.sensor} fixes")
+        ax.plot(r.values[:, 0], r.values[:, 1], ".", color="0.45", ms=4, label=f"{r.sensor} fixes")
     groups = list(tracks.groupby("track")) if not tracks.empty else []
     plots.draw_paths(ax, [g[["x", "y"]].to_numpy() for _, g in groups],
                      labels=[f"track {tid}" for tid, _ in groups])  # fmt: skip
