@@ -759,7 +759,7 @@ def _figures(
         ctx.figure_path("sbe_packet_loss"),
         loss.index.to_numpy(),
         {k: loss[k].to_numpy() for k in VARIANTS},
-        xlabel="packet loss",
+        xlabel="packet loss (share of packets lost)",
         ylabel="mean error (m)",
         title="Error against packet loss (beyond the paper)",
     )

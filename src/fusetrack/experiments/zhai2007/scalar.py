@@ -362,8 +362,8 @@ def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> dict[str, str]:
         ctx.figure_path("rmse_vs_time"),
         steps,
         {m: rmse_t[m].to_numpy() for m in ["EKF", "BS200", "BS2000", "PF-SP-PEKF"]},
-        xlabel="t",
-        ylabel="RMSE(t)",
+        xlabel="t (time step)",
+        ylabel="RMSE(t) (state units)",
         title=f"Fig 8: RMSE over {runs} runs (model as printed)",
         logy=True,
     )
@@ -379,8 +379,8 @@ def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> dict[str, str]:
                 for m in ["EKF", "BS200", "PF-SP-PEKF"]
             },
         },
-        xlabel="t",
-        ylabel="x",
+        xlabel="t (time step)",
+        ylabel="x (state, no unit)",
         title="Fig 9: one realisation",
         styles={"truth": "k-"},
     )
