@@ -260,3 +260,48 @@ def test_figure_rejects_bad_grid_and_log_axis_bad_axis():
     with pytest.raises(ConfigError, match="axis"):
         plots.log_axis(ax, "z")
     plt.close(fig)
+
+
+def test_draw_paths_one_entry_per_path_or_one_for_all():
+    fig, ax = _axes()
+    paths = [np.c_[np.arange(5.0), np.full(5, k)] for k in range(3)]
+    plots.draw_paths(ax, paths, labels=["a", "b", "c"])
+    assert plots.labelled(ax) == ["a", "b", "c"]
+    fig2, ax2 = _axes()
+    plots.draw_paths(ax2, paths, label="tracks", mark_start=True)
+    assert plots.labelled(ax2) == ["tracks"]
+    assert len(ax2.get_lines()) == 6  # a path and its start dot each
+    plt.close(fig)
+    plt.close(fig2)
+
+
+def test_reference_lines_are_labelled_and_bad_axis_named():
+    import pytest
+
+    from fusetrack.core import ConfigError
+
+    fig, ax = _axes()
+    plots.reference_line(ax, 2.0, "CRLB")
+    plots.reference_line(ax, 5.0, "outage starts", axis="x", color="r")
+    assert plots.labelled(ax) == ["CRLB", "outage starts"]
+    h, v = ax.get_lines()
+    assert np.allclose(h.get_ydata(), 2.0) and np.allclose(v.get_xdata(), 5.0)
+    with pytest.raises(ConfigError, match="axis"):
+        plots.reference_line(ax, 1.0, "x", axis="t")
+    plt.close(fig)
+
+
+def test_write_animation_writes_one_gif_frame_per_frame(tmp_path):
+    from PIL import Image
+
+    fig, ax = plots.panel(size=(2, 2))
+    (line,) = ax.plot([], [])
+    ax.set(xlim=(0, 4), ylim=(0, 4))
+
+    def draw(k):
+        line.set_data(np.arange(k + 2), np.arange(k + 2))
+        return [line]
+
+    out = plots.write_animation(fig, draw, range(3), tmp_path / "a.mp4", fps=5)
+    assert out == tmp_path / "a.gif"  # no mp4 asked for
+    assert Image.open(out).n_frames == 3
