@@ -529,7 +529,7 @@ def draw_sensors(
     """Sensors as named markers (one legend entry ``label``)."""
     for k, (name, pos) in enumerate(sensors):
         p = np.asarray(pos, float)
-        ax.plot(p[0], p[1], marker, color="tab:purple", ms=8, mfc="w",
+        ax.plot(p[0], p[1], marker, color="tab:purple", ms=8, mfc="none",
                 label=label if k == 0 else None)  # fmt: skip
         ax.annotate(name, (float(p[0]), float(p[1])), textcoords="offset points", xytext=(4, 4),
                     fontsize=8)  # fmt: skip
