@@ -39,10 +39,11 @@ variant "at its arithmetic" has about the bootstrap's ns per operation; one far 
 its time elsewhere (Python, allocation, memory traffic). ``above_arithmetic`` = (CPU time over
 the baseline's) / (operations over the baseline's): 1 at the baseline's cost per operation.
 
-Peers: Stone Soup 1.9.1 has no unscented-proposal or grid/partitioned-proposal particle filter
-(``stonesoup.updater.particle``: plain, Gromov-flow, multi-model, Rao-Blackwellised, Bernoulli,
-SMC-PHD); its multiple-model particle filter and ``particles``' guided filters are not timed here
-yet (see ``benchmarks/README.md``). fusetrack only: no agreement check.
+Peers: ``filter_peers.py`` times the variants a peer library implements (bootstrap, the
+unscented proposal through Stone Soup's ``KalmanProposal``, the multiple-model bootstrap) against
+the peers' own implementations on the Zhai 2007 model, with an RMSE agreement check, and lists
+every other variant with the reason it has no peer. This script is fusetrack only: no agreement
+check.
 """
 
 from __future__ import annotations

@@ -15,10 +15,14 @@ exists, wall and CPU time, and the file, date, load and threads of the run it co
 3. against batched Monte Carlo runs (``batched_runs.json``);
 4. against tracks, the Kalman family against FilterPy (``kalman_batch.json``);
 5. against targets, multi-target trackers against Stone Soup (``multitarget*.json[l]``);
-6. against filters, every Zhai 2007 particle filter against the bootstrap
-   (``zhai2007_speed.json``, else ``zhai2007_speed_c18.json``);
-7. the live node's tick latency against its message rate (``service_*.json``);
-8. the floor of a step (``step_floor.json``).
+6. against filters: every particle-filter variant on its paper's model against its baseline,
+   with its operations per particle (``filters.json``), and against the peers' own
+   implementations where one exists, the others listed with the reason (``filter_peers.json``);
+7. every Zhai 2007 filter at small N and claim C18 (``zhai2007_speed.json``, else
+   ``zhai2007_speed_c18.json``);
+8. PMMH against ``particles`` and the limit reference (``pmmh.json``);
+9. the live node's tick latency against its readings per second (``service_*.json``);
+10. the floor of a step (``step_floor.json``).
 
 A ratio is printed only where the script found the libraries in agreement (``"agree"`` not
 false, ``_results.py``); a configuration that disagrees says so instead.
@@ -61,16 +65,39 @@ COMMANDS: list[tuple[str, list[str], int]] = [
     ("multitarget_growth.json",
      ["multitarget.py", "--targets", "100", "500", "--scans", "30", "--seeds", "2",
       "--budget", "30"], 12),
+    ("filters.json", ["filters.py", "--steps", "5", "--repeats", "2", "--budget", "400"], 15),
+    ("filter_peers.json",
+     ["filter_peers.py", "--N", "1000", "10000", "100000", "--steps", "10", "--repeats", "5",
+      "--threads", "1"], 10),
+    ("pmmh.json", ["pmmh.py", "--iterations", "300", "--threads", "1"], 3),
     ("zhai2007_speed.json",
      ["zhai2007_speed.py", "--N", "200", "1000", "4000", "--steps", "30", "--repeats", "3"], 8),
     ("step_floor.json", ["step_floor.py", "--repeats", "30", "--stonesoup"], 3),
 ]  # fmt: skip
-# the node at 100 / 1000 / 10000 readings per second (service_load.py writes its own --out)
+# the node at 1000 to 10000 readings per second (service_load.py writes its own --out; the
+# 10,000/s files committed so far are 90 s runs, service_rate_10000_*_90s.json: SERVICE.md)
 NODE_COMMANDS: list[tuple[str, list[str], int]] = [
-    (f"service_rate_{n * r}.json",
-     ["service_load.py", "--nodes", str(n), "--rate", str(r), "--duration", "120",
-      "--alignment", "closest"], 3)
-    for n, r in ((10, 10), (100, 10), (1000, 10))
+    ("service_rate_1000_closest_60s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "10", "--duration", "60",
+      "--alignment", "closest"], 2),
+    ("service_rate_1000_all_60s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "10", "--duration", "60",
+      "--alignment", "all"], 2),
+    ("service_rate_3000_closest_60s.json",
+     ["service_load.py", "--nodes", "300", "--rate", "10", "--duration", "60",
+      "--alignment", "closest"], 2),
+    ("service_rate_5000_closest_60s.json",
+     ["service_load.py", "--nodes", "500", "--rate", "10", "--duration", "60",
+      "--alignment", "closest"], 2),
+    ("service_batch10_10000_100x100_60s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "100", "--duration", "60", "--batch", "10",
+      "--alignment", "closest"], 2),
+    ("service_rate_10000_1000x10_600s.json",
+     ["service_load.py", "--nodes", "1000", "--rate", "10", "--duration", "600",
+      "--alignment", "closest"], 11),
+    ("service_rate_10000_100x100_600s.json",
+     ["service_load.py", "--nodes", "100", "--rate", "100", "--duration", "600",
+      "--alignment", "closest"], 11),
 ]  # fmt: skip
 
 LEGACY_MULTITARGET = {  # the JSON-lines runs of issue 17, oldest first: when (benchmarks/README.md)
@@ -150,7 +177,7 @@ def times_x(r: float | None) -> str:
 def plot(path: Path, panels: list[dict[str, Any]]) -> None:
     """One figure of side-by-side log-log panels; a panel: title, xlabel, ylabel, series
     ``{label: [(x, y), ...]}`` (points with ``y`` ``None`` are left out) and optionally styles
-    ``{label: matplotlib keywords}``."""
+    ``{label: matplotlib keywords}``, ``legend`` (False: none), ``legend_loc``, ``legend_size``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -168,9 +195,9 @@ def plot(path: Path, panels: list[dict[str, Any]]) -> None:
         ax.set(xlabel=panel["xlabel"], ylabel=panel["ylabel"], title=panel["title"])
         ax.title.set_fontsize(9)
         ax.grid(True, which="both", alpha=0.3)
-        if drawn:
-            ax.legend(fontsize=7)
-        else:
+        if drawn and panel.get("legend", True):
+            ax.legend(fontsize=panel.get("legend_size", 7), loc=panel.get("legend_loc", "best"))
+        elif not drawn:
             ax.text(0.5, 0.5, "not measured", ha="center", transform=ax.transAxes)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
@@ -401,7 +428,7 @@ def multitarget_section(docs: list[tuple[str, dict]], fig: Path) -> list[str]:
     return out
 
 
-def filters_section(doc: dict, name: str, fig: Path) -> list[str]:
+def zhai_section(doc: dict, name: str, fig: Path) -> list[str]:
     rows = [r for r in doc["results"] if "N" in r]
     c18 = next((r["C18_scaling"] for r in doc["results"] if "C18_scaling" in r), None)
     out = [provenance(doc, name), ""]
@@ -441,37 +468,249 @@ def filters_section(doc: dict, name: str, fig: Path) -> list[str]:
     return out
 
 
+def _accepted_rate(r: dict) -> float | None:
+    """Accepted readings per second of a node run (older files: from the count, or none)."""
+    if "accepted_per_s" in r:
+        return float(r["accepted_per_s"])
+    return r["accepted"] / r["duration_s"] if "accepted" in r else None
+
+
+AGREE = {True: "yes", False: "**no**", None: "not checked"}
+
+
+def _variant_cell(r: dict | None) -> str:
+    """One filters.json row: CPU / wall ns per particle, times the baseline, operations, times
+    the arithmetic (CPU ratio to the baseline over the operations' ratio)."""
+    if r is None:
+        return "skipped (budget)"
+    rel = r.get("cpu_relative_to_baseline")
+    above = r.get("above_arithmetic", _results.ratio(rel, r["ops_relative_to_baseline"]))
+    return (f"{r['cpu_ns_per_particle']:,.0f} / {r['wall_ns_per_particle']:,.0f} ns; "
+            f"{times_x(rel)} base; {r['ops_per_particle']:,.0f} ops; "
+            f"{'-' if above is None else f'{above:.2g}x'} arith")  # fmt: skip
+
+
+def variants_table(doc: dict) -> list[str]:
+    rows = [r for r in doc["results"] if "variant" in r]
+    sizes = sorted({r["N"] for r in rows})
+    by = {(r["variant"], r["N"]): r for r in rows}
+    head = ["family", "variant", "baseline", *(f"N = {n:,}" for n in sizes)]
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name in dict.fromkeys(r["variant"] for r in rows):
+        first = next(r for r in rows if r["variant"] == name)
+        cells = [first["family"], name, first["baseline"]]
+        out.append(
+            "| " + " | ".join(cells + [_variant_cell(by.get((name, n))) for n in sizes]) + " |"
+        )
+    return out
+
+
+def _peer_rows(peers: dict) -> list[tuple[dict, str]]:
+    """``(row, peer library)`` of every timed peer of filter_peers.json."""
+    return [(r, lib) for r in peers["results"] if "variant" in r
+            for lib in r["cpu_seconds_per_step"] if lib != "fusetrack"]  # fmt: skip
+
+
+def peers_table(peers: dict) -> list[str]:
+    out = ["| variant | N | peer | fusetrack cpu / wall | peer cpu / wall | peer / fusetrack "
+           "(cpu / wall) | ns per op fusetrack / peer | RMSE fusetrack | RMSE peer; agree |",
+           "|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r, lib in _peer_rows(peers):
+        c, w, nop = r["cpu_seconds_per_step"], r["wall_seconds_per_step"], r["ns_per_op"]
+        a = r["agreement"][lib]
+        sp = r["speedup_over"].get(lib)
+        ratio = "RMSE disagrees: none" if sp is None else (
+            f"{times_x(sp.get('cpu'))} / {times_x(sp.get('wall'))}")  # fmt: skip
+        agree = AGREE[a.get("agree")]
+        out.append(
+            f"| {r['variant']} | {r['N']:,} | {lib} | {ms(c['fusetrack'])} / {ms(w['fusetrack'])} "
+            f"| {ms(c[lib])} / {ms(w[lib])} | {ratio} | {nop['fusetrack']:.2f} / {nop[lib]:.2f} | "
+            f"{_rmse(r, 'fusetrack')} | {_rmse(r, lib)}; {agree} |"
+        )
+    return out
+
+
+def _rmse(r: dict, lib: str) -> str:
+    se = r["rmse_se"].get(lib)
+    return f"{r['rmse'][lib]:.3f}" + ("" if se is None else f" ± {se:.3f}")
+
+
+def _variants_figure(doc: dict, peers: dict | None, fig: Path) -> None:
+    rows = [r for r in doc["results"] if "variant" in r]
+    names = list(dict.fromkeys(r["variant"] for r in rows))
+    cost = {v: [(r["N"], r["cpu_ns_per_particle"] * 1e-9) for r in rows if r["variant"] == v]
+            for v in names}  # fmt: skip
+    arith = {v: [(r["N"], r.get("above_arithmetic", _results.ratio(
+        r.get("cpu_relative_to_baseline"), r["ops_relative_to_baseline"])))
+        for r in rows if r["variant"] == v] for v in names}  # fmt: skip
+    styles = {v: {"color": f"C{i % 10}", "marker": "os"[i // 10 % 2],
+                  "linestyle": "-" if i < 10 else "--"} for i, v in enumerate(names)}  # fmt: skip
+    panels = [
+        {"title": "every variant on its paper's model (cpu)", "xlabel": "particles N",
+         "ylabel": "CPU seconds per particle per step", "series": cost, "styles": styles,
+         "legend_size": 6},
+        {"title": "x baseline over x operations (1 = at its arithmetic)", "xlabel": "particles N",
+         "ylabel": "above arithmetic", "series": arith, "styles": styles, "legend": False},
+    ]  # fmt: skip
+    if peers:
+        series: dict[str, list] = {}
+        peer_styles: dict[str, dict] = {}
+        for i, v in enumerate(dict.fromkeys(r["variant"] for r, _ in _peer_rows(peers))):
+            vr = [r for r in peers["results"] if r.get("variant") == v]
+            for lib in dict.fromkeys(k for r in vr for k in r["cpu_seconds_per_step"]):
+                label = f"{v}: {lib}"
+                series[label] = [(r["N"], r["cpu_seconds_per_step"].get(lib)) for r in vr]
+                peer_styles[label] = {"color": f"C{i}",
+                                 "linestyle": "-" if lib == "fusetrack" else "--",
+                                 "marker": {"fusetrack": "o", "stonesoup": "s"}.get(lib, "^")}  # fmt: skip
+        panels.append({"title": "against the peers (cpu)", "xlabel": "particles N",
+                       "ylabel": "CPU seconds per step", "series": series, "styles": peer_styles})  # fmt: skip
+    plot(fig, panels)
+
+
+def variants_section(doc: dict, peers: dict | None, fig: Path) -> list[str]:
+    """filters.json (every variant against its baseline, with operation counts) and
+    filter_peers.json (variants against the peers' implementations)."""
+    _variants_figure(doc, peers, fig)
+    out = [provenance(doc, "filters.json"), "", f"![variants vs particles and peers]({fig.name})",
+           "", "Each cell: CPU / wall ns per particle per step; CPU time over the baseline's "
+           "('base'); operations per particle as the algorithm states them (counts derived in "
+           "`filters.py`); 'arith' = (CPU over the baseline's) / (operations over the "
+           "baseline's), 1 where each operation costs what the baseline's do.", ""]  # fmt: skip
+    out += [*variants_table(doc), ""]
+    tail: dict = next((r for r in doc["results"] if "skipped" in r), {})
+    for s in tail.get("skipped", []):
+        out.append(f"* skipped {s['variant']} at N = {s['N']:,}: predicted "
+                   f"{s['predicted_cpu_seconds']:.0f} CPU s over its share of the budget")  # fmt: skip
+    if not peers:
+        return [*out, "", "(no peer results: `filter_peers.json` not written yet)", ""]
+    out += ["", "Against the peers' own implementations, on the Zhai 2007 E2/E13 model "
+            "(`filter_peers.py`): " + provenance(peers, "filter_peers.json"), ""]  # fmt: skip
+    out += [*peers_table(peers), ""]
+    ptail: dict = next((r for r in peers["results"] if "no_peer" in r), {})
+    timed = dict.fromkeys((r["variant"], r["peers"]) for r in peers["results"] if "variant" in r)
+    out += [f"* {variant}: {what}" for variant, what in timed]
+    for s in ptail.get("skipped", []):
+        out.append(f"* {s['library']} skipped on {s['variant']} at N = {s['N']:,}: estimated "
+                   f"{s['estimated_seconds']:.0f} s over `--max-seconds`")  # fmt: skip
+    out += ["", "No peer:", ""]
+    out += [f"* {v}: {why}" for v, why in ptail.get("no_peer", {}).items()]
+    if ptail.get("particles"):
+        out.append(f"* `particles`: {ptail['particles']}")
+    return [*out, ""]
+
+
+def pmmh_section(doc: dict, name: str, fig: Path) -> list[str]:
+    rows = doc["results"]
+    keys = {"wall": "ms_per_iteration_wall", "cpu": "ms_per_iteration_cpu"}
+    panels = [{"title": f"PMMH, T = {rows[0]['T']} ({clock})", "xlabel": "particles N",
+               "ylabel": f"seconds per iteration, {clock}",
+               "series": {r["library"]: [(r["N"], r[key] / 1e3)] for r in rows}}
+              for clock, key in keys.items()]  # fmt: skip
+    plot(fig, panels)
+    out = [provenance(doc, name), "", f"![PMMH time per iteration]({fig.name})", "",
+           "| library | T | N | iterations | per iteration cpu / wall | x limit reference cpu | "
+           "acceptance | posterior mean log q, log r (MC error) | agrees with the limit "
+           "reference |", "|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r in rows:
+        a = (r.get("agreement_with_limit_reference") or {}).get("agree")
+        out.append(
+            f"| {r['library']} | {r['T']} | {r['N']:,} | {r['iterations']} | "
+            f"{ms(r['ms_per_iteration_cpu'] / 1e3)} / {ms(r['ms_per_iteration_wall'] / 1e3)} | "
+            f"{times_x(r.get('cpu_ratio_to_limit_reference'))} | {r['acceptance_rate']:.2f} | "
+            f"{r['posterior_mean_log_q']:.3f} ({r['mc_se_log_q']:.3f}), "
+            f"{r['posterior_mean_log_r']:.3f} ({r['mc_se_log_r']:.3f}) | "
+            f"{AGREE[a]} |"
+        )
+    cpu = {r["library"]: r["ms_per_iteration_cpu"] for r in rows}
+    wall = {r["library"]: r["ms_per_iteration_wall"] for r in rows}
+    out.append("")
+    for lib in (lib for lib in cpu if lib not in ("fusetrack", "limit_reference")):
+        out.append(f"{lib} / fusetrack: {times_x(_results.ratio(cpu[lib], cpu.get('fusetrack')))} "
+                   f"cpu, {times_x(_results.ratio(wall[lib], wall.get('fusetrack')))} wall.")  # fmt: skip
+    return [*out, "", "One N measured: each library is one point per panel.", ""]
+
+
 def node_section(results: Path, fig: Path) -> list[str]:
     files = sorted(results.glob("service_*.json"))
     docs = [(p.name, _results.load(p)["results"][0], _results.load(p)["metadata"]) for p in files]
     curve = [d for d in docs if d[0].startswith("service_rate_")] or docs
-    series: dict[str, list] = {}
+    latency: dict[str, list] = {}
+    accepted: dict[str, list] = {}
     for _, r, _ in curve:
-        rate = r["nodes"] * r["rate_per_node"]
+        offered, what = r["nodes"] * r["rate_per_node"], f"{r['alignment']}"
         for q in ("p50", "p99"):
-            series.setdefault(f"tick latency {q} ({r['alignment']})", []).append(
-                (rate, r["tick_latency_ms"][q] / 1e3)
+            latency.setdefault(f"tick {q} ({what})", []).append(
+                (offered, r["tick_latency_ms"][q] / 1e3)
             )
-    plot(fig, [{"title": "live node: tick latency vs readings per second", "xlabel":
-                "readings per second", "ylabel": "seconds", "series": series}])  # fmt: skip
-    out = [f"![tick latency vs rate]({fig.name})", "",
+        accepted.setdefault(f"accepted ({what})", []).append((offered, _accepted_rate(r)))
+        accepted.setdefault("offered", []).append((offered, offered))
+    plot(fig, [
+        {"title": "live node: tick latency vs offered readings/s", "xlabel": "offered readings/s",
+         "ylabel": "seconds", "series": latency},
+        {"title": "live node: accepted vs offered readings/s", "xlabel": "offered readings/s",
+         "ylabel": "readings/s", "series": accepted,
+         "styles": {"offered": {"linestyle": "--", "marker": "", "color": "grey"}}},
+    ])  # fmt: skip
+    out = [f"![tick latency and accepted rate vs offered rate]({fig.name})", "",
            "No peer: no other library runs a networked fusion node. Wall clock by nature "
-           "(latency); the node's CPU per tick beside it.", "",
-           "| file | date | nodes x rate = readings/s | alignment | faults | s | lost | "
-           "tick p50 / p99 / max | compute ms/tick | node cpu ms/tick | memory MB first -> last |",
-           "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+           "(latency); the node's CPU beside it, and the load generator's own CPU share (it runs "
+           "on the same 2 cores). Load: 1-minute load average at the start -> end of the run. "
+           "Lost: sent - accepted - refused (UDP: the kernel dropped them when the node's socket "
+           "buffer was full).", "",
+           "| file | date | nodes x rate = offered/s | alignment | faults | s | accepted/s | lost "
+           "| tick p50 / p99 / max | compute ms/tick | node cpu ms/tick | node / generator cpu "
+           "share | memory MB first -> last | load |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for name, r, meta in docs:
         lat = r["tick_latency_ms"]
         cpu = r.get("node_cpu_ms_per_tick")
+        load = meta.get("load", {})
+        if load:
+            load_cell = f"{load['start'][0]:.1f} -> {load['end'][0]:.1f}"
+        elif "load_average" in r:
+            load_cell = f"{r['load_average'][0]:.1f} (end)"
+        else:
+            load_cell = "-"
+        share = " / ".join(
+            f"{r[k]:.2f}" if k in r else "-" for k in ("node_cpu_share", "generator_cpu_share")
+        )
         out.append(
             f"| `{name}` | {meta.get('date', '-')} | {r['nodes']} x {r['rate_per_node']:g} = "
             f"{r['nodes'] * r['rate_per_node']:g} | {r['alignment']} | {r['faults']} | "
-            f"{r['duration_s']:g} | {r['lost']} | {lat['p50']:.0f} / {lat['p99']:.0f} / "
+            f"{r['duration_s']:g} | {_num0(_accepted_rate(r))} "
+            f"| {r['lost']} | {lat['p50']:.0f} / {lat['p99']:.0f} / "
             f"{lat['max']:.0f} ms | {r['tick_compute_ms_mean']:.1f} | "
-            f"{'-' if cpu is None else f'{cpu:.1f}'} | "
-            f"{r['memory_mb']['first']:.0f} -> {r['memory_mb']['last']:.0f} |"
+            f"{'-' if cpu is None else f'{cpu:.1f}'} | {share} | "
+            f"{r['memory_mb']['first']:.0f} -> {r['memory_mb']['last']:.0f} | {load_cell} |"
         )
     return [*out, ""]
+
+
+def _num0(v: float | None) -> str:
+    return "-" if v is None else f"{v:.0f}"
+
+
+def node_headline(results: Path) -> list[str]:
+    """README's line on the node: its newest runs at the highest offered rate."""
+    rows = []
+    for p in sorted(results.glob("service_rate_*.json")):
+        doc = _results.load(p)
+        rows.append((p.name, doc["results"][0], doc["metadata"]))
+    if not rows:
+        return []
+    top = max(r["nodes"] * r["rate_per_node"] for _, r, _ in rows)
+    cells = []
+    for name, r, meta in rows:
+        if r["nodes"] * r["rate_per_node"] != top:
+            continue
+        load = meta.get("load", {}).get("end", [float("nan")])[0]
+        cells.append(
+            f"{r['nodes']} x {r['rate_per_node']:g}/s {r['alignment']}, {r['duration_s']:g} s: "
+            f"accepted {_num0(_accepted_rate(r))}/s, tick p99 {r['tick_latency_ms']['p99']:.0f} ms "
+            f"at load {load:.1f} (`results/{name}`, {_date({'metadata': meta})})"
+        )
+    return [f"* live node, {top:,.0f} readings/s offered: " + "; ".join(cells)]
 
 
 def floor_section(doc: dict, name: str) -> list[str]:
@@ -542,7 +781,9 @@ def headline(results: Path) -> list[str]:
             f"* {big} Kalman tracks in one batch against {big} FilterPy filters: "
             f"{', '.join(cells)} (`results/{name}`, {_date(doc)})"
         )
+    out += _filters_headline(results)
     out += _multitarget_headline(results)
+    out += node_headline(results)
     return out or ["* no results committed yet: `python benchmarks/report.py --rerun`"]
 
 
@@ -569,6 +810,39 @@ def _multitarget_headline(results: Path) -> list[str]:
             f"{', '.join(cells)} (`results/{name}`, {_date(doc)})"
         ]
     return []
+
+
+def _filters_headline(results: Path) -> list[str]:
+    """Each peer's ratio on each variant at the largest N it was timed at; PMMH's."""
+    out = []
+    peers = read(results, "filter_peers.json")
+    if peers:
+        last: dict[tuple[str, str], dict] = {}
+        for r, lib in _peer_rows(peers):
+            last[r["variant"], lib] = r  # rows in increasing N
+        cells = []
+        for (variant, lib), r in last.items():
+            sp = r["speedup_over"].get(lib)
+            ratio = "RMSE disagrees" if sp is None else f"{times_x(sp.get('cpu'))} cpu"
+            cells.append(f"{variant} {lib} {ratio} (N = {r['N']:,})")
+        out.append(f"* particle-filter variants, peer / fusetrack on the same model: "
+                   f"{', '.join(cells)} (`results/filter_peers.json`, {_date(peers)})")  # fmt: skip
+    pm = read(results, "pmmh.json")
+    if pm:
+        cpu = {r["library"]: r["ms_per_iteration_cpu"] for r in pm["results"]}
+        ft = next((r for r in pm["results"] if r["library"] == "fusetrack"), None)
+        if ft is not None:
+            others = [
+                f"{lib} / fusetrack {times_x(_results.ratio(t, cpu['fusetrack']))} cpu"
+                for lib, t in cpu.items()
+                if lib not in ("fusetrack", "limit_reference")
+            ]
+            ref = ft.get("cpu_ratio_to_limit_reference")
+            if ref is not None:
+                others.insert(0, f"fusetrack at {ref:.2f}x the limit reference's CPU")
+            out.append(f"* PMMH (N = {ft['N']:,}, T = {ft['T']}): {', '.join(others)} "
+                       f"(`results/pmmh.json`, {_date(pm)})")  # fmt: skip
+    return out
 
 
 def update_readme(path: Path, lines: list[str]) -> bool:
@@ -632,11 +906,21 @@ def report(results: Path, out: Path) -> list[str]:
     if mt:
         sections.append(("Multi-target trackers: time per scan against targets, against Stone "
                          "Soup", multitarget_section(mt, out / "scaling_targets.png")))  # fmt: skip
+    doc = read(results, "filters.json")
+    if doc:
+        peers = read(results, "filter_peers.json")
+        sections.append(("Particle-filter variants: cost per particle against the bootstrap, "
+                         "the arithmetic and the peers",
+                         variants_section(doc, peers, out / "scaling_filters.png")))  # fmt: skip
     found = newest(results, "zhai2007_speed")
     if found:
-        sections.append(("Every Zhai 2007 particle filter against the bootstrap",
-                         filters_section(_zhai_rows(found[1]), found[0],
-                                         out / "scaling_filters.png")))  # fmt: skip
+        sections.append(("Every Zhai 2007 particle filter against the bootstrap at small N; C18",
+                         zhai_section(_zhai_rows(found[1]), found[0],
+                                      out / "scaling_zhai2007.png")))  # fmt: skip
+    doc = read(results, "pmmh.json")
+    if doc:
+        sections.append(("PMMH: time per iteration against particles, against `particles`",
+                         pmmh_section(doc, "pmmh.json", out / "scaling_pmmh.png")))  # fmt: skip
     if any(results.glob("service_*.json")):
         sections.append(("The live node: latency against its readings per second",
                          node_section(results, out / "node_rate.png")))  # fmt: skip

@@ -54,26 +54,40 @@ PI4 = np.array(
 
 
 def scenario(steps: int, seed: int = 7):
+    """``(motion, sensor, prior, zs)``: the model and ``steps`` steps of bearings."""
+    return simulate(steps, seed)[:4]
+
+
+def simulate(steps: int, seed: int = 7):
+    """:func:`scenario` and the true states ``(steps, 4)`` at times 1..steps behind ``zs``."""
     rng = np.random.default_rng(seed)
     motion = ConstantVelocity(q=0.05)
     sensor = Bearing("s", position=[0.0, 0.0], sigma=0.05)
     x = np.array([0.0, 50.0, 1.0, -1.0])
-    zs = []
+    zs, truth = [], []
     for _ in range(steps):
         x = motion.sample(x, 1.0, rng)
         zs.append([sensor.simulate(x, rng)])
+        truth.append(x)
     prior = Gaussian(np.array([0.0, 50.0, 1.0, -1.0]), np.diag([1.0, 1.0, 0.1, 0.1]))
-    return motion, sensor, prior, zs
+    return motion, sensor, prior, zs, np.array(truth)
 
 
-def builders(n: int, channels: int = 20) -> dict[str, Callable[[], Callable[..., object]]]:
-    motion, sensor, _, _ = scenario(1)
-    models = [
+def mm_models() -> list:
+    """The four regimes of the multiple-model filters (transition matrix ``PI4``): the CV of
+    :func:`scenario`, turns at +-0.5 m/s^2 (Zhai 2007, Eq. 42) and a CV with ten times the noise."""
+    motion = scenario(1)[0]
+    return [
         motion,
         ManeuverTurn(0.5, 1, 0.05),
         ManeuverTurn(0.5, -1, 0.05),
         ConstantVelocity(q=0.5),
     ]
+
+
+def builders(n: int, channels: int = 20) -> dict[str, Callable[[], Callable[..., object]]]:
+    motion, sensor, _, _ = scenario(1)
+    models = mm_models()
 
     def sis(prop=None, **kw):
         return lambda: ProposalParticleFilter(motion, [sensor], prop, n, **kw)

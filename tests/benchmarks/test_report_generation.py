@@ -40,6 +40,19 @@ def _pf_row(n: int, ft: float, ss: float, agree: bool) -> dict:
     }  # fmt: skip
 
 
+def _peer_row(variant: str, ft: float, ss: float, agree: bool) -> dict:
+    libs = {"fusetrack": ft, "stonesoup": ss}
+    return {
+        "variant": variant, "N": 1000, "peers": f"Stone Soup's {variant}", "ops_per_particle": 89.0,
+        "runs": {"fusetrack": 5, "stonesoup": 5}, "rmse": {"fusetrack": 1.8, "stonesoup": 1.7},
+        "rmse_se": {"fusetrack": 0.1, "stonesoup": 0.1}, "wall_seconds_per_step": libs,
+        "cpu_seconds_per_step": libs, "ns_per_op": {k: v / 89e-6 for k, v in libs.items()},
+        "agreement": {"stonesoup": {"difference": 0.1, "se": 0.14, "agree": agree}},
+        "speedup_over": {"stonesoup": {"wall": ss / ft, "cpu": ss / ft} if agree else None},
+        "agree": agree,
+    }  # fmt: skip
+
+
 def _synthetic(results: Path) -> None:
     _write(results, "pf_bearing.json",
            [_pf_row(1000, 0.001, 0.0123, True), _pf_row(100_000, 0.004, 0.0521, False)])  # fmt: skip
@@ -68,9 +81,30 @@ def _synthetic(results: Path) -> None:
         {"N": n, "clock": "cpu", "seconds_per_step": {"bootstrap": 1e-4, "UPF": 1e-3},
          "cpu_seconds_per_step": {"bootstrap": 1e-4, "UPF": 1e-3},
          "wall_seconds_per_step": {"bootstrap": 2e-4, "UPF": 1e-3}} for n in (200, 1000)])  # fmt: skip
+    _write(results, "filters.json", [
+        {"variant": v, "family": "zhai2007", "baseline": "bootstrap", "N": 1000,
+         "cpu_seconds_per_step": c * 1e-6, "wall_seconds_per_step": c * 1.5e-6,
+         "cpu_ns_per_particle": c, "wall_ns_per_particle": 1.5 * c, "ops_per_particle": ops,
+         "ns_per_op": c / ops, "ops_relative_to_baseline": ops / 89,
+         "cpu_relative_to_baseline": c / 400, "wall_relative_to_baseline": c / 400}
+        for v, c, ops in (("bootstrap", 400.0, 89.0), ("UPF", 4000.0, 928.0))
+    ] + [{"skipped": [{"variant": "UPF", "N": 100000, "predicted_cpu_seconds": 900.0}]}])  # fmt: skip
+    _write(results, "filter_peers.json", [
+        _peer_row("bootstrap", 0.001, 0.0035, True), _peer_row("UPF", 0.008, 1.8, False),
+        {"no_peer": {"Galerkin PF": "no library has a grid proposal"}, "particles": "a note",
+         "skipped": [{"variant": "UPF", "library": "stonesoup", "N": 10000,
+                      "estimated_seconds": 900.0}]}])  # fmt: skip
+    _write(results, "pmmh.json", [
+        {"library": lib, "T": 100, "N": 1000, "iterations": 300, "ms_per_iteration_wall": w,
+         "ms_per_iteration_cpu": c, "acceptance_rate": 0.5, "posterior_mean_log_q": 0.2,
+         "posterior_mean_log_r": -1.4, "mc_se_log_q": 0.1, "mc_se_log_r": 0.2,
+         "agreement_with_limit_reference": {"agree": True}, "cpu_ratio_to_limit_reference": c / 3}
+        for lib, w, c in (("fusetrack", 4.0, 3.0), ("particles", 40.0, 27.0),
+                          ("limit_reference", 4.0, 3.0))])  # fmt: skip
     (results / "service_rate_1000.json").write_text(json.dumps({
         "nodes": 100, "rate_per_node": 10.0, "alignment": "closest", "faults": False,
         "duration_s": 60.0, "lost": 0, "tick_compute_ms_mean": 3.0, "node_cpu_ms_per_tick": 9.5,
+        "accepted_per_s": 998.0, "node_cpu_share": 0.04, "generator_cpu_share": 0.05,
         "tick_latency_ms": {"p50": 6.0, "p99": 21.0, "max": 30.0},
         "memory_mb": {"first": 250.0, "last": 260.0, "max": 261.0}, "metadata": META}))  # fmt: skip
 
@@ -86,7 +120,7 @@ def test_report_is_generated_from_the_results_files(tmp_path: Path) -> None:
     assert report.main(["--results", str(results), "--out", str(out), "--readme", str(readme)]) == 0
     text = (out / "REPORT.md").read_text()
     for fig in ("scaling_particles", "scaling_runs", "scaling_tracks", "scaling_targets",
-                "scaling_filters", "node_rate"):  # fmt: skip
+                "scaling_filters", "scaling_zhai2007", "scaling_pmmh", "node_rate"):  # fmt: skip
         assert (out / f"{fig}.png").stat().st_size > 0
         assert f"({fig}.png)" in text
     # the numbers come from the files; N = 1e3 agrees: its ratios wall / cpu
@@ -98,7 +132,20 @@ def test_report_is_generated_from_the_results_files(tmp_path: Path) -> None:
     assert "| 10 | 10 ms / 10 ms | 4 ms / 5 ms | 2.5x / 2.0x | True | 1.0 |" in text
     assert "| GNN | 50 | 10 | 5 ms (5 ms) | 150 ms (155 ms) | 30.0x / 31.0x |" in text
     assert "| UPF | 1 ms / 1 ms (10.0x / 5.0x) | 1 ms / 1 ms (10.0x / 5.0x) |" in text
-    assert "100 x 10 = 1000 | closest | False | 60 | 0 | 6 / 21 / 30 ms | 3.0 | 9.5 |" in text
+    assert "100 x 10 = 1000 | closest | False | 60 | 998 | 0 | 6 / 21 / 30 ms | 3.0 | 9.5 | " \
+           "0.04 / 0.05 |" in text  # fmt: skip
+    # every variant against its baseline with its operations; the peers where the RMSE agrees
+    assert "| zhai2007 | UPF | bootstrap | 4,000 / 6,000 ns; 10.0x base; 928 ops; 0.96x arith |" \
+           in text  # fmt: skip
+    assert "* skipped UPF at N = 100,000: predicted 900 CPU s" in text
+    assert "| bootstrap | 1,000 | stonesoup | 1 ms / 1 ms | 3.5 ms / 3.5 ms | 3.5x / 3.5x |" in text
+    assert (
+        "| UPF | 1,000 | stonesoup | 8 ms / 8 ms | 1.8 s / 1.8 s | RMSE disagrees: none |" in text
+    )
+    assert "* Galerkin PF: no library has a grid proposal" in text
+    assert "* stonesoup skipped on UPF at N = 10,000" in text
+    assert "| particles | 100 | 1,000 | 300 | 27 ms / 40 ms | 9.0x | 0.50 |" in text
+    assert "particles / fusetrack: 9.0x cpu, 10.0x wall." in text
     assert "load 1.5 -> 2.5" in text and "threads 1" in text and "Test CPU" in text
     assert "python benchmarks/pf_bearing.py" in text  # the commands that regenerate the files
     # README: the block between the markers is replaced, the rest kept
@@ -109,6 +156,23 @@ def test_report_is_generated_from_the_results_files(tmp_path: Path) -> None:
            "RMSE disagrees, no ratio" in new  # fmt: skip
     assert "EKF 50.0x wall / 50.0x cpu, UKF differs from FilterPy" in new
     assert "GNN 30.0x cpu / 31.0x wall" in new
+    assert "live node, 1,000 readings/s offered: 100 x 10/s closest, 60 s: accepted 998/s, " \
+           "tick p99 21 ms" in new  # fmt: skip
+    assert "bootstrap stonesoup 3.5x cpu (N = 1,000), UPF stonesoup RMSE disagrees" in new
+    assert "fusetrack at 1.00x the limit reference's CPU, particles / fusetrack 9.0x cpu" in new
+
+
+def test_the_committed_report_is_what_the_committed_results_give(
+    tmp_path: Path, monkeypatch
+) -> None:
+    """benchmarks/REPORT.md and README.md's speed numbers are regenerated whenever a results
+    file changes (``python benchmarks/report.py``); the figures are not redrawn here."""
+    monkeypatch.setattr(report, "plot", lambda path, panels: None)
+    lines = report.report(report.HERE / "results", tmp_path)
+    assert (report.HERE / "REPORT.md").read_text() == "\n".join(lines) + "\n"
+    readme = (report.HERE.parent / "README.md").read_text()
+    block = readme.split(report.README_BEGIN, 1)[1].split(report.README_END, 1)[0]
+    assert block == "\n" + "\n".join(report.headline(report.HERE / "results")) + "\n"
 
 
 def test_report_without_results_still_writes_the_regeneration_commands(tmp_path: Path) -> None:

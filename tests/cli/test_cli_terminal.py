@@ -101,14 +101,30 @@ def test_plain_progress_writes_a_line_per_interval_with_the_time_left():
             bar.update()  # 4 s: no line yet
         assert out.getvalue() == ""
         clock.now += 6.0
-        bar.update()  # 10 s, 5 of 40 done: 2 s per run, 35 left
+        bar.update()  # 10 s, 5 of 40 done: 9 s for 4 runs since the first, 35 left
         clock.now += 2.0
         bar.update()  # 2 s after the last line: none
         clock.now += 68.0
         bar.update(34)  # 80 s: all done
     assert out.getvalue().splitlines() == [
-        "demo: runs: 5/40, 10 s elapsed, about 1 min 10 s left",
+        "demo: runs: 5/40, 10 s elapsed, about 1 min 19 s left",
         "demo: runs: 40/40, 1 min 20 s elapsed",  # the last line; no repeat on closing
+    ]
+
+
+def test_plain_progress_time_left_leaves_out_the_warm_up_before_the_first_run():
+    clock, out = _Clock(), io.StringIO()
+    with PlainProgress(10, "x", stream=out, interval=5.0, clock=clock) as bar:
+        clock.now += 30.0
+        bar.update()  # the first run took 30 s (compilation); a line: only one run to go by
+        for _ in range(4):
+            clock.now += 1.0
+            bar.update()
+        clock.now += 1.0
+        bar.update()  # 6 runs, 1 s each since the first: 4 left -> 4 s, not 35 s / 6 * 4
+    assert out.getvalue().splitlines() == [
+        "x: 1/10 runs, 30 s elapsed, about 4 min 30 s left",
+        "x: 6/10 runs, 35 s elapsed, about 4 s left",
     ]
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from fusetrack.evaluation import plots
+from fusetrack.evaluation import drawing, plots
 
 
 def _legend_of_last_figure(monkeypatch, call):
@@ -20,7 +20,7 @@ def _legend_of_last_figure(monkeypatch, call):
         plt.close(fig)
         return path
 
-    monkeypatch.setattr(plots, "save", keep)
+    monkeypatch.setattr(drawing, "save", keep)
     call()
     return seen
 
@@ -178,3 +178,130 @@ def test_label_axes_sets_units():
     plots.label_axes(ax, title="scene")
     assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_title()) == ("x (m)", "y (m)", "scene")
     plt.close(fig)
+
+
+# --- the helpers the experiments' figures are made of ---
+
+
+def test_curves_label_every_curve_and_keep_given_styles():
+    fig, ax = _axes()
+    x = np.arange(30.0)
+    same = np.ones(30)
+    plots.curves(ax, x, {"A": same, "B": same, "C": same, "bound": same}, styles={"bound": "k--"})
+    assert plots.labelled(ax) == ["A", "B", "C", "bound"]
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    assert (lines["bound"].get_color(), lines["bound"].get_linestyle()) == ("k", "--")
+    looks = {(ln.get_color(), ln.get_linestyle(), ln.get_marker()) for ln in lines.values()}
+    assert len(looks) == 4
+    plt.close(fig)
+
+
+def test_error_bars_are_spread_sideways_and_short_curves_mark_every_point():
+    fig, ax = _axes()
+    x = np.array([0.0, 10.0])
+    plots.curves(ax, x, {"A": [1, 2], "B": [1, 2]}, errors={"A": [0.1, 0.1], "B": [0.2, 0.2]},
+                 spread=0.05)  # fmt: skip
+    xs = [c.lines[0].get_xdata() for c in ax.containers]
+    assert np.allclose(xs[0], [-0.25, 9.75]) and np.allclose(xs[1], [0.25, 10.25])
+    assert plots.distinct_style(3, 5)["markevery"] == (0, 1)
+    assert plots.distinct_style(3, 120)["markevery"] == (3, 10)
+    plt.close(fig)
+
+
+def test_curve_rejects_y_of_the_wrong_length_naming_the_curve():
+    import pytest
+
+    from fusetrack.core import ShapeError
+
+    fig, ax = _axes()
+    with pytest.raises(ShapeError, match=r"EKF: y\.shape"):
+        plots.curve(ax, [0, 1, 2], [1, 2], index=0, label="EKF")
+    with pytest.raises(ShapeError, match=r"UKF: yerr\.shape"):
+        plots.curve(ax, [0, 1], [1, 2], index=0, label="UKF", yerr=[1])
+    plt.close(fig)
+
+
+def test_shaded_intervals_where_given_and_bad_ones_named():
+    import pytest
+
+    from fusetrack.core import ConfigError
+
+    fig, ax = _axes()
+    plots.shade_intervals(ax, plots.runs_of([0, 1, 1, 0, 0, 1], np.arange(6.0)), "occluded")
+    spans = [p.get_x() for p in ax.patches], [p.get_width() for p in ax.patches]
+    assert np.allclose(spans[0], [0.5, 4.5]) and np.allclose(spans[1], [2.0, 1.0])
+    assert plots.labelled(ax) == ["occluded"]
+    with pytest.raises(ConfigError, match=r"intervals\[1\]"):
+        plots.shade_intervals(ax, [(0, 1), (3, 2)], "outage")
+    plt.close(fig)
+
+
+def test_bars_one_labelled_series_per_method_with_distinct_hatches():
+    fig, ax = _axes()
+    plots.bars(
+        ax, ["S1", "S2", "S3"], {"EKF": [1, 2, 3], "PF": [2, 3, 4]}, errors={"PF": [1, 1, 1]}
+    )
+    assert plots.labelled(ax) == ["EKF", "PF"]
+    rects = ax.patches
+    assert len(rects) == 6 and rects[0].get_hatch() != rects[3].get_hatch()
+    assert np.isclose(rects[3].get_x() - rects[0].get_x(), 0.4)  # side by side in a group
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["S1", "S2", "S3"]
+    plt.close(fig)
+
+
+def test_figure_rejects_bad_grid_and_log_axis_bad_axis():
+    import pytest
+
+    from fusetrack.core import ConfigError
+
+    with pytest.raises(ConfigError, match="cols"):
+        plots.figure(1, 0)
+    fig, ax = _axes()
+    with pytest.raises(ConfigError, match="axis"):
+        plots.log_axis(ax, "z")
+    plt.close(fig)
+
+
+def test_draw_paths_one_entry_per_path_or_one_for_all():
+    fig, ax = _axes()
+    paths = [np.c_[np.arange(5.0), np.full(5, k)] for k in range(3)]
+    plots.draw_paths(ax, paths, labels=["a", "b", "c"])
+    assert plots.labelled(ax) == ["a", "b", "c"]
+    fig2, ax2 = _axes()
+    plots.draw_paths(ax2, paths, label="tracks", mark_start=True)
+    assert plots.labelled(ax2) == ["tracks"]
+    assert len(ax2.get_lines()) == 6  # a path and its start dot each
+    plt.close(fig)
+    plt.close(fig2)
+
+
+def test_reference_lines_are_labelled_and_bad_axis_named():
+    import pytest
+
+    from fusetrack.core import ConfigError
+
+    fig, ax = _axes()
+    plots.reference_line(ax, 2.0, "CRLB")
+    plots.reference_line(ax, 5.0, "outage starts", axis="x", color="r")
+    assert plots.labelled(ax) == ["CRLB", "outage starts"]
+    h, v = ax.get_lines()
+    assert np.allclose(h.get_ydata(), 2.0) and np.allclose(v.get_xdata(), 5.0)
+    with pytest.raises(ConfigError, match="axis"):
+        plots.reference_line(ax, 1.0, "x", axis="t")
+    plt.close(fig)
+
+
+def test_write_animation_writes_one_gif_frame_per_frame(tmp_path):
+    from PIL import Image
+
+    fig, ax = plots.panel(size=(2, 2))
+    (line,) = ax.plot([], [])
+    ax.set(xlim=(0, 4), ylim=(0, 4))
+
+    def draw(k):
+        line.set_data(np.arange(k + 2), np.arange(k + 2))
+        return [line]
+
+    out = plots.write_animation(fig, draw, range(3), tmp_path / "a.mp4", fps=5)
+    assert out == tmp_path / "a.gif"  # no mp4 asked for
+    assert Image.open(out).n_frames == 3

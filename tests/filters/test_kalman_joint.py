@@ -48,6 +48,15 @@ def test_joint_ekf_is_the_stacked_update(n):
     y = (np.array(z) + 0.01 - zp + np.pi) % (2 * np.pi) - np.pi
     np.testing.assert_allclose(got.mean, x + k @ y, atol=1e-10)
     np.testing.assert_allclose(got.cov, p - k @ s @ k.T, atol=1e-10)
+    # the m x m path (taken when the likelihood is wanted, or a reading has its own
+    # covariance) gives the same posterior as the O(d^2 m) one
+    ekf = ExtendedKalmanFilter(ConstantVelocity(q=0.1), mics, joint=True)
+    with_ll, _ = ekf.update_with_likelihood(PRIOR, ms)
+    np.testing.assert_allclose(with_ll.mean, got.mean, atol=1e-10)
+    np.testing.assert_allclose(with_ll.cov, got.cov, atol=1e-10)
+    own = [Measurement(0.0, m.sensor_id, m.value, covariance=[[mics[i].sigma ** 2]])
+           for i, m in enumerate(ms)]  # fmt: skip
+    np.testing.assert_allclose(ekf.update(PRIOR, own).mean, got.mean, atol=1e-10)
     # and it is not the sequential EKF (relinearised after each reading)
     seq = ExtendedKalmanFilter(ConstantVelocity(q=0.1), mics).update(PRIOR, ms)
     assert np.abs(seq.mean - got.mean).max() > 1e-9

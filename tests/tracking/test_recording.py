@@ -110,3 +110,19 @@ def test_phd_tracker_refuses_other_filters():
 
     with pytest.raises(ConfigError, match="GMPHDFilter or a GMCPHDFilter"):
         PHDTracker(object())  # type: ignore[arg-type]
+
+
+def test_observe_sees_every_scan_once_in_time_order_with_the_state_after_it():
+    seen: list[tuple[float, float]] = []
+    tracker = _phd()
+    run_tracker(
+        tracker,
+        _recording(),
+        times=np.arange(12.0),
+        observe=lambda t, s: seen.append((t, float(s.intensity.expected_count))),
+    )
+    assert [t for t, _ in seen] == list(np.arange(12.0))  # the empty scan at t = 5 too
+    state = tracker.initial_state()
+    for t in range(12):
+        state = tracker.step(state, float(t), [m for m in _recording() if m.time == t])
+        assert seen[t][1] == pytest.approx(float(state.intensity.expected_count), abs=1e-12)

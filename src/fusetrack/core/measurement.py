@@ -55,8 +55,10 @@ class Measurement:
                     invalid("covariance", self.covariance, "None when the value is not a vector")
                 )
             return
-        v = np.atleast_1d(np.asarray(self.value, dtype=float))
-        object.__setattr__(self, "value", v)
+        v = self.value
+        if type(v) is not np.ndarray or v.dtype != np.float64 or v.ndim == 0:
+            v = np.atleast_1d(np.asarray(v, dtype=float))  # (an (m,) float array is kept as is)
+            object.__setattr__(self, "value", v)
         if self.covariance is not None:
             c = np.atleast_2d(np.asarray(self.covariance, dtype=float))
             m = v.shape[-1]

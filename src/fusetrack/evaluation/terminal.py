@@ -88,6 +88,7 @@ class PlainProgress:
         self.lines = 0
         self._shown = -1  # ``done`` at the last line
         self._start = self._last = clock()
+        self._first: tuple[float, int] | None = None  # (time, done) at the first update
 
     def line(self) -> str:
         """The progress line for the work done so far."""
@@ -96,9 +97,16 @@ class PlainProgress:
         count = f"{self.done}" if self.total is None else f"{self.done}/{self.total}"
         text = f"{self.desc}: {count}{units}, {_duration(elapsed)} elapsed"
         if self.total is not None and 0 < self.done < self.total:
-            left = elapsed / self.done * (self.total - self.done)
-            text += f", about {_duration(left)} left"
+            text += f", about {_duration(self._seconds_per_unit() * (self.total - self.done))} left"
         return text
+
+    def _seconds_per_unit(self) -> float:
+        """The rate since the first update (the warm-up before it, e.g. JIT compilation or
+        starting workers, does not repeat), or since the start while only one update came."""
+        t0, n0 = self._first if self._first is not None else (self._start, 0)
+        if self.done > n0:
+            return (self.clock() - t0) / (self.done - n0)
+        return (self.clock() - self._start) / self.done
 
     def _write(self) -> None:
         stream = self.stream if self.stream is not None else sys.stderr
@@ -109,6 +117,8 @@ class PlainProgress:
 
     def update(self, n: int = 1) -> None:
         self.done += n
+        if self._first is None:
+            self._first = (self.clock(), self.done)
         if self.clock() - self._last >= self.interval:
             self._write()
 

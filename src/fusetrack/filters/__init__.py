@@ -3,6 +3,8 @@
 One import per line, re-exported with ``as``: add new filters by adding lines.
 """
 
+from .bearing_steps import compile_bearing_steps as compile_bearing_steps
+from .bearing_steps import ekf_bearing_steps as ekf_bearing_steps
 from .cpf_sp import CPFSPProposal as CPFSPProposal
 from .detection_fusion import DetectionFusion as DetectionFusion
 from .detection_fusion import FusionBelief as FusionBelief

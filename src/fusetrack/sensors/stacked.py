@@ -38,6 +38,7 @@ class _BearingBank:
     idx: tuple[int, int]  # the state's x and y entries
     positions: np.ndarray  # (n, 2)
     headings: np.ndarray  # (n,)
+    variances: np.ndarray  # (n,) sigma_i^2, the bearings' constant noise
 
     def relative(self, x: Array) -> tuple[Array, Array]:
         return (
@@ -70,6 +71,7 @@ def _bearing_banks(parts: Sequence[SensorModel], rows: list[int]) -> list[_Beari
             (idx[0], idx[1]),
             np.array([np.asarray(b.position, dtype=np.float64) for _, b in members]),
             np.array([float(b.heading) for _, b in members]),
+            np.array([float(np.asarray(b.noise_cov())[0, 0]) for _, b in members]),
         )
         for idx, members in groups.items()
         if len(members) > 1
@@ -144,6 +146,22 @@ class StackedSensor:
         if all(b.shape == (1, 1) for b in blocks):
             return np.diag(np.concatenate([b[0] for b in blocks]))
         return np.asarray(block_diag(*blocks))
+
+    def noise_diagonal(self, x: Any = None) -> Array | None:
+        """The diagonal of :meth:`noise_cov` ``(m,)`` without the ``m x m`` matrix, or None when
+        a part's noise is not diagonal (the banked bearings' variances are kept once)."""
+        out = np.empty(self.dim)
+        for b in self._banks:
+            out[b.rows] = b.variances
+        for p, rows in self._others:
+            block = np.asarray(p.noise_cov(x), dtype=np.float64)
+            if block.shape != (rows.stop - rows.start,) * 2:
+                return None
+            diag = np.diagonal(block)
+            if np.count_nonzero(block) != np.count_nonzero(diag):
+                return None
+            out[rows] = diag
+        return out
 
     def residual(self, z: ArrayLike, z_pred: ArrayLike) -> Array:
         if self._wrapped is not None:

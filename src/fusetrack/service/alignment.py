@@ -52,6 +52,24 @@ class SensorBuffer:
             del self.items[0]  # the oldest goes first
             self.dropped += 1
 
+    def extend(self, readings: Sequence[Reading]) -> None:
+        """:meth:`push` each of ``readings``: appended at once when they arrive in time order
+        (the usual case), inserted one by one otherwise; then the oldest past ``size`` go."""
+        items, last = self.items, self.items[-1].time if self.items else -math.inf
+        for r in readings:
+            if r.time < last:
+                break
+            last = r.time
+        else:
+            items.extend(readings)  # ids grow with arrival: (time, id) order holds
+            readings = ()
+        for r in readings:
+            bisect.insort(items, r, key=lambda r: (r.time, r.id))
+        excess = len(items) - self.size
+        if excess > 0:
+            del items[:excess]  # the oldest go first
+            self.dropped += excess
+
     def take_until(self, t: float) -> list[Reading]:
         """Remove and return the readings with ``time <= t`` (in time order)."""
         n = bisect.bisect_right(self.items, t, key=lambda r: r.time)
@@ -110,6 +128,17 @@ class Aligner:
         before = buf.dropped
         buf.push(reading)
         self.pending += 1 - (buf.dropped - before)
+
+    def push_all(self, readings: Sequence[Reading]) -> None:
+        """:meth:`push` each of ``readings`` (arrival order), each sensor's buffer at once."""
+        by_sensor: dict[str, list[Reading]] = {}
+        for r in readings:
+            by_sensor.setdefault(r.sensor, []).append(r)
+        for sensor, rs in by_sensor.items():
+            buf = self.buffers[sensor]
+            before = buf.dropped
+            buf.extend(rs)
+            self.pending += len(rs) - (buf.dropped - before)
 
     def due(self, clock: float, limit: int = 1_000_000) -> list[int]:
         """The ticks whose window has closed by ``clock`` (their end + lag <= clock), at most

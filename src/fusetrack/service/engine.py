@@ -28,6 +28,7 @@ Everything random comes from the engine's generator, so the durable log replays 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from typing import Any
 
@@ -46,14 +47,18 @@ from ..filters import (
     ExtendedKalmanFilter,
     GMPHDFilter,
     GridFilter,
+    KalmanFilter,
     PhdIntensity,
     UnscentedKalmanFilter,
+    compile_bearing_steps,
+    ekf_bearing_steps,
 )
 from ..tracking import (
     MissedCountDeleter,
     MofNInitiator,
     MultiTargetTracker,
     PHDTracker,
+    SingleTargetState,
     SingleTargetTracker,
     Tracker,
     belief_summary,
@@ -223,6 +228,9 @@ class FusionEngine:
         self.state = self.tracker.initial_state()
         self.time = float(start)
         self.resets = 0  # estimates that were not finite (never published)
+        if type(self.filter) in (ExtendedKalmanFilter, KalmanFilter) and self.method == "none":
+            if cfg.fusion.alignment == "all":  # the loop of _bearing_steps, compiled before use
+                compile_bearing_steps()
 
     @property
     def belief(self) -> Any:
@@ -259,8 +267,10 @@ class FusionEngine:
         return as_measurements(readings, t)
 
     def _step(self, tick: int, t: float, readings: Sequence[Reading]) -> list[TrackState]:
-        for when, group in group_by_time(self.measurements(readings, t), TIME_TOLERANCE):
-            self._scan(when, group)
+        measurements = self.measurements(readings, t)
+        if not self._bearing_steps(measurements):
+            for when, group in group_by_time(measurements, TIME_TOLERANCE):
+                self._scan(when, group)
         if t - self.time > TIME_TOLERANCE:
             self._scan(t, [])
         out = []
@@ -274,6 +284,29 @@ class FusionEngine:
                 mean, cov = belief_summary(self.filter, self.state.belief)
             out.append(track_state(track.id + 1, tick, t, mean, cov, self.position_index, readings))
         return out
+
+    def _bearing_steps(self, measurements: Sequence[Measurement]) -> bool:
+        """One target, readings each at its own time (``alignment: all``), an EKF and bearing
+        sensors: the tick's steps in one loop (:func:`~fusetrack.filters.ekf_bearing_steps`, the
+        same numbers to rounding as one :meth:`_scan` per reading); False when it does not
+        apply (the scans then run)."""
+        state = self.state
+        if (
+            len(measurements) < 2
+            or not isinstance(self.tracker, SingleTargetTracker)
+            or not isinstance(state, SingleTargetState)
+            or state.belief is None
+            or any(b.time - a.time <= TIME_TOLERANCE for a, b in itertools.pairwise(measurements))
+        ):
+            return False
+        done = ekf_bearing_steps(
+            self.filter, state.belief, state.time, measurements, TIME_TOLERANCE
+        )
+        if done is None:
+            return False
+        self.state = SingleTargetState(*done)
+        self.time = max(self.time, done[1])
+        return True
 
     def _scan(self, when: float, measurements: Sequence[Measurement]) -> None:
         self.state = self.tracker.step(self.state, when, measurements, self.rng)

@@ -114,6 +114,27 @@ class DurableLog:
             ),
         )
 
+    def append_messages(
+        self, first_id: int, messages: Sequence[SensorMessage], received: float
+    ) -> None:
+        """:meth:`append_message` of several messages (ids ``first_id``, ``first_id + 1``, ...)
+        in one statement."""
+        self.db.executemany(
+            "INSERT INTO messages VALUES (?, ?, ?, ?, ?, ?, ?)",
+            [
+                (
+                    first_id + i,
+                    m.node,
+                    m.seq,
+                    m.sensor,
+                    m.time,
+                    received,
+                    m.model_dump_json(exclude_none=True),
+                )
+                for i, m in enumerate(messages)
+            ],
+        )
+
     def append_tick(
         self,
         tick: int,

@@ -23,12 +23,13 @@ from __future__ import annotations
 
 import asyncio
 import heapq
+import itertools
 import json
 import math
 import sqlite3
 import time
 from collections import Counter, deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -205,6 +206,7 @@ class FusionNode:
         self.node_time: dict[str, float] = {}  # each node's latest accepted reading time
         self.node_heard: dict[str, float] = {}  # wall time of each node's latest acceptance
         self.data_time = -math.inf  # the data clock (:meth:`update_data_clock`)
+        self.data_clock = fusion.clock == "data"
         self.accepted: Counter[str] = Counter()
         self.rejected: Counter[str] = Counter()
         self.last: dict[str, dict[str, Any]] = {}
@@ -259,8 +261,25 @@ class FusionNode:
 
     def ingest_frame(self, frame: bytes, source: object = None) -> list[Outcome]:
         """A UDP datagram from ``source`` (the sender's address): a sealed frame of one message
-        or a batch. A source that failed authentication too often is dropped before the frame's
-        HMAC is computed (issue 18: a flood of forged frames starved the legitimate ones)."""
+        or a batch (:meth:`ingest_frames` of one)."""
+        return self.ingest_frames([(frame, source)])
+
+    def ingest_frames(self, frames: Sequence[tuple[bytes, object]]) -> list[Outcome]:
+        """UDP datagrams ``(frame, source address)`` read together (the listener's drain): each
+        is authenticated, parsed and checked in turn exactly as alone; the accepted readings are
+        then logged, buffered and counted at once (:meth:`_accept_all`). A source that failed
+        authentication too often is dropped before its frame's HMAC is computed (issue 18: a
+        flood of forged frames starved the legitimate ones). The outcomes, in order."""
+        outcomes: list[Outcome] = []
+        staged: list[tuple[SensorMessage, np.ndarray]] = []
+        for frame, source in frames:
+            outcomes.extend(self._open_and_check(frame, source, staged))
+        self._accept_all(staged)
+        return outcomes
+
+    def _open_and_check(
+        self, frame: bytes, source: object, staged: list[tuple[SensorMessage, np.ndarray]]
+    ) -> list[Outcome]:
         if source is not None and self.limiter.blocked(source, self.wall()):
             return [self.reject("rate_limited", f"{source} failed authentication too often")]
         if len(frame) > self.cfg.limits.max_message_bytes:
@@ -273,17 +292,32 @@ class FusionNode:
             self.freshness.check(sent, self.wall())
         except Rejected as err:
             return [self.reject(err.reason, err.detail)]
-        return self.ingest_payload(payload, encoding, node)
+        return self._decode_and_check(payload, encoding, node, staged)
 
     def ingest_payload(self, payload: bytes, encoding: str, node: str) -> list[Outcome]:
-        """An authenticated payload (``node`` is who signed it or whose token came with it)."""
+        """An authenticated payload (``node`` is who signed it or whose token came with it): one
+        message, or a batch whose messages are checked in order, each accepted or refused on
+        its own (a batch that does not parse is refused whole: ``schema`` naming the message's
+        index and field, e.g. ``messages.3.reading.bearing``)."""
+        staged: list[tuple[SensorMessage, np.ndarray]] = []
+        outcomes = self._decode_and_check(payload, encoding, node, staged)
+        self._accept_all(staged)
+        return outcomes
+
+    def _decode_and_check(
+        self,
+        payload: bytes,
+        encoding: str,
+        node: str,
+        staged: list[tuple[SensorMessage, np.ndarray]],
+    ) -> list[Outcome]:
         if len(payload) > self.cfg.limits.max_message_bytes:
             return [self.reject("oversized", f"{len(payload)} bytes")]
         try:
             messages = decode_messages(payload, encoding)
         except SchemaRejection as err:
             return [self.reject(err.reason, err.detail)]
-        return [self.ingest_message(m, node) for m in messages]
+        return [self._check(m, node, staged) for m in messages]
 
     def authorize(self, header: str | None) -> str | None:
         """The node an ``Authorization: Bearer ...`` header names, or None (the scheme name is
@@ -306,8 +340,18 @@ class FusionNode:
 
     def ingest_message(self, m: SensorMessage, node: str) -> Outcome:
         """Check one parsed message against the network and accept or refuse it."""
+        staged: list[tuple[SensorMessage, np.ndarray]] = []
+        outcome = self._check(m, node, staged)
+        self._accept_all(staged)
+        return outcome
+
+    def _check(
+        self, m: SensorMessage, node: str, staged: list[tuple[SensorMessage, np.ndarray]]
+    ) -> Outcome:
+        """Check one parsed message against the network: refused (counted), or accepted and
+        added to ``staged`` (with its value) for :meth:`_accept_all`."""
         seq = m.seq
-        if self.aligner.pending >= self.cfg.limits.max_pending:
+        if self.aligner.pending + len(staged) >= self.cfg.limits.max_pending:
             return self.reject("overload", "too many unfused readings; retry later", seq)
         if m.node != node:
             return self.reject(
@@ -360,24 +404,40 @@ class FusionNode:
                 f"time={m.time} is at or before the fused time {self.aligner.fused_until:.3f}",
                 seq,
             )
-        self._accept(m, value)
+        staged.append((m, value))
+        if self.data_clock:  # the data clock moves with each acceptance: the next check sees it
+            self._accept_all(staged)
+            staged.clear()
         return Outcome(True, seq=seq)
 
-    def _accept(self, m: SensorMessage, value: np.ndarray) -> None:
-        rid = self.next_id
-        self.next_id += 1
-        now = self.wall()
+    def _accept_all(self, staged: Sequence[tuple[SensorMessage, np.ndarray]]) -> None:
+        """Accept checked messages (in order): log them (one statement), buffer their readings
+        (appended to each sensor's buffer together) and count them (one metric update per
+        sensor), so that the per-message cost of a drained burst is the checks alone."""
+        if not staged:
+            return
+        now, first = self.wall(), self.next_id
+        self.next_id += len(staged)
         if self.log is not None:
-            self.log.append_message(rid, m, now)
-        self.aligner.push(reading_of(m, rid, value))
-        self.watermark = max(self.watermark, m.time)
-        self.node_time[m.node] = max(self.node_time.get(m.node, -math.inf), m.time)
-        self.node_heard[m.node] = now
-        self.update_data_clock()
-        self.accepted[m.sensor] += 1
-        self.metrics.accepted_by[m.sensor].inc()
-        self.recent_accepts.append(now)
-        self.last[m.sensor] = {"time": m.time, "value": value.tolist(), "received": now}
+            self.log.append_messages(first, [m for m, _ in staged], now)
+        self.aligner.push_all([reading_of(m, first + i, v) for i, (m, v) in enumerate(staged)])
+        counts = Counter(m.sensor for m, _ in staged)
+        self.accepted.update(counts)
+        for sensor, n in counts.items():
+            self.metrics.accepted_by[sensor].inc(n)
+        latest: dict[str, tuple[SensorMessage, np.ndarray]] = {}
+        for m, v in staged:
+            latest[m.sensor] = (m, v)
+            if m.time > self.node_time.get(m.node, -math.inf):
+                self.node_time[m.node] = m.time
+            self.node_heard[m.node] = now
+            if m.time > self.watermark:
+                self.watermark = m.time
+        for sensor, (m, v) in latest.items():
+            self.last[sensor] = {"time": m.time, "value": v.tolist(), "received": now}
+        self.recent_accepts.extend(itertools.repeat(now, len(staged)))
+        if self.data_clock:  # O(nodes): only the data clock needs it (1000 nodes: 0.6 ms)
+            self.update_data_clock()
 
     def commit(self) -> None:
         if self.log is not None:

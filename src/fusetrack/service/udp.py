@@ -6,7 +6,9 @@ before it fires a tick, so a reading that reached the host before its tick fell 
 even when the loop was busy (a long tick, a burst), instead of being refused as late. Nothing is
 sent back: UDP senders learn about refusals from ``/health`` and ``/metrics``.
 
-Each datagram is charged to its sender's address (:meth:`.node.FusionNode.ingest_frame`: a
+The datagrams waiting are read first and then handed over together
+(:meth:`.node.FusionNode.ingest_frames`: each is checked alone, the accepted readings are logged,
+buffered and counted at once). Each datagram is charged to its sender's address (a
 source that keeps failing authentication is dropped unchecked). One drain takes at most a few
 hundred datagrams per event-loop turn, so a flood cannot hold ``/health`` and the ticks for
 seconds (issue 18: 13 s); what the kernel drops because the socket's buffer is full is read
@@ -50,17 +52,19 @@ class UdpListener:
 
     def drain(self, limit: int = 10_000) -> int:
         """Handle the waiting datagrams (at most ``limit``); return how many."""
-        n = 0
-        while n < limit:
+        frames: list[tuple[bytes, object]] = []
+        recv = self.sock.recvfrom
+        while len(frames) < limit:
             try:
-                data, addr = self.sock.recvfrom(MAX_DATAGRAM)
+                data, addr = recv(MAX_DATAGRAM)
             except (BlockingIOError, InterruptedError):
                 break
             except OSError:  # e.g. ICMP port unreachable reported on the socket: not fatal
                 continue
-            self.node.ingest_frame(data, addr[0])
-            n += 1
-        return n
+            frames.append((data, addr[0]))
+        if frames:  # checked one by one, accepted together (FusionNode.ingest_frames)
+            self.node.ingest_frames(frames)
+        return len(frames)
 
     def start(self) -> UdpListener:
         self.loop = asyncio.get_running_loop()

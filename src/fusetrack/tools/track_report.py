@@ -3,19 +3,18 @@
 from __future__ import annotations
 
 import math
-import shutil
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from ..evaluation import plots
 from ..service import NetworkConfig
 from .recordings import SensorReadings, VideoClock
 from .scene import Animation, Scene
 
 MARKERS = {"bearing": "^", "doa": "^", "range": "s", "range_bearing": "D", "image_position": "v"}
-STYLES = ["-", "--", "-.", ":"]
 
 
 def position_errors(tracks: pd.DataFrame, truth: pd.DataFrame) -> pd.DataFrame:
@@ -43,23 +42,20 @@ def position_errors(tracks: pd.DataFrame, truth: pd.DataFrame) -> pd.DataFrame:
 
 
 def _axes_scene(ax: Any, scene: Scene, net: NetworkConfig, truth: pd.DataFrame | None) -> None:
-    from matplotlib.patches import Rectangle
-
     x0, x1, y0, y1 = scene.area
-    ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, color="0.6", lw=1))
-    for s in net.sensors:
-        if s.position is not None:
-            ax.plot(*s.position[:2], MARKERS.get(s.kind, "o"), color="k", ms=8, mfc="w")
-            ax.annotate(s.id, s.position[:2], textcoords="offset points", xytext=(5, 5), fontsize=8)
+    plots.outline_box(ax, (x0, y0, x1, y1), color="0.6", label="area")
+    for kind in sorted({s.kind for s in net.sensors if s.position is not None}):
+        placed = [
+            (s.id, s.position[:2]) for s in net.sensors if s.kind == kind and s.position is not None
+        ]
+        plots.draw_sensors(ax, placed, marker=MARKERS.get(kind, "o"), label=f"{kind} sensor")
     if truth is not None:
-        for i, (_target, g) in enumerate(truth.groupby("target")):
-            ax.plot(g["x"], g["y"], "k:", lw=2, label="ground truth" if i == 0 else None)
+        plots.draw_truth(ax, [g[["x", "y"]].to_numpy() for _, g in truth.groupby("target")],
+                         label="ground truth")  # fmt: skip
     ax.set_xlim(x0 - 0.5, x1 + 0.5)
     ax.set_ylim(y0 - 0.5, y1 + 0.5)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.grid(alpha=0.3)
+    plots.label_axes(ax)
 
 
 def _fixes(readings: list[SensorReadings]) -> list[SensorReadings]:
@@ -75,38 +71,26 @@ def scene_figure(
     truth: pd.DataFrame | None,
 ) -> None:
     """Tracks (one style per id), position fixes, sensors and truth over the scene's area."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 6))
+    fig, ax = plots.panel(size=(6, 6))
     _axes_scene(ax, scene, net, truth)
     for r in _fixes(readings):
-        ax.plot(r.values[:, 0], r.values[:, 1], ".", ms=4, alpha=0.6, label=f"{r.sensor} fixes")
-    for i, (tid, g) in enumerate(tracks.groupby("track") if not tracks.empty else []):
-        ax.plot(g["x"], g["y"], STYLES[i % len(STYLES)], lw=1.8, label=f"track {tid}")
-        ax.plot(g["x"].iloc[-1], g["y"].iloc[-1], "o", color=ax.lines[-1].get_color(), ms=5)
+        ax.plot(r.values[:, 0], r.values[:, 1], ".", color="0.45", ms=4, label=f"{r.sensor} fixes")
+    groups = list(tracks.groupby("track")) if not tracks.empty else []
+    plots.draw_paths(ax, [g[["x", "y"]].to_numpy() for _, g in groups],
+                     labels=[f"track {tid}" for tid, _ in groups])  # fmt: skip
     ax.set_title(scene.name, fontsize=9)
-    ax.legend(fontsize=8, loc="best")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    plots.legend(ax, loc="best")
+    plots.save(fig, path)
 
 
 def error_figure(path: Path, errors: pd.DataFrame) -> None:
     """Position error against time, per track."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 3.2))
+    fig, ax = plots.panel(size=(7, 3.2))
     for i, (tid, g) in enumerate(errors.groupby("track")):
-        ax.plot(
-            g["time"], g["error"], STYLES[i % len(STYLES)], marker=".", ms=3, label=f"track {tid}"
-        )
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("position error (m)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        plots.curve(ax, g["time"], g["error"], index=i, label=f"track {tid}")
+    plots.label_axes(ax, "time (s)", "position error (m)")
+    plots.legend(ax)
+    plots.save(fig, path)
 
 
 def animate(
@@ -114,9 +98,6 @@ def animate(
 ) -> Path:
     """Tracks growing over the scene, one frame per tick (at most ``animation.max_frames``):
     a GIF (Pillow), or an MP4 when asked for and ffmpeg exists. Returns the file written."""
-    import matplotlib.pyplot as plt
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
-
     opts = scene.animation
     times = np.unique(tracks["time"].to_numpy()) if not tracks.empty else np.zeros(1)
     frames = times[
@@ -124,18 +105,18 @@ def animate(
             np.linspace(0, len(times) - 1, min(len(times), opts.max_frames)).round().astype(int)
         )
     ]
-    fig, ax = plt.subplots(figsize=(4.5, 4.5))
+    fig, ax = plots.panel(size=(4.5, 4.5))
     _axes_scene(ax, scene, net, truth)
     ids = sorted(tracks["track"].unique()) if not tracks.empty else []
     trails = {
-        tid: ax.plot([], [], STYLES[i % len(STYLES)], lw=1.5, label=f"track {tid}")[0]
+        tid: plots.curve(ax, [], [], index=i, label=f"track {tid}", marker=None)
         for i, tid in enumerate(ids)
     }
     heads = {tid: ax.plot([], [], "o", color=trails[tid].get_color(), ms=5)[0] for tid in ids}
     (true_dot,) = ax.plot([], [], "kx", ms=7, label="truth now" if truth is not None else None)
     title = ax.set_title("", fontsize=9)
     if ids:
-        ax.legend(fontsize=7, loc="upper right")
+        plots.legend(ax, fontsize=7, loc="upper right")
 
     def draw(t: float) -> list[Any]:
         for tid in ids:
@@ -153,15 +134,7 @@ def animate(
         title.set_text(f"{scene.name[:40]}  t = {t:.2f} s")
         return [*trails.values(), *heads.values(), true_dot, title]
 
-    anim = FuncAnimation(fig, draw, frames=list(frames), blit=False)
-    if opts.format == "mp4" and shutil.which("ffmpeg"):
-        out = path.with_suffix(".mp4")
-        anim.save(str(out), writer=FFMpegWriter(fps=opts.fps), dpi=80)
-    else:
-        out = path.with_suffix(".gif")
-        anim.save(str(out), writer=PillowWriter(fps=opts.fps), dpi=80)
-    plt.close(fig)
-    return out
+    return plots.write_animation(fig, draw, frames, path, fps=opts.fps, mp4=opts.format == "mp4")
 
 
 def _markdown(
@@ -243,9 +216,6 @@ def write_report(
 ) -> dict[str, Any]:
     """``report.md`` and its figures (and the animations: over the scene, and over each camera's
     frames for ``videos``, sensor id -> its video) into ``out``; the summary's numbers."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     scene_figure(out / "scene.png", scene, net, readings, tracks, truth)
     errors = position_errors(tracks, truth) if truth is not None and not tracks.empty else None
     if truth is not None and errors is None:

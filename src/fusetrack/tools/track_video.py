@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ..core import ConfigError, FusetrackError, MeasurementError, invalid
-from ..evaluation import load_yaml
+from ..evaluation import load_yaml, plots
 from .video_tracker import FrameResult, TrackerConfig, VideoRadioTracker
 
 REQUIRED_COLUMNS = ("time", "tag", "x", "y")
@@ -452,24 +452,16 @@ def track_video(
 
 
 def _floorplan(path: Path, df: pd.DataFrame, radio: pd.DataFrame) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6, 6))
+    """Top view: radio fixes, the estimate, and the frames the person was occluded."""
+    fig, ax = plots.panel(size=(6, 6))
     ax.plot(radio["x"], radio["y"], "b.", ms=4, label="radio fixes")
     ax.plot(df["x"], df["y"], "r-", lw=1.5, label="estimate")
     occ = df[df["occluded"]]
     ax.plot(occ["x"], occ["y"], "kx", ms=4, label="occluded frames")
     ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    plots.label_axes(ax)
+    plots.legend(ax)
+    plots.save(fig, path)
 
 
 def run_track_video_command(args: Any) -> int:

@@ -5,14 +5,13 @@ components."""
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
-from ..core import ConfigError, Gaussian, Measurement, Track, invalid
+from ..core import ConfigError, Gaussian, Measurement, invalid
 from ..filters import (
     CphdBelief,
     GMCPHDFilter,
@@ -22,7 +21,7 @@ from ..filters import (
     extract_states,
 )
 from .protocol import TrackView
-from .recording import run_tracker, with_silent_sensors
+from .recording import RecordingRunner, predict_and_update
 
 
 @dataclass(frozen=True)
@@ -37,7 +36,7 @@ class PHDTrackerState:
     ids: Mapping[int, int] = field(default_factory=dict)
 
 
-class PHDTracker:
+class PHDTracker(RecordingRunner):
     """The GM-PHD filter as a tracker: predict to the scan, update with the scan's readings
     (every sensor in ``scanned``, default all, that sent nothing looked and saw nothing: a NaN
     reading, the missed-detection term only), then the components of weight above
@@ -68,20 +67,6 @@ class PHDTracker:
             return PHDTrackerState(CphdBelief.empty(dim, self.max_count))
         return PHDTrackerState(PhdIntensity.empty(dim))
 
-    def run(
-        self,
-        measurements: Iterable[Measurement | tuple[Any, ...]],
-        rng: np.random.Generator | None = None,
-        *,
-        times: ArrayLike | None = None,
-        order: Literal["reject", "reorder"] = "reject",
-        state: Any = None,
-    ) -> list[Track]:
-        """Track over a whole recording (:func:`~.recording.run_tracker`): every track ever
-        extracted, by id, at the scans it was extracted; ``state`` the state to start from
-        (e.g. a prior intensity; default :meth:`initial_state`)."""
-        return run_tracker(self, measurements, rng, times=times, order=order, state=state)
-
     def step(
         self,
         state: PHDTrackerState,
@@ -91,10 +76,15 @@ class PHDTracker:
         *,
         scanned: Collection[str] | None = None,
     ) -> PHDTrackerState:
-        dt = 0.0 if state.time is None else max(0.0, time - state.time)
-        v: Any = self.filter.predict(state.intensity, dt, rng)  # type: ignore[arg-type]
-        v = self.filter.update(
-            v, with_silent_sensors(measurements, self._phd.sensors, time, scanned), rng
+        v: Any = predict_and_update(
+            self.filter,
+            state.intensity,
+            state.time,
+            time,
+            measurements,
+            self._phd.sensors,
+            scanned,
+            rng,
         )
         if isinstance(v, CphdBelief):
             v = CphdBelief(_distinct_labels(v.intensity, top=v.map_count), v.cardinality)

@@ -5,17 +5,16 @@ identity of the measurement that created it, behind the tracker interface
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-from ..core import ConfigError, Gaussian, Measurement, Track, check_probability, invalid
+from ..core import ConfigError, Gaussian, Measurement, check_probability, invalid
 from .pmb import PMBDensity, PMBFilter
 from .protocol import TrackView
-from .recording import run_tracker, with_silent_sensors
+from .recording import RecordingRunner, predict_and_update
 
 EXTRACTIONS = ("threshold", "map")
 
@@ -31,7 +30,7 @@ class PMBTrackerState:
     ids: Mapping[int, int] = field(default_factory=dict)
 
 
-class PMBTracker:
+class PMBTracker(RecordingRunner):
     """The PMB filter as a tracker: predict to the scan, update with the scan's readings (every
     sensor in ``scanned``, default all, that sent nothing looked and saw nothing: a NaN
     reading, the missed-detection terms only), then the tracks are the Bernoullis with
@@ -53,20 +52,6 @@ class PMBTracker:
     def initial_state(self) -> PMBTrackerState:
         return PMBTrackerState(PMBDensity.empty(self.filter.motion.dim))
 
-    def run(
-        self,
-        measurements: Iterable[Measurement | tuple[Any, ...]],
-        rng: np.random.Generator | None = None,
-        *,
-        times: ArrayLike | None = None,
-        order: Literal["reject", "reorder"] = "reject",
-        state: Any = None,
-    ) -> list[Track]:
-        """Track over a whole recording (:func:`~.recording.run_tracker`): every track ever
-        extracted, by id, at the scans it was extracted; ``state`` the state to start from
-        (e.g. a prior intensity; default :meth:`initial_state`)."""
-        return run_tracker(self, measurements, rng, times=times, order=order, state=state)
-
     def step(
         self,
         state: PMBTrackerState,
@@ -76,10 +61,15 @@ class PMBTracker:
         *,
         scanned: Collection[str] | None = None,
     ) -> PMBTrackerState:
-        dt = 0.0 if state.time is None else max(0.0, time - state.time)
-        density = self.filter.predict(state.density, dt, rng)
-        density = self.filter.update(
-            density, with_silent_sensors(measurements, self.filter.sensors, time, scanned), rng
+        density: PMBDensity = predict_and_update(
+            self.filter,
+            state.density,
+            state.time,
+            time,
+            measurements,
+            self.filter.sensors,
+            scanned,
+            rng,
         )
         ids = dict(state.ids)
         tracks = []

@@ -6,7 +6,7 @@ keeps its own richer history (the measurements each track used); the random-fini
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from typing import Any, Literal
 
 import numpy as np
@@ -96,11 +96,13 @@ def run_tracker(
     times: ArrayLike | None = None,
     order: Literal["reject", "reorder"] = "reject",
     state: Any = None,
+    observe: Callable[[float, Any], None] | None = None,
 ) -> list[Track]:
     """Step ``tracker`` scan by scan over a recording (from ``state``, default its
     ``initial_state()``) and return every track it ever confirmed, by id: the scans at which it
     was confirmed, its mean and covariance after each (``filter.estimate`` when the tracker's
-    filter has one)."""
+    filter has one). ``observe(time, state)`` is called after each scan (e.g. to record a PHD's
+    expected number of targets)."""
     ms, scans = ordered_scans(measurements, times, order)
     state = tracker.initial_state() if state is None else state
     history: dict[int, tuple[list[float], list[np.ndarray], list[np.ndarray]]] = {}
@@ -112,7 +114,46 @@ def run_tracker(
             ts.append(t)
             means.append(np.asarray(mean, float))
             covs.append(np.asarray(cov, float))
+        if observe is not None:
+            observe(t, state)
     return [
         Track(np.array(ts), np.stack(means), np.stack(covs), label=f"track {i}", id=i)
         for i, (ts, means, covs) in sorted(history.items())
     ]
+
+
+def predict_and_update(
+    filt: Any,
+    belief: Any,
+    last_time: float | None,
+    time: float,
+    measurements: Sequence[Measurement],
+    sensors: Mapping[str, Any],
+    scanned: Collection[str] | None,
+    rng: np.random.Generator | None,
+) -> Any:
+    """One scan of a random-finite-set filter: predict from ``last_time`` (none: ``dt = 0``) to
+    ``time``, then update with the scan's readings and a NaN reading for each silent sensor
+    (:func:`with_silent_sensors`)."""
+    dt = 0.0 if last_time is None else max(0.0, time - last_time)
+    predicted = filt.predict(belief, dt, rng)
+    return filt.update(predicted, with_silent_sensors(measurements, sensors, time, scanned), rng)
+
+
+class RecordingRunner:
+    """``run(measurements, ...)`` for a tracker: the whole recording through
+    :func:`run_tracker`."""
+
+    def run(
+        self,
+        measurements: Iterable[Measurement | tuple[Any, ...]],
+        rng: np.random.Generator | None = None,
+        *,
+        times: ArrayLike | None = None,
+        order: Literal["reject", "reorder"] = "reject",
+        state: Any = None,
+    ) -> list[Track]:
+        """Track over a whole recording (:func:`run_tracker`): every track ever extracted, by
+        id, at the scans it was extracted; ``state`` the state to start from (e.g. a prior
+        intensity; default ``initial_state()``)."""
+        return run_tracker(self, measurements, rng, times=times, order=order, state=state)  # type: ignore[arg-type]

@@ -10,10 +10,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from pydantic import Field
@@ -153,33 +149,25 @@ def curve_plot(
     diagonal: bool = False,
     labels: Mapping[Any, str] | None = None,
 ) -> Path:
-    """Mean +- one standard deviation of each series against ``x`` (the paper's error-bar plots)."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    """Mean +- one standard deviation of each series against ``x`` (the paper's error-bar plots),
+    bars shifted sideways so that they do not hide one another; ``hlines`` are labelled
+    reference values."""
+    fig, ax = plots.panel(size=(6.4, 4.4))
     groups = list(table.groupby(series, sort=False))
     span = float(table[x].max() - table[x].min()) or 1.0
     for i, (key, grp) in enumerate(groups):
         grp = grp.sort_values(x)
         off = (i - (len(groups) - 1) / 2) * 0.012 * span  # small shifts keep error bars apart
-        ax.errorbar(
-            grp[x] + off,
-            grp["mean"],
-            yerr=grp["std"],
-            marker="o",
-            ms=4,
-            capsize=3,
-            label=(labels or {}).get(key, str(key)),
-        )
-    for name, y in (hlines or {}).items():
-        ax.axhline(y, ls=":", color="k", lw=1)
-        ax.annotate(name, (ax.get_xlim()[0], y), va="bottom", fontsize=8)
+        label = (labels or {}).get(key, str(key))
+        plots.curve(ax, grp[x] + off, grp["mean"], index=i, label=label, yerr=grp["std"])
+    dashes = (":", "--", "-.", (0, (6, 2)))
+    for k, (name, y) in enumerate((hlines or {}).items()):
+        plots.reference_line(ax, y, name, linestyle=dashes[k % 4])
     if diagonal:
         lim = max(table[x].max(), table["mean"].max())
         ax.plot([0, lim], [0, lim], "k:", lw=1, label="y = x")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
-    ax.set_title(title)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    plots.label_axes(ax, xlabel, ylabel, title)
+    plots.legend(ax)
     return plots.save(fig, path)
 
 

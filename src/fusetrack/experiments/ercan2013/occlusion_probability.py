@@ -14,14 +14,10 @@ import itertools
 from dataclasses import dataclass
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...world import (
     OccluderPriors,
     occlusion_probability,
@@ -259,28 +255,17 @@ def _figure(ctx: RunContext, case: _Case) -> None:
     """Fig. 17: Eq. 7 against the Monte Carlo q with +-3 std bars (at most 2000 points shown)."""
     q7, rect, sd = case.q7, case.rect, case.sd
     show = np.random.default_rng(0).choice(len(q7), size=min(2000, len(q7)), replace=False)
-    fig, ax = plt.subplots(figsize=(5.6, 5.2))
-    ax.errorbar(
-        rect[show],
-        q7[show],
-        xerr=3 * sd[show],
-        fmt=".",
-        ms=2,
-        alpha=0.4,
-        elinewidth=0.5,
-        label="configurations",
-    )
+    fig, ax = plots.panel(size=(5.6, 5.2))
+    ax.errorbar(rect[show], q7[show], xerr=3 * sd[show], fmt=".", ms=2, alpha=0.4, elinewidth=0.5,
+                label="configurations")  # fmt: skip
     ax.plot([0, 1], [0, 1], "k-", lw=1, label="y = x")
-    ax.set_xlabel("Monte Carlo q (+-3 std)")
-    ax.set_ylabel("Eq. 7")
+    plots.label_axes(ax, "Monte Carlo q (probability, +-3 std)", "Eq. 7 (probability)")
     ax.set_title(
-        f"Fig. 17: Eq. 7 vs Monte Carlo (D = 3.33, sigma = 2, alpha = 4; {len(show)} of {len(q7)} shown)"
+        f"Fig. 17: Eq. 7 vs Monte Carlo (D = 3.33, sigma = 2, alpha = 4; {len(show)} of {len(q7)} shown)",
+        fontsize=8,
     )
-    ax.title.set_fontsize(8)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(ctx.figure_path("fig17_eq7_vs_mc"), dpi=110)
-    plt.close(fig)
+    plots.legend(ax)
+    plots.save(fig, ctx.figure_path("fig17_eq7_vs_mc"))
 
 
 def _report(c: _Checks) -> str:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from .common import (
     PRINTED_PREFIX,
     fmt,
@@ -88,9 +88,6 @@ def _gaussian_vs_none(table: pd.DataFrame) -> pd.DataFrame:
 
 def _grid_figure(ctx: RunContext, table: pd.DataFrame, targets: list[float], runs: int) -> str:
     """Mean RMSE_tr over (RMSE_occ, k) as a colour map with the iso-lines at ``targets``."""
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import LogNorm
-
     mean = table.pivot(index="k", columns="label", values="mean")
     occ = table.groupby("label")["rmse_occ"].mean()
     labels = sorted(mean.columns, key=lambda lab: occ[lab])
@@ -98,22 +95,16 @@ def _grid_figure(ctx: RunContext, table: pd.DataFrame, targets: list[float], run
     x = occ[labels].to_numpy()
     y = mean.index.to_numpy()
     z = mean.to_numpy()
-    fig, ax = plt.subplots(figsize=(6.6, 4.4))
-    mesh = ax.contourf(x, y, z, levels=np.geomspace(max(z.min(), 1e-3), z.max(), 14),
-                       norm=LogNorm(), cmap="viridis")  # fmt: skip
-    fig.colorbar(mesh, ax=ax, label="mean RMSE_tr (units)", format="%.2g")
+    fig, ax = plots.panel(size=(6.6, 4.4))
+    plots.colour_map(ax, z, x=x, y=y, label="mean RMSE_tr (units)", log=True, filled_levels=14)
     if len(y) > 1 and len(x) > 1:
-        levels = sorted(set(targets))
-        lines = ax.contour(x, y, z, levels=levels, colors=["r", "w"][: len(levels)])
-        ax.clabel(lines, fmt="%.2f", fontsize=8)
+        plots.contour_lines(ax, x, y, z, sorted(set(targets)), ["r", "w"][: len(set(targets))])
     gx, gy = np.meshgrid(x, y)
-    ax.scatter(gx.ravel(), gy.ravel(), s=6, c="k", alpha=0.5)
-    ax.set_xlabel("RMSE_occ (units; left = perfect priors, right = none)")
-    ax.set_ylabel("number of cameras k")
-    ax.set_title(f"RMSE_tr over the grid ({runs} runs each)")
-    fig.tight_layout()
-    fig.savefig(ctx.figure_path("rmse_grid"), dpi=110)
-    plt.close(fig)
+    ax.scatter(gx.ravel(), gy.ravel(), s=6, c="k", alpha=0.5, label="grid points run")
+    plots.label_axes(ax, "RMSE_occ (units; left = perfect priors, right = none)",
+                     "number of cameras k", f"RMSE_tr over the grid ({runs} runs each)")  # fmt: skip
+    plots.legend(ax, loc="upper right")
+    plots.save(fig, ctx.figure_path("rmse_grid"))
     return "rmse_grid.png"
 
 
@@ -233,37 +224,21 @@ def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
 
 def _tradeoff_figure(ctx: RunContext, t: _Tradeoff, ks: list[int], runs: int) -> None:
     """Fig. 8: cameras against the tolerated RMSE_occ (corrected, printed, scaled target)."""
-    import matplotlib.pyplot as plt
-
     curve, rmse_max, scaled = t.curve, t.rmse_max, t.scaled
-    fig, ax = plt.subplots(figsize=(6.0, 4.2))
+    fig, ax = plots.panel(size=(6.0, 4.2))
     ok = curve.dropna()
-    ax.plot(ok["tolerated_rmse_occ"], ok["k"], "o-", label="corrected likelihood")
+    plots.curve(ax, ok["tolerated_rmse_occ"], ok["k"], index=0, label="corrected likelihood")
     hard_ok = curve.dropna(subset=["tolerated (printed likelihood)"])
-    ax.plot(
-        hard_ok["tolerated (printed likelihood)"],
-        hard_ok["k"],
-        "s",
-        mfc="none",
-        label="likelihood as printed",
-    )
-    sc = curve.dropna(subset=[f"tolerated at scaled target {scaled:.2f}"])
-    ax.plot(
-        sc[f"tolerated at scaled target {scaled:.2f}"],
-        sc["k"],
-        "^--",
-        label=f"corrected, scaled target {scaled:.2f}",
-    )
-    ax.legend(fontsize=8)
-    ax.axvline(rmse_max, ls=":", color="k", lw=1)
-    ax.annotate("RMSE_max (no priors)", (rmse_max, ks[0]), fontsize=8, ha="right")
-    ax.set_xlabel("RMSE_occ tolerated (units)")
-    ax.set_ylabel("number of cameras")
-    ax.set_title(f"Fig. 8: cameras vs prior accuracy for mean RMSE_tr = {TARGET:g} ({runs} runs)")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(ctx.figure_path("fig8_tradeoff"), dpi=110)
-    plt.close(fig)
+    ax.plot(hard_ok["tolerated (printed likelihood)"], hard_ok["k"], "s", color="C1", mfc="none",
+            label="likelihood as printed")  # fmt: skip
+    col = f"tolerated at scaled target {scaled:.2f}"
+    sc = curve.dropna(subset=[col])
+    plots.curve(ax, sc[col], sc["k"], index=2, label=f"corrected, scaled target {scaled:.2f}")
+    plots.reference_line(ax, rmse_max, "RMSE_max (no priors)", axis="x")
+    plots.label_axes(ax, "RMSE_occ tolerated (units)", "number of cameras",
+                     f"Fig. 8: cameras vs prior accuracy for mean RMSE_tr = {TARGET:g} ({runs} runs)")  # fmt: skip
+    plots.legend(ax)
+    plots.save(fig, ctx.figure_path("fig8_tradeoff"))
 
 
 def _report_tables(ctx: RunContext, t: _Tradeoff, size: dict[str, int], runs: int) -> str:

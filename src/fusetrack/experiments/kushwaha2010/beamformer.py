@@ -230,13 +230,11 @@ reverberation of the paper's outdoor site are not modelled.
 
 def _polar(ctx: RunContext, energies: np.ndarray) -> Any:
     """Fig. 10b analogue: the beam energies of a source at 50 ft and 120°."""
-    import matplotlib.pyplot as plt
-
     a = np.append(beam_angles(), 2 * np.pi)
     e = np.append(energies, energies[0])
-    fig = plt.figure(figsize=(4.5, 4.5))
-    ax = fig.add_subplot(projection="polar")
-    ax.plot(a, e / e.max(), "o-", ms=3)
-    ax.plot([np.deg2rad(120.0)] * 2, [0, 1], "k--", lw=1)
+    fig, ax = plots.panel(size=(4.5, 4.5), projection="polar")
+    ax.plot(a, e / e.max(), "o-", ms=3, label="beam energy (normalised)")
+    ax.plot([np.deg2rad(120.0)] * 2, [0, 1], "k--", lw=1, label="true direction 120°")
+    plots.legend(ax, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08))
     ax.set_title("Beamform, source at 50 ft and 120° (Fig. 10b analogue)", fontsize=9)
     return plots.save(fig, ctx.figure_path("beamform_50ft_120deg"))

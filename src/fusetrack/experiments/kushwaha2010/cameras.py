@@ -376,31 +376,29 @@ def _bandwidth_claims(table: pd.DataFrame, prefix: str) -> list[Claim]:
 
 
 def _figures(ctx: RunContext, df: pd.DataFrame, table: pd.DataFrame, setup: str) -> list[str]:
-    import matplotlib.pyplot as plt
-
     names = []
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axes = plots.panels(2, size=(11, 4.2))
     order = [*TRACKERS, "T4-eq103", *ABLATIONS]
-    x = np.arange(len(order))
     for ax, col, label in zip(
         axes, ("err3d", "err2d"), ("3-D error (m)", "2-D reprojection error (px)")
     ):
-        ax.bar(x - 0.2, table[f"{col}_fixed"].reindex(order), 0.4, label="fixed orientation")
-        ax.bar(x + 0.2, table[f"{col}_rotating"].reindex(order), 0.4, label="rotating")
-        ax.set_xticks(x, order, rotation=30, ha="right")
-        ax.set_yscale("log")
-        ax.set_ylabel(label)
-    axes[0].legend()
+        plots.bars(ax, order, {
+            "fixed orientation": table[f"{col}_fixed"].reindex(order),
+            "rotating": table[f"{col}_rotating"].reindex(order),
+        }, rotation=30)  # fmt: skip
+        plots.log_axis(ax, "y")
+        plots.label_axes(ax, "tracker", label)
+    plots.legend(axes[0])
     fig.suptitle(
         f"Setup {setup.upper()}: mean errors per tracker (Figs {'48-49' if setup == 'a' else '54-56'})"
     )
     names.append(plots.save(fig, ctx.figure_path(f"errors_setup_{setup}")).name)
 
-    fig, ax = plt.subplots(figsize=(7, 3.6))
+    fig, ax = plots.panel(size=(7, 3.6))
     run0 = df[df.experiment_run == 0]
     for k, name in enumerate(TRACKERS):
         d = run0[run0.tracker == name]
-        ax.plot(d.t, d.err3d, label=name, lw=1.1, **plots.distinct_style(k, len(d)))
+        plots.curve(ax, d.t, d.err3d, index=k, label=name, lw=1.1)
     ax.set_yscale("log")
     plots.label_axes(ax, "time step", "3-D error (m)")
     ax2 = ax.twinx()
@@ -411,16 +409,16 @@ def _figures(ctx: RunContext, df: pd.DataFrame, table: pd.DataFrame, setup: str)
     ax.set_title(f"Setup {setup.upper()}, run 0: error and participating cameras (Figs 47/53)")
     names.append(plots.save(fig, ctx.figure_path(f"error_vs_time_{setup}")).name)
 
-    fig, ax = plt.subplots(figsize=(6, 3.4))
+    fig, ax = plots.panel(size=(6, 3.4))
     b = table.loc[list(TRACKERS), ["bytes_per_step", "link_bytes_per_step"]]
-    xb = np.arange(len(TRACKERS))
-    ax.bar(xb - 0.2, b["bytes_per_step"], 0.4, label="originated (paper's accounting)")
-    ax.bar(xb + 0.2, b["link_bytes_per_step"], 0.4, label="on all links of the routing tree")
+    plots.bars(ax, list(TRACKERS), {
+        "originated (paper's accounting)": b["bytes_per_step"],
+        "on all links of the routing tree": b["link_bytes_per_step"],
+    })  # fmt: skip
     ax.set_yscale("log")
-    ax.set_xticks(xb, TRACKERS)
-    ax.set_ylabel("bytes per step")
-    ax.legend(fontsize=7)
-    ax.set_title(f"Setup {setup.upper()}: communication per time step")
+    plots.label_axes(ax, "tracker", "bytes per step (B)",
+                     f"Setup {setup.upper()}: communication per time step")  # fmt: skip
+    plots.legend(ax, fontsize=7)
     names.append(plots.save(fig, ctx.figure_path(f"bandwidth_{setup}")).name)
     return names
 

@@ -214,18 +214,19 @@ on its best piece.
 
 def _figure(ctx: RunContext, tracks: dict[int, Any], truth_rows: Any) -> Any:
     truth = np.array(truth_rows)
-    fig, axes2 = plots.figure(1, 2, size=(10, 3.6))
-    axes = axes2[0]
+    fig, axes = plots.panels(2, size=(10, 3.6))
     found = [Track(np.asarray(times, float), np.asarray(pos, float), id=k)
              for k, (times, pos) in tracks.items()]  # fmt: skip
     plots.draw_tracks(axes[0], found, truth=[truth[:, i, :2] for i in range(truth.shape[1])])
-    for i in range(truth.shape[1]):
-        axes[1].plot(0.25 * np.arange(len(truth)), truth[:, i, 0], "k-", lw=2, alpha=0.6)
+    t = 0.25 * np.arange(len(truth))
+    plots.draw_truth(axes[1], [np.c_[t, truth[:, i, 0]] for i in range(truth.shape[1])])
     for k, track in enumerate(found):
-        axes[1].plot(0.25 * track.times, track.means[:, 0], **plots.distinct_style(k, len(track)))
+        plots.curve(axes[1], 0.25 * track.times, track.means[:, 0], index=k,
+                    label=f"track {track.id}", lw=1.1)  # fmt: skip
     axes[0].set_xlim(0, 35)
     axes[0].set_ylim(0, 20)
     plots.label_axes(axes[0], title="MCMCDA tracks (Fig. 26a analogue), truth in black")
-    axes[0].legend(fontsize=7)
+    plots.legend(axes[0], fontsize=7)
     plots.label_axes(axes[1], "time (s)", "x (m)", title="x against time (Fig. 26b analogue)")
+    plots.legend(axes[1], fontsize=7)
     return plots.save(fig, ctx.figure_path("crossing_tracks"))

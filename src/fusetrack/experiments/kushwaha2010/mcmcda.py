@@ -364,20 +364,17 @@ p_z 0.05, λ_b 0.05 and λ_f 0.1 per step over the field, v̄ 20 m/s, gaps ≤ 3
 
 
 def _figure(ctx: RunContext, df: pd.DataFrame) -> Any:
-    import matplotlib.pyplot as plt
-
     g = df.groupby(["modality", "fusion"])
     err = g.apply(lambda d: d[d.success]["error"].mean())
     suc = g["success"].mean()
     labels = [f"{m}-{r}" for m, r in err.index]
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.4))
-    axes[0].bar(labels, err.to_numpy())
-    axes[0].set_ylabel("mean error (m)")
-    axes[0].set_title("MCMCDA error (Fig. 24/25 analogue)")
-    axes[1].bar(labels, suc.to_numpy(), color="C1")
-    axes[1].set_ylabel("success rate")
-    axes[1].set_title("Tracking success")
+    fig, axes = plots.panels(2, size=(9, 3.4))
+    plots.bars(axes[0], labels, {"mean error over successful runs": err.to_numpy()}, rotation=45)
+    plots.label_axes(
+        axes[0], "modality-fusion", "mean error (m)", "MCMCDA error (Fig. 24/25 analogue)"
+    )
+    plots.bars(axes[1], labels, {"success rate": suc.to_numpy()}, rotation=45)
+    plots.label_axes(axes[1], "modality-fusion", "success rate (share of runs)", "Tracking success")
     for ax in axes:
-        ax.tick_params(axis="x", rotation=45)
-        ax.grid(alpha=0.3, axis="y")
+        plots.legend(ax, fontsize=7, loc="best")
     return plots.save(fig, ctx.figure_path("mcmcda_error_success"))

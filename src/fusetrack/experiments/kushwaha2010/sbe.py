@@ -821,22 +821,33 @@ DIFFERENCES_TEXT = """## Differences from the paper and their causes
 def _figures(
     ctx: RunContext, df: pd.DataFrame, table: pd.DataFrame, loss: pd.DataFrame
 ) -> dict[str, Any]:
-    import matplotlib.pyplot as plt
-
     out = {}
-    fig, ax = plt.subplots(figsize=(7, 3.6))
-    ax.bar(table.index, table["mean error (m)"], color=["C0", "C1", "C2", "C3"] * 2)
-    ax.set_ylabel("mean error (m)")
-    ax.set_title("Average tracking error per approach (Fig. 21a analogue)")
-    ax.grid(alpha=0.3, axis="y")
-    out["bars"] = plots.save(fig, ctx.figure_path("sbe_error_bars"))
-    fig, ax = plt.subplots(figsize=(7, 3.6))
-    ax.bar(table.index, table["median det Σ (m⁴)"], color=["C0", "C1", "C2", "C3"] * 2)
-    ax.set_yscale("log")
-    ax.set_ylabel("median det Σ (m⁴)")
-    ax.set_title("Posterior uncertainty per approach (Fig. 21b analogue)")
-    ax.grid(alpha=0.3, axis="y")
-    out["det"] = plots.save(fig, ctx.figure_path("sbe_det_bars"))
+    modalities = ("A", "V", "AVC", "AVH")
+    rules = {"weighted sum (variant ...S)": "S", "product (variant ...P)": "P"}
+    for key, col, title, log in (
+        (
+            "bars",
+            "mean error (m)",
+            "Average tracking error per approach (Fig. 21a analogue)",
+            False,
+        ),
+        (
+            "det",
+            "median det Σ (m⁴)",
+            "Posterior uncertainty per approach (Fig. 21b analogue)",
+            True,
+        ),
+    ):
+        fig, ax = plots.panel(size=(7, 3.6))
+        values = {r: table[col].reindex([m + s for m in modalities]) for r, s in rules.items()}
+        plots.bars(ax, list(modalities), values)
+        if log:
+            ax.set_yscale("log")
+        plots.label_axes(ax, "sensors (A audio, V video; C centralised, H hybrid)", col, title)
+        plots.legend(ax)
+        out[key] = plots.save(
+            fig, ctx.figure_path(f"sbe_{'error' if key == 'bars' else 'det'}_bars")
+        )
     base = df[
         (df.condition == "base") & (df.sensors == "all") & (df.packet_loss == 0.0) & (df.run == 0)
     ]
@@ -870,7 +881,7 @@ def _figures(
         ctx.figure_path("sbe_packet_loss"),
         loss.index.to_numpy(),
         {k: loss[k].to_numpy() for k in VARIANTS},
-        xlabel="packet loss",
+        xlabel="packet loss (share of packets lost)",
         ylabel="mean error (m)",
         title="Error against packet loss (beyond the paper)",
     )

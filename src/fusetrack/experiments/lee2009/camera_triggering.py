@@ -18,16 +18,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from pydantic import Field, field_validator
 
-from ...evaluation import Claim, ClaimKinds, ExperimentOptions, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, ExperimentOptions, Outcome, RunContext, plots
 from ...filters import turn_models
 from ...management import AcousticTracker, CooperationPolicy, run_cooperation, run_periodic_batch
 from ...motion import AccelTurn
@@ -332,16 +327,15 @@ def _sweep_section(ctx: RunContext, e32: pd.DataFrame, tv_sweep: list[int]) -> t
         "RMS(1) < RMS(100)",
         falls,
     )
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for c in ("O1", "O2", "O3"):
-        ax.plot(e32m.index, e32m[c], "o-", label=c)
-    ax.errorbar(e32m.index, avg, yerr=e32m["95% CI +-"], fmt="ks-", label="average (95% CI)")
+    fig, ax = plots.panel(size=(6, 4))
+    plots.curves(ax, e32m.index, {c: e32m[c] for c in ("O1", "O2", "O3")})
+    plots.curve(ax, e32m.index, avg, index=3, label="average (95% CI)", fmt="ks-",
+                yerr=e32m["95% CI +-"])  # fmt: skip
     ax.set_xscale("log")
-    ax.set_xlabel("camera period T_v (T_s)")
-    ax.set_ylabel("RMS position error (m)")
-    ax.set_title("E3.2 (Fig. 3-6): periodic cooperation, sigma^2 = 5")
-    ax.legend()
-    fig_path = save(fig, ctx.figure_path("e32_periodic"))
+    plots.label_axes(ax, "camera period T_v (T_s)", "RMS position error (m)",
+                     "E3.2 (Fig. 3-6): periodic cooperation, sigma^2 = 5 deg^2")  # fmt: skip
+    plots.legend(ax)
+    fig_path = plots.save(fig, ctx.figure_path("e32_periodic"))
     monotone = bool(np.all(np.diff(avg.to_numpy()) > 0))
     body = f"""## E3.2 Periodic cooperation (Figs. 3-5, 3-6; C8)
 
@@ -607,54 +601,50 @@ def _figures(ctx: RunContext, e31: pd.DataFrame, t31: _Table31, room: _Room) -> 
     tab, per, tvs, tv_trig_obj = t31.tab, t31.per, t31.tvs, t31.tv_trig_obj
     prob, events = room.prob, room.events
     figs = {}
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for c in ("O1", "O2", "O3", "average"):
-        ax.plot(e31.index, e31[c], "o-", label=c)
-    ax.set_xlabel("bearing noise variance (deg^2)")
-    ax.set_ylabel("RMS position error (m)")
-    ax.set_title("E3.1 (Fig. 3-4): acoustic only")
-    ax.legend()
-    figs["e31"] = save(fig, ctx.figure_path("e31_noise_sweep"))
-    fig, axs = plt.subplots(1, 3, figsize=(14, 4))
+    fig, ax = plots.panel(size=(6, 4))
+    plots.curves(ax, e31.index, {c: e31[c] for c in ("O1", "O2", "O3", "average")})
+    plots.label_axes(ax, "bearing noise variance (deg^2)", "RMS position error (m)",
+                     "E3.1 (Fig. 3-4): acoustic only")  # fmt: skip
+    plots.legend(ax)
+    figs["e31"] = plots.save(fig, ctx.figure_path("e31_noise_sweep"))
+    fig, axs = plots.panels(3, size=(14, 4))
     for ax, c in zip(axs, ("O1", "O2", "O3")):
-        ax.plot(tvs, per[c], "o-", label="periodic")
-        ax.axhline(
-            float(tab.loc["trigger", c]),
-            color="r",
-            label=f"triggering (T_v {tv_trig_obj.get(c, float('nan')):.2f})",
-        )
-        ax.axhline(float(tab.loc["none", c]), color="k", ls="--", label="none")
+        plots.curve(ax, tvs, per[c], index=0, label="periodic")
+        tv = tv_trig_obj.get(c, float("nan"))
+        plots.reference_line(ax, float(tab.loc["trigger", c]), f"triggering (T_v {tv:.2f})",
+                             color="r", linestyle="-")  # fmt: skip
+        plots.reference_line(ax, float(tab.loc["none", c]), "none", linestyle="--")
         ax.set_xscale("log")
-        ax.set_xlabel("T_v (T_s)")
-        ax.set_title(f"Fig. 3-14: {c}")
-        ax.legend(fontsize=7)
-    figs["e34"] = save(fig, ctx.figure_path("fig3_14"))
-    fig, axs = plt.subplots(2, 2, figsize=(13, 6), sharex=True)
+        plots.label_axes(ax, "T_v (T_s)", "RMS position error (m)", f"Fig. 3-14: {c}")
+        plots.legend(ax, fontsize=7)
+    figs["e34"] = plots.save(fig, ctx.figure_path("fig3_14"))
+    fig, axs = plots.figure(2, 2, size=(13, 6), sharex=True)
     t35 = np.arange(T_35)
     for i, s in enumerate(SENSORS_35):
         for j, coop in enumerate((True, False)):
-            axs[j, i].plot(t35, prob[(s, coop)], lw=0.8)
-            axs[j, i].set_title(f"{s}, {'with' if coop else 'without'} cooperation")
-            for e in events[s]:
-                axs[j, i].axvline(e, color="r", lw=0.6, ls=":")
-            axs[j, i].set_ylabel("P(trigger)")
-    axs[1, 0].set_xlabel("step (T_s = 0.01 s)")
-    axs[1, 1].set_xlabel("step (T_s = 0.01 s)")
-    figs["e35"] = save(fig, ctx.figure_path("fig3_18_20_trigger_probability"))
+            ax = axs[j, i]
+            plots.curve(ax, t35, prob[(s, coop)], index=0, label="P(trigger)", lw=0.8, marker="")
+            for k, e in enumerate(events[s]):
+                plots.reference_line(ax, e, "event" if k == 0 else "", axis="x", color="r", lw=0.6)
+            plots.label_axes(ax, "step (T_s = 0.01 s)" if j == 1 else "", "P(trigger)",
+                             f"{s}, {'with' if coop else 'without'} cooperation")  # fmt: skip
+    plots.legend(axs[0, 0], fontsize=7)
+    figs["e35"] = plots.save(fig, ctx.figure_path("fig3_18_20_trigger_probability"))
     tr35 = truth_e35()
-    fig, ax = plt.subplots(figsize=(8, 4.8))
-    for o in range(3):
-        ax.plot(tr35[:, o, 0], tr35[:, o, 1], label=f"O{o + 1}")
-    for name, pos in {**SENSORS_35, **CAMERAS_35}.items():
-        ax.plot(*pos, "k^" if name.startswith("A") else "bs")
-        ax.annotate(name, pos)
+    fig, ax = plots.panel(size=(8, 4.8))
+    plots.draw_paths(ax, [tr35[:, o] for o in range(3)], labels=[f"O{o + 1}" for o in range(3)])
+    acoustic = [(n, p) for n, p in SENSORS_35.items() if n.startswith("A")]
+    cameras = [(n, p) for n, p in {**SENSORS_35, **CAMERAS_35}.items() if not n.startswith("A")]
+    plots.draw_sensors(ax, acoustic, label="acoustic array")
+    plots.draw_sensors(ax, cameras, marker="s", label="camera")
     ax.set_xlim(0, ROOM[0])
     ax.set_ylim(0, ROOM[1])
     ax.set_aspect("equal")
-    ax.legend()
-    ax.set_title("Figs. 3-15/3-16: the room, trajectories, sensors")
-    figs["room"] = save(fig, ctx.figure_path("fig3_16_room"))
+    plots.label_axes(ax, title="Figs. 3-15/3-16: the room, trajectories, sensors")
+    plots.legend(ax, fontsize=7)
+    figs["room"] = plots.save(fig, ctx.figure_path("fig3_16_room"))
 
+    return figs
     return figs
 
 

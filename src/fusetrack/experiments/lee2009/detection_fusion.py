@@ -15,15 +15,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...filters import (
     DetectionFusion,
     chair_varshney,
@@ -417,25 +412,22 @@ def _figures(
     ctx: RunContext, s2: Array, curves: Mapping[tuple[str, int], Array], trials: int
 ) -> tuple[Path, Path]:
     """Figs. 4-3(a) and 4-2."""
-    fig, axs = plt.subplots(1, 2, figsize=(12, 4))
+    fig, axs = plots.panels(2, size=(12, 4))
     for ax, term in zip(axs, ("logW", "logit")):
-        for n in range(1, 6):
-            ax.plot(s2, curves[(term, n)], label=f"N(S_E1) = {n}")
+        plots.curves(ax, s2, {f"N(S_E1) = {n}": curves[(term, n)] for n in range(1, 6)})
         ax.set_xscale("log")
-        ax.set_xlabel("sigma_xy^2")
-        ax.set_ylabel("P(G1)")
-        ax.set_title(f"Fig. 4-3(a): quality term {term}, {trials} trials")
-        ax.legend(fontsize=7)
-    fig43 = save(fig, ctx.figure_path("fig4_3"))
+        plots.label_axes(ax, "sigma_xy^2 (m^2)", "P(G1)",
+                         f"Fig. 4-3(a): quality term {term}, {trials} trials")  # fmt: skip
+        plots.legend(ax, fontsize=7)
+    fig43 = plots.save(fig, ctx.figure_path("fig4_3"))
     dx = np.linspace(-3, 3, 121)
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for sg in (0.5, 1.0, 2.0):
-        ax.plot(dx, np.exp(-(dx**2) / (2 * sg**2)), label=f"sigma = {sg}")
-    ax.set_xlabel("Delta x (Delta y = 0)")
-    ax.set_ylabel("P1(n)")
-    ax.set_title("Fig. 4-2: dynamic prior")
-    ax.legend()
-    fig42 = save(fig, ctx.figure_path("fig4_2"))
+    fig, ax = plots.panel(size=(6, 4))
+    plots.curves(
+        ax, dx, {f"sigma = {sg} m": np.exp(-(dx**2) / (2 * sg**2)) for sg in (0.5, 1.0, 2.0)}
+    )
+    plots.label_axes(ax, "Delta x (m), Delta y = 0", "P1(n)", "Fig. 4-2: dynamic prior")
+    plots.legend(ax)
+    fig42 = plots.save(fig, ctx.figure_path("fig4_2"))
 
     return fig43, fig42
 

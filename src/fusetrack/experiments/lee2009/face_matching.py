@@ -7,15 +7,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...perception import (
     CAMERA_VIEWS,
     COMPASS,
@@ -162,14 +157,14 @@ def _claims(ident: pd.DataFrame, direc: pd.Series) -> list[Claim]:
 def _figure(ctx: RunContext) -> Path:
     """Synthetic multi-view face patches (Fig. 5-22/5-23 analogue)."""
     rng = np.random.default_rng(ctx.seed)
-    fig, axs = plt.subplots(2, 5, figsize=(10, 4.4))
+    fig, axs = plots.figure(2, 5, size=(10, 4.4))
     for row, (s, h) in enumerate(population("across", rng)[:2]):
         for i, v in enumerate(np.linspace(0, math.pi, 5)):
-            axs[row, i].imshow(synthetic_face(v, s, h, rng))
-            axs[row, i].set_title(f"{math.degrees(v):.0f} deg", fontsize=8)
-            axs[row, i].axis("off")
+            plots.show_image(
+                axs[row, i], synthetic_face(v, s, h, rng), title=f"{math.degrees(v):.0f} deg"
+            )
     fig.suptitle("Synthetic multi-view face patches (Fig. 5-22/5-23 analogue)")
-    return save(fig, ctx.figure_path("faces"))
+    return plots.save(fig, ctx.figure_path("faces"))
 
 
 def _report_text(runs: int, queries: int, ident: pd.DataFrame, direc: pd.Series, figp: Path) -> str:

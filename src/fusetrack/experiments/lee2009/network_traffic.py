@@ -6,14 +6,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...management import PROTOCOLS, NetworkConfig, simulate_traffic
 
 SCENARIOS: dict[str, dict[str, Any]] = {
@@ -167,19 +162,17 @@ def _hop_table(df: pd.DataFrame) -> list[str]:
 
 def _figure(ctx: RunContext, s1a: pd.DataFrame, s1s: pd.DataFrame) -> Path:
     """Fig. 5-44."""
-    fig, axs = plt.subplots(1, 2, figsize=(11, 4))
-    for p in PROTOCOLS:
-        axs[0].plot(s1a.index, s1a[p], "o-", label=p)
-        axs[1].plot(s1s.index, s1s[p], "o-", label=p)
-    axs[0].set_xlabel("alpha (share of objects tracked)")
-    axs[1].set_xlabel("image size (KB)")
+    fig, axs = plots.panels(2, size=(11, 4))
+    plots.curves(axs[0], s1a.index, {p: s1a[p] for p in PROTOCOLS})
+    plots.curves(axs[1], s1s.index, {p: s1s[p] for p in PROTOCOLS})
     axs[1].set_xscale("log")
+    plots.label_axes(axs[0], "alpha (share of objects tracked)", "end-to-end delay per round (s)",
+                     "Fig. 5-44(a): Scenario 1, 40 KB images")  # fmt: skip
+    plots.label_axes(axs[1], "image size (KB)", "end-to-end delay per round (s)",
+                     "Fig. 5-44(b): Scenario 1, alpha = 0.1")  # fmt: skip
     for ax in axs:
-        ax.set_ylabel("end-to-end delay per round (s)")
-        ax.legend()
-    axs[0].set_title("Fig. 5-44(a): Scenario 1, 40 KB images")
-    axs[1].set_title("Fig. 5-44(b): Scenario 1, alpha = 0.1")
-    return save(fig, ctx.figure_path("fig5_44_delay"))
+        plots.legend(ax)
+    return plots.save(fig, ctx.figure_path("fig5_44_delay"))
 
 
 def _report_text(

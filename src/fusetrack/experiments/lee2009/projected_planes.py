@@ -19,10 +19,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from pydantic import Field
@@ -36,8 +32,8 @@ from ...evaluation import (
     direct3d_crlb,
     fused_bound,
     plane_crlb,
+    plots,
 )
-from ...evaluation.plots import save
 from ...filters import Direct3DFilter, ProjectedPlanesTracker, select_pairs
 from ...motion import AccelTurn
 from ...sensors import PLANE_AXES, DoaSensor3D, monte_carlo_projected_variance, projected_variance
@@ -396,19 +392,21 @@ def _variance_part(ctx: RunContext) -> tuple[list[Claim], str, pd.DataFrame]:
             yz_below_inside > 0,
         ),
     ]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    fig, axes = plots.panels(2, size=(11, 4))
     for ax, col, name in ((axes[0], "yz", "Fig. 2-2"), (axes[1], "zx", "Fig. 2-3")):
-        for ph in phis[:5]:
+        for i, ph in enumerate(phis[:5]):
             sub = df[df.phi_deg == ph]
-            ax.plot(sub.theta_deg, sub[f"mc_{col}"], ".", ms=3)
-            ax.plot(sub.theta_deg, sub[f"cf_{col}"], "-", lw=1, label=f"phi = {ph:.0f} deg")
-        ax.axhline(1.0, color="k", lw=0.8, ls="--")
+            ax.plot(sub.theta_deg, sub[f"mc_{col}"], ".", ms=3, color=f"C{i}",
+                    label="Monte Carlo" if i == 0 else None)  # fmt: skip
+            plots.curve(ax, sub.theta_deg, sub[f"cf_{col}"], index=i, label=f"phi = {ph:.0f} deg",
+                        marker="", lw=1)  # fmt: skip
+        plots.reference_line(ax, 1.0, "sigma^2", linestyle="--", lw=0.8)
         ax.set_yscale("log")
-        ax.set_xlabel("azimuth theta (deg)")
-        ax.set_ylabel(f"var_{col} / sigma^2")
-        ax.set_title(f"{name}: {col} plane (dots MC, lines closed form)")
-        ax.legend(fontsize=7)
-    fig_path = save(fig, ctx.figure_path("projected_variance"))
+        ax.set_ylim(0.1, 100.0)  # the closed form diverges where the plane is edge-on
+        plots.label_axes(ax, "azimuth theta (deg)", f"var_{col} / sigma^2 (ratio, clipped at 100)",
+                         f"{name}: {col} plane (dots MC, lines closed form)")  # fmt: skip
+        plots.legend(ax, fontsize=7)
+    fig_path = plots.save(fig, ctx.figure_path("projected_variance"))
     body = f"""
 ### E2.0 Projected-angle noise (Figs. 2-2, 2-3; C1)
 
@@ -698,44 +696,42 @@ def _gaussian_figures(
     ):
         sub = tab[(tab.part == case) & (tab.run == 0)]
         truth = TABLE_TRUTH.trajectory(np.array(TABLE_X0), TABLE_DT, TABLE_STEPS)
-        fig, axs = plt.subplots(1, 2, figsize=(11, 4))
+        fig, axs = plots.panels(2, size=(11, 4))
         for ax, col, j in ((axs[0], "est_y", 1), (axs[1], "est_z", 2)):
-            ax.plot(steps, truth[:, j], "k-", lw=2, label="truth")
-            for m, st in (("equal", "--"), ("weighted", "-"), ("yz filter alone", ":")):
-                ax.plot(steps, sub[sub.method == m][col].to_numpy(), st, label=m)
-            ax.set_xlabel("time (s)")
-            ax.set_ylabel(col[-1] + " (m)")
             if case == "table22":
-                ax.axvspan(*MISMATCH, color="0.9")
-            ax.legend(fontsize=7)
+                plots.shade_intervals(ax, [MISMATCH], "yz model mismatched")
+            ax.plot(steps, truth[:, j], "k-", lw=2, alpha=0.6, label="truth")
+            ms = ("equal", "weighted", "yz filter alone")
+            plots.curves(ax, steps, {m: sub[sub.method == m][col].to_numpy() for m in ms})
+            plots.label_axes(ax, "time (s)", col[-1] + " (m)")
+            plots.legend(ax, fontsize=7)
         fig.suptitle(f"Figs. 2-5/2-6, run 0: {label}")
-        figs.append(save(fig, ctx.figure_path(f"combining_{case}")))
-    fig, ax = plt.subplots(figsize=(6, 4))
-    for m in ws.columns:
-        ax.plot(ws.index, ws[m], "o-", label=m)
-    ax.set_xlabel("measurement variance (deg^2)")
-    ax.set_ylabel("mean log weight sum")
-    ax.set_title("Fig. 2-7: unnormalised weight sums (100 particles, Scenario 1)")
-    ax.legend()
-    figs.append(save(fig, ctx.figure_path("weight_sums")))
+        figs.append(plots.save(fig, ctx.figure_path(f"combining_{case}")))
+    fig, ax = plots.panel(size=(6, 4))
+    plots.curves(ax, ws.index, {str(m): ws[m] for m in ws.columns})
+    plots.label_axes(ax, "measurement variance (deg^2)", "mean log weight sum (nats)",
+                     "Fig. 2-7: unnormalised weight sums (100 particles, Scenario 1)")  # fmt: skip
+    plots.legend(ax)
+    figs.append(plots.save(fig, ctx.figure_path("weight_sums")))
     for name in SCENARIOS:
         b = bounds.get(name, {})
         t = np.arange(SCN_STEPS) * SCN_DT
-        fig, axs = plt.subplots(1, 3, figsize=(14, 4))
+        fig, axs = plots.panels(3, size=(14, 4))
         sub = sc[sc.part == name]
+        greys, dashes = ("0.1", "0.35", "0.55", "0.75"), ("--", "-.", ":", (0, (6, 2)))
         for k, (ax, c) in enumerate(zip(axs, AXES)):
-            for key, vals in b.items():
-                if key.startswith(f"{c}|") and "switched" not in key:
-                    ax.plot(t, vals, "--", lw=1, label=f"CRLB {key.split('|')[1]}")
-            for m in sub.method.unique():
+            bounds_c = [(key, v) for key, v in b.items() if key.startswith(f"{c}|")]
+            for i, (key, vals) in enumerate(k_v for k_v in bounds_c if "switched" not in k_v[0]):
+                plots.curve(ax, t, vals, index=i, label=f"CRLB {key.split('|')[1]}", marker="",
+                            color=greys[i % 4], linestyle=dashes[i % 4], lw=1)  # fmt: skip
+            for i, m in enumerate(sub.method.unique()):
                 r = np.sqrt(sub[sub.method == m].groupby("step")[f"sq_{c}"].mean())
-                ax.plot(t, r, "-", lw=1.5, label=f"RMSE {m}")
-            ax.set_xlabel("time (s)")
-            ax.set_ylabel(f"{c} error (m)")
+                plots.curve(ax, t, r, index=i, label=f"RMSE {m}")
+            plots.label_axes(ax, "time (s)", f"{c} error (m)")
             if k == 0:
-                ax.legend(fontsize=6)
+                plots.legend(ax, fontsize=6)
         fig.suptitle(f"{name}: per-axis RMSE ({runs} runs) and CRLBs (prior std {PRIOR_STD})")
-        figs.append(save(fig, ctx.figure_path(f"scenario_{name}")))
+        figs.append(plots.save(fig, ctx.figure_path(f"scenario_{name}")))
 
     return figs
 

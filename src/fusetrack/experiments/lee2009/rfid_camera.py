@@ -7,15 +7,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...sensors import (
     RfidReader,
     WallCameraPair,
@@ -166,26 +161,27 @@ def _claims(rm: pd.DataFrame) -> tuple[list[Claim], float]:
 
 def _figure(ctx: RunContext, rm: pd.DataFrame) -> Path:
     """The 8-reader layout with its virtual sensors, and RMSE per layout."""
-    fig, axs = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig, axs = plots.panels(2, size=(12, 4.5))
     readers = readers_grid(8, 0.6)
     regions = virtual_sensors(readers, ROOM, 0.05)
-    for r in readers:
-        axs[0].add_patch(plt.Circle(r.position, r.radius, fill=False, lw=0.8))
-    for v in regions.values():
-        axs[0].plot(*v.reference, "r.", ms=4)
+    for k, r in enumerate(readers):
+        plots.outline_circle(
+            axs[0], r.position, r.radius, label="reader coverage" if k == 0 else None
+        )
+    refs = np.array([v.reference for v in regions.values()]).reshape(-1, 2)
+    axs[0].plot(refs[:, 0], refs[:, 1], "r.", ms=4, label="virtual sensors' reference points")
     tr = trajectory(np.random.default_rng(ctx.seed))
-    axs[0].plot(tr[:, 0], tr[:, 1], "b-", lw=1)
+    axs[0].plot(tr[:, 0], tr[:, 1], "b-", lw=1, label="tag path")
     axs[0].set_xlim(0, ROOM[0])
     axs[0].set_ylim(0, ROOM[1])
     axs[0].set_aspect("equal")
-    axs[0].set_title(f"8 readers, {len(regions)} virtual sensors (red: reference points)")
-    for m in rm.columns:
-        axs[1].plot(range(len(rm)), rm[m], "o-", label=m)
+    plots.label_axes(axs[0], title=f"8 readers, {len(regions)} virtual sensors")
+    plots.legend(axs[0], fontsize=7, loc="upper right")
+    plots.curves(axs[1], range(len(rm)), {str(m): rm[m] for m in rm.columns})
     axs[1].set_xticks(range(len(rm)), [f"{a}/x{b}" for a, b in rm.index], fontsize=7)
-    axs[1].set_xlabel("readers / coverage radius scale")
-    axs[1].set_ylabel("RMSE (m)")
-    axs[1].legend(fontsize=7)
-    return save(fig, ctx.figure_path("rfid_camera"))
+    plots.label_axes(axs[1], "readers / coverage radius scale", "RMSE (m)")
+    plots.legend(axs[1], fontsize=7)
+    return plots.save(fig, ctx.figure_path("rfid_camera"))
 
 
 def _report_text(runs: int, rm: pd.DataFrame, vs: pd.Series, ratio: float, fig_path: Path) -> str:

@@ -7,15 +7,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...world import NavigationResult, PotentialField, navigate
 
 PAPER_FORCES = {(12.0, 12.0): -8.46, (10.0, 10.0): -5.34, (9.0, 9.0): -1.21}
@@ -142,24 +137,26 @@ def _figures(
     prof = np.array(
         [[fld.attractive(np.array([a, a])) @ u, fld.repulsive(np.array([a, a])) @ u] for a in t]
     )
-    fig, axs = plt.subplots(1, 3, figsize=(13, 3.6))
+    fig, axs = plots.panels(3, size=(13, 3.6))
     for ax, y, name in zip(
         axs, (prof[:, 0], prof[:, 1], prof.sum(1)), ("(a) attractive", "(b) repulsive", "(c) total")
     ):
-        ax.plot(t, np.clip(y, -20, 20))
-        ax.axhline(0, color="k", lw=0.6)
-        ax.set_xlabel("position on the diagonal (x = y)")
-        ax.set_title(f"Fig. 5-26 {name}")
-    fig526 = save(fig, ctx.figure_path("fig5_26_force_profile"))
-    fig, ax = plt.subplots(figsize=(5.5, 5.5))
-    for name, res in results.items():
-        ax.plot(res.path[:, 0], res.path[:, 1], "o-", ms=3, label=name)
+        plots.curve(ax, t, np.clip(y, -20, 20), index=0, label="force, clipped to +-20")
+        plots.reference_line(ax, 0.0, "zero", linestyle="-", lw=0.6)
+        plots.label_axes(ax, "position on the diagonal x = y (field units)",
+                         "signed force along the diagonal", f"Fig. 5-26 {name}")  # fmt: skip
+    plots.legend(axs[0], fontsize=7)
+    fig526 = plots.save(fig, ctx.figure_path("fig5_26_force_profile"))
+    fig, ax = plots.panel(size=(5.5, 5.5))
+    plots.draw_paths(ax, [res.path for res in results.values()], labels=list(results))
     ax.plot(*fld.obstacle, "ks", ms=10, label="obstacle")
     ax.plot(*fld.goal, "g*", ms=14, label="goal")
     ax.set_aspect("equal")
-    ax.legend(fontsize=7)
-    ax.set_title("Robot paths (Figs. 5-25, 5-28, 5-29)")
-    figpath = save(fig, ctx.figure_path("robot_paths"))
+    plots.label_axes(
+        ax, "x (field units)", "y (field units)", "Robot paths (Figs. 5-25, 5-28, 5-29)"
+    )
+    plots.legend(ax, fontsize=7)
+    figpath = plots.save(fig, ctx.figure_path("robot_paths"))
     return fig526, figpath
 
 

@@ -12,19 +12,10 @@ from ...evaluation import Claim
 from .benchmark_claims import MOT_METRICS, summary_table
 from .benchmark_scenario import BIRTH_POS_STD, POS_SIGMA, RADAR_SIGMA_BEARING, RADAR_SIGMA_RANGE
 from .benchmark_trackers import CONFIRM_M, CONFIRM_N, EXISTENCE_FLOOR, MAX_MISSES
+from .text import hypotheses_verdict
 
 if TYPE_CHECKING:
     from .benchmark import Options
-
-
-def _verdict(claims: Sequence[Claim]) -> str:
-    held = [c.id for c in claims if c.holds]
-    failed = [c.id for c in claims if not c.holds]
-    return (
-        f"{len(held)} of {len(claims)} hypotheses hold"
-        + (f" ({', '.join(held)})" if held else "")
-        + (f"; these do not: {', '.join(failed)}." if failed else ".")
-    )
 
 
 def _setup_text(scans: int, opts: Options) -> str:
@@ -140,7 +131,7 @@ def report_text(
     return f"""
 Beyond the papers (fusetrack issue 17): every multi-target tracker of the library (GNN, JPDA,
 MHT, MCMCDA, GM-PHD, PMB) on targets that are born and die, seen by a position sensor and a
-range-bearing radar with missed detections and Poisson clutter. Verdict: {_verdict(claims)}
+range-bearing radar with missed detections and Poisson clutter. Verdict: {hypotheses_verdict(claims)}
 
 {_setup_text(scans, opts)}
 

@@ -29,7 +29,6 @@ Every tracker knows the true ``P_D``, ``P_S``, clutter density and (PHD, MCMCDA)
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,7 +40,7 @@ from ...association import (
     MCMCDAConfig,
     TrackOrientedMHT,
 )
-from ...core import Gaussian, Measurement, Track, group_by_time
+from ...core import Gaussian, Measurement, Track
 from ...filters import ExtendedKalmanFilter, GMPHDFilter, PhdIntensity
 from ...tracking import (
     AnyOf,
@@ -57,6 +56,7 @@ from ...tracking import (
     PMBFilter,
     PMBTracker,
     PMBTrackerState,
+    run_tracker,
 )
 from .benchmark_scenario import (
     AREA,
@@ -188,38 +188,6 @@ def phd_prior(setting: Setting) -> PhdIntensity:
     return birth_intensity(setting.birth_rate / (1.0 - setting.p_survive))
 
 
-def step_tracks(
-    tracker: Any,
-    zs: Sequence[Measurement],
-    times: Sequence[float],
-    rng: Any,
-    observe: Callable[[Any], float] | None = None,
-    state: Any = None,
-) -> tuple[list[Track], list[float]]:
-    """Step any :class:`~fusetrack.tracking.Tracker` scan by scan (an empty scan at each of
-    ``times`` without reports) and gather its confirmed tracks' means into
-    :class:`~fusetrack.core.Track` values by id; ``observe(state)`` after each scan (e.g. a
-    PHD's expected count) is returned too. ``state``: the state to start from (default
-    ``tracker.initial_state()``)."""
-    groups = {round(t / DT): g for t, g in group_by_time(sorted(zs, key=lambda m: m.time))}
-    state = tracker.initial_state() if state is None else state
-    history: dict[int, tuple[list[float], list[Any]]] = {}
-    seen: list[float] = []
-    for t in times:
-        state = tracker.step(state, float(t), groups.get(round(t / DT), []), rng)
-        for tr in state.confirmed:
-            ts, ms = history.setdefault(int(tr.id), ([], []))
-            ts.append(float(t))
-            ms.append(np.asarray(tr.belief.mean, float))
-        if observe is not None:
-            seen.append(observe(state))
-    tracks = [
-        Track(np.array(ts), np.stack(ms), label=f"track {i}", id=i)
-        for i, (ts, ms) in sorted(history.items())
-    ]
-    return tracks, seen
-
-
 def run_trackers(
     setting: Setting, params: TrackerParams, zs: list[Measurement], times: Any, seed: int
 ) -> tuple[dict[str, list[Track]], list[float]]:
@@ -230,21 +198,23 @@ def run_trackers(
         for k, name in enumerate(("GNN", "JPDA", "MHT"))
     }
     out["MCMCDA"] = mcmcda_tracks(setting, params, zs, np.random.default_rng(seed + 3))
-    out["GM-PHD"], count = step_tracks(
+    count: list[float] = []
+    out["GM-PHD"] = run_tracker(
         phd_tracker(setting),
         zs,
-        times,
         np.random.default_rng(seed + 4),
-        lambda s: float(s.intensity.expected_count),
-        PHDTrackerState(phd_prior(setting)),
+        times=times,
+        order="reorder",
+        state=PHDTrackerState(phd_prior(setting)),
+        observe=lambda _, s: count.append(float(s.intensity.expected_count)),
     )
     prior = PMBDensity(phd_prior(setting), PhdIntensity.empty(4))
-    out["PMB"], _ = step_tracks(
+    out["PMB"] = run_tracker(
         pmb_tracker(setting),
         zs,
-        times,
         np.random.default_rng(seed + 5),
-        None,
-        PMBTrackerState(prior),
+        times=times,
+        order="reorder",
+        state=PMBTrackerState(prior),
     )
     return out, count

@@ -16,7 +16,8 @@ if TYPE_CHECKING:
     from .experiment import Options
 
 
-def _verdict(claims: Sequence[Claim]) -> str:
+def hypotheses_verdict(claims: Sequence[Claim]) -> str:
+    """``"k of n hypotheses hold (ids); these do not: ids."`` (beyond-the-paper experiments)."""
     held = [c.id for c in claims if c.holds]
     failed = [c.id for c in claims if not c.holds]
     return (
@@ -92,7 +93,7 @@ def report_text(
     return f"""
 Beyond the papers (fusetrack issue 17): several targets tracked from *unlabelled* bearings of
 two or three arrays, where every pair of bearings of two arrays intersects and most
-intersections are ghosts. Verdict: {_verdict(claims)}
+intersections are ghosts. Verdict: {hypotheses_verdict(claims)}
 
 ## Set-up
 

@@ -14,15 +14,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...sensors import NferTagSimulator, fit_position_fix
 
 POINTS = ("A", "B", "C", "D", "E", "F")
@@ -137,7 +132,7 @@ def _claims(df: pd.DataFrame, tol: float) -> list[Claim]:
 
 def _figure(ctx: RunContext, tab: dict[str, Any], df: pd.DataFrame, runs: int) -> str:
     """Fig. 5.5 / Table 5.1: test points and simulated readings; error histogram; file name."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axes = plots.panels(2, size=(11, 4.2))
     ax = axes[0]
     ax.plot(*TABLE_5_1_TRUTH.T, "ko", label="ground truth")
     ax.plot(*TABLE_5_1_RFID.T, "rx", label="RFID (Table 5.1)")
@@ -147,19 +142,18 @@ def _figure(ctx: RunContext, tab: dict[str, Any], df: pd.DataFrame, runs: int) -
     ax.plot(*cal_pts.T, ".", color="0.6", ms=4, label="calibration points (32)")
     for n, p in zip(POINTS, TABLE_5_1_TRUTH):
         ax.annotate(n, p, textcoords="offset points", xytext=(4, 4))
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title("Fig. 5.5 / Table 5.1: test points")
-    ax.legend(fontsize=7)
+    ax.set_aspect("equal", adjustable="datalim")
+    plots.label_axes(ax, title="Fig. 5.5 / Table 5.1: test points")
+    plots.legend(ax, fontsize=7, loc="lower right")
     ax = axes[1]
-    ax.hist(df["err"], bins=40, density=True, alpha=0.6, label=f"simulated ({runs} buildings)")
-    for e in tab["errors"]:
-        ax.axvline(e, color="r", lw=1)
-    ax.set_xlabel("test-point error (m)")
-    ax.set_title("errors: simulated (histogram) vs Table 5.1 (red)")
-    ax.legend(fontsize=7)
-    return save(fig, ctx.figure_path("table_5_1")).name
+    plots.histogram(ax, df["err"], bins=40, label=f"simulated ({runs} buildings)")
+    for k, e in enumerate(tab["errors"]):
+        plots.reference_line(ax, e, "Table 5.1 errors" if k == 0 else "", axis="x", color="r",
+                             linestyle="-")  # fmt: skip
+    plots.label_axes(ax, "test-point error (m)", "density (1/m)",
+                     "errors: simulated (histogram) vs Table 5.1 (red)")  # fmt: skip
+    plots.legend(ax, fontsize=7)
+    return plots.save(fig, ctx.figure_path("table_5_1")).name
 
 
 def _report(tab: dict[str, Any], df: pd.DataFrame, runs: int, fig_name: str) -> str:

@@ -9,15 +9,10 @@ from __future__ import annotations
 
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from .scenario import METHOD_NAMES, run_once
 
 BURN_IN = 5
@@ -78,41 +73,37 @@ def _means(df: pd.DataFrame, case: str, window: bool) -> pd.Series:
 
 def _plot_case(ctx: RunContext, df: pd.DataFrame, case: str, title: str) -> str:
     d = df[(df["case"] == case) & (df["run"] == 0)]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    fig, axes = plots.panels(2, size=(11, 3.8))
     truth = d[d["method"] == "J"]
     occ = truth["occluded"].to_numpy()
     t = truth["step"].to_numpy()
     for ax, axis in zip(axes, ("x", "y")):
-        ax.plot(t, truth[f"true_{axis}"], "k-", lw=2, label="true")
-        for m, style in (("B1", "c."), ("B2", "b-"), ("B4", "g-"), ("B5", "m--"), ("J", "r-")):
-            dm = d[d["method"] == m]
-            ax.plot(dm["step"], dm[axis], style, lw=1.2, ms=3, label=f"{m} {METHOD_NAMES[m]}")
         if occ.any():
-            ax.axvspan(t[occ][0] - 0.5, t[occ][-1] + 0.5, color="0.85", label="occluded")
-        ax.set_xlabel("time instant")
-        ax.set_ylabel(f"{axis} (m)")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
+            plots.shade_intervals(ax, [(t[occ][0] - 0.5, t[occ][-1] + 0.5)], "occluded")
+        ax.plot(t, truth[f"true_{axis}"], "k-", lw=2, alpha=0.6, label="true")
+        for i, m in enumerate(("B1", "B2", "B4", "B5", "J")):
+            dm = d[d["method"] == m]
+            plots.curve(ax, dm["step"], dm[axis], index=i, label=f"{m} {METHOD_NAMES[m]}",
+                        lw=1.2)  # fmt: skip
+        plots.label_axes(ax, "time instant", f"{axis} (m)")
+    plots.legend(axes[0], fontsize=7)
     fig.suptitle(title)
-    return save(fig, ctx.figure_path(f"{case}_xy")).name
+    return plots.save(fig, ctx.figure_path(f"{case}_xy")).name
 
 
 def _plot_errors(ctx: RunContext, df: pd.DataFrame, case: str) -> str:
     d = df[df["case"] == case]
-    fig, ax = plt.subplots(figsize=(7, 3.8))
-    for m in ("B1", "B2", "B3", "B4", "B5", "J"):
-        s = d[d["method"] == m].groupby("step")["err"].mean()
-        ax.plot(s.index, s.to_numpy(), label=f"{m} {METHOD_NAMES[m]}")
+    fig, ax = plots.panel(size=(7, 3.8))
     occ = d[d["method"] == "J"].groupby("step")["occluded"].first()
     if occ.any():
-        ax.axvspan(occ[occ].index[0] - 0.5, occ[occ].index[-1] + 0.5, color="0.85")
+        plots.shade_intervals(ax, plots.runs_of(occ.to_numpy(), occ.index.to_numpy()), "occluded")
+    for i, m in enumerate(("B1", "B2", "B3", "B4", "B5", "J")):
+        s = d[d["method"] == m].groupby("step")["err"].mean()
+        plots.curve(ax, s.index, s.to_numpy(), index=i, label=f"{m} {METHOD_NAMES[m]}")
     ax.set_yscale("log")
-    ax.set_xlabel("time instant")
-    ax.set_ylabel("mean position error (m)")
-    ax.set_title(f"{case}: mean error over runs")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    return save(fig, ctx.figure_path(f"{case}_error")).name
+    plots.label_axes(ax, "time instant", "mean position error (m)", f"{case}: mean error over runs")
+    plots.legend(ax, fontsize=7)
+    return plots.save(fig, ctx.figure_path(f"{case}_error")).name
 
 
 def _tables(df: pd.DataFrame) -> dict[str, pd.Series]:
@@ -344,20 +335,17 @@ def _consistency_claim(df: pd.DataFrame) -> Claim:
 
 def _sweep_figure(ctx: RunContext, sweep: pd.DataFrame) -> str:
     """Window error against occlusion length, ours and the spec's prototype."""
-    fig, ax = plt.subplots(figsize=(6.5, 3.8))
-    for m, st in (("B4", "g-o"), ("J", "r-o"), ("B5", "m--s"), ("B2", "b:")):
-        ax.plot(sweep.index, sweep[m], st, label=f"{m} {METHOD_NAMES[m]}")
-    ax.plot(
-        list(PROTO["sweep"]), [v[0] for v in PROTO["sweep"].values()], "g:x", label="B4 [PROTO]"
-    )
-    ax.plot(list(PROTO["sweep"]), [v[1] for v in PROTO["sweep"].values()], "r:x", label="J [PROTO]")
+    fig, ax = plots.panel(size=(6.5, 3.8))
+    for i, m in enumerate(("B4", "J", "B5", "B2")):
+        plots.curve(ax, sweep.index, sweep[m], index=i, label=f"{m} {METHOD_NAMES[m]}")
+    for i, m in enumerate(("B4", "J")):
+        ys = [v[i] for v in PROTO["sweep"].values()]
+        plots.curve(ax, list(PROTO["sweep"]), ys, index=i, label=f"{m} [PROTO]", fmt=f"C{i}:x")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("occlusion length L (time instants)")
-    ax.set_ylabel("mean error in the window (m)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    return save(fig, ctx.figure_path("occlusion_sweep")).name
+    plots.label_axes(ax, "occlusion length L (time instants)", "mean error in the window (m)")
+    plots.legend(ax, fontsize=7)
+    return plots.save(fig, ctx.figure_path("occlusion_sweep")).name
 
 
 def _figures(ctx: RunContext, df: pd.DataFrame, sweep: pd.DataFrame) -> list[str]:

@@ -23,16 +23,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
 from ...core import Gaussian, Measurement
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
-from ...evaluation.plots import save
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...filters import ExtendedKalmanFilter
 from ...motion import WalkingPerson
 from ...perception import (
@@ -1160,44 +1155,39 @@ def _figures(
 ) -> list[str]:
     figs = []
     # Fig. 5.8 analogue: X and Y against frame with the dropped window
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    fig, axes = plots.panels(2, size=(11, 3.8))
     run0 = single[single["run"] == 0]
     for ax, axis in zip(axes, ("x", "y")):
         j = run0[run0["method"] == "J-drop"]
-        ax.plot(j["frame"], j[f"true_{axis}"], "k-", lw=2, label="true")
-        ax.plot(j["frame"], j[f"bgs_{axis}"], "c.", ms=3, label="BGS foot")
-        ax.plot(j["frame"], j[f"radio_{axis}"], "b:", label="tag (raw)")
-        ax.plot(j["frame"], j[axis], "r-", label="joint")
         b4 = run0[run0["method"] == "B4-drop"]
-        ax.plot(b4["frame"], b4[axis], "g--", label="visual EKF")
-        ax.axvspan(DROP[0], DROP[1], color="0.85", label="visual dropped")
-        ax.set_xlabel("frame")
-        ax.set_ylabel(f"{axis} (m)")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
+        plots.shade_intervals(ax, [DROP], "visual dropped")
+        ax.plot(j["frame"], j[f"true_{axis}"], "k-", lw=2, alpha=0.6, label="true")
+        ax.plot(j["frame"], j[f"bgs_{axis}"], "c.", ms=3, label="BGS foot")
+        plots.curves(ax, j["frame"], {"tag (raw)": j[f"radio_{axis}"], "joint": j[axis]})
+        plots.curve(ax, b4["frame"], b4[axis], index=2, label="visual EKF")
+        plots.label_axes(ax, "frame", f"{axis} (m)")
+    plots.legend(axes[0], fontsize=7)
     fig.suptitle("Fig. 5.8 analogue: occlusion simulated on frames 22-53")
-    figs.append(save(fig, ctx.figure_path("fig5_8_dropped_frames")).name)
+    figs.append(plots.save(fig, ctx.figure_path("fig5_8_dropped_frames")).name)
     # Fig. 5.9 analogue: pixel coordinates through the crossing
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    fig, axes = plots.panels(2, size=(11, 3.8))
     c0 = cj[cj["run"] == 0]
     Hf, _ = _true_homographies()
     true_px = apply_homography(Hf, c0[["true_x", "true_y"]].to_numpy())
     est_px = apply_homography(Hf, c0[["x", "y"]].to_numpy())
     tag_px = apply_homography(Hf, c0[["radio_x", "radio_y"]].to_numpy())
+    frames = c0["frame"].to_numpy()
+    occ = c0["occluded_detected"].to_numpy(dtype=bool)
     for i, (ax, name) in enumerate(zip(axes, ("u (column)", "v (row)"))):
-        ax.plot(c0["frame"], true_px[:, i], "k-", lw=2, label="true foot")
-        ax.plot(c0["frame"], tag_px[:, i], "b:", label="tag reprojected")
-        ax.plot(c0["frame"], est_px[:, i], "r-", label="joint")
-        occ = c0["occluded_detected"].to_numpy(dtype=bool)
         if occ.any():
-            fr = c0["frame"].to_numpy()[occ]
-            ax.axvspan(fr.min(), fr.max(), color="0.85", label="occlusion detected")
-        ax.set_xlabel("frame")
-        ax.set_ylabel(f"{name} (px)")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
+            plots.shade_intervals(ax, [(frames[occ].min(), frames[occ].max())],
+                                  "occlusion detected")  # fmt: skip
+        ax.plot(frames, true_px[:, i], "k-", lw=2, alpha=0.6, label="true foot")
+        plots.curves(ax, frames, {"tag reprojected": tag_px[:, i], "joint": est_px[:, i]})
+        plots.label_axes(ax, "frame", f"{name} (px)")
+    plots.legend(axes[0], fontsize=7)
     fig.suptitle("Fig. 5.9 analogue: person-person occlusion, image coordinates")
-    figs.append(save(fig, ctx.figure_path("fig5_9_crossing_pixels")).name)
+    figs.append(plots.save(fig, ctx.figure_path("fig5_9_crossing_pixels")).name)
     figs += _snapshot_figures(ctx)
     return figs
 
@@ -1209,21 +1199,18 @@ def _figure_first_frames(
     analogue (frames of the track-video output with the estimated foot marked)."""
     import cv2
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6))
+    fig, axes = plots.panels(2, size=(11, 3.6))
     run0 = single[(single["run"] == 0) & (single["frame"] < 25)]
     for ax, axis in zip(axes, ("x", "y")):
         j = run0[run0["method"] == "J"]
         b4 = run0[run0["method"] == "B4"]
-        ax.plot(j["frame"], j[f"true_{axis}"], "k-", lw=2, label="true")
-        ax.plot(j["frame"], j[f"radio_{axis}"], "b:", label="tag (raw)")
-        ax.plot(b4["frame"], b4[axis], "g--", label="EKF on video only")
-        ax.plot(j["frame"], j[axis], "r-", label="joint")
-        ax.set_xlabel("frame")
-        ax.set_ylabel(f"{axis} (m)")
-        ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7)
+        ax.plot(j["frame"], j[f"true_{axis}"], "k-", lw=2, alpha=0.6, label="true")
+        plots.curves(ax, j["frame"], {"tag (raw)": j[f"radio_{axis}"], "joint": j[axis]})
+        plots.curve(ax, b4["frame"], b4[axis], index=2, label="EKF on video only")
+        plots.label_axes(ax, "frame", f"{axis} (m)")
+    plots.legend(axes[0], fontsize=7)
     fig.suptitle("Figs. 5.6/5.7 analogue: the first 25 frames")
-    names = [save(fig, ctx.figure_path("fig5_6_7_first_frames")).name]
+    names = [plots.save(fig, ctx.figure_path("fig5_6_7_first_frames")).name]
     cap = cv2.VideoCapture(str(annotated))
     shots = []
     n = int(tool_summary["tracked_frames"])
@@ -1238,14 +1225,13 @@ def _figure_first_frames(
         k += 1
     cap.release()
     if shots:
-        fig, axes = plt.subplots(1, len(shots), figsize=(6.5 * len(shots), 5.0))
-        for ax, im in zip(np.atleast_1d(axes), shots):
-            ax.imshow(im)
-            ax.axis("off")
+        fig, axes = plots.panels(len(shots), size=(6.5 * len(shots), 5.0))
+        for ax, im in zip(axes, shots):
+            plots.show_image(ax, im)
         fig.suptitle(
             "Fig. 5.12 analogue: track-video output (red cross: estimated foot; green: blob foot)"
         )
-        names.append(save(fig, ctx.figure_path("fig5_12_estimated_foot")).name)
+        names.append(plots.save(fig, ctx.figure_path("fig5_12_estimated_foot")).name)
     return names
 
 
@@ -1260,25 +1246,19 @@ def _snapshot_figures(ctx: RunContext) -> list[str]:
     bgs = HorprasertModel.train(renderer.empty_frames(20, rng))
     f = renderer.render(people, 40, rng)
     cls = bgs.classify(f.image)
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    axes[0].imshow(f.image)
-    axes[0].set_title("frame")
+    fig, axes = plots.panels(3, size=(13, 3.6))
+    plots.show_image(axes[0], f.image, title="frame")
     colours = np.zeros((*cls.shape, 3))
     colours[cls == FOREGROUND] = (1, 1, 1)
     colours[cls == SHADOW] = (0.3, 0.3, 1.0)
     colours[cls == 3] = (1.0, 0.8, 0.2)
-    axes[1].imshow(colours)
-    axes[1].set_title("Horprasert: F white, S blue, H yellow")
+    plots.show_image(axes[1], colours, title="Horprasert: F white, S blue, H yellow")
     fg = bgs.foreground(f.image)
-    axes[2].imshow(fg, cmap="gray")
+    plots.show_image(axes[2], fg, cmap="gray", title="blobs (unmerged) and bottom points")
     for b in find_blobs(fg, merge_gap=None, min_area=30):
-        u0, v0, u1, v1 = b.box
-        axes[2].add_patch(plt.Rectangle((u0, v0), u1 - u0, v1 - v0, fill=False, color="r"))
+        plots.outline_box(axes[2], b.box)
         axes[2].plot(*b.foot, "gx")
-    axes[2].set_title("blobs (unmerged) and bottom points")
-    for ax in axes:
-        ax.axis("off")
-    names = [save(fig, ctx.figure_path("fig5_10_background_subtraction")).name]
+    names = [plots.save(fig, ctx.figure_path("fig5_10_background_subtraction")).name]
     people, _ = _people("crossing", 66)
     renderer = RoomRenderer()
     bgs = HorprasertModel.train(renderer.empty_frames(20, rng))
@@ -1295,16 +1275,16 @@ def _snapshot_figures(ctx: RunContext) -> list[str]:
         if merged
         else [0, 30, 45, 60]
     )
-    fig, axes = plt.subplots(1, 4, figsize=(14, 3.2))
+    fig, axes = plots.panels(4, size=(14, 3.2))
     for ax, k, title in zip(axes, picks, ("before", "occlusion starts", "during", "after")):
         fg = bgs.foreground(frames[k].image)
-        ax.imshow(fg, cmap="gray")
+        plural = "s" if counts[k] != 1 else ""
+        plots.show_image(
+            ax, fg, cmap="gray", title=f"{title} (frame {k + 30}, {counts[k]} blob{plural})"
+        )
         for b in find_blobs(fg):
-            u0, v0, u1, v1 = b.box
-            ax.add_patch(plt.Rectangle((u0, v0), u1 - u0, v1 - v0, fill=False, color="r"))
-        ax.set_title(f"{title} (frame {k + 30}, {counts[k]} blob{'s' if counts[k] != 1 else ''})")
-        ax.axis("off")
-    names.append(save(fig, ctx.figure_path("fig5_11_occlusion_detection")).name)
+            plots.outline_box(ax, b.box)
+    names.append(plots.save(fig, ctx.figure_path("fig5_11_occlusion_detection")).name)
     return names
 
 

@@ -267,35 +267,29 @@ def error_vs_seconds_figure(
     """Mean score against seconds per run (log x), one panel per configuration of ``table``'s
     index levels before ``method``; methods listed in a ``families`` entry are joined by a line
     (e.g. a bootstrap at several particle counts)."""
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
     from ...evaluation import plots
 
     by = [n for n in table.index.names if n != "method"]
     groups = list(table.groupby(level=by, sort=False)) if by else [((), table)]
     ncols = min(4, len(groups))
     nrows = -(-len(groups) // ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols + 1.8, 3.6 * nrows), squeeze=False)
-    for ax in axes.flat[len(groups) :]:
-        ax.set_visible(False)
+    fig, axes = plots.figure(nrows, ncols, size=(4.2 * ncols + 1.8, 3.6 * nrows))
+    plots.hide_unused(axes, len(groups))
     for ax, (key, t) in zip(axes.flat, groups):
         t = t.droplevel(by) if by else t
         for i, (m, row) in enumerate(t.iterrows()):
             ax.plot(row["seconds/run"], row["mean"], "osD^v<>ph*X"[i % 11], ms=6, label=str(m))
-        for members in (families or {}).values():
+        for k, members in enumerate((families or {}).values()):
             pts = t.loc[[m for m in members if m in t.index]].sort_values("seconds/run")
-            ax.plot(pts["seconds/run"], pts["mean"], "k:", lw=1)
-        ax.set_xscale("log")
-        ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
-        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.2g}"))
-        ax.xaxis.set_minor_formatter(NullFormatter())
+            label = "same method, other sizes" if k == 0 else None
+            ax.plot(pts["seconds/run"], pts["mean"], "k:", lw=1, label=label)
+        plots.log_axis(ax, "x")
         if logy and bool((t["mean"] > 0).all()):
-            ax.set_yscale("log")
-        ax.set(xlabel="seconds per run", ylabel=ylabel)
+            plots.log_axis(ax, "y")
+        plots.label_axes(ax, "seconds per run (s)", ylabel)
         ax.set_title(", ".join(f"{n}={v}" for n, v in zip(by, np.atleast_1d(key))) or title)
         ax.grid(alpha=0.3, which="both")
-    axes[0][ncols - 1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    plots.legend(axes[0][ncols - 1], fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     if title and by:
         fig.suptitle(title)
     return plots.save(fig, path)

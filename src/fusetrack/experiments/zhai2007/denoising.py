@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
+from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...perception import (
     RasterParticleFilter,
     add_mixed_noise,
@@ -234,16 +234,12 @@ def claim_residual(df: pd.DataFrame) -> Claim:
 
 def figure_cameraman(ctx: RunContext, shifts: int) -> str:
     """Fig 80: cameraman clean, noisy, after the PF, and after TI hard and soft thresholding."""
-    import matplotlib.pyplot as plt
-
-    from ...evaluation import plots
-
     clean = load("cameraman")
     noisy = add_mixed_noise(clean, np.random.default_rng(ctx.seed))
     pf = RasterParticleFilter()(noisy, seed=1)
     hard, soft = ti_threshold(pf, "hard", shifts=shifts), ti_threshold(pf, "soft", shifts=shifts)
-    fig, axes = plt.subplots(1, 5, figsize=(16, 3.6))
-    for ax, (t, panel) in zip(
+    fig, axes = plots.panels(5, size=(16, 3.6))
+    for ax, (t, image) in zip(
         axes,
         [
             ("clean", clean),
@@ -253,12 +249,8 @@ def figure_cameraman(ctx: RunContext, shifts: int) -> str:
             ("PF + TI soft", soft),
         ],
     ):
-        ax.imshow(panel, cmap="gray", vmin=0, vmax=255)
-        ax.set(
-            title=t if t in ("clean", "noisy") else f"{t} ({isnr(clean, noisy, panel):.2f} dB)",
-            xticks=[],
-            yticks=[],
-        )
+        title = t if t in ("clean", "noisy") else f"{t} (ISNR {isnr(clean, noisy, image):.2f} dB)"
+        plots.show_image(ax, image, cmap="gray", title=title, vmin=0, vmax=255)
     return plots.save(fig, ctx.figure_path("fig80_cameraman")).name
 
 

@@ -382,22 +382,24 @@ def claim_e15(demo: Mapping[str, Any]) -> Claim:
 
 def figure_e15(ctx: RunContext, demo: Mapping[str, Any]) -> str:
     """Figs 50-52: predicted particles, weighted cells, particles after the bearing."""
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
-    axes[0].plot(demo["prior"][:, 0] + 10, demo["prior"][:, 1] + 5, ".", ms=2)
-    axes[0].set(title="predicted particles (Fig 50)")
+    fig, axes = plots.panels(3, size=(13, 4))
+    axes[0].plot(demo["prior"][:, 0] + 10, demo["prior"][:, 1] + 5, ".", ms=2, label="particles")
     sc = axes[1].scatter(demo["centre"][:, 0], demo["centre"][:, 1], c=demo["w"], s=12, marker="s")
-    fig.colorbar(sc, ax=axes[1])
-    axes[1].set(title=f"weighted cells after the bearing ({len(demo['w'])} cells, Fig 51)")
-    axes[2].plot(demo["post"][:, 0], demo["post"][:, 1], ".", ms=2)
-    for ax in axes:
-        ax.plot(*demo["truth"][:2], "r*", ms=12)
+    fig.colorbar(sc, ax=axes[1], label="cell weight")
+    axes[2].plot(demo["post"][:, 0], demo["post"][:, 1], ".", ms=2, label="particles")
+    titles = (
+        "predicted particles (Fig 50)",
+        f"weighted cells after the bearing\n({len(demo['w'])} cells, Fig 51)",
+        "particles (Fig 52)",
+    )
+    for ax, title in zip(axes, titles):
+        ax.plot(*demo["truth"][:2], "r*", ms=12, label="truth")
         b = float(demo["z"][0])
         t = np.linspace(40, 60, 2)
-        ax.plot(-20 + t * np.cos(b), -40 + t * np.sin(b), "k--", lw=0.8)
+        ax.plot(-20 + t * np.cos(b), -40 + t * np.sin(b), "k--", lw=0.8, label="measured bearing")
         ax.set(aspect="equal", xlim=(3, 18), ylim=(-3, 12))
-    axes[2].set(title="particles (Fig 52)")
+        plots.label_axes(ax, "x (units)", "y (units)", title)
+    plots.legend(axes[0], fontsize=7)
     return plots.save(fig, ctx.figure_path("e15_cells")).name
 
 

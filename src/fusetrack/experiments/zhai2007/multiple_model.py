@@ -384,17 +384,14 @@ def claims_e5(shares: np.ndarray) -> list[Claim]:
 
 def figure_e5(ctx: RunContext, shares: np.ndarray) -> str:
     """Fig 25: each model's share per step, with the stationary share dotted."""
-    import matplotlib.pyplot as plt
-
     stat = stationary_distribution(PI_A)
-    fig, ax = plt.subplots(figsize=(6, 3.6))
+    fig, ax = plots.panel(size=(6, 3.6))
     for i in range(4):
-        ax.plot(shares[:, i], "o-", label=f"model {i + 1}")
-        ax.axhline(stat[i], ls=":", color=ax.lines[-1].get_color())
-    ax.set(
-        xlabel="step", ylabel="share of 10 000 model particles", title="Fig 25: regimes under Pi_A"
-    )
-    ax.legend()
+        plots.curve(ax, np.arange(len(shares)), shares[:, i], index=i, label=f"model {i + 1}")
+    for i in range(4):
+        plots.reference_line(ax, stat[i], "stationary shares" if i == 0 else "", color=f"C{i}")
+    plots.label_axes(ax, "step", "share of 10 000 model particles", "Fig 25: regimes under Pi_A")
+    plots.legend(ax)
     return plots.save(fig, ctx.figure_path("fig25_model_shares")).name
 
 
@@ -426,13 +423,11 @@ def claim_e6(tracks: Mapping[str, np.ndarray]) -> Claim:
 
 def figure_e6(ctx: RunContext, tracks: Mapping[str, np.ndarray]) -> str:
     """Fig 26: the coordinated turns."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(5, 5))
-    for k, tr in tracks.items():
-        ax.plot(tr[:, 0], tr[:, 1], label=k)
-    ax.set(aspect="equal", title="Fig 26: coordinated turns", xlabel="x", ylabel="y")
-    ax.legend(fontsize=6)
+    fig, ax = plots.panel(size=(5, 5))
+    plots.draw_paths(ax, list(tracks.values()), labels=list(tracks))
+    ax.set(aspect="equal")
+    plots.label_axes(ax, "x (m)", "y (m)", "Fig 26: coordinated turns (speed 1 m/s)")
+    plots.legend(ax, fontsize=6)
     return plots.save(fig, ctx.figure_path("fig26_turns")).name
 
 
@@ -464,27 +459,26 @@ def figure_e7(
     ctx: RunContext, df7: pd.DataFrame, share_tables: Mapping[float, pd.DataFrame], runs: int
 ) -> str:
     """Figs 27-28: run 0's tracks at the first sigma, and the model shares per step."""
-    import matplotlib.pyplot as plt
-
     sigmas = list(share_tables)
-    fig = plt.figure(figsize=(11, 4))
-    ax1 = fig.add_subplot(1, 2, 1)
+    fig, (ax1, ax2) = plots.panels(2, size=(11, 4))
     r0 = df7[(df7["run"] == 0) & (df7["sigma"] == sigmas[0])]
-    for m in ["MM-bootstrap", "bootstrap CV", "MMPF-SP", "IMM-EKF"]:
-        rr = r0[r0["method"] == m]
-        ax1.plot(rr["x"], rr["y"], ".-", label=m)
     tr = r0[r0["method"] == "MM-bootstrap"]
-    ax1.plot(tr["true_x"], tr["true_y"], "k-", lw=2, label="truth")
-    ax1.set(title="Fig 27: run 0", xlabel="x", ylabel="y")
-    ax1.legend(fontsize=7)
-    ax2 = fig.add_subplot(1, 2, 2)
-    for sig, style in zip(sigmas, ("o-", "s--")):
-        for m, c in zip(MODEL_NAMES, "bgr"):
+    ax1.plot(tr["true_x"], tr["true_y"], "k-", lw=2, alpha=0.6, label="truth")
+    methods = ["MM-bootstrap", "bootstrap CV", "MMPF-SP", "IMM-EKF"]
+    plots.draw_paths(ax1, [r0[r0["method"] == m][["x", "y"]].to_numpy() for m in methods],
+                     labels=methods)  # fmt: skip
+    plots.label_axes(ax1, "x (m)", "y (m)", "Fig 27: run 0")
+    plots.legend(ax1, fontsize=7)
+    plots.shade_intervals(ax2, [(E7_TURN[0] - 0.5, E7_TURN[-1] + 0.5)], "turn")
+    k = 0
+    for sig, dashes in zip(sigmas, ("-", "--")):
+        for m in MODEL_NAMES:
             pt = share_tables[sig]
-            ax2.plot(pt.index, pt[f"p_{m}"], c + style, label=f"{m}, sigma {sig:g}")
-    ax2.axvspan(E7_TURN[0] - 0.5, E7_TURN[-1] + 0.5, color="0.9")
-    ax2.set(title=f"Fig 28: model shares (mean of {runs} runs)", xlabel="t", ylabel="share")
-    ax2.legend(fontsize=6)
+            plots.curve(ax2, pt.index, pt[f"p_{m}"], index=k, label=f"{m}, sigma {sig:g} rad",
+                        color=f"C{MODEL_NAMES.index(m)}", linestyle=dashes)  # fmt: skip
+            k += 1
+    plots.label_axes(ax2, "time step", "model share", f"Fig 28: model shares (mean of {runs} runs)")
+    plots.legend(ax2, fontsize=6)
     return plots.save(fig, ctx.figure_path("fig27_28_mm_bootstrap")).name
 
 

@@ -161,32 +161,30 @@ def state_pdfs(
 
 def _pdf_figure(ctx: RunContext, quick: bool) -> str:
     """Figs 5-7: densities of x_20 and z_20 per sinusoid gain, and of x_t at gain 5."""
-    import matplotlib.pyplot as plt
-
     samples = state_pdfs(
         np.random.default_rng(ctx.seed),
         (1.0, 5.0, 10.0, 50.0, 100.0),
         20_000 if quick else 100_000,
         20,
     )
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6))
-    for b, xs in samples.items():
-        axes[0].hist(xs[-1], bins=200, density=True, histtype="step", label=f"gain {b:g}")
-        axes[1].hist(
-            np.clip(xs[-1] ** 3, -2e3, 2e3),
-            bins=200,
-            density=True,
-            histtype="step",
-            label=f"gain {b:g}",
-        )
-    axes[0].set(title="p(x_20) by sinusoid gain (Fig 5)", xlabel="x")
-    axes[1].set(title="p(z_20 = x^3 + v) (Fig 5)", xlabel="z (clipped to ±2000)")
-    axes[0].legend(fontsize=7)
+    fig, axes = plots.panels(3, size=(13, 3.6))
+    for i, (b, xs) in enumerate(samples.items()):
+        step = {"bins": 200, "histtype": "step", "alpha": 1.0}
+        plots.histogram(axes[0], xs[-1], label=f"gain {b:g}", index=i, **step)
+        plots.histogram(axes[1], np.clip(xs[-1] ** 3, -2e3, 2e3), label=f"gain {b:g}", index=i,
+                        **step)  # fmt: skip
+    plots.label_axes(
+        axes[0], "x_20 (state, no unit)", "density", "p(x_20) by sinusoid gain (Fig 5)"
+    )
+    plots.label_axes(axes[1], "z_20 (clipped to ±2000)", "density", "p(z_20 = x^3 + v) (Fig 5)")
+    plots.legend(axes[0], fontsize=7)
+    plots.legend(axes[1], fontsize=7)
     x5 = samples[5.0]
-    for t in (0, 1, 4, 9, 19):
-        axes[2].hist(x5[t], bins=150, density=True, histtype="step", label=f"t={t + 1}")
-    axes[2].set(title="p(x_t), gain 5 (Figs 6-7)", xlabel="x")
-    axes[2].legend(fontsize=7)
+    for i, t in enumerate((0, 1, 4, 9, 19)):
+        plots.histogram(axes[2], x5[t], label=f"t={t + 1}", index=i, bins=150, histtype="step",
+                        alpha=1.0)  # fmt: skip
+    plots.label_axes(axes[2], "x_t (state, no unit)", "density", "p(x_t), gain 5 (Figs 6-7)")
+    plots.legend(axes[2], fontsize=7)
     return plots.save(fig, ctx.figure_path("state_pdfs")).name
 
 
@@ -364,8 +362,8 @@ def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> dict[str, str]:
         ctx.figure_path("rmse_vs_time"),
         steps,
         {m: rmse_t[m].to_numpy() for m in ["EKF", "BS200", "BS2000", "PF-SP-PEKF"]},
-        xlabel="t",
-        ylabel="RMSE(t)",
+        xlabel="t (time step)",
+        ylabel="RMSE(t) (state units)",
         title=f"Fig 8: RMSE over {runs} runs (model as printed)",
         logy=True,
     )
@@ -381,8 +379,8 @@ def figures(ctx: RunContext, df: pd.DataFrame, runs: int) -> dict[str, str]:
                 for m in ["EKF", "BS200", "PF-SP-PEKF"]
             },
         },
-        xlabel="t",
-        ylabel="x",
+        xlabel="t (time step)",
+        ylabel="x (state, no unit)",
         title="Fig 9: one realisation",
         styles={"truth": "k-"},
     )

@@ -509,10 +509,8 @@ def cue_accuracy(seed: int) -> pd.DataFrame:
 
 def frame_strips(ctx: RunContext, df: pd.DataFrame) -> Any:
     """Run 0 of every scene: four frames with the truth (circle) and each tracker's estimate."""
-    import matplotlib.pyplot as plt
-
     exps = list(EXPERIMENTS)
-    fig, axes = plt.subplots(len(exps), 4, figsize=(10, 1.9 * len(exps)))
+    fig, axes = plots.figure(len(exps), 4, size=(10, 1.9 * len(exps)))
     colours = ["tab:red", "tab:cyan", "tab:orange", "tab:green"]
     for i, exp in enumerate(exps):
         r0 = df[(df["exp"] == exp) & (df["run"] == df["run"].min())]
@@ -521,40 +519,33 @@ def frame_strips(ctx: RunContext, df: pd.DataFrame) -> Any:
         for j, k in enumerate(np.linspace(n // 5, n - 1, 4).astype(int)):
             ax = axes[i, j]
             h, w = seq.frames.shape[1:3]  # half resolution keeps the PNG small
-            ax.imshow(seq.frames[k, ::2, ::2], extent=(-0.5, w - 0.5, h - 0.5, -0.5))
-            ax.plot(*seq.truth[k, :2], "o", mfc="none", mec="white", ms=14, mew=1.5)
+            plots.show_image(ax, seq.frames[k, ::2, ::2], title=f"{exp} frame {k}",
+                             extent=(-0.5, w - 0.5, h - 0.5, -0.5))  # fmt: skip
+            ax.plot(*seq.truth[k, :2], "o", mfc="none", mec="white", ms=14, mew=1.5, label="truth")
             for c, m in enumerate(EXPERIMENTS[exp][2]):
                 row = r0[(r0["method"] == m) & (r0["frame"] == k)]
                 ax.plot(row["x"], row["y"], "+", color=colours[c], ms=12, mew=2, label=m)
-            ax.set_title(f"{exp} frame {k}", fontsize=8)
-            ax.axis("off")
-        axes[i, 0].legend(fontsize=6, loc="lower left", framealpha=0.7)
-    path = ctx.figure_path("frame_strips")
-    fig.tight_layout()
-    fig.savefig(path, dpi=72)  # noisy frames compress badly: a low resolution keeps it small
-    plt.close(fig)
-    return path
+        plots.legend(axes[i, 0], fontsize=6, loc="lower left")
+    # noisy frames compress badly: a low resolution keeps the PNG small
+    return plots.save(fig, ctx.figure_path("frame_strips"), dpi=72)
 
 
 def error_curves(ctx: RunContext, df: pd.DataFrame) -> Any:
     """Centre error against frame, run 0 of every experiment, with the loss radius."""
-    import matplotlib.pyplot as plt
-
     exps = list(EXPERIMENTS)
-    fig, axes = plt.subplots(3, 3, figsize=(13, 9))
+    fig, axes = plots.figure(3, 3, size=(13, 9))
+    plots.hide_unused(axes, len(exps))
     for ax, exp in zip(axes.ravel(), exps):
         r0 = df[(df["exp"] == exp) & (df["run"] == df["run"].min())]
-        for m in EXPERIMENTS[exp][2]:
+        for i, m in enumerate(EXPERIMENTS[exp][2]):
             rm = r0[r0["method"] == m]
-            ax.plot(rm["frame"], np.minimum(rm["error"], 200), label=m, lw=1.2)
+            plots.curve(ax, rm["frame"], np.minimum(rm["error"], 200), index=i, label=m, lw=1.2)
         hs = r0[r0["method"] == EXPERIMENTS[exp][2][0]]
         ax.plot(hs["frame"], hs["half_size"], "k:", lw=1, label="loss radius")
         ax.set_yscale("log")
-        ax.set_title(f"{exp} ({EXPERIMENTS[exp][0]}), run 0", fontsize=9)
-        ax.set_xlabel("frame")
-        ax.set_ylabel("centre error (px)")
-        ax.legend(fontsize=6)
-        ax.grid(alpha=0.3)
+        plots.label_axes(ax, "frame", "centre error (px, capped at 200)",
+                         f"{exp} ({EXPERIMENTS[exp][0]}), run 0")  # fmt: skip
+        plots.legend(ax, fontsize=6)
     return plots.save(fig, ctx.figure_path("error_curves"))
 
 
@@ -714,11 +705,10 @@ def _beyond_tables(first: pd.DataFrame, is_beyond: pd.Series) -> tuple[pd.DataFr
 
 def _beyond_figure(ctx: RunContext, table: pd.DataFrame) -> Any:
     """Mean per-run RMSE against seconds per run, one panel per experiment."""
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
     colour = {"UPF": "tab:red", "IMM-EKF": "tab:purple", "bootstrap equal time": "tab:brown"}
-    fig, axes = plt.subplots(3, 3, figsize=(13, 10))
+    used = table.index.get_level_values("exp").nunique()
+    rows = -(-used // 3)
+    fig, axes = plots.figure(rows, 3, size=(13, 3.4 * rows + 0.6))
     for ax, (exp, t) in zip(axes.ravel(), table.groupby(level="exp", sort=False)):
         others = iter(["tab:green", "tab:gray", "tab:olive"])
         for m, r in t.droplevel("exp").iterrows():
@@ -733,16 +723,13 @@ def _beyond_figure(ctx: RunContext, table: pd.DataFrame) -> Any:
             mk = "s" if base in colour else "o"
             lab = f"{m} ({r['loss rate']:.0%})"
             ax.plot(r["seconds/run"], r["mean"], mk, color=c, ms=7, label=lab)
-        ax.set(xscale="log", yscale="log", xlabel="seconds per run", ylabel="mean RMSE (px)")
-        for axis in (ax.xaxis, ax.yaxis):
-            axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-            axis.set_minor_formatter(NullFormatter())
-        ax.set_title(f"{exp} ({EXPERIMENTS[exp][0]})", fontsize=9)
-        ax.legend(fontsize=6)
+        plots.log_axis(ax, "x")
+        plots.log_axis(ax, "y")
+        plots.label_axes(ax, "seconds per run (s)", "mean RMSE (px)",
+                         f"{exp} ({EXPERIMENTS[exp][0]})")  # fmt: skip
+        plots.legend(ax, fontsize=6)
         ax.grid(alpha=0.3, which="both")
-    for ax in axes.ravel()[table.index.get_level_values("exp").nunique() :]:
-        ax.axis("off")
+    plots.hide_unused(axes, used)
     fig.suptitle(
         "Mean per-run RMSE against seconds per run (legend: loss rate; orange: the thesis's "
         "tracker, blue: its baseline, squares: comparators)"
