@@ -175,22 +175,33 @@ def _table(runs: pd.DataFrame, fractions: pd.Series) -> pd.DataFrame:
 
 
 def _figure(ctx: RunContext, runs: pd.DataFrame, fractions: pd.Series) -> str:
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.2, 3.8))
+    """3-D error (median run, and mean) of T0, T2, T3 against the target's pixel share."""
+    fig, ax = plots.panel(size=(6.2, 3.8))
     x = 100 * fractions.reindex(SCALES).to_numpy()
+    by = runs.groupby("scale")
     for k, name in enumerate(SWEPT):
-        med = runs.groupby("scale")[name].median().reindex(SCALES).to_numpy()
-        mean = runs.groupby("scale")[name].mean().reindex(SCALES).to_numpy()
-        style = plots.distinct_style(k, len(x))
-        ax.plot(x, med, label=f"{name} median run", **style)
-        ax.plot(x, mean, ls=":", color=ax.get_lines()[-1].get_color(), label=f"{name} mean")
-    ax.axvline(1.0, color="k", lw=0.8, ls="--")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    plots.label_axes(ax, "median target pixel share (% of the image)", "3-D error (m)")
-    ax.legend(fontsize=7, ncol=2)
-    ax.set_title("Setup A, target scaled: T2 against T3 (spec H19)")
+        line = plots.curve(
+            ax, x, by[name].median().reindex(SCALES).to_numpy(), index=k, label=f"{name} median run"
+        )
+        plots.curve(
+            ax,
+            x,
+            by[name].mean().reindex(SCALES).to_numpy(),
+            index=k,
+            label=f"{name} mean",
+            color=line.get_color(),
+            linestyle=":",
+        )
+    plots.reference_line(ax, 1.0, "1 % of the image (spec H19)", axis="x", linestyle="--")
+    plots.log_axis(ax, "x")
+    plots.log_axis(ax, "y")
+    plots.label_axes(
+        ax,
+        "median target pixel share (% of the image)",
+        "3-D error (m)",
+        "Setup A, target scaled: T2 against T3 (spec H19)",
+    )
+    plots.legend(ax, fontsize=7, ncol=2)
     return plots.save(fig, ctx.figure_path("error_vs_pixel_share")).name
 
 
