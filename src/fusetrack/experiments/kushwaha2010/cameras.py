@@ -1020,7 +1020,7 @@ def rewrite_report(out_dir: str, setup: str) -> None:
     )
     df = pd.read_parquet(out / "results.parquet")
     outcome = (outcome_a if setup == "a" else outcome_b)(ctx, df)
-    from ..registry import describe
+    from .. import describe
 
     outcome.title = describe(ctx.name).title
     write_outputs(ctx, outcome, summary["seconds"], summary["peak_memory_mb"])
