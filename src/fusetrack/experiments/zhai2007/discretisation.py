@@ -371,7 +371,7 @@ def run(ctx: RunContext) -> Outcome:
 
 
 E16_READINGS = ("T=0.25", "sigma_n^2=0.0001", "narrow DOA, wide prior")
-"""E13's readings (:mod:`.e13_readings`) E16 reruns; with --quick only the last, 30 steps."""
+"""E13's readings (:mod:`.e13_readings`) E16 reruns; with --quick only the last, fewer steps."""
 E16_METHODS = ("EKF", "bootstrap 200", "discretisation PF 200", "bootstrap 2000")
 
 
@@ -436,7 +436,7 @@ def claims_e16_readings(v: pd.DataFrame) -> list[Claim]:
 def e16_section(v: pd.DataFrame, runs: int, quick: bool) -> str:
     """The report's section on E16's best possible and readings."""
     wins = [str(r) for r, row in v.iterrows() if row["discretisation PF < bootstrap(200)"]]
-    note = " (--quick: only the last, 30 steps)" if quick else ""
+    note = f" (--quick: only the last, {e13_readings.QUICK_STEPS} steps)" if quick else ""
     return f"""
 ## E16: the best possible and E13's readings (issue 19)
 

@@ -226,7 +226,7 @@ def run(ctx: RunContext) -> Outcome:
     df = pd.concat([df1, df2], ignore_index=True)
     ours = summarise(df1)
     claims = [*claims_table9(ours, ctx.quick), claim_turn(df2)]
-    n_truths = 200 if ctx.quick else 2000
+    n_truths = 50 if ctx.quick else 2000
     bounds = {"printed": e13_readings.pcrb(PRINTED, ctx.seed, n_truths)}
     first = df1[df1["step"] == 1]
     best = {
