@@ -154,7 +154,7 @@ def verdicts(
             "BS2000 at Table 9's order": LEVEL_BAND[0] <= ratio <= LEVEL_BAND[1],
             "Table 9 Galerkin row": "possible"
             if all(
-                bp.verdict(paper[a], *best[a], bounds[r][i]) == bp.POSSIBLE
+                bp.verdict(paper[a], best[a][0], best[a][1], bounds[r][i]) == bp.POSSIBLE
                 for i, a in enumerate("xy")
             )
             else bp.IMPOSSIBLE,

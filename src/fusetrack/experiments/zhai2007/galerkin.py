@@ -255,7 +255,8 @@ def best_possible(
 ) -> tuple[list[Claim], str]:
     """Issue 19: Table 9 against the posterior mean ``best`` and the PCRB ``bound`` per axis
     (RMS over runs of the per-run RMSE): a claim per Table 9 row, and the report section."""
-    claims, rows = [], {}
+    claims: list[Claim] = []
+    rows: dict[str, dict[str, Any]] = {}
     for m in PAPER.index:
         paper = {
             ax: bp.paper_rms(PAPER.loc[m, f"mean e_{ax}"], PAPER.loc[m, f"var e_{ax}"])

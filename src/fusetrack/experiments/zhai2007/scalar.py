@@ -116,6 +116,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         rng = np.random.default_rng([seed, 1000])
         est, secs = bp.posterior_mean(motion, [sensor], prior, zs, 1.0, config["n_best"], rng)
         results[POSTERIOR_MEAN] = (est, secs, 0, 0)
+        assert isinstance(sensor, Power)
         results[INVERTED] = (invert(sensor, np.array([z[0] for z in zs])), 0.0, 0, 0)
     rows = []
     for method, (est, secs, dropped, repaired) in results.items():
