@@ -29,6 +29,7 @@ from ...filters import (
 )
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
+from . import best_possible as bp
 from .common import timed_gaussian, timed_sis, track_rows
 from .comparators import (
     COMPARATORS,
@@ -50,6 +51,7 @@ METHODS = (
     "bootstrap equal time",
     "IMM-EKF",
 )
+POSTERIOR_MEAN = "posterior mean"
 IMM_TRANSITION = np.array([[0.9, 0.05, 0.05], [0.1, 0.9, 0.0], [0.1, 0.0, 0.9]])
 
 
@@ -106,7 +108,11 @@ def imm_models(scn: Mapping[str, Any]) -> list[ConstantVelocity | CoordinatedTur
 
 def comparator_scenario(name: str, seed: int) -> Scenario:
     """Run ``seed``'s truth, bearings and prior as a :class:`Scenario` (filters' CV model)."""
-    scn = scenario(name)
+    return scenario_of(scenario(name), seed)
+
+
+def scenario_of(scn: Mapping[str, Any], seed: int) -> Scenario:
+    """Run ``seed``'s truth, bearings and prior under the settings ``scn`` (:func:`scenario`)."""
     rng = np.random.default_rng(seed)
     truth, zs = simulate(scn, rng)
     prior = Gaussian(scn["x0"] + rng.multivariate_normal(np.zeros(4), scn["p0"]), scn["p0"])
@@ -143,6 +149,13 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         est, secs, _ = timed_sis(f, prior, zs, dt, np.random.default_rng([seed, k]))
         estimates[name] = (est, secs)
     estimates.update(run_comparators(cs, seed, config["n_equal"]))
+    if "n_best" in config:  # the best possible (issue 19): the posterior mean on the truth's model
+        scn = scenario(str(config["scenario"]))
+        model = ConstantVelocity(q=scn["q"], noise="discrete")
+        rng = np.random.default_rng([seed, 1000])
+        estimates[POSTERIOR_MEAN] = bp.posterior_mean(
+            model, [sensor], prior, zs, dt, int(config["n_best"]), rng
+        )
     rows = []
     for name, (est, secs) in estimates.items():
         err = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])  # Eq. 36
@@ -152,15 +165,22 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
-    """E2-E3: comparators calibrated to PF-SP-PEKF(200), the runs, claims, figures, report."""
+    """E2-E3: comparators calibrated to PF-SP-PEKF(200), the runs with the posterior mean
+    beside them, E2's readings of what the thesis does not print (issue 19), claims, report."""
+    from . import e2_readings
+
     runs = ctx.n_runs(full=100, quick=8)
     eq = EqualTime.for_run(ctx)
     for s in ("E2", "E3"):  # particles at PF-SP-PEKF(200)'s time, on run 0's scenario
         cs = comparator_scenario(s, ctx.seed)
         eq.calibrate_sis(s, cs, partial(sp_pekf, cs, 200))
+    n_best = bp.best_n(ctx.quick)
     df = ctx.monte_carlo(
         run_once,
-        [{"scenario": s, "n_particles": 200, "n_equal": eq.n_particles[s]} for s in ("E2", "E3")],
+        [
+            {"scenario": s, "n_particles": 200, "n_equal": eq.n_particles[s], "n_best": n_best}
+            for s in ("E2", "E3")
+        ],
         runs,
     )
     claims: list[Claim] = []
@@ -168,13 +188,17 @@ def run(ctx: RunContext) -> Outcome:
     tables = {}
     for s in ("E2", "E3"):
         d = df[df["scenario"] == s]
-        rm = rmse_by_step(d, "sq_err")[list(METHODS)]
+        rm = rmse_by_step(d, "sq_err")[[*METHODS, POSTERIOR_MEAN]]
         tables[s] = scenario_table(d, rm)
         claims += scenario_claims(s, rm)
         figs.update(scenario_figures(ctx, s, d, rm, runs))
-    cmp = comparison(ctx, df, eq)
-    body = report_text(tables, figs) + cmp.section
-    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+    dfr = e2_readings.run_readings(ctx, runs)
+    verdicts = e2_readings.verdicts(dfr)
+    claims += e2_readings.claims(verdicts)
+    cmp = comparison(ctx, df[df["method"] != POSTERIOR_MEAN], eq)
+    body = report_text(tables, figs) + e2_readings.section(verdicts, runs, ctx.quick)
+    df = pd.concat([df, dfr.assign(scenario="E2")], ignore_index=True)
+    return Outcome(df, claims, body + cmp.section, runs, beyond_the_paper=cmp.summary)
 
 
 def scenario_table(d: pd.DataFrame, rm: pd.DataFrame) -> pd.DataFrame:
@@ -188,6 +212,7 @@ def scenario_table(d: pd.DataFrame, rm: pd.DataFrame) -> pd.DataFrame:
 CLAIM_KINDS = ClaimKinds(
     {
         "C4_*": "paper",
+        "R_*": "diagnostic",  # E2's claims under unprinted readings (e2_readings, issue 19)
     }
 )
 
@@ -259,7 +284,9 @@ def comparison(ctx: RunContext, df: pd.DataFrame, eq: EqualTime) -> Comparison:
 def report_text(tables: Mapping[str, pd.DataFrame], figs: Mapping[str, str]) -> str:
     """The report's set-up, E2 and E3 tables and figures, and the differences."""
     winner = {
-        s: tables[s]["RMSE all t"].drop(["UKF", "PF-SP-PEKF marginal", *COMPARATORS]).idxmin()
+        s: tables[s]["RMSE all t"]
+        .drop(["UKF", "PF-SP-PEKF marginal", POSTERIOR_MEAN, *COMPARATORS])
+        .idxmin()
         for s in tables
     }
     sp_vs_bs = {
@@ -275,7 +302,9 @@ full-rank continuous white-noise-acceleration covariance (same q) because Eq. 13
 transition density and the thesis's Gamma Q Gamma^T is rank 2; the truth uses the thesis's model.
 E3 is a simulated substitute for the private NWRT radar data (aircraft ~25 km from the radar, CV,
 a 3 deg/s right turn for 30 s, CV; bearing sigma 0.5 deg every 2 s; prior position error 1.5 km).
-UPF, IMM-EKF and "bootstrap equal time" are beyond the paper (last section).
+UPF, IMM-EKF and "bootstrap equal time" are beyond the paper (last section). Row "posterior
+mean": the best possible (issue 19), a bootstrap filter on the truth's model (rank-2 noise) with
+{bp.BEST_N["full"]} particles ({bp.BEST_N["quick"]} with --quick).
 
 ## E2 (Figs 10-11)
 

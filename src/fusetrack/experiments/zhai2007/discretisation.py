@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import asdict, replace
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,8 @@ from ...filters import (
 )
 from ...motion import ConstantAcceleration, ConstantVelocity, CoordinatedTurn, ManeuverTurn
 from ...sensors import Bearing, RangeBearing
+from . import best_possible as bp
+from . import e13_readings
 from . import galerkin as e13
 from .common import timed_gaussian, timed_mm, timed_sis, track_rows
 from .comparators import (
@@ -52,18 +55,22 @@ E17_STEPS = 50
 # ----------------------------------------------------------------------------- E16
 
 
-def e16_scenario(seed: int) -> Scenario:
-    """Run ``seed``'s E16 truth, bearings and prior as a :class:`Scenario` (one model: IMM = EKF)."""
+def e16_scenario(seed: int, setting: e13.Setting = e13.PRINTED) -> Scenario:
+    """Run ``seed``'s E16 truth, bearings and prior as a :class:`Scenario` (one model: IMM = EKF)
+    under E13's ``setting`` (a reading of what the thesis does not print)."""
     rng = np.random.default_rng(seed)
-    truth, zs = e13.simulate(1, rng)
-    prior = Gaussian(e13.x0(1) + rng.multivariate_normal(np.zeros(4), e13.P0), e13.P0)
-    sensor = Bearing("s", position=[0.0, 0.0], sigma=0.1)
-    return Scenario(ConstantVelocity(q=0.05), [sensor], prior, zs, 1.0, truth)
+    truth, zs = e13.simulate(1, rng, setting)
+    p0 = setting.p0
+    prior = Gaussian(e13.x0(1) + rng.multivariate_normal(np.zeros(4), p0), p0)
+    motion = ConstantVelocity(q=setting.q)
+    return Scenario(motion, [setting.bearing()], prior, zs, setting.dt, truth)
 
 
 def run_e16(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
-    cs = e16_scenario(seed)
+    setting = e13.Setting(**config.get("setting", {}))
+    cs = e16_scenario(seed, setting)
     truth, zs, prior, motion, sensor = cs.truth, cs.zs, cs.prior, cs.motion, cs.sensors[0]
+    dt = cs.dt
     if "n_equal" in config:  # beyond the paper only (fewer runs)
         found = run_comparators(cs, seed, config["n_equal"], ("UPF", "bootstrap equal time"))
         return [
@@ -73,7 +80,7 @@ def run_e16(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                 m, finite(t.estimates), truth, experiment="E16", seconds=t.seconds
             )
         ]
-    est = {"EKF": timed_gaussian(ExtendedKalmanFilter(motion, [sensor]), prior, zs, ["s"], 1.0)}
+    est = {"EKF": timed_gaussian(ExtendedKalmanFilter(motion, [sensor]), prior, zs, ["s"], dt)}
     pfs = {
         "bootstrap 200": ProposalParticleFilter(motion, [sensor], n_particles=200),
         "discretisation PF 200": ProposalParticleFilter(
@@ -82,8 +89,15 @@ def run_e16(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         "bootstrap 2000": ProposalParticleFilter(motion, [sensor], n_particles=2000),
     }
     for k, (name, f) in enumerate(pfs.items()):
-        e, secs, _ = timed_sis(f, prior, zs, 1.0, np.random.default_rng([seed, k]))
+        e, secs, _ = timed_sis(f, prior, zs, dt, np.random.default_rng([seed, k]))
         est[name] = (e, secs)
+    if "n_best" in config:  # the best possible (issue 19): posterior mean, prior carried forward
+        rng = np.random.default_rng([seed, 1000])
+        model = e13.truth_model(setting)
+        est[e13.POSTERIOR_MEAN] = bp.posterior_mean(
+            model, [sensor], prior, zs, dt, int(config["n_best"]), rng
+        )
+        est[e13.DEAD_RECKONING] = (e13.dead_reckoning(cs), 0.0)
     return [
         row
         for name, (e, secs) in est.items()
@@ -322,7 +336,8 @@ def run(ctx: RunContext) -> Outcome:
     claims = [claim_e15(demo)]
     fig52 = figure_e15(ctx, demo)
 
-    df16 = ctx.monte_carlo(run_e16, [{"experiment": "E16"}], runs16, desc="E16")
+    n_best = bp.best_n(ctx.quick)
+    df16 = ctx.monte_carlo(run_e16, [{"experiment": "E16", "n_best": n_best}], runs16, desc="E16")
     avg16 = rmse_by_method(df16, "sq_pos_err")
     claims.append(
         order_claim(
@@ -346,8 +361,96 @@ def run(ctx: RunContext) -> Outcome:
     figs17 = figures_e17(ctx, df17, runs17)
     df = pd.concat([df16, df17], ignore_index=True)
     cmp = comparators(ctx, df16, df17, cfgs, (runs16, runs17))
-    body = report_text(fig52, avg16, tab, figs17, (runs16, runs17), n17) + cmp.section
+    dfr = e16_readings(ctx, runs16, n_best)
+    v16 = e16_verdicts(pd.concat([df16.assign(reading="printed"), dfr], ignore_index=True))
+    claims += claims_e16_readings(v16)
+    body = report_text(fig52, avg16, tab, figs17, (runs16, runs17), n17)
+    body += e16_section(v16, runs16, ctx.quick) + cmp.section
+    df = pd.concat([df, dfr], ignore_index=True)
     return Outcome(df, claims, body, runs16, beyond_the_paper=cmp.summary)
+
+
+E16_READINGS = ("T=0.25", "sigma_n^2=0.0001", "narrow DOA, wide prior")
+"""E13's readings (:mod:`.e13_readings`) E16 reruns; with --quick only the last, fewer steps."""
+E16_METHODS = ("EKF", "bootstrap 200", "discretisation PF 200", "bootstrap 2000")
+
+
+def e16_readings(ctx: RunContext, runs: int, n_best: int) -> pd.DataFrame:
+    """E16 under E13's readings of what the thesis does not print (issue 19, item 4)."""
+    names = E16_READINGS[-1:] if ctx.quick else E16_READINGS
+    steps = e13_readings.QUICK_STEPS if ctx.quick else e13.PRINTED.steps
+    cfgs = [
+        {
+            "experiment": "E16",
+            "reading": r,
+            "setting": asdict(replace(e13_readings.READINGS[r], steps=steps)),
+            "n_best": n_best,
+        }
+        for r in names
+    ]
+    return ctx.monte_carlo(run_e16, cfgs, runs, desc="E16 readings")
+
+
+def e16_verdicts(df: pd.DataFrame) -> pd.DataFrame:
+    """Per reading: position RMSE of every method and the verdicts on E16's claims."""
+    rm = df.groupby(["reading", "method"], sort=False)["sq_pos_err"].mean().pow(0.5).unstack()
+    rm = rm[[*E16_METHODS, e13.POSTERIOR_MEAN, e13.DEAD_RECKONING]]
+    out = rm.copy()
+    out["discretisation PF < bootstrap(200)"] = rm["discretisation PF 200"] < rm["bootstrap 200"]
+    out["E16 order"] = (rm["discretisation PF 200"] < rm["bootstrap 200"]) & (
+        rm["bootstrap 200"] < rm["EKF"]
+    )
+    return out
+
+
+def claims_e16_readings(v: pd.DataFrame) -> list[Claim]:
+    """Per reading: the discretisation PF beats the bootstrap at equal particles, and E16's
+    order (new PF < bootstrap < EKF)."""
+    out = []
+    for r, row in v.iterrows():
+        key = str(r).replace(" ", "").replace(",", "_")
+        ours = f"discretisation PF {row['discretisation PF 200']:.3g}, bootstrap 200 {row['bootstrap 200']:.3g}, EKF {row['EKF']:.3g} (posterior mean {row[e13.POSTERIOR_MEAN]:.3g})"
+        out.append(
+            CLAIM_KINDS.claim(
+                f"R_{key}_proposal_beats_bootstrap",
+                f"reading '{r}': discretisation PF(200) < bootstrap(200) in position RMSE",
+                "new PF < bootstrap",
+                ours,
+                "strict",
+                bool(row["discretisation PF < bootstrap(200)"]),
+            )
+        )
+        out.append(
+            CLAIM_KINDS.claim(
+                f"R_{key}_E16_order",
+                f"reading '{r}': discretisation PF < bootstrap(200) < EKF (Figs 53-54)",
+                "new PF < bootstrap < EKF",
+                ours,
+                "strict",
+                bool(row["E16 order"]),
+            )
+        )
+    return out
+
+
+def e16_section(v: pd.DataFrame, runs: int, quick: bool) -> str:
+    """The report's section on E16's best possible and readings."""
+    wins = [str(r) for r, row in v.iterrows() if row["discretisation PF < bootstrap(200)"]]
+    note = f" (--quick: only the last, {e13_readings.QUICK_STEPS} steps)" if quick else ""
+    return f"""
+## E16: the best possible and E13's readings (issue 19)
+
+Position RMSE over all steps and runs ({runs} runs per row); "printed" is the E16 runs above,
+the others change one quantity E13 does not print{note} (see zhai2007-galerkin's report):
+T = 0.25, a narrow bearing (sigma_n^2 = 1e-4), and the same under a wide prior (P_0 x 25), the
+thesis's own mechanism for its proposals. Beside the filters: the posterior mean (a bootstrap on
+the truth's model with {bp.BEST_N["full"]} particles, {bp.BEST_N["quick"]} with --quick) and the
+prior mean carried forward (no bearing used).
+
+{v.to_markdown(floatfmt=".3g")}
+
+Readings where the discretisation PF beats the bootstrap at equal particles: {", ".join(wins) if wins else "none"}.
+"""
 
 
 # Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
@@ -356,6 +459,7 @@ CLAIM_KINDS = ClaimKinds(
         "E15_along_bearing": "paper",
         "E16_order": "paper",
         "C14_*": "paper",
+        "R_*": "diagnostic",  # E16 under E13's unprinted readings (issue 19)
     }
 )
 

@@ -10,6 +10,7 @@ position grid, Algorithm 5 with the corrected prediction). Example 2 (Fig 47): t
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any, Literal
 
@@ -26,6 +27,7 @@ from ...filters import (
 )
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import Bearing
+from . import best_possible as bp
 from .common import timed_gaussian, timed_sis, track_rows
 from .comparators import Comparison, Scenario, run_comparators
 from .equal_time import EqualTime
@@ -50,12 +52,39 @@ PAPER = pd.DataFrame(
 P0 = np.diag([1.0, 1.0, 0.1, 0.1])
 
 
-def simulate(example: int, rng: np.random.Generator) -> tuple[np.ndarray, list[list[np.ndarray]]]:
-    """Truth and bearings (sigma 0.1 rad) from a sensor at the origin."""
-    cv = ConstantVelocity(q=0.05, noise="discrete")
-    sensor = Bearing("s", position=[0.0, 0.0], sigma=0.1)
+@dataclass(frozen=True)
+class Setting:
+    """What Table 9 leaves open or prints (issue 19, item 4): the sampling period ``dt`` (never
+    printed; the spec chose 1), the process noise ``q`` (printed 0.05), the bearing variance
+    ``sigma2`` (printed 0.01 rad^2), the prior covariance's scale ``p0_scale`` (times ``P0``,
+    a spec choice) and the steps (the spec chose 100)."""
+
+    dt: float = 1.0
+    q: float = 0.05
+    sigma2: float = 0.01
+    p0_scale: float = 1.0
+    steps: int = 100
+
+    @property
+    def p0(self) -> np.ndarray:
+        return self.p0_scale * P0
+
+    def bearing(self) -> Bearing:
+        return Bearing("s", position=[0.0, 0.0], sigma=float(np.sqrt(self.sigma2)))
+
+
+PRINTED = Setting()
+
+
+def simulate(
+    example: int, rng: np.random.Generator, setting: Setting = PRINTED
+) -> tuple[np.ndarray, list[list[np.ndarray]]]:
+    """Truth and bearings (sigma 0.1 rad as printed) from a sensor at the origin; example 1
+    under ``setting``."""
+    cv = ConstantVelocity(q=setting.q, noise="discrete")
+    sensor = setting.bearing()
     if example == 1:
-        x, steps, turn = np.array([0.0, 50.0, 1.0, -1.0]), 100, range(0)
+        x, steps, turn = np.array([0.0, 50.0, 1.0, -1.0]), setting.steps, range(0)
     else:
         x, steps, turn = np.array([0.0, 50.0, 72.0 / 44.0, -1.0]), 77, range(45, 48)
     xs, zs = [], []
@@ -63,7 +92,7 @@ def simulate(example: int, rng: np.random.Generator) -> tuple[np.ndarray, list[l
         if k in turn:
             x = CoordinatedTurn(omega=-np.pi / 6).mean(x, 1.0)  # 90 degrees clockwise in 3 steps
         else:
-            x = cv.sample(x, 1.0, rng) if example == 1 else cv.mean(x, 1.0)
+            x = cv.sample(x, setting.dt, rng) if example == 1 else cv.mean(x, 1.0)
         xs.append(x.copy())
         zs.append([sensor.simulate(x, rng)])
     return np.array(xs), zs
@@ -83,15 +112,15 @@ IMM_OMEGA = np.pi / 6
 IMM_TRANSITION = np.array([[0.9, 0.05, 0.05], [0.1, 0.9, 0.0], [0.1, 0.0, 0.9]])
 
 
-def comparator_scenario(example: int, seed: int) -> Scenario:
+def comparator_scenario(example: int, seed: int, setting: Setting = PRINTED) -> Scenario:
     """Run ``seed``'s truth, bearings and prior as a :class:`Scenario` (the filters' CV model)."""
     rng = np.random.default_rng(seed)
-    truth, zs = simulate(example, rng)
-    prior = Gaussian(x0(example) + rng.multivariate_normal(np.zeros(4), P0), P0)
-    motion = ConstantVelocity(q=0.05, noise="continuous")
-    sensor = Bearing("s", position=[0.0, 0.0], sigma=0.1)
-    imm = [motion, *(CoordinatedTurn(omega=w, q=0.05) for w in (IMM_OMEGA, -IMM_OMEGA))]
-    return Scenario(motion, [sensor], prior, zs, 1.0, truth, imm, IMM_TRANSITION)
+    truth, zs = simulate(example, rng, setting)
+    p0 = setting.p0
+    prior = Gaussian(x0(example) + rng.multivariate_normal(np.zeros(4), p0), p0)
+    motion = ConstantVelocity(q=setting.q, noise="continuous")
+    imm = [motion, *(CoordinatedTurn(omega=w, q=setting.q) for w in (IMM_OMEGA, -IMM_OMEGA))]
+    return Scenario(motion, [setting.bearing()], prior, zs, setting.dt, truth, imm, IMM_TRANSITION)
 
 
 def galerkin_pf(
@@ -99,6 +128,25 @@ def galerkin_pf(
 ) -> ProposalParticleFilter:
     """Algorithm 5 with 200 particles on a 100 x 100 grid (Table 9's Galerkin PF)."""
     return ProposalParticleFilter(cs.motion, cs.sensors, GalerkinProposal(100, weight=weight), 200)
+
+
+POSTERIOR_MEAN = "posterior mean"
+DEAD_RECKONING = "prior mean carried forward"
+
+
+def truth_model(setting: Setting) -> ConstantVelocity:
+    """The truth's CV model (Eq. 34, rank-2 noise ``Gamma Q Gamma^T``): the posterior mean's
+    bootstrap samples it (a bootstrap needs no transition density)."""
+    return ConstantVelocity(q=setting.q, noise="discrete")
+
+
+def dead_reckoning(cs: Scenario) -> np.ndarray:
+    """The trivial estimator that ignores every bearing: the prior mean moved by the CV model."""
+    x, out = cs.prior.mean, []
+    for _ in cs.zs:
+        x = cs.motion.mean(x, cs.dt)
+        out.append(x)
+    return np.array(out)
 
 
 def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
@@ -123,6 +171,12 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         if name == "Galerkin PF 200":
             grid_small = f.stats.grid_too_small
     est.update(run_comparators(cs, seed, config["n_equal"]))
+    if "n_best" in config:  # the best possible (issue 19): posterior mean, prior carried forward
+        rng = np.random.default_rng([seed, 1000])
+        est[POSTERIOR_MEAN] = bp.posterior_mean(
+            truth_model(PRINTED), [sensor], prior, zs, 1.0, config["n_best"], rng
+        )
+        est[DEAD_RECKONING] = (dead_reckoning(cs), 0.0)
     rows = []
     for name, (e, secs) in est.items():
         dx, dy = e[:, 0] - truth[:, 0], e[:, 1] - truth[:, 1]
@@ -142,7 +196,10 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
 
 
 def run(ctx: RunContext) -> Outcome:
-    """E13: comparators calibrated to the Galerkin PF, examples 1 and 2, claims, report."""
+    """E13: comparators calibrated to the Galerkin PF, examples 1 and 2, the best possible and
+    the readings of what Table 9 does not print (issue 19), claims, report."""
+    from . import e13_readings
+
     runs = ctx.n_runs(full=200, quick=4)
     runs2 = max(2, runs // 10)
     eq = EqualTime.for_run(ctx)
@@ -152,7 +209,14 @@ def run(ctx: RunContext) -> Outcome:
     n_equal = eq.n_particles
     df1 = ctx.monte_carlo(
         run_once,
-        [{"example": 1, "extras": True, "n_equal": n_equal["example 1"]}],
+        [
+            {
+                "example": 1,
+                "extras": True,
+                "n_equal": n_equal["example 1"],
+                "n_best": bp.best_n(ctx.quick),
+            }
+        ],
         runs,
         desc="example 1",
     )
@@ -162,10 +226,92 @@ def run(ctx: RunContext) -> Outcome:
     df = pd.concat([df1, df2], ignore_index=True)
     ours = summarise(df1)
     claims = [*claims_table9(ours, ctx.quick), claim_turn(df2)]
+    n_truths = 50 if ctx.quick else 2000
+    bounds = {"printed": e13_readings.pcrb(PRINTED, ctx.seed, n_truths)}
+    first = df1[df1["step"] == 1]
+    best = {
+        ax: bp.rms_over_runs(first[first["method"] == POSTERIOR_MEAN][f"e_{ax}"]) for ax in "xy"
+    }
+    best_claims, best_text = best_possible(first, best, bounds["printed"])
+    claims += best_claims
+    reading_runs = runs if ctx.runs is not None or ctx.quick else 50
+    dfr = e13_readings.run_readings(ctx, reading_runs)
+    for r, setting in e13_readings.readings(ctx.quick).items():
+        steps = e13_readings.QUICK_STEPS if ctx.quick else setting.steps
+        bounds[r] = e13_readings.pcrb(replace(setting, steps=steps), ctx.seed, n_truths)
+    table = e13_readings.summarise(dfr, first)
+    verdicts = e13_readings.verdicts(table, bounds)
+    claims += e13_readings.claims(verdicts)
     figs = figures(ctx, df1, df2, runs)
-    body = report_text(ours, df1, figs, runs, runs2)
+    body = report_text(ours, df1, figs, runs, runs2) + best_text
+    body += e13_readings.section(verdicts, reading_runs, ctx.quick)
     cmp = comparison(ctx, df, eq, runs2)
+    df = pd.concat([df, dfr.assign(example=1)], ignore_index=True)
     return Outcome(df, claims, body + "\n" + cmp.section, runs, beyond_the_paper=cmp.summary)
+
+
+def best_possible(
+    first: pd.DataFrame, best: Mapping[str, tuple[float, float]], bound: tuple[float, float]
+) -> tuple[list[Claim], str]:
+    """Issue 19: Table 9 against the posterior mean ``best`` and the PCRB ``bound`` per axis
+    (RMS over runs of the per-run RMSE): a claim per Table 9 row, and the report section."""
+    claims: list[Claim] = []
+    rows: dict[str, dict[str, Any]] = {}
+    for m in PAPER.index:
+        paper = {
+            ax: bp.paper_rms(PAPER.loc[m, f"mean e_{ax}"], PAPER.loc[m, f"var e_{ax}"])
+            for ax in "xy"
+        }
+        labels = {ax: bp.verdict(paper[ax], *best[ax], bound[i]) for i, ax in enumerate("xy")}
+        worse = min(paper, key=lambda ax: paper[ax] - best[ax][0])
+        claims.append(
+            bp.possible_claim(
+                CLAIM_KINDS,
+                f"BP_possible_{m.replace(' ', '_')}",
+                f"{m} (Table 9, RMS over runs in {worse}, the axis nearer the bound)",
+                round(paper[worse], 4),
+                best[worse],
+                bound["xy".index(worse)],
+            )
+        )
+        rows[m] = {
+            "paper RMS x": paper["x"],
+            "paper RMS y": paper["y"],
+            "x": labels["x"],
+            "y": labels["y"],
+        }
+    g = dict(iter(first.groupby("method")))
+    ours = {
+        m: {f"RMS {ax}": bp.rms_over_runs(g[m][f"e_{ax}"])[0] for ax in "xy"}
+        for m in (*PAPER.index, POSTERIOR_MEAN, DEAD_RECKONING)
+    }
+    ours["PCRB"] = {"RMS x": bound[0], "RMS y": bound[1]}
+    return (
+        claims,
+        f"""
+## The best possible beside Table 9
+
+What no filter can beat on example 1 as printed (T = 1), on the same runs: the posterior mean
+(a bootstrap filter on the truth's model, Eq. 34 with its rank-2 noise, with {bp.BEST_N["full"]}
+particles, {bp.BEST_N["quick"]} with --quick), the PCRB (truths from the model; the rank-2 noise
+regularised by 1e-6 q) and the trivial estimator that ignores every bearing (the prior mean
+carried forward). RMS over runs of the per-run RMSE (the paper's: `sqrt(mean^2 + var)`):
+
+{pd.DataFrame.from_dict(ours, orient="index").to_markdown(floatfmt=".3f")}
+
+Each Table 9 row against them (*{bp.IMPOSSIBLE}*: more than {bp.MARGIN_SE:g} standard errors
+below the posterior mean, or below the PCRB):
+
+{pd.DataFrame.from_dict(rows, orient="index").to_markdown(floatfmt=".3f")}
+
+The posterior mean is {best["x"][0]:.3g} / {best["y"][0]:.3g} (x / y, ± {best["x"][1]:.2g} /
+{best["y"][1]:.2g}), {min(best[a][0] / ours["bootstrap 2000"][f"RMS {a}"] for a in "xy"):.2f}x or
+more our bootstrap(2000)'s: Table 9's bootstrap rows sit
+{min(best[a][0] for a in "xy") / max(r["paper RMS x"] for r in rows.values()):.1f}x or more below
+it. The PCRB is {bound[0]:.3g} / {bound[1]:.3g} against the Galerkin row's
+{rows["Galerkin PF 200"]["paper RMS x"]:.3g} / {rows["Galerkin PF 200"]["paper RMS y"]:.3g}.
+""",
+    )
 
 
 def summarise(df1: pd.DataFrame) -> pd.DataFrame:
@@ -189,6 +335,8 @@ CLAIM_KINDS = ClaimKinds(
         "C12_*": "paper",
         "C13_saturation": "paper",
         "E13_turn": "paper",
+        "BP_*": "diagnostic",  # Table 9 against the best possible (issue 19)
+        "R_*": "diagnostic",  # Table 9's claims under unprinted readings (e13_readings)
     }
 )
 

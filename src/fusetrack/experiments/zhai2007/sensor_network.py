@@ -26,6 +26,7 @@ from ...filters import CPFSPProposal, ProposalParticleFilter
 from ...management import activation_radius, active_sensors, intensity_weights
 from ...motion import ConstantVelocity, CoordinatedTurn
 from ...sensors import AcousticIntensity, Bearing
+from . import best_possible as bp
 from .common import run_steps, track_rows
 from .comparators import (
     COMPARATORS,
@@ -57,10 +58,10 @@ PAPER = pd.DataFrame(
 )
 
 
-def trajectory(scenario: str, rng: np.random.Generator) -> np.ndarray:
-    """``(STEPS + 1, 4)`` states, row 0 at t = 0."""
+def trajectory(scenario: str, rng: np.random.Generator, q: float = 0.05) -> np.ndarray:
+    """``(STEPS + 1, 4)`` states, row 0 at t = 0 (S1's process noise ``q``)."""
     if scenario == "S1":
-        cv = ConstantVelocity(q=0.05, noise="discrete")
+        cv = ConstantVelocity(q=q, noise="discrete")
         x = np.array([40.0, 60.0, 7.0, 6.0])
         out = [x]
         for _ in range(STEPS):
@@ -92,7 +93,7 @@ def trajectory(scenario: str, rng: np.random.Generator) -> np.ndarray:
 
 
 def measurements(
-    truth: np.ndarray, threshold: float, rng: np.random.Generator
+    truth: np.ndarray, threshold: float, rng: np.random.Generator, sigma: float = 0.1
 ) -> tuple[list[list[Any]], list[np.ndarray], np.ndarray]:
     """Per step: DOAs of the active sensors (None elsewhere), intensity weights, active counts.
 
@@ -100,7 +101,7 @@ def measurements(
     origin evaluates them all on the target seen from each sensor (``x - r_k``).
     """
     mic = AcousticIntensity("m", position=[0.0, 0.0], source_db=SOURCE_DB)
-    doa = Bearing("d", position=[0.0, 0.0], sigma=0.1)
+    doa = Bearing("d", position=[0.0, 0.0], sigma=sigma)
     offsets = np.c_[np.asarray(GRID), np.zeros((len(GRID), 2))]
     zs, ws, counts = [], [], []
     for x in truth[1:]:
@@ -122,16 +123,17 @@ def comparator_scenario(
     """Run ``seed``'s truth, DOAs and prior as a :class:`Scenario` (IMM: CV and +-pi/10 rad/s
     coordinated turns), with the intensity weights and active counts per step."""
     rng = np.random.default_rng(seed)
-    truth = trajectory(str(config["scenario"]), rng)
-    zs, ws, counts = measurements(truth, float(config["threshold"]), rng)
+    q, sigma = float(config.get("q", 0.05)), float(config.get("sigma", 0.1))
+    truth = trajectory(str(config["scenario"]), rng, q)
+    zs, ws, counts = measurements(truth, float(config["threshold"]), rng, sigma)
     prior = Gaussian(truth[0] + rng.multivariate_normal(np.zeros(4), P0), P0)
-    doas = [Bearing(f"d{k}", position=list(p), sigma=0.1) for k, p in enumerate(GRID)]
+    doas = [Bearing(f"d{k}", position=list(p), sigma=sigma) for k, p in enumerate(GRID)]
     imm = [
-        ConstantVelocity(q=0.05),
-        CoordinatedTurn(omega=IMM_OMEGA, q=0.05),
-        CoordinatedTurn(omega=-IMM_OMEGA, q=0.05),
+        ConstantVelocity(q=q),
+        CoordinatedTurn(omega=IMM_OMEGA, q=q),
+        CoordinatedTurn(omega=-IMM_OMEGA, q=q),
     ]
-    cs = Scenario(ConstantVelocity(q=0.05), doas, prior, zs, 1.0, truth[1:], imm, IMM_TRANSITION)
+    cs = Scenario(ConstantVelocity(q=q), doas, prior, zs, 1.0, truth[1:], imm, IMM_TRANSITION)
     return cs, ws, counts
 
 
@@ -177,7 +179,35 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
         side = None if aux is None else {WEIGHTS: aux}
         est = np.array(run_steps(f, prior, zs, 1.0, np.random.default_rng([seed, k]), side=side))
         rows += _rows(name, est, time.perf_counter() - t0, truth, counts)
+    if "n_best" in config:  # the best possible (issue 19): posterior mean, bearings triangulated
+        rng = np.random.default_rng([seed, 1000])
+        model = ConstantVelocity(q=float(config.get("q", 0.05)), noise="discrete")
+        est, secs = bp.posterior_mean(model, doas, prior, zs, 1.0, int(config["n_best"]), rng)
+        rows += _rows(POSTERIOR_MEAN, est, secs, truth, counts)
+        rows += _rows(TRIANGULATED, triangulate(cs), 0.0, truth, counts)
     return rows
+
+
+POSTERIOR_MEAN = "posterior mean"
+TRIANGULATED = "bearings triangulated"
+
+
+def triangulate(cs: Scenario) -> np.ndarray:
+    """The trivial estimator: each step's active bearings intersected by least squares (the
+    bearing lines ``n_k . p = n_k . r_k``, ``n_k = (-sin z_k, cos z_k)``), the last position
+    kept when fewer than two sensors are active; velocity the difference of positions."""
+    pos, out = cs.prior.mean[:2].copy(), []
+    for step in cs.zs:
+        act = [(np.asarray(GRID[k]), float(z[0])) for k, z in enumerate(step) if z is not None]
+        if len(act) >= 2:
+            n = np.array([[-np.sin(z), np.cos(z)] for _, z in act])
+            b = np.array([nk @ r for nk, (r, _) in zip(n, act)])
+            new = np.linalg.lstsq(n, b, rcond=None)[0]
+        else:
+            new = pos
+        out.append(np.r_[new, new - pos])
+        pos = new
+    return np.array(out)
 
 
 def _rows(
@@ -249,18 +279,27 @@ def comparators(
 
 
 def run(ctx: RunContext) -> Outcome:
-    """E4: every configuration's runs, the comparators, claims, figures and report."""
+    """E4: every configuration's runs (the best possible beside them), the comparators, Table
+    5 under other noises (issue 19), claims, figures and report."""
+    from . import e4_readings
+
     runs = ctx.n_runs(full=100, quick=2)
+    n_best = bp.best_n(ctx.quick)
     cfgs = [{"scenario": "S1", "threshold": t} for t in (0.75, 0.78)]
     cfgs += [{"scenario": s, "threshold": 0.75} for s in ("S2", "S3")]
-    df = ctx.monte_carlo(run_once, cfgs, runs)
+    df = ctx.monte_carlo(run_once, [{**c, "n_best": n_best} for c in cfgs], runs)
     cmp = comparators(ctx, cfgs, df, runs)
     summ = summarise(df)
     claims = [*claims_table5(summ), *claims_scenarios(df)]
+    dfr = e4_readings.run_readings(ctx, runs)
+    printed = df[(df["scenario"] == "S1") & (df["threshold"] == 0.75)].assign(reading="printed")
+    verdicts = e4_readings.verdicts(pd.concat([printed, dfr], ignore_index=True))
+    claims += e4_readings.best_claims(verdicts) + e4_readings.claims(verdicts)
     figs = figures(ctx, df, runs)
     active = active_counts(np.random.default_rng(ctx.seed), runs=5 if ctx.quick else 50)
-    body = report_text(summ, active, figs, runs) + cmp.section
-    return Outcome(df, claims, body, runs, beyond_the_paper=cmp.summary)
+    body = report_text(summ, active, figs, runs) + e4_readings.section(verdicts, runs, ctx.quick)
+    df = pd.concat([df, dfr], ignore_index=True)
+    return Outcome(df, claims, body + cmp.section, runs, beyond_the_paper=cmp.summary)
 
 
 def summarise(df: pd.DataFrame) -> pd.DataFrame:
@@ -289,6 +328,8 @@ CLAIM_KINDS = ClaimKinds(
         "C6_*": "paper",
         "C7_*": "paper",
         "C8_*": "paper",
+        "BP_*": "diagnostic",  # Table 5 against the best possible (issue 19)
+        "R_*": "diagnostic",  # Table 5's claims under other noises (e4_readings, issue 19)
     }
 )
 
