@@ -17,7 +17,7 @@ from fusetrack.evaluation.report import (
 
 
 def test_write_outputs_follows_the_contract(tmp_path):
-    ctx = RunContext("toy", tmp_path / "out", quick=True, seed=4)
+    ctx = RunContext("toy", tmp_path / "out", quick=True, seed=4, workers=3)
     df = pd.DataFrame(
         {"run": [0, 1], "method": ["a", "b"], "rmse": [1.0, 2.0], "extra": [[1, 2], None]}
     )
@@ -34,6 +34,7 @@ def test_write_outputs_follows_the_contract(tmp_path):
     assert s == summary
     assert {"experiment", "claims", "runs", "seed", "seconds"} <= set(s)
     assert s["experiment"] == "toy" and s["runs"] == 2 and s["seed"] == 4 and s["seconds"] == 1.25
+    assert s["workers"] == 3  # the wall time means little without the worker count
     assert [c["holds"] for c in s["claims"]] == [True, False, True]
     assert set(s["claims"][0]) == {"id", "statement", "paper", "ours", "tolerance", "holds", "kind"}
     assert [c["kind"] for c in s["claims"]] == ["paper", "paper", "calibration"]
@@ -41,6 +42,7 @@ def test_write_outputs_follows_the_contract(tmp_path):
     assert "## Claims (1 of 2 paper claims hold; calibration 1 of 1)" in report
     assert "**no**" in report and "## Body" in report
     assert "| c3 | calibration | tuned |" in report
+    assert "--workers 3`" in report
 
 
 def test_claim_kind_is_required_and_checked():

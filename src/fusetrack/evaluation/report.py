@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import resource
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
@@ -115,6 +116,10 @@ class RunContext:
         if self.runs is not None:
             return self.runs
         return quick if self.quick else full
+
+    def n_workers(self) -> int:
+        """Worker processes the Monte Carlo runs use: ``--workers``, else one per CPU."""
+        return self.workers if self.workers is not None else (os.cpu_count() or 1)
 
     def monte_carlo(
         self, fn: RunFunction, configs: Sequence[Mapping[str, Any]], runs: int, desc: str = "runs"
@@ -225,6 +230,7 @@ def write_outputs(
         "runs": outcome.runs,
         "seed": ctx.seed,
         "seconds": round(seconds, 3),
+        "workers": ctx.n_workers(),
         "peak_memory_mb": round(memory_mb, 1),
         "quick": ctx.quick,
         "engine": ctx.engine,
@@ -236,7 +242,7 @@ def write_outputs(
         f"# {outcome.title or ctx.name}",
         "",
         f"`fusetrack run {ctx.name}{' --quick' if ctx.quick else ''} --runs {outcome.runs} --seed {ctx.seed}"
-        f" --engine {ctx.engine}{_option_flags(ctx.extra)}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
+        f" --engine {ctx.engine} --workers {ctx.n_workers()}{_option_flags(ctx.extra)}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
         f"{' (quick run: fewer runs, wider tolerances)' if ctx.quick else ''}.",
         "",
         f"## Claims ({verdict_line(outcome.claims)})",

@@ -18,7 +18,9 @@ Choices where the paper is silent (spec §8 items 13-14): ``h/d`` is clipped to 
 ``+-tan(fov/2)`` (it explodes for particles beside or behind a camera), the expected noise
 variance ``E_x var(v_i | x)`` is taken over the particles in the camera's field of view, and
 ``Sigma_Z`` is inverted with a pseudo-inverse (a camera that sees no particle contributes
-nothing). Every moment for all N cameras is computed once per selection epoch; a subset's MSE
+nothing). The model ``"perspective-joint"`` is the variant of item 13 that drops the independence
+of eta and x: every expectation is joint over the particles, ``sum_l w_l P{eta | u_l} (.)``
+(:func:`joint_perspective_moments`). Every moment for all N cameras is computed once per selection epoch; a subset's MSE
 then costs a k x k solve, so greedy (Algorithm 2) and brute force share the same numbers.
 
 Bad input: a selection size outside ``[1, N]`` is a :class:`~fusetrack.core.errors.ConfigError`.
@@ -46,7 +48,7 @@ from ..sensors import MIN_DEPTH, CameraArray
 from ..world import OccluderPriors, Room, disks_block, occlusion_probability, pair_visibility_kernel
 
 Array = NDArray[np.float64]
-CameraModel = Literal["perspective", "weak"]
+CameraModel = Literal["perspective", "weak", "perspective-joint"]
 SELECTION_METHODS = ("greedy", "brute", "fixed", "random", "closest", "all")
 
 
@@ -101,6 +103,70 @@ def visibility_probabilities(
         raise ConfigError(invalid("prior_mode", prior_mode, "'gaussian', 'perfect' or 'none'"))
     vw = vis * w[None, :]
     return vw.sum(axis=1), vw @ vis.T.astype(float)
+
+
+def visibility_per_particle(
+    cameras: CameraArray,
+    room: Room,
+    x: Array,
+    occluders: OccluderPriors | ArrayLike | None,
+    diameter: float,
+    prior_mode: str,
+    exclusion: float = 0.0,
+) -> tuple[Array, Array]:
+    """``P{eta_i = 1 | u_l}`` ``(N, L)`` and ``P{eta_i = 1, eta_j = 1 | u_l}`` ``(N, N, L)``: the
+    terms :func:`visibility_probabilities` sums with the particle weights (Eq. 8 with Q = {i} or
+    {i, j}, factors clamped at 0; deterministic for the extreme priors)."""
+    assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
+    if prior_mode == "gaussian":
+        if not isinstance(occluders, OccluderPriors):
+            raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
+        q = occlusion_probability(cameras.positions, x, occluders, diameter, exclusion)  # (N, L, M)
+        p1 = assigned * np.prod(np.clip(1.0 - q, 0.0, None), axis=-1)
+        both = assigned[:, None, :] & assigned[None, :, :]
+        pair = np.prod(np.clip(1.0 - q[:, None] - q[None, :], 0.0, None), axis=-1)
+        p2 = both * pair
+        diag = np.arange(len(p1))
+        p2[diag, diag] = p1
+        return p1, p2
+    if prior_mode == "perfect":
+        centres = occluders.mean if isinstance(occluders, OccluderPriors) else occluders
+        centres = np.zeros((0, 2)) if centres is None else np.asarray(centres, float).reshape(-1, 2)
+        vis = assigned & ~disks_block(cameras.positions, x, centres, diameter)
+    elif prior_mode == "none":
+        vis = assigned
+    else:
+        raise ConfigError(invalid("prior_mode", prior_mode, "'gaussian', 'perfect' or 'none'"))
+    v = vis.astype(float)
+    return v, v[:, None, :] * v[None, :, :]
+
+
+def joint_perspective_moments(
+    cameras: CameraArray, x: Array, w: Array, p1: Array, p2: Array
+) -> tuple[Array, Array]:
+    """``Sigma_Zx`` ``(N, 2)`` and ``Sigma_Z`` ``(N, N)`` of the perspective model with joint
+    expectations over the particles (spec §8 item 13's variant of Eqs. 11-13): an occluded camera
+    returns its expected reading ``e_i`` (Eq. 10), so ``z~_i - e_i = eta_i (z_i - e_i)`` and
+
+        Sigma_Zx,i = sum_l w_l P{eta_i | u_l} (f_i r_il - e_i) (x_l - mu),
+        Sigma_Z,ij = sum_l w_l P{eta_i, eta_j | u_l} (f_i r_il - e_i)(f_j r_jl - e_j)
+                     + [i = j] sum_l w_l P{eta_i | u_l} var(v_i | x_l),
+
+    with ``r = h/d`` clipped to the image bounds as in Eq. 11. ``p1 (N, L)``, ``p2 (N, N, L)``:
+    :func:`visibility_per_particle`. With P{eta | u_l} the same for every particle this is
+    Eqs. 12-13 (the noise averaged over the particles in view)."""
+    mu = w @ x
+    dx = x - mu
+    f = cameras.focals
+    d, h = cameras.depth_lateral(x[:, None, :])  # (L, N)
+    bound = np.tan(cameras.fovs / 2)
+    r = np.clip(h / np.where(np.abs(d) > MIN_DEPTH, d, MIN_DEPTH), -bound, bound)
+    dev = f * r - f * (w @ r)  # (L, N): f_i r_il - e_i
+    cov_zx = (p1 * w * dev.T) @ dx
+    cov_z = np.einsum("ijl,l,li,lj->ij", p2, w, dev, dev)
+    var = cameras.noise_var(x[:, None, :])  # (L, N)
+    cov_z[np.diag_indices_from(cov_z)] += np.sum(p1 * w * var.T, axis=1)
+    return cov_zx, cov_z
 
 
 def selection_moments(
@@ -159,6 +225,13 @@ def selection_moments(
         ) * d_bar**2 + cameras.sigma_pos**2  # Eq. 14
         cov_zx["weak"] = p1[:, None] * (a @ sigma_x)  # Eq. 15
         cov_z["weak"] = p2 * (a @ sigma_x @ a.T + np.diag(var_t))  # Eq. 16
+    if "perspective-joint" in models:
+        pl1, pl2 = visibility_per_particle(
+            cameras, room, x, occluders, diameter, prior_mode, exclusion
+        )
+        cov_zx["perspective-joint"], cov_z["perspective-joint"] = joint_perspective_moments(
+            cameras, x, w, pl1, pl2
+        )
     return SelectionMoments(mu, sigma_x, p1, p2, cov_zx, cov_z)
 
 

@@ -15,11 +15,14 @@ rectangles of Eq. 7 end this many occluder diameters before the particle; 0 = as
 ``tracker_sigma_v`` (the tracker's motion noise sigma_v of Eq. 5, "assumed to be known" by the
 paper; None = the walkers' true 0.33 units, spec §8 item 15), ``occlusion_power`` (p(eta | u)
 enters the likelihood to this power; 1 = the paper): see
-:class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`.
+:class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`; ``calibration``
+("white": Eq. 2's noise drawn afresh every step, the paper's model; "fixed": each camera's yaw and
+position errors drawn once per run, spec §8 item 23, see :func:`camera_readings`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import pickle
 import time
@@ -44,6 +47,7 @@ from ...management import (
 )
 from ...motion import WaypointRegimeDynamics
 from ...sensors import (
+    CameraArray,
     CameraNetworkReport,
     OcclusionAwareCameraSensor,
     OcclusionAwareLikelihood,
@@ -78,7 +82,9 @@ DEFAULTS: dict[str, Any] = {
     "exclusion": 1.0,
     "tracker_sigma_v": None,
     "occlusion_power": 1.0,
+    "calibration": "white",
 }
+CALIBRATIONS = ("white", "fixed")
 
 
 def _resolve(config: Mapping[str, Any]) -> tuple[dict[str, Any], Scene]:
@@ -89,6 +95,8 @@ def _resolve(config: Mapping[str, Any]) -> tuple[dict[str, Any], Scene]:
     scene = cfg.get("scene_obj") or get_scene(cfg["scene"])
     if cfg["prior_filter"] not in PRIOR_FILTERS:
         raise ConfigError(invalid("prior_filter", cfg["prior_filter"], f"one of {PRIOR_FILTERS}"))
+    if cfg["calibration"] not in CALIBRATIONS:
+        raise ConfigError(invalid("calibration", cfg["calibration"], f"one of {CALIBRATIONS}"))
     if cfg["method"] not in SELECTION_METHODS:
         raise ConfigError(invalid("method", cfg["method"], f"one of {SELECTION_METHODS}"))
     n = len(scene.cameras)
@@ -99,21 +107,21 @@ def _resolve(config: Mapping[str, Any]) -> tuple[dict[str, Any], Scene]:
     return cfg, scene
 
 
-_WORLDS: dict[tuple[str, int, int, int], tuple[Array, Array, Array]] = {}
+_WORLDS: dict[tuple[str, int, int, int, str], tuple[Array, Array, Array]] = {}
 _WORLD_CACHE_SIZE = 8
 
 
 def world_and_readings(
-    scene: Scene, n_occluders: int, steps: int, seed: int
+    scene: Scene, n_occluders: int, steps: int, seed: int, calibration: str = "white"
 ) -> tuple[Array, Array, Array]:
     """:func:`simulate_world` and :func:`camera_readings`, remembered per process: configurations
     that share a seed share the world (common random numbers), so it is simulated once."""
-    key = (hashlib.sha1(pickle.dumps(scene)).hexdigest(), n_occluders, steps, seed)
+    key = (hashlib.sha1(pickle.dumps(scene)).hexdigest(), n_occluders, steps, seed, calibration)
     if key not in _WORLDS:
         if len(_WORLDS) >= _WORLD_CACHE_SIZE:
             _WORLDS.pop(next(iter(_WORLDS)))
         obj, occ = simulate_world(scene, n_occluders, steps, seed)
-        _WORLDS[key] = (obj, occ, camera_readings(scene, obj, occ, seed))
+        _WORLDS[key] = (obj, occ, camera_readings(scene, obj, occ, seed, calibration))
     return _WORLDS[key]
 
 
@@ -132,15 +140,37 @@ def simulate_world(scene: Scene, n_occluders: int, steps: int, seed: int) -> tup
     return path[idx], occ
 
 
-def camera_readings(scene: Scene, obj: Array, occ: Array, seed: int) -> Array:
+def miscalibrated(scene: Scene, seed: int) -> CameraArray:
+    """The cameras as they really are in a run with fixed calibration errors (spec §8 item 23):
+    each camera's yaw off by ``N(0, sigma_theta^2)`` and its position by ``N(0, sigma_pos^2 I)``,
+    drawn once per run (stream ``[seed, 5]``); only the read noise is left white."""
+    rng = np.random.default_rng([seed, 5])
+    cams = scene.cameras
+    n = len(cams)
+    return dataclasses.replace(
+        cams,
+        yaws=cams.yaws + cams.sigma_theta * rng.standard_normal(n),
+        positions=cams.positions + cams.sigma_pos[:, None] * rng.standard_normal((n, 2)),
+        sigma_theta=np.zeros(n),
+        sigma_pos=np.zeros(n),
+    )
+
+
+def camera_readings(
+    scene: Scene, obj: Array, occ: Array, seed: int, calibration: str = "white"
+) -> Array:
     """Readings of every camera at every step ``(steps + 1, N)``: Eq. 4 with Eq. 2 noise, NaN when
-    out of view, behind a wall or static occluder, or behind an occluder disc."""
+    out of view, behind a wall or static occluder, or behind an occluder disc. ``calibration``
+    "fixed": the readings come from the :func:`miscalibrated` cameras with white read noise only
+    (the tracker still assumes Eq. 2); which steps a camera sees is decided as for "white", from
+    the nominal cameras, so the two differ only in the reading values."""
     rng = np.random.default_rng([seed, 2])
     cams = scene.cameras
+    real = cams if calibration == "white" else miscalibrated(scene, seed)
     n_steps = len(obj)
     z = np.full((n_steps, len(cams)), np.nan)
-    mean = cams.image_coordinate(obj[:, None, :])
-    sd = np.sqrt(cams.noise_var(obj[:, None, :]))
+    mean = real.image_coordinate(obj[:, None, :])
+    sd = np.sqrt(real.noise_var(obj[:, None, :]))
     noise = rng.standard_normal(mean.shape)
     seen = cams.in_fov(obj[:, None, :]) & ~scene.room.sight_blocked(
         cams.positions[None], obj[:, None, :]
@@ -389,7 +419,7 @@ def run_tracking(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     cpu0 = time.process_time()
     cfg, scene = _resolve(config)
     steps, m = int(cfg["steps"]), int(cfg["n_occluders"])
-    obj, occ, z_all = world_and_readings(scene, m, steps, seed)
+    obj, occ, z_all = world_and_readings(scene, m, steps, seed, cfg["calibration"])
     pri = _occluder_priors(cfg, scene, occ, seed)
     clock = _Clock()
     asir = _filter(cfg, scene, clock)
