@@ -2,7 +2,8 @@
 
 Each experiment runs as ``fusetrack run NAME --seed 0 --out OUT/NAME`` with its default (the
 paper's) number of runs, one after the other, as the committed reports' headers show; a line on
-stderr says which one is running and how it ended.
+stderr says which one is running and how it ended. Into a reports folder (one with a
+README.md) it then rewrites the generated blocks (`fusetrack reports tally --write`).
 """
 
 from __future__ import annotations
@@ -62,4 +63,10 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
         print(
             f"[{i}/{len(names)}] {name}: {verdict} ({seconds:.0f} s)", file=sys.stderr, flush=True
         )
+    if (args.out / "README.md").exists() and not args.quick:
+        # the reports folder: its tally and verdict blocks follow the new summaries
+        from .report_tally import write_generated
+
+        changed = write_generated(args.out)
+        print(f"generated blocks: {len(changed)} file(s) updated", file=sys.stderr, flush=True)
     return 0
