@@ -1,6 +1,6 @@
 """``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track``,
 ``make-sample``, ``track-video``, ``serve``, ``replay``, ``log check|recover``, ``reproduce
-[NAME ...|--all]`` and ``reports tally``; ``--version``, ``-v``/``-q`` (the ``logging`` level;
+[NAME ...|--all]`` and ``reports tally|verdicts``; ``--version``, ``-v``/``-q`` (the ``logging`` level;
 before or after any subcommand), ``run NAME --help`` (the experiment's own options). Progress
 goes to stderr (a bar on a terminal, plain lines elsewhere); colour only on a terminal and never
 with ``NO_COLOR``."""
