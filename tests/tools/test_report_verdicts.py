@@ -11,6 +11,7 @@ import pytest
 from fusetrack.cli import main
 from fusetrack.core import ConfigError
 from fusetrack.experiments import PAPERS, paper_verdicts
+from fusetrack.tools.report_tally import refresh_reports_folder
 from fusetrack.tools.report_verdicts import (
     BEGIN,
     committed_block,
@@ -87,3 +88,25 @@ def test_paper_pages_show_the_verdict():
     for prefix in PAPERS:
         page = (ROOT / "docs" / "papers" / f"{prefix}.md").read_text()
         assert page.splitlines()[2] == f"{{{{ verdicts {prefix} }}}}"
+
+
+def test_a_full_size_run_into_a_reports_folder_refreshes_it(tmp_path):
+    """`fusetrack run NAME --out reports/NAME` (and `reproduce`) rewrite the generated blocks of
+    a reports folder; elsewhere nothing happens; a stale verdict is said, not raised."""
+    assert refresh_reports_folder(tmp_path / "nott2009-video") is None
+    reports = _copy(
+        tmp_path, [p.name for p in REPORTS.glob("*2*-*") if (p / "summary.json").exists()]
+    )
+    (reports / "nott2009-video" / "report.md").write_text("# Video\n")
+    (reports / "README.md").write_text("# Reports\n")
+    assert refresh_reports_folder(reports / "nott2009-video") is None  # no tally markers
+    (reports / "README.md").write_text((REPORTS / "README.md").read_text())
+    note = refresh_reports_folder(reports / "nott2009-video")
+    assert note is not None and "updated in 2 file(s)" in note
+    assert (reports / "nott2009-video" / "report.md").read_text().startswith(f"# Video\n\n{BEGIN}")
+    path = reports / "nott2009-video" / "summary.json"
+    summary = json.loads(path.read_text())
+    summary["claims"] = [c for c in summary["claims"] if c["id"] != "H6"]
+    path.write_text(json.dumps(summary))
+    note = refresh_reports_folder(reports / "nott2009-video")
+    assert "NOT updated" in note and "'H6'" in note

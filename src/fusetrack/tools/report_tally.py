@@ -186,6 +186,22 @@ def write_generated(reports: Path) -> list[Path]:
     return list(dict.fromkeys([*changed, *write_verdicts(reports)]))
 
 
+def refresh_reports_folder(out_dir: Path) -> str | None:
+    """After a full-size run into ``REPORTS/NAME``: rewrite the generated blocks of ``REPORTS``
+    if it is a reports folder (its README.md has the tally's markers); a line saying what was
+    done, or ``None`` if ``out_dir`` is not in one. A verdict that no longer matches the reports
+    is reported, not raised: the run's own files are written."""
+    reports = out_dir.parent
+    readme = reports / "README.md"
+    if not readme.is_file() or BEGIN not in readme.read_text():
+        return None
+    try:
+        changed = write_generated(reports)
+    except ConfigError as err:
+        return f"{reports}: generated blocks NOT updated ({err}); fix and run `fusetrack reports tally --write`"
+    return f"{reports}: generated blocks updated in {len(changed)} file(s)"
+
+
 def run_reports_command(args: argparse.Namespace) -> int:
     if args.write:
         changed = write_generated(args.reports)

@@ -17,6 +17,7 @@ from typing import Any
 from ..core import ConfigError, invalid
 from ..evaluation import Claim, RunContext, verdict_line
 from ..experiments import REGISTRY, describe, run_experiment
+from .report_tally import refresh_reports_folder
 
 NOT_REPORTED = ("demo",)  # experiments with no folder under reports/
 
@@ -63,10 +64,8 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
         print(
             f"[{i}/{len(names)}] {name}: {verdict} ({seconds:.0f} s)", file=sys.stderr, flush=True
         )
-    if (args.out / "README.md").exists() and not args.quick:
-        # the reports folder: its tally and verdict blocks follow the new summaries
-        from .report_tally import write_generated
-
-        changed = write_generated(args.out)
-        print(f"generated blocks: {len(changed)} file(s) updated", file=sys.stderr, flush=True)
+    if names and not args.quick:  # into a reports folder: its tally and verdicts follow
+        note = refresh_reports_folder(args.out / names[0])
+        if note:
+            print(note, file=sys.stderr, flush=True)
     return 0
