@@ -1,6 +1,7 @@
 """A paper's verdict is computed from its claims: every deciding claim holds -> reproduced; only
-a reading's claims hold -> reproduced under that reading; the best-possible diagnostics hold ->
-impossible on the printed model; a claim id missing from the summary is an error naming it."""
+a reading's claims hold -> reproduced under that reading; a best-possible diagnostic fails (the
+paper's number is below the best possible) -> impossible on the printed model; a claim id
+missing from the summary is an error naming it."""
 
 import pytest
 
@@ -39,18 +40,18 @@ CENTRAL = Contribution(
         Reading("sigma = 1", refs("x2000-a", "gain_sigma1")),
         Reading("sigma = 2", refs("x2000-a", "gain_sigma2", "order_sigma2")),
     ),
-    best_possible=refs("x2000-a", "best_below_paper"),
+    best_possible=refs("x2000-a", "paper_not_below_best"),
 )
 
 
-def _summary(gain, order, s1, s2, o2, best):
+def _summary(gain, order, s1, s2, o2, impossible):
     return _claims(
         _claim("gain", gain, paper=2.34, ours=1.51),
         _claim("order", order),
         _claim("gain_sigma1", s1, kind="diagnostic"),
         _claim("gain_sigma2", s2, kind="diagnostic"),
         _claim("order_sigma2", o2, kind="diagnostic"),
-        _claim("best_below_paper", best, kind="diagnostic"),
+        _claim("paper_not_below_best", not impossible, kind="diagnostic"),
         _claim("other", False),
     )
 
@@ -69,7 +70,7 @@ def test_held_only_under_a_reading():
         "order",
         "gain_sigma2",
         "order_sigma2",
-        "best_below_paper",
+        "paper_not_below_best",
     ]
     # a reading holds only if all its claims hold
     assert judge(CENTRAL, _summary(False, True, False, True, False, False)).word == "not reproduced"

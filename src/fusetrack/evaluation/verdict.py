@@ -4,12 +4,12 @@ full-size reports (never typed by hand).
 A paper declares its central contributions (:class:`PaperVerdict`, one module per paper under
 ``fusetrack.experiments``); each names the claims that decide it as the paper prints it, the
 readings under which it may hold instead (a model detail the paper leaves open, with the claims
-that decide it under that reading) and the ``diagnostic`` claims that hold when the paper's number
-is out of reach of the best possible estimator on the printed model. :func:`judge` computes the
-verdict word from whether those claims hold:
+that decide it under that reading) and the best-possible ``diagnostic`` claims: "the paper's
+number is not below the best possible estimator on the printed model", which fail when it is.
+:func:`judge` computes the verdict word from whether those claims hold:
 
 * every deciding claim holds: ``reproduced``;
-* else the best-possible claims all hold: ``impossible on the printed model``;
+* else a best-possible claim fails: ``impossible on the printed model``;
 * else (or as well) every claim of a reading holds: ``reproduced under reading X``;
 * else ``not reproduced``.
 
@@ -62,7 +62,8 @@ class Reading:
 @dataclass(frozen=True)
 class Contribution:
     """A central contribution: a one-line ``statement``, the claims that decide it as printed,
-    the readings under which it may hold instead and the best-possible diagnostics."""
+    the readings under which it may hold instead and the best-possible diagnostics (each holds
+    while the paper's number is not below the best possible on the printed model)."""
 
     statement: str
     decided_by: tuple[ClaimRef, ...]
@@ -176,7 +177,7 @@ def judge(contribution: Contribution, claims: SummaryClaims) -> Judgement:
     if all(e.holds for e in printed):
         return Judgement(contribution, REPRODUCED, tuple(printed))
     held = next(((name, ev) for name, ev in readings if all(e.holds for e in ev)), None)
-    impossible = bool(best) and all(e.holds for e in best)
+    impossible = any(not e.holds for e in best)
     words = [IMPOSSIBLE] if impossible else []
     if held is not None:
         words.append(f"reproduced under reading {held[0]}")
