@@ -9,6 +9,9 @@ Nothing on the site is typed twice; at build time this hook
   ``fusetrack.cli.build_parser()``, and ``{{ experiments PREFIX }}`` into a table of the
   experiments whose names start with ``PREFIX``: title from the registry, the claims that hold
   from ``reports/NAME/summary.json``;
+* expands ``{{ verdicts PREFIX }}`` into the verdict on the central contributions of the paper
+  whose experiments start with ``PREFIX`` (``fusetrack/experiments/PREFIX/verdict.py``, judged
+  from ``reports/*/summary.json`` as in ``reports/README.md``);
 * expands ``{{ readme_code "HEADING" }}`` into the first code block under that heading of
   ``README.md`` (the commands are written once), and ``{{ figure NAME/FILE.png "caption" }}`` into
   that figure of ``reports/`` or, while the report is missing, a note saying how to make it;
@@ -67,6 +70,11 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str
     markdown = re.sub(
         r"\{\{ experiments ([\w-]+) \}\}",
         lambda m: experiments_table(m.group(1), page.file.src_uri),
+        markdown,
+    )
+    markdown = re.sub(
+        r"\{\{ verdicts ([\w-]+) \}\}",
+        lambda m: verdicts(m.group(1), page.file.src_uri),
         markdown,
     )
     markdown = re.sub(
@@ -220,6 +228,19 @@ def experiments_table(prefix: str, page_uri: str) -> str:
     if len(rows) == 2:
         raise ValueError(f"no experiment starts with {prefix!r}")
     return "\n".join(rows)
+
+
+def verdicts(prefix: str, page_uri: str) -> str:
+    """Markdown: the verdict on the central contributions of the paper ``prefix``."""
+    from fusetrack.experiments import paper_verdicts
+    from fusetrack.tools.report_verdicts import paper_block, summary_claims
+
+    up = "../" * page_uri.count("/")
+    found = [v for v in paper_verdicts() if v.prefix == prefix]
+    if not found:
+        raise ValueError(f"no paper verdict has the prefix {prefix!r}")
+    claims = summary_claims(ROOT / "reports")
+    return "\n".join(paper_block(found[0], claims, lambda n: f"{up}reports/{n}/report.md"))
 
 
 # --- API pages ---------------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """``fusetrack`` command line: ``list``, ``run NAME``, ``demo [--live]``, ``track``,
 ``make-sample``, ``track-video``, ``serve``, ``replay``, ``log check|recover``, ``reproduce
-[NAME ...|--all]`` and ``reports tally``; ``--version``, ``-v``/``-q`` (the ``logging`` level;
+[NAME ...|--all]`` and ``reports tally|verdicts``; ``--version``, ``-v``/``-q`` (the ``logging`` level;
 before or after any subcommand), ``run NAME --help`` (the experiment's own options). Progress
 goes to stderr (a bar on a terminal, plain lines elsewhere); colour only on a terminal and never
 with ``NO_COLOR``."""
@@ -299,6 +299,12 @@ def _dispatch(args: argparse.Namespace) -> int:
     )
     summary = run_experiment(ctx)
     _print_summary(summary, ctx.out_dir)
+    if not ctx.quick:  # a full-size run into reports/NAME: the tally and verdicts follow it
+        from .tools.report_tally import refresh_reports_folder
+
+        note = refresh_reports_folder(ctx.out_dir)
+        if note:
+            print(note, file=sys.stderr)
     return 0
 
 

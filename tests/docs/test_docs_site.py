@@ -86,3 +86,9 @@ def test_readme_commands_are_taken_from_the_readme():
     assert 'pip install -e ".[dev,docs]" && .venv/bin/python -m pytest -q' in code
     with pytest.raises(ValueError, match="no line"):
         _hooks().readme_code("## No such heading")
+
+
+def test_paper_pages_get_their_verdict():
+    text = _hooks().verdicts("nott2009", "papers/nott2009.md")
+    assert text.startswith("**Verdict on Nott 2009's central contributions**")
+    assert "[nott2009-simulation](../reports/nott2009-simulation/report.md) `H1-S1`" in text

@@ -15,7 +15,7 @@ from fusetrack.cli import main
 CASES = {
     "nott2009-simulation": (
         ["--runs", "1"],
-        {"H1-S1", "H2", "H3-S3-ca", "H4-S4-ca-mean", "H4-sweep", "H11", "H12-k5"},
+        {"H1-S1", "H2", "H3-S3-ca", "H4-S4-ca-mean", "H4-sweep", "H11", "H12-k5", "V4-H1"},
     ),
     "nott2009-radio-accuracy": (
         ["--runs", "4"],
@@ -23,7 +23,7 @@ CASES = {
     ),
     "nott2009-video": (
         ["--quick"],
-        {"H10-straight-head", "H8-recall", "H5", "H6", "speed-front-end"},
+        {"H10-straight-head", "H8-recall", "H5", "H6", "speed-front-end", "Ry-known", "V4-video"},
     ),
 }
 

@@ -78,6 +78,7 @@ def test_an_unknown_claim_id_is_an_error(tmp_path):
 
 
 def test_write_replaces_only_the_block(tmp_path, capsys):
+    """(A folder without any paper's report.md: no verdict block is written.)"""
     _summary(tmp_path / "zhai2007-mcmc", "zhai2007-mcmc", [{"id": "C15_order_N100", "holds": True}])
     readme = tmp_path / "README.md"
     readme.write_text("# Reports\n\nIntro.\n")

@@ -9,13 +9,16 @@ from .registry import (
     run_experiment,
     validate_options,
 )
+from .verdicts import PAPERS, paper_verdicts
 
 __all__ = [
+    "PAPERS",
     "REGISTRY",
     "ExperimentInfo",
     "claim_kinds",
     "describe",
     "options_model",
+    "paper_verdicts",
     "run_experiment",
     "validate_options",
 ]

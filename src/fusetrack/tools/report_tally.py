@@ -159,23 +159,59 @@ def readme_tally(readme: Path) -> str | None:
 
 
 def add_reports_parser(sub: Any) -> None:
-    """``fusetrack reports tally [--reports DIR] [--write]``."""
+    """``fusetrack reports tally|verdicts [--reports DIR] [--write]``."""
     reports = sub.add_parser("reports", help="work on the committed reports/ folder")
     what = reports.add_subparsers(dest="reports_command", required=True)
-    tally = what.add_parser(
-        "tally", help="tally of paper claims per paper and experiment, from reports/*/summary.json"
-    )
-    tally.add_argument("--reports", type=Path, default=Path("reports"), help="reports folder")
-    tally.add_argument(
-        "--write", action="store_true", help="write it into REPORTS/README.md (else print it)"
-    )
+    for name, text in (
+        ("tally", "tally of paper claims per paper and experiment, from reports/*/summary.json"),
+        ("verdicts", "each paper's verdict on its central contributions, from the summaries"),
+    ):
+        p = what.add_parser(name, help=text)
+        p.add_argument("--reports", type=Path, default=Path("reports"), help="reports folder")
+        p.add_argument(
+            "--write",
+            action="store_true",
+            help="write every generated block (the tally and the verdicts in REPORTS/README.md, "
+            "the verdict atop each paper's report.md) instead of printing",
+        )
+
+
+def write_generated(reports: Path) -> list[Path]:
+    """Write every generated block under ``reports``: the tally, then the verdicts; return the
+    files that changed."""
+    from .report_verdicts import write_verdicts
+
+    readme = reports / "README.md"
+    changed = [readme] if write_tally(readme, tally_markdown(reports)) else []
+    return list(dict.fromkeys([*changed, *write_verdicts(reports)]))
+
+
+def refresh_reports_folder(out_dir: Path) -> str | None:
+    """After a full-size run into ``REPORTS/NAME``: rewrite the generated blocks of ``REPORTS``
+    if it is a reports folder (its README.md has the tally's markers); a line saying what was
+    done, or ``None`` if ``out_dir`` is not in one. A verdict that no longer matches the reports
+    is reported, not raised: the run's own files are written."""
+    reports = out_dir.parent
+    readme = reports / "README.md"
+    if not readme.is_file() or BEGIN not in readme.read_text():
+        return None
+    try:
+        changed = write_generated(reports)
+    except ConfigError as err:
+        return f"{reports}: generated blocks NOT updated ({err}); fix and run `fusetrack reports tally --write`"
+    return f"{reports}: generated blocks updated in {len(changed)} file(s)"
 
 
 def run_reports_command(args: argparse.Namespace) -> int:
-    block = tally_markdown(args.reports)
     if args.write:
-        changed = write_tally(args.reports / "README.md", block)
-        print(f"{args.reports / 'README.md'}: tally {'updated' if changed else 'unchanged'}")
+        changed = write_generated(args.reports)
+        print(f"{args.reports}: {len(changed)} file(s) updated")
+        for path in changed:
+            print(f"  {path}")
+    elif args.reports_command == "tally":
+        print(tally_markdown(args.reports))
     else:
-        print(block)
+        from .report_verdicts import readme_block
+
+        print(readme_block(args.reports))
     return 0

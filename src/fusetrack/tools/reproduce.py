@@ -2,7 +2,8 @@
 
 Each experiment runs as ``fusetrack run NAME --seed 0 --out OUT/NAME`` with its default (the
 paper's) number of runs, one after the other, as the committed reports' headers show; a line on
-stderr says which one is running and how it ended.
+stderr says which one is running and how it ended. Into a reports folder (one with a
+README.md) it then rewrites the generated blocks (`fusetrack reports tally --write`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Any
 from ..core import ConfigError, invalid
 from ..evaluation import Claim, RunContext, verdict_line
 from ..experiments import REGISTRY, describe, run_experiment
+from .report_tally import refresh_reports_folder
 
 NOT_REPORTED = ("demo",)  # experiments with no folder under reports/
 
@@ -62,4 +64,8 @@ def run_reproduce_command(args: argparse.Namespace) -> int:
         print(
             f"[{i}/{len(names)}] {name}: {verdict} ({seconds:.0f} s)", file=sys.stderr, flush=True
         )
+    if names and not args.quick:  # into a reports folder: its tally and verdicts follow
+        note = refresh_reports_folder(args.out / names[0])
+        if note:
+            print(note, file=sys.stderr, flush=True)
     return 0

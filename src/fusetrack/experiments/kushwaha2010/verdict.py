@@ -1,0 +1,34 @@
+"""Kushwaha 2010's central contributions and the claims that decide them (the verdict word is
+computed from the committed reports: :mod:`fusetrack.evaluation.verdict`)."""
+
+from ...evaluation import Contribution, PaperVerdict, refs
+
+VERDICT = PaperVerdict(
+    "Kushwaha 2010",
+    "kushwaha2010",
+    (
+        Contribution(
+            "Ch. III: audio-video fusion (product rule) tracks vehicles better than audio or "
+            "video alone, with grid SBE and with MCMCDA",
+            (
+                *refs("kushwaha2010-sbe", "av_beats_each_modality"),
+                *refs("kushwaha2010-mcmcda", "av_lowest_error"),
+            ),
+        ),
+        Contribution(
+            "Ch. III: product fusion is more accurate than the quality-weighted sum",
+            (
+                *refs("kushwaha2010-sbe", "product_more_accurate"),
+                *refs("kushwaha2010-mcmcda", "product_lower_error"),
+            ),
+        ),
+        Contribution(
+            "Ch. V: the image-plane trackers (T3/T4) beat the 3-D kernel-density ones (T1/T2) on "
+            "large targets (setup A), the kernel-density ones win on small targets (setup B)",
+            (
+                *refs("kushwaha2010-cameras-a", "a_image_plane_beat_kernel"),
+                *refs("kushwaha2010-cameras-b", "b_kernel_best"),
+            ),
+        ),
+    ),
+)

@@ -1,0 +1,39 @@
+"""Lee 2009's central contributions and the claims that decide them (the verdict word is
+computed from the committed reports: :mod:`fusetrack.evaluation.verdict`)."""
+
+from ...evaluation import Contribution, PaperVerdict, refs
+
+VERDICT = PaperVerdict(
+    "Lee 2009",
+    "lee2009",
+    (
+        Contribution(
+            "Ch. 2: 3-D tracking from one acoustic DOA sensor on the two selected projected planes "
+            "(PPS) is at least as accurate as a direct 3-D particle filter, and its selected "
+            "planes weigh the measurements more",
+            refs("lee2009-projected-planes", "C5_pps_rmse_vs_3d", "C4_weight_sums"),
+        ),
+        Contribution(
+            "Ch. 3: cameras triggered by the acoustic trackers cut the error of no cooperation "
+            "with fewer camera uses than periodic cooperation of the same error",
+            refs("lee2009-camera-triggering", "C9_trigger_beats_none", "C9_fewer_camera_uses"),
+        ),
+        Contribution(
+            "Ch. 4: quality-weighted fusion of camera detections with a dynamic prior rejects the "
+            "false detection the unweighted rule accepts, and tolerates more spread with more "
+            "cameras",
+            refs(
+                "lee2009-detection-fusion",
+                "C12_decisions",
+                "C13_baseline_accepts_false",
+                "C14_falls_with_spread",
+                "C14_more_cameras_tolerate_more",
+            ),
+        ),
+        Contribution(
+            "Sec. 5.2.3: RFID virtual sensors refined by cameras beat the coarse RFID position, "
+            "with an accuracy roughly independent of the readers' layout",
+            refs("lee2009-rfid-camera", "C17_refined_beats_coarse", "C17_refined_flat"),
+        ),
+    ),
+)

@@ -1,0 +1,40 @@
+"""Zhai 2007's central contributions and the claims that decide them (the verdict word is
+computed from the committed reports: :mod:`fusetrack.evaluation.verdict`)."""
+
+from ...evaluation import Contribution, PaperVerdict, Reading, refs
+
+VERDICT = PaperVerdict(
+    "Zhai 2007",
+    "zhai2007",
+    (
+        Contribution(
+            "Ch. 3: the PF-SP-PEKF proposal beats the bootstrap filter (with ten times the "
+            "particles) and the EKF on the scalar benchmark (Tables 2-3)",
+            refs("zhai2007-scalar", "C1_order"),
+            readings=tuple(
+                Reading(name, refs("zhai2007-scalar", f"C1_order_variant_{name}"))
+                for name in ("z=x^2", "z=x^2/20", "sigma_v^2=100")
+            ),
+        ),
+        Contribution(
+            "Ch. 3: PF-SP-PEKF beats the bootstrap and the EKF in bearings-only tracking "
+            "(Figs 10-12)",
+            refs("zhai2007-bearings", "C4_order_E2", "C4_order_E3"),
+        ),
+        Contribution(
+            "Ch. 4: the Galerkin-projection PF with 200 particles beats the bootstrap with 2000 "
+            "(Table 9)",
+            refs("zhai2007-galerkin", "C12_beats_bs2000"),
+        ),
+        Contribution(
+            "Ch. 3: CPF-SP tracks on the acoustic sensor network with under a quarter of the "
+            "centralised bootstrap's error (Table 5)",
+            refs("zhai2007-sensor-network", "C5_cpfsp_vs_bootstrap"),
+        ),
+        Contribution(
+            "Ch. 6: MCMC moves (random-walk Metropolis) reduce the particle filter's error at "
+            "every particle count (Table 15)",
+            refs("zhai2007-mcmc", "C15_PF-RWM_beats_PF"),
+        ),
+    ),
+)
