@@ -539,10 +539,11 @@ def _plan(ctx: RunContext) -> _Plan:
     quick = ctx.quick
     n_part = 100 if quick else 500
     runs = ctx.n_runs(full=100, quick=2)
-    runs_variant = ctx.n_runs(full=40, quick=2)
+    runs_variant = ctx.n_runs(full=40, quick=1)
     variances = [0.0, 0.5, 1.5, 5.0]
     tv_grid = [1, 5, 20] if quick else [1, 2, 3, 4, 5, 6, 8, 10, 20, 50, 100]
-    tv_variant = [1, 5, 20] if quick else [1, 2, 4, 6, 8, 12, 20, 100]
+    tv_variant = [1, 20] if quick else [1, 2, 4, 6, 8, 12, 20, 100]
+    n_variant = 50 if quick else n_part
     tv_sweep = [1, 10, 100] if quick else SWEEP_PERIODS
     ablations = ["trigger without count", "trigger without gate", "trigger without ellipse"]
     if not quick:
@@ -551,15 +552,19 @@ def _plan(ctx: RunContext) -> _Plan:
     trials32 = ctx.n_runs(full=1000, quick=4) if ctx.runs is None else ctx.runs
     batches: list[dict[str, Any]] = []
     for sc, r, v in itertools.product(VELOCITIES_31, READINGS, variances):
-        n_trials = runs if r == DEFAULT_READING else runs_variant
-        batches += _batch_configs("E3.1", v, [0], n_trials, 50, n_part, scenario=sc, reading=r)
+        if r == DEFAULT_READING:
+            batches += _batch_configs("E3.1", v, [0], runs, 50, n_part, scenario=sc, reading=r)
+        elif v in (0.0, 5.0):  # the other readings: the two ends C7 compares
+            batches += _batch_configs(
+                "E3.1", v, [0], runs_variant, 50, n_variant, scenario=sc, reading=r
+            )
     batches += _batch_configs("E3.2", 5.0, tv_sweep, trials32, 10, n_part)
     configs = [
         {"part": "E3.4", "policy": p, "n_particles": n_part, "reading": DEFAULT_READING}
         for p in ["none", "trigger", *ablations] + [f"periodic {t}" for t in tv_grid]
     ]
     variant_configs = [
-        {"part": "E3.4", "policy": p, "n_particles": n_part, "reading": r}
+        {"part": "E3.4", "policy": p, "n_particles": n_variant, "reading": r}
         for r in READINGS
         if r != DEFAULT_READING
         for p in ["none", "trigger", *ablations[:3]] + [f"periodic {t}" for t in tv_variant]
