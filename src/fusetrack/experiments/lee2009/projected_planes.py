@@ -990,8 +990,8 @@ def _information_claim(bounds: Mapping[str, Mapping[str, np.ndarray]]) -> Claim:
         "fused-independent PPS bound is below the 3-D bound)",
         "selected-plane bounds below 3-D (C5)",
         {
-            "pair - 3-D": float(f"{pair_gap:.3g}"),
-            "min eig 3-D - plane": float(f"{single_min:.3g}"),
+            "pair - 3-D": round(pair_gap, 10) + 0.0,  # rounding-level: machine-independent
+            "min eig 3-D - plane": round(single_min, 10) + 0.0,
             "min eig 3-D - independent": round(indep_min, 4),
             "PPS bound below 3-D (of 450)": below,
         },
