@@ -12,12 +12,12 @@ SIGMA = math.sqrt(3.0) * math.pi / 180
 
 
 def _sensor() -> DoaSensor3D:
-    return DoaSensor3D((0.0, 0.0, 0.0), SIGMA)
+    return DoaSensor3D("A0", (0.0, 0.0, 0.0), SIGMA)
 
 
 def test_xy_plane_alone_is_the_azimuth_information_by_hand():
     # at (1, 0, 0): d theta / dp = (-y, x, 0) / r^2 = (0, 1, 0), so J_xy = diag(0, 1, 0) / sigma^2
-    J = angle_pair_information(np.array([1.0, 0.0, 0.0]), _sensor(), ("xy", "yz"))
+    J = angle_pair_information(np.array([1.0, 0.0, 0.0]), _sensor(), ("xy", "zx"))
     np.testing.assert_allclose(J["xy"], np.diag([0.0, 1.0, 0.0]) / SIGMA**2, atol=1e-6 / SIGMA**2)
 
 
