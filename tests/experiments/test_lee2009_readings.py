@@ -3,6 +3,7 @@
 import itertools
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from fusetrack.core import ConfigError
@@ -71,3 +72,34 @@ def test_fig_5_36_eq_540_ignores_the_reference_eq_539_does_not():
     assert rows[1]["refined (Eq. 5.40)"] == pytest.approx(rows[2]["refined (Eq. 5.40)"], rel=1e-9)
     assert rows[1]["refined (Eq. 5.39)"] > rows[2]["refined (Eq. 5.39)"]
     assert rows[1]["coarse"] > rows[2]["coarse"]
+
+
+def _e34_rows(periodic_slope: float) -> pd.DataFrame:
+    """Synthetic E3.4 rows: 5 paired runs, trigger 1 m every 10 steps, none 5 m, ablations 2 m,
+    periodic ``slope * T_v`` m (plus a little per-run noise)."""
+    rng = np.random.default_rng(0)
+    grid = [1, 2, 4, 8, 20]
+    rms = {"none": 5.0, "trigger": 1.0, **{a: 2.0 for a in ABLATIONS}}
+    rms |= {f"periodic {t}": periodic_slope * t for t in grid}
+    return pd.DataFrame(
+        [
+            {"run": run, "policy": p, "object": f"O{o}", "rms": v + 0.01 * rng.standard_normal(),
+             "tracked_steps": 200, "camera_updates": 20 if p == "trigger" else 0}
+            for run in range(5) for p, v in rms.items() for o in (1, 2, 3)
+        ]
+    )  # fmt: skip
+
+
+ABLATIONS = ["trigger without count", "trigger without gate", "trigger without ellipse"]
+
+
+@pytest.mark.parametrize(("slope", "cheaper"), [(0.2, True), (0.1, False)])
+def test_cheaper_than_periodic_compares_at_the_triggered_budget(slope, cheaper):
+    # triggered period 10 -> periodic T_v 8 (at least as many camera uses): 1.6 m or 0.8 m
+    claims, t = ct._table31_claims(_e34_rows(slope), [1, 2, 4, 8, 20], ABLATIONS, "_variant_x")
+    by_id = {c.id: c for c in claims}
+    assert t.tv_trig == pytest.approx(10.0)
+    c9 = by_id["C9_cheaper_than_periodic_variant_x"]
+    assert c9.ours["periodic T_v"] == 8 and c9.holds is cheaper
+    assert by_id["C9_trigger_beats_none_variant_x"].holds
+    assert by_id["C10_each_condition_helps_variant_x"].holds

@@ -462,6 +462,7 @@ class _Plan:
     batches: list[dict[str, Any]]
     configs: list[dict[str, Any]]
     room: list[dict[str, Any]]
+    readings: list[str]  # READINGS run (--quick: the default only)
     runs_variant: int  # runs of the E3.4 readings other than the default
     tv_variant: list[int]  # their periodic grid
     variant_configs: list[dict[str, Any]]
@@ -492,15 +493,16 @@ class _Room:
 def run(ctx: RunContext) -> Outcome:
     """E3.1-E3.5: plan, Monte Carlo, claims C7-C11, figures, report text."""
     plan = _plan(ctx)
-    df = pd.concat(
-        [
-            ctx.monte_carlo(run_batch, plan.batches, 1, desc="E3.1/E3.2 batches"),
-            ctx.monte_carlo(run_once, plan.configs, plan.runs),
-            ctx.monte_carlo(run_once, plan.variant_configs, plan.runs_variant, desc="readings"),
-            ctx.monte_carlo(run_once, plan.room, plan.runs35, desc="room"),
-        ],
-        ignore_index=True,
-    )
+    parts = [
+        ctx.monte_carlo(run_batch, plan.batches, 1, desc="E3.1/E3.2 batches"),
+        ctx.monte_carlo(run_once, plan.configs, plan.runs),
+        ctx.monte_carlo(run_once, plan.room, plan.runs35, desc="room"),
+    ]
+    if plan.readings != [DEFAULT_READING]:
+        parts.append(
+            ctx.monte_carlo(run_once, plan.variant_configs, plan.runs_variant, desc="readings")
+        )
+    df = pd.concat(parts, ignore_index=True)
     claims: list[Claim] = []
     obj = df[df["object"].isin(["O1", "O2", "O3"]) & df["rms"].notna()]
     c7s, e31s = _noise_claims(obj[obj.part == "E3.1"])
@@ -509,7 +511,7 @@ def run(ctx: RunContext) -> Outcome:
     claims.append(c8)
     e34 = obj[obj.part == "E3.4"]
     t31s: dict[str, _Table31] = {}
-    for name in READINGS:
+    for name in plan.readings:
         grid = plan.tv_grid if name == DEFAULT_READING else plan.tv_variant
         t31_claims, t31s[name] = _table31_claims(
             e34[e34.reading == name], grid, plan.ablations, _suffix(name)
@@ -527,7 +529,7 @@ def run(ctx: RunContext) -> Outcome:
     e31 = e31s[("spec", DEFAULT_READING)]
     figs = _figures(ctx, e31, t31, room)
     body = _report_text(plan, e31, e32_body, t31, fired, room, figs)
-    body += _readings_text(plan, claims, e31s, t31s)
+    body += _readings_text(plan, claims, e31s, t31s) if len(plan.readings) > 1 else ""
     return Outcome(df, claims, body, plan.runs)
 
 
@@ -543,10 +545,10 @@ def _plan(ctx: RunContext) -> _Plan:
     n_part = 100 if quick else 500
     runs = ctx.n_runs(full=100, quick=2)
     runs_variant = ctx.n_runs(full=40, quick=1)
+    readings = [DEFAULT_READING] if quick else list(READINGS)  # --quick: keep it cheap
     variances = [0.0, 0.5, 1.5, 5.0]
     tv_grid = [1, 5, 20] if quick else [1, 2, 3, 4, 5, 6, 8, 10, 20, 50, 100]
-    tv_variant = [1, 20] if quick else [1, 2, 4, 6, 8, 12, 20, 100]
-    n_variant = 50 if quick else n_part
+    tv_variant = [1, 2, 4, 6, 8, 12, 20, 100]
     tv_sweep = [1, 10, 100] if quick else SWEEP_PERIODS
     ablations = ["trigger without count", "trigger without gate", "trigger without ellipse"]
     if not quick:
@@ -554,12 +556,12 @@ def _plan(ctx: RunContext) -> _Plan:
     # E3.1 / E3.2 as batches (chunks of trials; every chunk runs all its periods at once)
     trials32 = ctx.n_runs(full=1000, quick=4) if ctx.runs is None else ctx.runs
     batches: list[dict[str, Any]] = []
-    for sc, r, v in itertools.product(VELOCITIES_31, READINGS, variances):
+    for sc, r, v in itertools.product(VELOCITIES_31, readings, variances):
         if r == DEFAULT_READING:
             batches += _batch_configs("E3.1", v, [0], runs, 50, n_part, scenario=sc, reading=r)
         elif v in (0.0, 5.0):  # the other readings: the two ends C7 compares
             batches += _batch_configs(
-                "E3.1", v, [0], runs_variant, 50, n_variant, scenario=sc, reading=r
+                "E3.1", v, [0], runs_variant, 50, n_part, scenario=sc, reading=r
             )
     batches += _batch_configs("E3.2", 5.0, tv_sweep, trials32, 10, n_part)
     configs = [
@@ -567,8 +569,8 @@ def _plan(ctx: RunContext) -> _Plan:
         for p in ["none", "trigger", *ablations] + [f"periodic {t}" for t in tv_grid]
     ]
     variant_configs = [
-        {"part": "E3.4", "policy": p, "n_particles": n_variant, "reading": r}
-        for r in READINGS
+        {"part": "E3.4", "policy": p, "n_particles": n_part, "reading": r}
+        for r in readings
         if r != DEFAULT_READING
         for p in ["none", "trigger", *ablations[:3]] + [f"periodic {t}" for t in tv_variant]
     ]
@@ -581,7 +583,7 @@ def _plan(ctx: RunContext) -> _Plan:
     ]
     return _Plan(
         n_part, runs, tv_grid, tv_sweep, ablations, n35, runs35, batches, configs, room,
-        runs_variant, tv_variant, variant_configs,
+        readings, runs_variant, tv_variant, variant_configs,
     )  # fmt: skip
 
 
