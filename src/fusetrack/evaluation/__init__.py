@@ -47,7 +47,7 @@ from .multi_target_metrics import (
     siap,
 )
 from .options import ExperimentOptions, describe_options, load_yaml, parse_options
-from .projected_planes_crlb import direct3d_crlb, fused_bound, plane_crlb
+from .projected_planes_crlb import angle_pair_information, direct3d_crlb, fused_bound, plane_crlb
 from .report import (
     KINDS,
     Claim,
@@ -93,6 +93,7 @@ __all__ = [
     "RunContext",
     "SiapResult",
     "SummaryClaims",
+    "angle_pair_information",
     "average",
     "axis_bounds",
     "check_kind",

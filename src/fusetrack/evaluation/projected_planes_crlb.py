@@ -26,13 +26,20 @@ propagates), Lee 2009 Figs. 2-10 ... 2-13.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ..core import ConfigError, ShapeError, invalid
 from ..motion import AccelTurn
-from ..sensors import PLANE_AXES, PLANES, DoaSensor3D, projected_variance
+from ..sensors import (
+    PLANE_AXES,
+    PLANES,
+    DoaSensor3D,
+    direction_angles,
+    projected_angles,
+    projected_variance,
+)
 
 Array = np.ndarray
 
@@ -193,3 +200,41 @@ def axis_bounds_from_planes(plane_bounds: dict[str, Array]) -> dict[str, dict[st
 def fused_bound(a: Array, b: Array) -> Array:
     """``1 / sqrt(1/a^2 + 1/b^2)``: two independent estimates of a shared coordinate combined."""
     return 1.0 / np.sqrt(1.0 / np.square(a) + 1.0 / np.square(b))
+
+
+def _angle_jacobian(fn: Callable[[Array], Array], x: Array, eps: float = 1e-6) -> Array:
+    """Central differences of ``fn: (n,) -> (m,)`` angles, differences wrapped to ``(-pi, pi]``."""
+    cols = []
+    for j in range(len(x)):
+        h = np.zeros(len(x))
+        h[j] = eps * max(1.0, abs(x[j]))
+        d = np.asarray(fn(x + h)) - np.asarray(fn(x - h))
+        cols.append((np.mod(d + np.pi, 2 * np.pi) - np.pi) / (2 * h[j]))
+    return np.stack(cols, axis=-1)
+
+
+def angle_pair_information(
+    position: Array, sensor: DoaSensor3D, planes: tuple[str, str]
+) -> dict[str, Array]:
+    """Fisher information ``(3, 3)`` about a (local-frame) position carried by one angle pair.
+
+    Lee 2009's PPS bearings are functions of the same measured ``(theta, phi)``: with
+    ``G = d(theta_p1, theta_p2)/d(theta, phi)`` and ``H = d(theta, phi)/dp``, the planes' noise
+    is ``G R G^T`` (correlated), so their joint information ``H^T G^T (G R G^T)^-1 G H`` equals
+    the 3-D pair's ``H^T R^-1 H`` when ``G`` is invertible, and any one plane carries less
+    (data-processing inequality). Summing the planes as if independent (each with its own
+    marginal variance, as a per-plane bound fused on the shared axis does) can exceed the 3-D
+    information: the bound it gives is not a bound for PPS. Keys ``"3-D"``, ``"pair"`` (joint,
+    correlated), ``"independent"`` (the planes' sum) and each plane's name.
+    """
+    local = sensor.local(np.asarray(position, float))
+    R = sensor.sigma**2 * np.eye(2)
+    H = _angle_jacobian(lambda p: np.array(direction_angles(p)), local)  # (2, 3)
+    tp = np.array(direction_angles(local))
+    idx = [PLANES.index(p) for p in planes]
+    G = _angle_jacobian(lambda a: projected_angles(a[0], a[1])[idx], tp)  # (2, 2)
+    Hp, Rp = G @ H, G @ R @ G.T
+    out = {"3-D": H.T @ np.linalg.solve(R, H), "pair": Hp.T @ np.linalg.solve(Rp, Hp)}
+    singles = {p: np.outer(Hp[i], Hp[i]) / Rp[i, i] for i, p in enumerate(planes)}
+    out["independent"] = sum(singles.values(), np.zeros((3, 3)))
+    return out | singles

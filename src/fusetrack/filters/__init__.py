@@ -47,6 +47,7 @@ from .kalman import UnscentedKalmanFilter as UnscentedKalmanFilter
 from .mcmc_moves import IndependenceMove as IndependenceMove
 from .mcmc_moves import MHPriorMove as MHPriorMove
 from .mcmc_moves import RandomWalkMove as RandomWalkMove
+from .multi_model_pf import MULTI_MODEL_ESTIMATORS as MULTI_MODEL_ESTIMATORS
 from .multi_model_pf import MultiModelBearingPF as MultiModelBearingPF
 from .multi_model_pf import MultiModelBelief as MultiModelBelief
 from .multi_model_pf import resample_l as resample_l

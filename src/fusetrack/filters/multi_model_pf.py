@@ -46,6 +46,7 @@ from .multi_model_kernel import kernel_bank, predict_weigh_kernel
 Array = np.ndarray
 
 ESTIMATORS = ("consistent", "literal")
+MULTI_MODEL_ESTIMATORS = ESTIMATORS  # the public name (fusetrack.filters)
 ENGINES = ("numba", "numpy")
 
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..core import ConfigError, Measurement, invalid
 from ..filters import (
+    MULTI_MODEL_ESTIMATORS,
     MultiModelBearingPF,
     MultiModelBelief,
     resample_l,
@@ -110,7 +111,9 @@ class AcousticTracker:
     ``sigma_r`` the std of a camera fix; ``dz_critical`` the separation below which two bearings
     merge (Eq. 3.4); ``known_initial_velocity``: filters started at step 0 or by an oracle birth
     begin at the true velocity (the text's "initial state given"), camera-started ones never;
-    ``engine`` "numba": the fused kernel, "numpy": the reference (same draws, equal to rounding).
+    ``engine`` "numba": the fused kernel, "numpy": the reference (same draws, equal to rounding);
+    ``estimator`` "consistent" (convex JPDA average) or "literal" (the printed chain (3.7)-(3.11),
+    :class:`MultiModelBearingPF`).
     """
 
     models: tuple
@@ -122,16 +125,22 @@ class AcousticTracker:
     init_velocity_std: float = 0.3
     known_initial_velocity: bool = False
     engine: str = "numba"
+    estimator: str = "consistent"
 
     def __post_init__(self) -> None:
         if self.engine not in ("numba", "numpy"):
             raise ConfigError(invalid("engine", self.engine, "'numba' or 'numpy'"))
+        if self.estimator not in MULTI_MODEL_ESTIMATORS:
+            raise ConfigError(
+                invalid("estimator", self.estimator, f"one of {MULTI_MODEL_ESTIMATORS}")
+            )
 
     def build(self, sensor: tuple[float, float], sigma: float) -> MultiModelBearingPF:
         """The filter for a sensor at ``sensor`` whose bearings have std ``sigma``."""
         return MultiModelBearingPF(
-            self.models, sensor, self.sigma_filter or sigma, self.n_particles, engine=self.engine
-        )
+            self.models, sensor, self.sigma_filter or sigma, self.n_particles,
+            estimator=self.estimator, engine=self.engine,
+        )  # fmt: skip
 
     @property
     def start_std(self) -> Array:

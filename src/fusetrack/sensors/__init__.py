@@ -31,8 +31,10 @@ from .doa_projection import (
     PLANES,
     DoaSensor3D,
     check_angles,
+    direction_angles,
     literal_second_plane,
     monte_carlo_projected_variance,
+    projected_angles,
     projected_variance,
 )
 from .ellipsoid_camera import (
@@ -108,6 +110,7 @@ __all__ = [
     "colour_log_likelihood",
     "default_camera",
     "detection_quality",
+    "direction_angles",
     "ellipsoid_matrix",
     "ground_homography",
     "intersect_rays",
@@ -121,6 +124,7 @@ __all__ = [
     "normalize_likelihood",
     "plane_homography",
     "project_ellipsoid",
+    "projected_angles",
     "projected_variance",
     "quaternion_multiply",
     "quaternion_to_rotation",
