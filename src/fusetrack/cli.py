@@ -300,7 +300,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     summary = run_experiment(ctx)
     _print_summary(summary, ctx.out_dir)
     if not ctx.quick:  # a full-size run into reports/NAME: the tally and verdicts follow it
-        from .tools.report_tally import refresh_reports_folder
+        from .tools import refresh_reports_folder
 
         note = refresh_reports_folder(ctx.out_dir)
         if note:

@@ -63,6 +63,7 @@ def test_point_mass_unscented_proposal_is_stone_soups_kalman_proposal() -> None:
 
 
 def test_a_tiny_run_times_every_library_and_checks_agreement(capsys, tmp_path: Path) -> None:
+    pytest.importorskip("particles")  # the bench extra (.ci/run installs dev and docs only)
     out = tmp_path / "filter_peers.json"
     argv = ["--N", "40", "--steps", "2", "--repeats", "2", "--json", "--out", str(out)]
     assert filter_peers.main(argv) == 0

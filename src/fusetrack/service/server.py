@@ -5,6 +5,7 @@ MQTT bridge when the config has an ``mqtt`` section, :mod:`.mqtt`)."""
 from __future__ import annotations
 
 import logging
+import signal
 import socket
 import ssl
 import sys
@@ -127,6 +128,19 @@ class RunningNode:
         self.stop()
 
 
+class _ForegroundServer(uvicorn.Server):
+    """uvicorn's server remembering a Ctrl-C: uvicorn re-raises the captured SIGINT after its
+    graceful shutdown, but inside asyncio's runner that can end as a normal return (a race with
+    the main task finishing), and the CLI would exit 0 instead of 128 + SIGINT."""
+
+    interrupted = False
+
+    def handle_exit(self, sig: int, frame: Any) -> None:
+        if sig == signal.SIGINT:
+            self.interrupted = True
+        super().handle_exit(sig, frame)
+
+
 def serve(
     cfg: NetworkConfig,
     host: str = "127.0.0.1",
@@ -157,9 +171,11 @@ def serve(
         )
     if node.resumed_ticks and node.log is not None:
         log.info("fusion node: resumed %d ticks from %s", node.resumed_ticks, node.log.path)
-    server = uvicorn.Server(uvicorn.Config(app, **uvicorn_options(node), **tls))
+    server = _ForegroundServer(uvicorn.Config(app, **uvicorn_options(node), **tls))
     try:
         server.run(sockets=[http])
     finally:
         if node.log is not None:
             node.log.close()
+    if server.interrupted:  # stopped by Ctrl-C: the CLI's one-line note and exit code 130
+        raise KeyboardInterrupt

@@ -2,7 +2,12 @@
 ``make-sample``), regenerate the full-size reports (``fusetrack reproduce``) and tally their
 claims (``fusetrack reports tally``)."""
 
-from .report_tally import add_reports_parser, run_reports_command, tally_markdown
+from .report_tally import (
+    add_reports_parser,
+    refresh_reports_folder,
+    run_reports_command,
+    tally_markdown,
+)
 from .reproduce import add_reproduce_parser, run_reproduce_command
 from .sample import add_make_sample_parser, make_sample, run_make_sample_command
 from .scene import Scene, load_scene
@@ -25,6 +30,7 @@ __all__ = [
     "add_track_video_parser",
     "load_scene",
     "make_sample",
+    "refresh_reports_folder",
     "run_make_sample_command",
     "run_reports_command",
     "run_reproduce_command",
