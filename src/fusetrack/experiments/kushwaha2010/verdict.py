@@ -1,7 +1,7 @@
 """Kushwaha 2010's central contributions and the claims that decide them (the verdict word is
 computed from the committed reports: :mod:`fusetrack.evaluation.verdict`)."""
 
-from ...evaluation import Contribution, PaperVerdict, refs
+from ...evaluation import Contribution, PaperVerdict, Reading, refs
 
 VERDICT = PaperVerdict(
     "Kushwaha 2010",
@@ -28,6 +28,24 @@ VERDICT = PaperVerdict(
             (
                 *refs("kushwaha2010-cameras-a", "a_image_plane_beat_kernel"),
                 *refs("kushwaha2010-cameras-b", "b_kernel_best"),
+            ),
+            readings=(
+                Reading(
+                    "one scene swept over the target's pixel area (H19: where T2 and T3 cross)",
+                    refs(
+                        "kushwaha2010-cameras-area",
+                        "area_t3_better_large",
+                        "area_t2_better_small",
+                        "area_crossover_near_1pct",
+                    ),
+                ),
+                Reading(
+                    "medians of paired per-run differences (one diverged run decides a mean)",
+                    (
+                        *refs("kushwaha2010-cameras-a", "a_image_plane_beat_kernel"),
+                        *refs("kushwaha2010-cameras-b", "b_kernel_best_median"),
+                    ),
+                ),
             ),
         ),
     ),

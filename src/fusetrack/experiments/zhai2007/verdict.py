@@ -15,6 +15,17 @@ VERDICT = PaperVerdict(
                 Reading(name, refs("zhai2007-scalar", f"C1_order_variant_{name}"))
                 for name in ("z=x^2", "z=x^2/20", "sigma_v^2=100")
             ),
+            best_possible=refs(
+                "zhai2007-scalar",
+                *(
+                    f"BP_{test}_{method}"
+                    for test, methods in (
+                        ("possible", ("EKF", "BS200", "BS1000", "BS2000", "PF-SP-PEKF")),
+                        ("converged", ("BS200", "BS1000", "BS2000")),
+                    )
+                    for method in methods
+                ),
+            ),
         ),
         Contribution(
             "Ch. 3: PF-SP-PEKF beats the bootstrap and the EKF in bearings-only tracking "
@@ -35,6 +46,7 @@ VERDICT = PaperVerdict(
             "Ch. 6: MCMC moves (random-walk Metropolis) reduce the particle filter's error at "
             "every particle count (Table 15)",
             refs("zhai2007-mcmc", "C15_PF-RWM_beats_PF"),
+            best_possible=refs("zhai2007-mcmc", "BP_possible_table15"),
         ),
     ),
 )
