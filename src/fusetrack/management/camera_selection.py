@@ -68,6 +68,39 @@ class SelectionMoments:
         return len(self.p_visible)
 
 
+def _gaussian_occlusion(
+    cameras: CameraArray,
+    x: Array,
+    occluders: OccluderPriors | ArrayLike | None,
+    diameter: float,
+    exclusion: float,
+) -> Array:
+    """``q`` ``(N, L, M)``: each occluder prior's probability of hiding each particle from each
+    camera (Gaussian priors only)."""
+    if not isinstance(occluders, OccluderPriors):
+        raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
+    return occlusion_probability(cameras.positions, x, occluders, diameter, exclusion)
+
+
+def _certain_visibility(
+    cameras: CameraArray,
+    x: Array,
+    occluders: OccluderPriors | ArrayLike | None,
+    diameter: float,
+    prior_mode: str,
+    assigned: NDArray[np.bool_],
+) -> NDArray[np.bool_]:
+    """Visibility ``(L, N)`` under the extreme priors: occluders exactly at their means
+    (``"perfect"``) or ignored (``"none"``)."""
+    if prior_mode == "perfect":
+        centres = occluders.mean if isinstance(occluders, OccluderPriors) else occluders
+        centres = np.zeros((0, 2)) if centres is None else np.asarray(centres, float).reshape(-1, 2)
+        return assigned & ~disks_block(cameras.positions, x, centres, diameter)
+    if prior_mode == "none":
+        return assigned
+    raise ConfigError(invalid("prior_mode", prior_mode, "'gaussian', 'perfect' or 'none'"))
+
+
 def visibility_probabilities(
     cameras: CameraArray,
     room: Room,
@@ -88,19 +121,10 @@ def visibility_probabilities(
     """
     assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
     if prior_mode == "gaussian":
-        if not isinstance(occluders, OccluderPriors):
-            raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
-        q = occlusion_probability(cameras.positions, x, occluders, diameter, exclusion)  # (N, L, M)
+        q = _gaussian_occlusion(cameras, x, occluders, diameter, exclusion)  # (N, L, M)
         p1, p2 = pair_visibility_kernel(q, np.ascontiguousarray(assigned), np.ascontiguousarray(w))
         return p1, p2
-    if prior_mode == "perfect":
-        centres = occluders.mean if isinstance(occluders, OccluderPriors) else occluders
-        centres = np.zeros((0, 2)) if centres is None else np.asarray(centres, float).reshape(-1, 2)
-        vis = assigned & ~disks_block(cameras.positions, x, centres, diameter)
-    elif prior_mode == "none":
-        vis = assigned
-    else:
-        raise ConfigError(invalid("prior_mode", prior_mode, "'gaussian', 'perfect' or 'none'"))
+    vis = _certain_visibility(cameras, x, occluders, diameter, prior_mode, assigned)
     vw = vis * w[None, :]
     return vw.sum(axis=1), vw @ vis.T.astype(float)
 
@@ -119,9 +143,7 @@ def visibility_per_particle(
     {i, j}, factors clamped at 0; deterministic for the extreme priors)."""
     assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
     if prior_mode == "gaussian":
-        if not isinstance(occluders, OccluderPriors):
-            raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
-        q = occlusion_probability(cameras.positions, x, occluders, diameter, exclusion)  # (N, L, M)
+        q = _gaussian_occlusion(cameras, x, occluders, diameter, exclusion)  # (N, L, M)
         p1 = assigned * np.prod(np.clip(1.0 - q, 0.0, None), axis=-1)
         both = assigned[:, None, :] & assigned[None, :, :]
         pair = np.prod(np.clip(1.0 - q[:, None] - q[None, :], 0.0, None), axis=-1)
@@ -129,14 +151,7 @@ def visibility_per_particle(
         diag = np.arange(len(p1))
         p2[diag, diag] = p1
         return p1, p2
-    if prior_mode == "perfect":
-        centres = occluders.mean if isinstance(occluders, OccluderPriors) else occluders
-        centres = np.zeros((0, 2)) if centres is None else np.asarray(centres, float).reshape(-1, 2)
-        vis = assigned & ~disks_block(cameras.positions, x, centres, diameter)
-    elif prior_mode == "none":
-        vis = assigned
-    else:
-        raise ConfigError(invalid("prior_mode", prior_mode, "'gaussian', 'perfect' or 'none'"))
+    vis = _certain_visibility(cameras, x, occluders, diameter, prior_mode, assigned)
     v = vis.astype(float)
     return v, v[:, None, :] * v[None, :, :]
 
