@@ -315,44 +315,43 @@ def _sensitivity_claims(t: pd.DataFrame) -> list[Claim]:
             "(the paper gives no band, A-III-2)",
         ),
     ):
-        lowers = {v: _gap(t, ("base", v), (cond, v)) for v in ("AS", "AP")}
-        a_beats_v = {r: _gap(t, (cond, f"V{r}"), (cond, f"A{r}")) for r in ("S", "P")}
-        av_sum = {m: _gap(t, (cond, m), (cond, "AVCS")) for m in ("AS", "VS")}
-        claims += [
-            CLAIM_KINDS.claim(
-                f"{label}_lowers_audio_error",
-                f"with {what}, the audio-only error falls (sum and product)",
+        lowers = {f"{v}: base - {cond}": _gap(t, ("base", v), (cond, v)) for v in ("AS", "AP")}
+        a_beats_v = {f"V{r} - A{r}": _gap(t, (cond, f"V{r}"), (cond, f"A{r}")) for r in "SP"}
+        av_sum = {f"{m} - AVCS": _gap(t, (cond, m), (cond, "AVCS")) for m in ("AS", "VS")}
+        both_rules = "95% paired t-intervals over runs above 0, both rules"
+        for suffix, statement, paper, gaps, tolerance in (
+            (
+                "lowers_audio_error",
+                "the audio-only error falls (sum and product)",
                 why,
-                {
-                    f"{v}: base - {cond} (mean, 95% half-width)": interval_values(g)
-                    for v, g in lowers.items()
-                },
-                "95% paired t-intervals over runs above 0, both rules",
-                all(shown_positive(g) for g in lowers.values()),
+                lowers,
+                both_rules,
             ),
-            CLAIM_KINDS.claim(
-                f"{label}_audio_beats_video",
-                f"with {what}, audio-only is more accurate than video-only (H4)",
+            (
+                "audio_beats_video",
+                "audio-only is more accurate than video-only (H4)",
                 "A < V ('consistently lower', Fig. 17)",
-                {
-                    f"V{r} - A{r} (mean, 95% half-width)": interval_values(g)
-                    for r, g in a_beats_v.items()
-                },
-                "95% paired t-intervals over runs above 0, both rules",
-                all(shown_positive(g) for g in a_beats_v.values()),
+                a_beats_v,
+                both_rules,
             ),
-            CLAIM_KINDS.claim(
-                f"{label}_av_sum_beats_each",
-                f"with {what}, AV centralized weighted sum beats AS and VS (H1)",
+            (
+                "av_sum_beats_each",
+                "AV centralized weighted sum beats AS and VS (H1)",
                 "AV < A and AV < V",
-                {
-                    f"{m} - AVCS (mean, 95% half-width)": interval_values(g)
-                    for m, g in av_sum.items()
-                },
+                av_sum,
                 "95% paired t-intervals over runs above 0",
-                all(shown_positive(g) for g in av_sum.values()),
             ),
-        ]
+        ):
+            claims.append(
+                CLAIM_KINDS.claim(
+                    f"{label}_{suffix}",
+                    f"with {what}, {statement}",
+                    paper,
+                    {f"{k} (mean, 95% half-width)": interval_values(g) for k, g in gaps.items()},
+                    tolerance,
+                    all(shown_positive(g) for g in gaps.values()),
+                )
+            )
     return claims
 
 
