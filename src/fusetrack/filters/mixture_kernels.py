@@ -266,7 +266,8 @@ def em_fit_reference(
     mix = np.full(len(means), 1.0 / len(means))
     last = -np.inf
     for _ in range(iterations):
-        prec, logdet = np.linalg.inv(covs), np.linalg.slogdet(covs)[1]
+        prec = np.asarray(np.linalg.inv(covs), dtype=np.float64)
+        logdet = np.linalg.slogdet(covs)[1]
         terms = component_log_terms_reference(x, means, prec, logdet, np.log(mix))
         loglik, r = em_responsibilities_reference(terms, w)
         if loglik - last < 1e-4:
