@@ -7,11 +7,14 @@ from fusetrack.sensors.ellipsoid_camera import (
     EllipsoidCamera,
     axis_angle_quaternion,
     ellipse_area,
+    ellipsoid_matrix,
     intersect_rays,
     look_at,
+    project_ellipsoid,
     quaternion_multiply,
     quaternion_to_rotation,
     rotation_to_quaternion,
+    shape_matrix,
 )
 from fusetrack.world.ellipsoid_scene import EllipsoidTarget, render_target
 
@@ -85,3 +88,32 @@ def test_rays_through_projections_meet_at_the_point():
     rays = np.array([c.ray(c.project(x)) for c in cams])
     est = intersect_rays(np.array([c.centre for c in cams]), rays)
     np.testing.assert_allclose(est, x, atol=1e-9)
+
+
+def test_one_shape_for_many_centres_equals_the_shape_repeated_per_centre():
+    # the shared-shape path inverts M once; the per-centre path inverts each copy: same bits
+    cam = _camera()
+    rng = np.random.default_rng(7)
+    x = np.array([0.0, 0.0, 1.0]) + 0.3 * rng.normal(size=(50, 3))
+    q = axis_angle_quaternion([0.3, -1.0, 0.5], 0.8)
+    M = ellipsoid_matrix((0.3, 0.2, 0.5), q)
+    yc, B = project_ellipsoid(cam.P, x, M)
+    yc_ref, B_ref = project_ellipsoid(cam.P, x, np.repeat(M[None], 50, axis=0))
+    np.testing.assert_array_equal(yc, yc_ref)
+    np.testing.assert_array_equal(B, B_ref)
+    yc_cam, B_cam = cam.ellipse(x, q, (0.3, 0.2, 0.5))
+    np.testing.assert_array_equal(yc_cam, yc_ref)
+    np.testing.assert_array_equal(B_cam, B_ref)
+
+
+def test_remembered_shape_matrix_equals_a_fresh_one_and_is_read_only():
+    q = axis_angle_quaternion([1.0, 2.0, 0.5], 0.4)
+    first = shape_matrix((0.3, 0.2, 0.5), q)
+    again = shape_matrix(np.array([0.3, 0.2, 0.5]), q.copy())
+    assert again is first
+    np.testing.assert_array_equal(first, ellipsoid_matrix((0.3, 0.2, 0.5), q))
+    assert not first.flags.writeable
+    other = shape_matrix((0.3, 0.2, 0.5), axis_angle_quaternion([1.0, 2.0, 0.5], 0.41))
+    assert not np.array_equal(other, first)
+    qs = np.stack([q, q])  # several orientations are not remembered, only computed
+    np.testing.assert_array_equal(shape_matrix((0.3, 0.2, 0.5), qs)[1], first)

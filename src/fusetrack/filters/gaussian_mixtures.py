@@ -18,18 +18,16 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import logsumexp
 
 from ..core import ConfigError, GaussianMixture, invalid
+from .mixture_kernels import (
+    component_log_terms,
+    em_fit,
+    kde_log_density,
+    log_sum_exp_rows,
+)
 
 Array = NDArray[np.float64]
 
 MIN_VAR = 1e-8  # eigenvalue floor of every covariance (m^2 or px^2)
-
-
-def _lse(a: Array, axis: int) -> Array:
-    """Log-sum-exp over ``axis`` (a lean version of SciPy's for the EM inner loop)."""
-    m = np.max(a, axis=axis, keepdims=True)
-    m = np.where(np.isfinite(m), m, 0.0)
-    with np.errstate(divide="ignore"):
-        return np.log(np.sum(np.exp(a - m), axis=axis)) + np.squeeze(m, axis=axis)
 
 
 def floor_covariances(covs: ArrayLike, min_var: float = MIN_VAR) -> Array:
@@ -37,29 +35,28 @@ def floor_covariances(covs: ArrayLike, min_var: float = MIN_VAR) -> Array:
     c = np.asarray(covs, float)
     c = 0.5 * (c + np.swapaxes(c, -1, -2))
     vals, vecs = np.linalg.eigh(c)
-    vals = np.maximum(np.nan_to_num(vals, nan=min_var), min_var)
+    vals = np.fmax(vals, min_var)  # NaN -> min_var
     return np.einsum("...ij,...j,...kj->...ik", vecs, vals, vecs)
 
 
 def component_logpdf(x: ArrayLike, means: ArrayLike, covs: ArrayLike) -> Array:
     """``log N(x_n | mu_k, S_k)`` as ``(N, K)`` for points ``(N, d)`` and ``K`` components."""
     x = np.asarray(x, float)
-    mu = np.asarray(means, float)
     c = np.asarray(covs, float)
-    inv = np.linalg.inv(c)
+    prec = np.linalg.inv(c)
     logdet = np.linalg.slogdet(c)[1]
-    d = x.shape[-1]
-    # (x - mu)^T S^-1 (x - mu) = x^T S^-1 x - 2 mu^T S^-1 x + mu^T S^-1 mu, one GEMM per term
-    xx = np.einsum("ni,nj->nij", x, x).reshape(len(x), d * d) @ inv.reshape(len(mu), d * d).T
-    im = np.einsum("kij,kj->ki", inv, mu)
-    maha = xx - 2 * x @ im.T + np.einsum("ki,ki->k", mu, im)
-    return -0.5 * (np.maximum(maha, 0.0) + logdet + d * np.log(2 * np.pi))
+    return component_log_terms(x, np.asarray(means, float), prec, logdet, np.zeros(len(c)))
 
 
 def mixture_logpdf(gm: GaussianMixture, x: ArrayLike) -> Array:
     """``log sum_k w_k N(x | mu_k, S_k)`` for points ``(N, d)``."""
+    c = np.asarray(gm.covs, float)
     with np.errstate(divide="ignore"):
-        return _lse(component_logpdf(x, gm.means, gm.covs) + np.log(gm.weights), axis=1)
+        log_w = np.log(gm.weights)
+    terms = component_log_terms(
+        np.asarray(x, float), gm.means, np.linalg.inv(c), np.linalg.slogdet(c)[1], log_w
+    )
+    return log_sum_exp_rows(terms)
 
 
 def weighted_em(
@@ -89,26 +86,7 @@ def weighted_em(
     k = len(means)
     spread = np.cov(x.T, aweights=w) if n > 1 else np.eye(d)
     covs = np.repeat(floor_covariances(np.atleast_2d(spread))[None], k, axis=0)
-    mix = np.full(k, 1.0 / k)
-    last = -np.inf
-    for _ in range(iterations):
-        with np.errstate(divide="ignore"):
-            logr = component_logpdf(x, means, covs) + np.log(mix)
-        norm = _lse(logr, axis=1)
-        loglik = float(w @ norm)
-        if loglik - last < 1e-4:
-            break
-        last = loglik
-        r = np.exp(logr - norm[:, None]) * w[:, None]  # (N, K)
-        nk = r.sum(0)
-        keep = nk > 1e-12
-        r, nk = r[:, keep], nk[keep]
-        mix = nk / nk.sum()
-        means = (r.T @ x) / nk[:, None]
-        diff = x[None, :, :] - means[:, None, :]
-        covs = floor_covariances(
-            np.einsum("nk,kni,knj->kij", r, diff, diff) / nk[:, None, None], 1e-6
-        )
+    mix, means, covs = em_fit(x, w, means, covs, iterations, min_var=1e-6)
     return GaussianMixture(mix, means, floor_covariances(covs + extra))
 
 
@@ -153,8 +131,7 @@ def fit_kde_mixture(
     kernel = h * h * np.eye(d)
     idx = rng.choice(len(w), size=kl_samples, p=w)
     s = x[idx] + h * rng.standard_normal((kl_samples, d))
-    sq = np.maximum(np.sum(s * s, 1)[:, None] + np.sum(x * x, 1)[None, :] - 2 * s @ x.T, 0.0)
-    log_kde = _lse(-0.5 * sq / (h * h) + np.log(w), axis=1) - 0.5 * d * np.log(2 * np.pi * h * h)
+    log_kde = kde_log_density(s, x, w, h)
     fits, kls = [], []
     for m in range(1, max(1, m_max) + 1):
         gm = weighted_em(x, w, m, rng, extra_cov=kernel)

@@ -47,6 +47,7 @@ from .ellipsoid_camera import (
     quaternion_multiply,
     quaternion_to_rotation,
     rotation_to_quaternion,
+    shape_matrix,
 )
 from .likelihood_map import LikelihoodMapSensor, detection_quality
 from .linear_gaussian import LinearGaussianSensor
@@ -132,6 +133,7 @@ __all__ = [
     "region_histograms",
     "ring_of_cameras",
     "rotation_to_quaternion",
+    "shape_matrix",
     "simulate_bearings",
     "true_bearings",
     "virtual_sensors",

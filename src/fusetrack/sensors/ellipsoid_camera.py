@@ -12,6 +12,7 @@ Everything is vectorised over leading axes of the positions and quaternions.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property, lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -83,6 +84,23 @@ def ellipsoid_matrix(semi_axes: ArrayLike, q: ArrayLike) -> Array:
     return np.einsum("...ij,j,...kj->...ik", R, 1.0 / s**2, R)
 
 
+@lru_cache(maxsize=64)
+def _shape_matrix_of(semi_axes: tuple[float, ...], q_bytes: bytes) -> Array:
+    m = ellipsoid_matrix(semi_axes, np.frombuffer(q_bytes, dtype=np.float64))
+    m.setflags(write=False)
+    return m
+
+
+def shape_matrix(semi_axes: ArrayLike, q: ArrayLike) -> Array:
+    """:func:`ellipsoid_matrix`, remembered for the last few single orientations ``(4,)``: a
+    tracker's step asks for the same ``M`` once per camera and per likelihood (read-only)."""
+    qa = np.asarray(q, dtype=np.float64)
+    if qa.shape != (4,):
+        return ellipsoid_matrix(semi_axes, qa)
+    axes = tuple(float(a) for a in np.asarray(semi_axes, dtype=np.float64).ravel())
+    return _shape_matrix_of(axes, qa.tobytes())
+
+
 def project_ellipsoid(P: ArrayLike, centre: ArrayLike, M: ArrayLike) -> tuple[Array, Array]:
     """Exact image ``(y_c, B)`` of the ellipsoid ``(p - c)^T M (p - c) <= 1`` through ``P``.
 
@@ -94,9 +112,10 @@ def project_ellipsoid(P: ArrayLike, centre: ArrayLike, M: ArrayLike) -> tuple[Ar
     p = np.asarray(P, float)
     c = np.asarray(centre, float)
     m = np.asarray(M, float)
+    one_inverse = np.linalg.inv(m) if m.ndim == 2 else None  # one shape for every centre
     c, m = np.broadcast_arrays(c[..., None, :], m)
     c = c[..., 0, :]
-    minv = np.linalg.inv(m)
+    minv = np.linalg.inv(m) if one_inverse is None else np.broadcast_to(one_inverse, m.shape)
     q = np.empty((*c.shape[:-1], 4, 4))
     q[..., :3, :3] = minv - c[..., :, None] * c[..., None, :]
     q[..., :3, 3] = -c
@@ -151,9 +170,12 @@ class EllipsoidCamera:
     camera: PinholeCamera
     min_area: float = 12.0
 
-    @property
+    @cached_property
     def P(self) -> Array:
-        return self.camera.P
+        """The camera matrix, computed once (the camera does not move; read-only)."""
+        p = self.camera.P
+        p.setflags(write=False)
+        return p
 
     @property
     def centre(self) -> Array:
@@ -173,7 +195,7 @@ class EllipsoidCamera:
 
     def ellipse(self, x: ArrayLike, q: ArrayLike, semi_axes: ArrayLike) -> tuple[Array, Array]:
         """``(y_c, B)`` of the target at ``x`` ``(..., 3)`` with orientation ``q``."""
-        return project_ellipsoid(self.P, x, ellipsoid_matrix(semi_axes, q))
+        return project_ellipsoid(self.P, x, shape_matrix(semi_axes, q))
 
     def participates(self, yc: ArrayLike, B: ArrayLike) -> NDArray[np.bool_]:
         """Whether a projected ellipse ``(y_c, B)`` is usable in this camera."""
