@@ -251,6 +251,33 @@ def segments_cross_edges_kernel(
 
 
 @numba.njit(cache=True, nogil=True)
+def segments_cross_edges_paired_kernel(
+    starts: np.ndarray, ends: np.ndarray, edge_a: np.ndarray, edge_b: np.ndarray
+) -> np.ndarray:  # pragma: no cover - jit
+    """(P,): the open segment ``starts[p] -> ends[p]`` properly crosses one of the edges ``a -> b``;
+    the arithmetic and the test ``d1 d2 < 0 and d3 d4 < 0`` of
+    :func:`fusetrack.world.geometry.segments_cross_polygon`, one segment per row."""
+    P, E = starts.shape[0], edge_a.shape[0]
+    out = np.zeros(P, dtype=np.bool_)
+    for p in range(P):
+        sx, sy = starts[p, 0], starts[p, 1]
+        px, py = ends[p, 0], ends[p, 1]
+        dx, dy = px - sx, py - sy
+        for e in range(E):
+            ax, ay = edge_a[e, 0], edge_a[e, 1]
+            bx, by = edge_b[e, 0], edge_b[e, 1]
+            ex, ey = bx - ax, by - ay
+            d1 = ex * (sy - ay) - ey * (sx - ax)
+            d2 = ex * (py - ay) - ey * (px - ax)
+            d3 = dx * (ay - sy) - dy * (ax - sx)
+            d4 = dx * (by - sy) - dy * (bx - sx)
+            if d1 * d2 < 0.0 and d3 * d4 < 0.0:
+                out[p] = True
+                break
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
 def pair_visibility_kernel(
     q: np.ndarray, assigned: np.ndarray, w: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
