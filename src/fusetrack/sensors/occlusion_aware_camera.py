@@ -75,6 +75,9 @@ from ..world.occlusion_kernels import camera_likelihood_kernel
 from ..world.room import Room
 from .perspective_camera import CameraArray
 
+_CameraArgs = tuple[Array, Array, Array, Array, Array, Array, Array]
+"""The camera arrays of :func:`camera_likelihood_kernel` for one selection."""
+
 PriorMode = Literal["gaussian", "perfect", "none"]
 PRIOR_MODES = ("gaussian", "perfect", "none")
 
@@ -90,7 +93,7 @@ class OcclusionAwareLikelihood:
     floor: float = 0.0
     exclusion: float = 0.0
     occlusion_power: float = 1.0
-    _camera_args: dict[bytes, tuple[Array, ...]] = field(
+    _camera_args: dict[bytes, _CameraArgs] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
 
@@ -172,7 +175,7 @@ class OcclusionAwareLikelihood:
             )
         return 2, np.ascontiguousarray(occluders.mean), np.ascontiguousarray(occluders.cov)
 
-    def _cameras_of(self, sel: NDArray[np.intp]) -> tuple[Array, ...]:
+    def _cameras_of(self, sel: NDArray[np.intp]) -> _CameraArgs:
         """The kernel's camera arrays of the selected cameras: positions, yaws, tan(fov/2), focal
         lengths and the variances of Eq. 2, made once per distinct selection (a run queries few)."""
         key = sel.tobytes()
@@ -205,6 +208,7 @@ class OcclusionAwareLikelihood:
         """
         zz, sel, pts = self._inputs(z, selected, x)
         mode, mu, cov = self._occluder_arrays(occluders)
+        positions, yaws, tan_half, focals, var_theta, var_pos, var_read = self._cameras_of(sel)
         edge_a, edge_b = self.room._blocking_edges
         in_static = (
             self.room.in_static_occluder(pts)
@@ -215,7 +219,13 @@ class OcclusionAwareLikelihood:
             camera_likelihood_kernel(
                 pts,
                 zz,
-                *self._cameras_of(sel),
+                positions,
+                yaws,
+                tan_half,
+                focals,
+                var_theta,
+                var_pos,
+                var_read,
                 edge_a,
                 edge_b,
                 np.ascontiguousarray(in_static),
