@@ -135,3 +135,22 @@ def test_occlusion_power_scales_only_the_pattern_term() -> None:
     np.testing.assert_allclose(a[ok] - b[ok], 0.7 * log_p, rtol=1e-9, atol=1e-9)
     with pytest.raises(Exception, match="occlusion_power"):
         OcclusionAwareLikelihood(scene.cameras, scene.room, 3.33, "gaussian", occlusion_power=0.0)
+
+
+def test_camera_arrays_remembered_per_selection_give_the_same_likelihood() -> None:
+    """The kernel's camera arrays are made once per distinct selection: alternating selections
+    on one likelihood give bit for bit what a fresh likelihood gives for each."""
+    scene = get_scene("L")
+    obj, occ, z = world_and_readings(scene, 40, 20, 5)
+    rng = np.random.default_rng(2)
+    x = obj[12] + rng.normal(0, 6, (200, 2))
+    pri = OccluderPriors(occ[12] + rng.normal(0, 2, (40, 2)), np.eye(2) * 16.0)
+    lik = OcclusionAwareLikelihood(scene.cameras, scene.room, scene.diameter, "gaussian")
+    selections = [np.array([0, 3, 5]), np.array([1, 2, 7, 9]), np.array([0, 3, 5])]
+    got = [lik.log_likelihood(z[12, s], s, x, pri) for s in selections]
+    for s, g in zip(selections, got, strict=True):
+        fresh = OcclusionAwareLikelihood(scene.cameras, scene.room, scene.diameter, "gaussian")
+        assert np.array_equal(g, fresh.log_likelihood(z[12, s], s, x, pri))
+    assert np.array_equal(got[0], got[2])
+    assert not np.array_equal(got[0], got[1])
+    assert len(lik._camera_args) == 2

@@ -65,3 +65,32 @@ def test_sample_free_avoids_occluders():
     pts = room.sample_free(np.random.default_rng(0), 500)
     assert pts.shape == (500, 2)
     assert room.free(pts).all()
+
+
+def test_paired_crossing_kernel_matches_numpy_reference():
+    """Room.sight_blocked's Numba pass equals segments_cross_polygon (the NumPy reference) per
+    polygon: hand-made cases (crossing, touching a vertex, running along an edge, ending on a
+    wall) and random segments with broadcast shapes in the L room with a static occluder."""
+    from fusetrack.world.occlusion_kernels import segments_cross_edges_paired_kernel
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    a, b = square, np.roll(square, -1, axis=0)
+    starts = np.array([[-1.0, 0.5], [-1.0, -1.0], [-1.0, 0.0], [0.5, 0.5], [-1.0, 0.5]])
+    ends = np.array([[2.0, 0.5], [0.0, 0.0], [2.0, 0.0], [0.6, 0.6], [0.0, 0.5]])
+    got = segments_cross_edges_paired_kernel(starts, ends, a, b)
+    assert got.tolist() == [True, False, False, False, False]
+    assert got.tolist() == segments_cross_polygon(starts, ends, square).tolist()
+
+    l_room = l_shaped_room(200.0)
+    room = Room(l_room.boundary, (np.array([[120.0, 20], [150, 20], [150, 60], [120, 60]]),))
+    rng = np.random.default_rng(5)
+    viewers = rng.uniform(-10, 210, (7, 1, 2))
+    points = rng.uniform(-10, 210, (1, 50, 2))
+    expected = segments_cross_polygon(viewers, points, room.boundary)
+    for o in room.static_occluders:
+        expected |= segments_cross_polygon(viewers, points, o) | points_in_polygon(points, o)
+    got = room.sight_blocked(viewers, points)
+    assert got.shape == (7, 50)
+    assert np.array_equal(got, expected)
+    assert 0 < got.mean() < 1
+    assert room.sight_blocked(viewers[0, 0], points[0, 0]).shape == ()

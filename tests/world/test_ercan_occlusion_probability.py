@@ -197,3 +197,21 @@ def test_prior_draw_hits_match_numpy_draws():
     np.testing.assert_allclose(got_rect, rect, atol=1.5 / n)  # a draw on an edge may round apart
     np.testing.assert_allclose(got_disk, disk, atol=1.5 / n)
     assert 0 < rect.mean() < 1 and np.all(disk >= rect - 1.5 / n)
+
+
+def test_tabulated_normal_cdf_error_is_the_documented_bound():
+    """The table lookup errs by < 3.3e-8 (h^2 phi(1) / 8 for the grid step h), reached near |t| = 1,
+    and is exact (0 or 1) beyond the table's +-8.5."""
+    import math
+
+    from scipy.special import ndtr
+
+    from fusetrack.world.occlusion_kernels import _TABLE_STEP, _phi_fast
+
+    t = np.linspace(-9.0, 9.0, 180_001)
+    err = np.abs(np.array([_phi_fast(float(v)) for v in t]) - ndtr(t))
+    bound = _TABLE_STEP**2 / 8 * math.exp(-0.5) / math.sqrt(2 * math.pi)
+    assert err.max() < 3.3e-8
+    assert err.max() > 0.9 * bound  # the bound is what the table really reaches
+    assert abs(abs(t[err.argmax()]) - 1.0) < 0.05
+    assert _phi_fast(-8.5) == 0.0 and _phi_fast(8.5) == 1.0

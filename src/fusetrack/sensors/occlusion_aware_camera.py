@@ -57,7 +57,7 @@ building blocks it replaces (the tests compare them).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -75,6 +75,9 @@ from ..world.occlusion_kernels import camera_likelihood_kernel
 from ..world.room import Room
 from .perspective_camera import CameraArray
 
+_CameraArgs = tuple[Array, Array, Array, Array, Array, Array, Array]
+"""The camera arrays of :func:`camera_likelihood_kernel` for one selection."""
+
 PriorMode = Literal["gaussian", "perfect", "none"]
 PRIOR_MODES = ("gaussian", "perfect", "none")
 
@@ -90,6 +93,9 @@ class OcclusionAwareLikelihood:
     floor: float = 0.0
     exclusion: float = 0.0
     occlusion_power: float = 1.0
+    _camera_args: dict[bytes, _CameraArgs] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         if self.prior_mode not in PRIOR_MODES:
@@ -169,6 +175,23 @@ class OcclusionAwareLikelihood:
             )
         return 2, np.ascontiguousarray(occluders.mean), np.ascontiguousarray(occluders.cov)
 
+    def _cameras_of(self, sel: NDArray[np.intp]) -> _CameraArgs:
+        """The kernel's camera arrays of the selected cameras: positions, yaws, tan(fov/2), focal
+        lengths and the variances of Eq. 2, made once per distinct selection (a run queries few)."""
+        key = sel.tobytes()
+        if key not in self._camera_args:
+            cams = self.cameras.subset(sel)
+            self._camera_args[key] = (
+                np.ascontiguousarray(cams.positions),
+                np.ascontiguousarray(cams.yaws, dtype=float),
+                np.tan(cams.fovs / 2),
+                np.ascontiguousarray(cams.focals, dtype=float),
+                cams.sigma_theta**2,
+                cams.sigma_pos**2,
+                cams.sigma_read**2,
+            )
+        return self._camera_args[key]
+
     def log_likelihood(
         self,
         z: ArrayLike,
@@ -185,7 +208,7 @@ class OcclusionAwareLikelihood:
         """
         zz, sel, pts = self._inputs(z, selected, x)
         mode, mu, cov = self._occluder_arrays(occluders)
-        cams = self.cameras.subset(sel)
+        positions, yaws, tan_half, focals, var_theta, var_pos, var_read = self._cameras_of(sel)
         edge_a, edge_b = self.room._blocking_edges
         in_static = (
             self.room.in_static_occluder(pts)
@@ -196,13 +219,13 @@ class OcclusionAwareLikelihood:
             camera_likelihood_kernel(
                 pts,
                 zz,
-                np.ascontiguousarray(cams.positions),
-                np.ascontiguousarray(cams.yaws, dtype=float),
-                np.tan(cams.fovs / 2),
-                np.ascontiguousarray(cams.focals, dtype=float),
-                cams.sigma_theta**2,
-                cams.sigma_pos**2,
-                cams.sigma_read**2,
+                positions,
+                yaws,
+                tan_half,
+                focals,
+                var_theta,
+                var_pos,
+                var_read,
                 edge_a,
                 edge_b,
                 np.ascontiguousarray(in_static),

@@ -20,10 +20,13 @@ from .geometry import (
     is_convex,
     points_in_polygon,
     rectangle,
-    segments_cross_polygon,
     signed_area,
 )
-from .occlusion_kernels import points_in_polygon_kernel, segments_cross_edges_kernel
+from .occlusion_kernels import (
+    points_in_polygon_kernel,
+    segments_cross_edges_kernel,
+    segments_cross_edges_paired_kernel,
+)
 
 
 def _in_polygon(points: ArrayLike, v: Array) -> NDArray[np.bool_]:
@@ -31,6 +34,19 @@ def _in_polygon(points: ArrayLike, v: Array) -> NDArray[np.bool_]:
     p = np.asarray(points, dtype=float)
     flat = np.ascontiguousarray(p.reshape(-1, 2))
     return np.asarray(points_in_polygon_kernel(flat, v).reshape(p.shape[:-1]))
+
+
+def _sight_edges(
+    boundary: Array, static_occluders: tuple[Array, ...], convex: bool
+) -> tuple[Array, Array]:
+    """Start and end points ``(E, 2)`` of the edges that can block sight: the walls of a
+    non-convex room, then every static occluder's."""
+    polys = ([] if convex else [boundary]) + list(static_occluders)
+    if not polys:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    a = np.concatenate(list(polys))
+    b = np.concatenate([np.concatenate([p[1:], p[:1]]) for p in polys])
+    return np.ascontiguousarray(a), np.ascontiguousarray(b)
 
 
 @dataclass(frozen=True)
@@ -47,6 +63,7 @@ class Room:
     name: str = "room"
     convex: bool = field(init=False)
     _free_area: float = field(init=False, repr=False, compare=False)
+    _edges: tuple[Array, Array] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         b = as_polygon(self.boundary, "room.boundary")
@@ -64,6 +81,7 @@ class Room:
         object.__setattr__(self, "convex", is_convex(b))
         area = signed_area(b) - sum(signed_area(o) for o in occ)
         object.__setattr__(self, "_free_area", area)  # sample_free needs it every call
+        object.__setattr__(self, "_edges", _sight_edges(b, occ, self.convex))
 
     @property
     def bounding_box(self) -> tuple[float, float, float, float]:
@@ -103,13 +121,17 @@ class Room:
         """
         v = np.asarray(viewer, dtype=float)
         p = np.asarray(points, dtype=float)
-        blocked = np.zeros(np.broadcast_shapes(v.shape, p.shape)[:-1], dtype=bool)
-        if not self.convex:
-            blocked |= segments_cross_polygon(v, p, self.boundary)
+        shape = np.broadcast_shapes(v.shape, p.shape)
+        ea, eb = self._edges
+        if len(ea):  # walls (non-convex room) and static occluders, one Numba pass
+            starts = np.ascontiguousarray(np.broadcast_to(v, shape).reshape(-1, 2))
+            ends = np.ascontiguousarray(np.broadcast_to(p, shape).reshape(-1, 2))
+            blocked = segments_cross_edges_paired_kernel(starts, ends, ea, eb).reshape(shape[:-1])
+        else:
+            blocked = np.zeros(shape[:-1], dtype=bool)
         for o in self.static_occluders:
-            blocked |= segments_cross_polygon(v, p, o)
             blocked |= points_in_polygon(p, o)
-        return blocked
+        return np.asarray(blocked)
 
     def sight_blocked_grid(self, viewers: ArrayLike, points: ArrayLike) -> NDArray[np.bool_]:
         """``(K, L)`` :meth:`sight_blocked` for every viewer ``(K, 2)`` and point ``(L, 2)`` (Numba)."""
@@ -127,12 +149,8 @@ class Room:
 
     @property
     def _blocking_edges(self) -> tuple[Array, Array]:
-        polys = ([] if self.convex else [self.boundary]) + list(self.static_occluders)
-        if not polys:
-            return np.zeros((0, 2)), np.zeros((0, 2))
-        a = np.concatenate([p for p in polys])
-        b = np.concatenate([np.concatenate([p[1:], p[:1]]) for p in polys])
-        return np.ascontiguousarray(a), np.ascontiguousarray(b)
+        """Start and end points ``(E, 2)`` of every edge that can block sight (made once)."""
+        return self._edges
 
     def segment_free(self, start: ArrayLike, end: ArrayLike) -> NDArray[np.bool_]:
         """True where an object can walk straight from ``start`` to ``end``."""
