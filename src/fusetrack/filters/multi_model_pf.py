@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -41,7 +42,7 @@ from ..core import (
     wrap_angle_inplace,
 )
 from ..motion import AccelTurn
-from .multi_model_kernel import kernel_bank, predict_weigh_kernel
+from .multi_model_kernel import gather_particles, kernel_bank, predict_weigh_kernel
 
 Array = np.ndarray
 
@@ -56,6 +57,13 @@ def resample_l(w: Array, n: int, rng: np.random.Generator) -> Array:
     flat = w.reshape(*w.shape[:-2], -1)
     u = (np.arange(n) + rng.random((*flat.shape[:-1], 1))) / n
     return inverse_cdf(flat, u)
+
+
+def take_resampled(pred: Array, idx: Array) -> Array:
+    """The resampled particles of a batch: ``pred (B, O, J, L, 4)`` and ancestors ``idx (B, O, M)``
+    into the flattened ``J L`` predictions -> ``(B, O, M, 4)`` (what
+    ``np.take_along_axis(pred.reshape(B, O, -1, 4), idx[..., None], axis=2)`` gives)."""
+    return gather_particles(np.ascontiguousarray(pred), np.ascontiguousarray(idx))
 
 
 def turn_models(alpha: float, sigma_a: float) -> tuple[AccelTurn, AccelTurn, AccelTurn]:
@@ -149,16 +157,16 @@ def weigh_every_model(
     draws, results equal to rounding)."""
     B, O, L = parts.shape[:3]
     J = len(filt.models)
-    alphas = kernel_bank(filt.models)
+    alphas = filt.bank
     if filt.engine == "numba" and alphas is not None:
         sigma_a = float(filt.models[0].sigma_a)
-        shape = (J, B, O, L, 2)  # the draw of propagate_every_model
-        eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
+        shape = (J, B, O, L, 2)  # the draw of propagate_every_model, scaled by sigma_a inside
+        eta = rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
         pred = np.empty((B, O, J, L, 4))
         w_ml = np.empty((B, O, J, L))
         est = np.empty((B, O, 4))
         degenerate = predict_weigh_kernel(
-            parts, eta, alphas, dt, np.asarray(filt.sensor_position, float), z,
+            parts, eta, sigma_a, alphas, dt, filt.sensor_array, z,
             1.0 / filt.sigma**2, pred, w_ml, est,
         )  # fmt: skip
         return pred, w_ml, est, int(degenerate)
@@ -201,6 +209,22 @@ class MultiModelBearingPF:
             raise ConfigError(invalid("n_particles", self.n_particles, "an integer >= 1"))
         if self.engine not in ENGINES:
             raise ConfigError(invalid("engine", self.engine, f"one of {ENGINES}"))
+
+    @cached_property
+    def bank(self) -> Array | None:
+        """The models' turn accelerations when the fused kernel implements the bank, else None
+        (:func:`~.multi_model_kernel.kernel_bank`, computed once per filter; read-only)."""
+        alphas = kernel_bank(self.models)
+        if alphas is not None:
+            alphas.flags.writeable = False
+        return alphas
+
+    @cached_property
+    def sensor_array(self) -> Array:
+        """``sensor_position`` as a read-only float array (the kernel's argument)."""
+        s = np.asarray(self.sensor_position, float)
+        s.flags.writeable = False
+        return s
 
     def initial_belief(self, mean: Array, std: Array, rng: np.random.Generator) -> MultiModelBelief:
         """``n_particles`` draws from ``N(mean, diag(std^2))``."""
@@ -255,7 +279,7 @@ class MultiModelBearingPF:
         """``update(predict(...))``, through the fused kernel when it implements the bank."""
         rng = rng if rng is not None else np.random.default_rng()
         z = bearings_of(measurements)
-        alphas = kernel_bank(self.models)
+        alphas = self.bank
         if (
             self.engine == "numpy"
             or alphas is None
@@ -321,7 +345,7 @@ class MultiModelBearingPF:
         one vectorised coordinated-turn map with ``omega_j = alpha_j / speed`` (0 for CV),
         identical in law to calling each model's ``sample``.
         """
-        alphas = kernel_bank(self.models)
+        alphas = self.bank
         if alphas is None:
             return np.stack([m.sample(particles, dt, rng) for m in self.models])
         lead = particles.shape[:-1]

@@ -34,6 +34,7 @@ from ..filters import (
     MultiModelBelief,
     resample_l,
     reset_to_fix,
+    take_resampled,
     weigh_every_model,
 )
 from ..sensors import merge_close, simulate_bearings, true_bearings
@@ -69,11 +70,25 @@ def ellipse_trigger(estimate: Array, predictions: Array, chi2: float = CHI2_2_95
     p = np.asarray(estimate, float)[:2]
     for pts in np.asarray(predictions, float)[..., :2]:
         mu = pts.mean(axis=0)
-        cov = np.cov(pts.T) + 1e-12 * np.eye(2)
+        cov = _sample_cov(pts) + _RIDGE
         d = p - mu
         if float(d @ np.linalg.solve(cov, d)) <= chi2:
             return False
     return True
+
+
+_RIDGE = 1e-12 * np.eye(2)
+
+
+def _sample_cov(pts: Array) -> Array:
+    """``np.cov(pts.T)`` for ``pts (L, 2)`` without its argument handling: the same operations
+    on the same memory layout (a copy of the transpose, row means, ``dot``, times ``1 / (L - 1)``),
+    so the same bits (tested)."""
+    X = np.array(pts.T, dtype=float)
+    X -= X.mean(axis=1)[:, None]
+    c = np.dot(X, X.T.conj())
+    c *= np.true_divide(1, X.shape[1] - 1)
+    return c
 
 
 @dataclass(frozen=True)
@@ -381,13 +396,12 @@ def run_periodic_batch(
         pred, w_ml, est, degenerate = weigh_every_model(filt, parts, z, tracker.dt, rng)
         res.degenerate_steps += degenerate
         idx = resample_l(w_ml, L, rng)  # (B, O, L) indices into J*L
-        flat = pred.reshape(B, O, -1, 4)
-        parts = np.take_along_axis(flat, idx[..., None], axis=2)
+        parts = take_resampled(pred, idx)
         ask = (periods > 0) & (k % np.maximum(periods, 1) == 0)
-        if ask.any():
+        if ask.any():  # every run draws; only the asking ones use the draws
             fixes = truth[k, :, :2] + tracker.sigma_r * rng.standard_normal((B, O, 2))
-            moved = fixes[:, :, None, :] + tracker.sigma_r * rng.standard_normal((B, O, L, 2))
-            parts[ask, :, :, :2] = moved[ask]
+            noise = rng.standard_normal((B, O, L, 2))
+            parts[ask, :, :, :2] = fixes[ask][:, :, None, :] + tracker.sigma_r * noise[ask]
             est[ask, :, :2] = fixes[ask]
             res.camera_updates[k, ask] = True
         res.estimates[k] = est
