@@ -22,6 +22,7 @@ particle i with resampled ancestor i ("paired", the thesis's literal weight); "m
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -151,7 +152,21 @@ Move = Callable[[Array, Array, Callable[[Array], Array], float, np.random.Genera
 
 def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
     """Whether ``motion.log_density(x', x, dt) = log N(x'; motion.mean(x, dt), noise_cov(dt))``
-    with a positive-definite ``noise_cov`` (checked at two random pairs)."""
+    with a positive-definite ``noise_cov`` (checked at two random pairs; once per hashable
+    ``(motion, dt)``)."""
+    try:
+        hash((motion, dt))
+    except TypeError:  # a model with array fields: checked each time
+        return _check_gaussian_transition(motion, dt)
+    return _cached_gaussian_transition(motion, dt)
+
+
+@functools.lru_cache(maxsize=64)
+def _cached_gaussian_transition(motion: MotionModel, dt: float) -> bool:
+    return _check_gaussian_transition(motion, dt)
+
+
+def _check_gaussian_transition(motion: MotionModel, dt: float) -> bool:
     try:
         cov = np.asarray(motion.noise_cov(dt), float)
         np.linalg.cholesky(cov)
