@@ -107,7 +107,8 @@ class MultiModelBelief:
 
     @property
     def uniform_weights(self) -> bool:
-        return bool(np.ptp(self.log_weights) == 0)
+        lw = self.log_weights  # np.ptp(lw) == 0, without its wrapper
+        return bool(lw.max() - lw.min() == 0)
 
     def weights(self) -> Array:
         w = np.exp(self.log_weights - self.log_weights.max())
