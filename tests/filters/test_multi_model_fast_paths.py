@@ -2,6 +2,7 @@
 
 * :func:`take_resampled` (a Numba gather) gives what ``np.take_along_axis`` gives;
 * the filter's cached ``bank`` is :func:`kernel_bank` of its models, and read-only;
+* :meth:`MultiModelBearingPF.step_bearings` on an array is :meth:`step` on measurements;
 * the fused kernel's noise scaling and its skipped ``sin``/``cos`` at a zero turn rate leave
   the step equal to the NumPy reference (same draws).
 """
@@ -9,8 +10,10 @@
 import math
 
 import numpy as np
+import pytest
 
-from fusetrack.filters import MultiModelBearingPF, take_resampled, turn_models
+from fusetrack.core import Measurement, MeasurementError
+from fusetrack.filters import MultiModelBearingPF, finite_bearings, take_resampled, turn_models
 from fusetrack.filters.multi_model_kernel import kernel_bank
 from fusetrack.filters.multi_model_pf import weigh_every_model
 
@@ -52,3 +55,18 @@ def test_kernel_equals_reference_with_standing_and_moving_particles():
     for a, b in zip(out["numba"][:3], out["numpy"][:3]):
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
     assert out["numba"][3] == out["numpy"][3]
+
+
+def test_step_bearings_is_step_on_one_measurement_per_bearing():
+    z = np.array([0.4, -0.2, 1.1])
+    ms = [Measurement(3.0, "acoustic", v) for v in z]
+    for estimator in ("consistent", "literal"):
+        filt = MultiModelBearingPF(turn_models(1.0, 0.01), (0.0, 0.0), 0.05, 40, estimator)
+        b0 = filt.initial_belief(
+            np.array([10.0, 5.0, 0.2, 0.1]), np.full(4, 0.1), np.random.default_rng(1)
+        )
+        a = filt.step(b0, 1.0, ms, np.random.default_rng(2))
+        b = filt.step_bearings(b0, 1.0, finite_bearings(z), np.random.default_rng(2))
+        assert np.array_equal(a.states, b.states) and np.array_equal(a.mean, b.mean)
+    with pytest.raises(MeasurementError, match="bearings"):
+        finite_bearings([0.1, np.nan])

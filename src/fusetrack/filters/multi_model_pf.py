@@ -140,7 +140,15 @@ def bearings_of(measurements: Sequence[Measurement]) -> Array:
     """The step's unlabelled bearings (rad), in order; each measurement carries one or more."""
     if not measurements:
         return np.empty(0)
-    z = np.concatenate([np.ravel(np.asarray(m.value, dtype=float)) for m in measurements])
+    return finite_bearings(
+        np.concatenate([np.ravel(np.asarray(m.value, dtype=float)) for m in measurements])
+    )
+
+
+def finite_bearings(z: Array) -> Array:
+    """``z`` as a flat float array of bearings (rad), or :class:`MeasurementError` unless every
+    one is finite (what :meth:`MultiModelBearingPF.step_bearings` expects)."""
+    z = np.asarray(z, dtype=float).reshape(-1)
     if not np.all(np.isfinite(z)):
         raise MeasurementError(invalid("bearings", z.tolist(), "finite angles (rad)"))
     return z
@@ -257,8 +265,13 @@ class MultiModelBearingPF:
     ) -> MultiModelBelief:
         """Weight every prediction against every bearing (Eqs. 3.4-3.6), estimate (Eqs.
         3.7-3.11) and resample ``L`` (Fig. 3-1)."""
+        return self.update_bearings(belief, bearings_of(measurements), rng)
+
+    def update_bearings(
+        self, belief: MultiModelBelief, z: Array, rng: np.random.Generator | None = None
+    ) -> MultiModelBelief:
+        """:meth:`update` with the step's bearings ``z`` (rad, finite) as one array."""
         rng = rng if rng is not None else np.random.default_rng()
-        z = bearings_of(measurements)
         J = len(self.models)
         pred = belief.states.reshape(J, -1, 4)
         w, degenerate = self._joint_weights(pred, z)
@@ -278,8 +291,18 @@ class MultiModelBearingPF:
         rng: np.random.Generator | None = None,
     ) -> MultiModelBelief:
         """``update(predict(...))``, through the fused kernel when it implements the bank."""
+        return self.step_bearings(belief, dt, bearings_of(measurements), rng)
+
+    def step_bearings(
+        self,
+        belief: MultiModelBelief,
+        dt: float,
+        z: Array,
+        rng: np.random.Generator | None = None,
+    ) -> MultiModelBelief:
+        """:meth:`step` with the step's bearings ``z`` (rad, finite; what :func:`bearings_of`
+        makes of the measurements) as one array: no measurement objects per step."""
         rng = rng if rng is not None else np.random.default_rng()
-        z = bearings_of(measurements)
         alphas = self.bank
         if (
             self.engine == "numpy"
@@ -288,7 +311,7 @@ class MultiModelBearingPF:
             or self.estimator != "consistent"
             or not belief.uniform_weights
         ):
-            return self.update(self.predict(belief, dt, rng), measurements, rng)
+            return self.update_bearings(self.predict(belief, dt, rng), z, rng)
         J, L = len(alphas), len(belief.states)
         pred, w_ml, est, deg = weigh_every_model(
             self, belief.states[None, None], z.reshape(1, -1), dt, rng

@@ -27,11 +27,12 @@ from typing import Any
 
 import numpy as np
 
-from ..core import ConfigError, Measurement, invalid
+from ..core import ConfigError, invalid
 from ..filters import (
     MULTI_MODEL_ESTIMATORS,
     MultiModelBearingPF,
     MultiModelBelief,
+    finite_bearings,
     resample_l,
     reset_to_fix,
     take_resampled,
@@ -228,12 +229,12 @@ def run_cooperation(
     for k in range(T):
         z = simulate_bearings(truth[k, :, :2], audible[k], sensor, sigma, rng, tracker.dz_critical)
         res.n_bearings[k] = len(z)
-        bearings = [Measurement(k * tracker.dt, "acoustic", z_i) for z_i in z]
+        bearings = finite_bearings(z)  # what filt.step makes of one measurement per bearing
         est: dict[int, Array] = {}
         steps = {}
         if k > 0:
             for o, b in list(parts.items()):
-                parts[o] = steps[o] = filt.step(b, tracker.dt, bearings, rng)
+                parts[o] = steps[o] = filt.step_bearings(b, tracker.dt, bearings, rng)
                 est[o] = steps[o].mean
                 res.degenerate_steps += steps[o].degenerate
         else:
