@@ -23,9 +23,9 @@ particle i with resampled ancestor i ("paired", the thesis's literal weight); "m
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Protocol, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -158,11 +158,11 @@ def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
         hash((motion, dt))
     except TypeError:  # a model with array fields: checked each time
         return _check_gaussian_transition(motion, dt)
-    return _cached_gaussian_transition(motion, dt)
+    return _cached_gaussian_transition(cast(Hashable, motion), dt)
 
 
 @functools.lru_cache(maxsize=64)
-def _cached_gaussian_transition(motion: MotionModel, dt: float) -> bool:
+def _cached_gaussian_transition(motion: Any, dt: float) -> bool:
     return _check_gaussian_transition(motion, dt)
 
 
