@@ -108,3 +108,16 @@ def test_batch_has_the_law_of_run_cooperation():
         tracker=AcousticTracker(n_particles=60, **KW),
     ).rms(truth)  # fmt: skip
     assert both[:8].mean() < 0.5 * both[8:].mean()
+
+
+def test_sample_cov_is_numpy_cov_to_the_bit():
+    from fusetrack.management.camera_triggering import _sample_cov
+
+    pts = np.array([[1.0, 2.0], [3.0, -1.0], [0.5, 0.25], [2.0, 2.0]])
+    d = pts - pts.mean(axis=0)
+    hand = d.T @ d / 3.0
+    np.testing.assert_allclose(_sample_cov(pts), hand, rtol=1e-15)
+    rng = np.random.default_rng(3)
+    pred = 1e3 * rng.standard_normal((3, 501, 4)) + 40.0  # strided (L, 2) views, as the trigger's
+    for p in pred[..., :2]:
+        assert np.array_equal(_sample_cov(p), np.cov(p.T))

@@ -181,3 +181,26 @@ def test_step_is_predict_then_update_with_the_same_draws():
     assert np.array_equal(fixed.states[:, 2:], ref.states[:, 2:]) and ref is not fixed
     assert np.allclose(fixed.states[:, :2].mean(0), [1.0, 2.0], atol=0.05)
     assert np.array_equal(fixed.mean[:2], [1.0, 2.0])
+
+
+def test_merge_close_groups_across_the_wrap_and_matches_the_roll_reference():
+    # 359.5 and 0.5 deg merge across 0; 90 and 91 merge; 200 stays alone
+    b = np.array([0.5, 90.0, 359.5, 200.0, 91.0]) * D
+    m = merge_close(b, 2 * D)
+    want = [90.5 * D, -160 * D, 0.0]  # after the first real gap (91 -> 200); atan2 range
+    np.testing.assert_allclose(m, want, atol=1e-12)
+    # the same groups as the np.roll formulation it replaces, to the bit
+    s = np.sort(np.mod(b, 2 * math.pi))
+    gaps = np.diff(np.append(s, s[0] + 2 * math.pi))
+    start = int(np.argmax(gaps >= 2 * D)) + 1
+    order, g = np.roll(s, -start), np.roll(gaps, -start)
+    groups, cur = [], [order[0]]
+    for k in range(1, len(order)):
+        if g[k - 1] < 2 * D:
+            cur.append(order[k])
+        else:
+            groups.append(cur)
+            cur = [order[k]]
+    groups.append(cur)
+    ref = np.array([math.atan2(np.sin(gr).sum(), np.cos(gr).sum()) for gr in groups])
+    assert np.array_equal(m, ref)

@@ -50,8 +50,10 @@ from .mcmc_moves import RandomWalkMove as RandomWalkMove
 from .multi_model_pf import MULTI_MODEL_ESTIMATORS as MULTI_MODEL_ESTIMATORS
 from .multi_model_pf import MultiModelBearingPF as MultiModelBearingPF
 from .multi_model_pf import MultiModelBelief as MultiModelBelief
+from .multi_model_pf import finite_bearings as finite_bearings
 from .multi_model_pf import resample_l as resample_l
 from .multi_model_pf import reset_to_fix as reset_to_fix
+from .multi_model_pf import take_resampled as take_resampled
 from .multi_model_pf import turn_models as turn_models
 from .multi_model_pf import weigh_every_model as weigh_every_model
 from .multiple_model import MultipleModelParticleFilter as MultipleModelParticleFilter

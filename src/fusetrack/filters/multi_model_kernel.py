@@ -21,6 +21,7 @@ Array = np.ndarray
 def predict_weigh_kernel(
     parts: Array,
     eta: Array,
+    sigma_a: float,
     alphas: Array,
     dt: float,
     sensor: Array,
@@ -32,7 +33,8 @@ def predict_weigh_kernel(
 ) -> int:  # pragma: no cover - jit
     """Fused :meth:`MultiModelBearingPF.propagate_every_model` + weights + consistent estimate for a batch.
 
-    ``parts (B, O, L, 4)``, ``eta (J, B, O, L, 2)`` (scaled noise), ``z (B, N)``; writes
+    ``parts (B, O, L, 4)``, ``eta (J, B, O, L, 2)`` (standard normal draws, scaled here by
+    ``sigma_a``: the same product as the reference's), ``z (B, N)``; writes
     ``pred (B, O, J, L, 4)``, normalised ``w_ml (B, O, J, L)`` and ``est (B, O, 4)``; returns the
     number of degenerate filters (equal weights then). Same arithmetic as the NumPy reference.
     """
@@ -57,7 +59,9 @@ def predict_weigh_kernel(
                 for j in range(J):
                     omega = alphas[j] / max(speed, 1e-9) if speed > 1e-9 else 0.0
                     wt = omega * dt
-                    if abs(wt) < 1e-9:
+                    if wt == 0.0:  # sin(+-0) = +-0 and cos(+-0) = 1 exactly: no call
+                        s_, c_, a1, a2 = wt, 1.0, dt, 0.0
+                    elif abs(wt) < 1e-9:
                         s_, c_, a1, a2 = np.sin(wt), np.cos(wt), dt, 0.0
                     else:
                         if twin[j] >= 0:  # sin(-x) = -sin(x), cos(-x) = cos(x) exactly
@@ -66,7 +70,7 @@ def predict_weigh_kernel(
                             s_, c_ = np.sin(wt), np.cos(wt)
                         a1, a2 = s_ / omega, (1.0 - c_) / omega
                     sw[j], cw[j] = s_, c_
-                    e0, e1 = eta[j, b, o, l, 0], eta[j, b, o, l, 1]
+                    e0, e1 = sigma_a * eta[j, b, o, l, 0], sigma_a * eta[j, b, o, l, 1]
                     px = x + a1 * vx - a2 * vy + 0.5 * dt * dt * e0
                     py = y + a2 * vx + a1 * vy + 0.5 * dt * dt * e1
                     pred[b, o, j, l, 0] = px
@@ -110,6 +114,24 @@ def predict_weigh_kernel(
                         acc += w_ml[b, o, j, l] * pred[b, o, j, l, d]
                 est[b, o, d] = acc
     return degenerate
+
+
+@numba.njit(cache=True, nogil=True)
+def gather_particles(pred: Array, idx: Array) -> Array:  # pragma: no cover - jit
+    """``out[b, o, l] = pred[b, o].reshape(J * L, -1)[idx[b, o, l]]``: the resampled particles of
+    a batch (``np.take_along_axis`` over the flattened models, without its index arrays);
+    ``pred (B, O, J, L, D)``, ``idx (B, O, M)`` -> ``(B, O, M, D)``."""
+    B, O, L, D = pred.shape[0], pred.shape[1], pred.shape[3], pred.shape[4]
+    M = idx.shape[2]
+    out = np.empty((B, O, M, D))
+    for b in range(B):
+        for o in range(O):
+            for m in range(M):
+                i = idx[b, o, m]
+                j, l = i // L, i % L
+                for d in range(D):
+                    out[b, o, m, d] = pred[b, o, j, l, d]
+    return out
 
 
 def kernel_bank(models: tuple) -> Array | None:

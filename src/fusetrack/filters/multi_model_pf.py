@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -41,7 +42,7 @@ from ..core import (
     wrap_angle_inplace,
 )
 from ..motion import AccelTurn
-from .multi_model_kernel import kernel_bank, predict_weigh_kernel
+from .multi_model_kernel import gather_particles, kernel_bank, predict_weigh_kernel
 
 Array = np.ndarray
 
@@ -56,6 +57,13 @@ def resample_l(w: Array, n: int, rng: np.random.Generator) -> Array:
     flat = w.reshape(*w.shape[:-2], -1)
     u = (np.arange(n) + rng.random((*flat.shape[:-1], 1))) / n
     return inverse_cdf(flat, u)
+
+
+def take_resampled(pred: Array, idx: Array) -> Array:
+    """The resampled particles of a batch: ``pred (B, O, J, L, 4)`` and ancestors ``idx (B, O, M)``
+    into the flattened ``J L`` predictions -> ``(B, O, M, 4)`` (what
+    ``np.take_along_axis(pred.reshape(B, O, -1, 4), idx[..., None], axis=2)`` gives)."""
+    return gather_particles(np.ascontiguousarray(pred), np.ascontiguousarray(idx))
 
 
 def turn_models(alpha: float, sigma_a: float) -> tuple[AccelTurn, AccelTurn, AccelTurn]:
@@ -99,7 +107,8 @@ class MultiModelBelief:
 
     @property
     def uniform_weights(self) -> bool:
-        return bool(np.ptp(self.log_weights) == 0)
+        lw = self.log_weights  # np.ptp(lw) == 0, without its wrapper
+        return bool(lw.max() - lw.min() == 0)
 
     def weights(self) -> Array:
         w = np.exp(self.log_weights - self.log_weights.max())
@@ -131,7 +140,15 @@ def bearings_of(measurements: Sequence[Measurement]) -> Array:
     """The step's unlabelled bearings (rad), in order; each measurement carries one or more."""
     if not measurements:
         return np.empty(0)
-    z = np.concatenate([np.ravel(np.asarray(m.value, dtype=float)) for m in measurements])
+    return finite_bearings(
+        np.concatenate([np.ravel(np.asarray(m.value, dtype=float)) for m in measurements])
+    )
+
+
+def finite_bearings(z: Array) -> Array:
+    """``z`` as a flat float array of bearings (rad), or :class:`MeasurementError` unless every
+    one is finite (what :meth:`MultiModelBearingPF.step_bearings` expects)."""
+    z = np.asarray(z, dtype=float).reshape(-1)
     if not np.all(np.isfinite(z)):
         raise MeasurementError(invalid("bearings", z.tolist(), "finite angles (rad)"))
     return z
@@ -149,16 +166,16 @@ def weigh_every_model(
     draws, results equal to rounding)."""
     B, O, L = parts.shape[:3]
     J = len(filt.models)
-    alphas = kernel_bank(filt.models)
+    alphas = filt.bank
     if filt.engine == "numba" and alphas is not None:
         sigma_a = float(filt.models[0].sigma_a)
-        shape = (J, B, O, L, 2)  # the draw of propagate_every_model
-        eta = sigma_a * rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
+        shape = (J, B, O, L, 2)  # the draw of propagate_every_model, scaled by sigma_a inside
+        eta = rng.standard_normal(shape) if sigma_a > 0 else np.zeros(shape)
         pred = np.empty((B, O, J, L, 4))
         w_ml = np.empty((B, O, J, L))
         est = np.empty((B, O, 4))
         degenerate = predict_weigh_kernel(
-            parts, eta, alphas, dt, np.asarray(filt.sensor_position, float), z,
+            parts, eta, sigma_a, alphas, dt, filt.sensor_array, z,
             1.0 / filt.sigma**2, pred, w_ml, est,
         )  # fmt: skip
         return pred, w_ml, est, int(degenerate)
@@ -202,6 +219,22 @@ class MultiModelBearingPF:
         if self.engine not in ENGINES:
             raise ConfigError(invalid("engine", self.engine, f"one of {ENGINES}"))
 
+    @cached_property
+    def bank(self) -> Array | None:
+        """The models' turn accelerations when the fused kernel implements the bank, else None
+        (:func:`~.multi_model_kernel.kernel_bank`, computed once per filter; read-only)."""
+        alphas = kernel_bank(self.models)
+        if alphas is not None:
+            alphas.flags.writeable = False
+        return alphas
+
+    @cached_property
+    def sensor_array(self) -> Array:
+        """``sensor_position`` as a read-only float array (the kernel's argument)."""
+        s = np.asarray(self.sensor_position, float)
+        s.flags.writeable = False
+        return s
+
     def initial_belief(self, mean: Array, std: Array, rng: np.random.Generator) -> MultiModelBelief:
         """``n_particles`` draws from ``N(mean, diag(std^2))``."""
         draws = np.asarray(mean, float) + np.asarray(std, float) * rng.standard_normal(
@@ -232,8 +265,13 @@ class MultiModelBearingPF:
     ) -> MultiModelBelief:
         """Weight every prediction against every bearing (Eqs. 3.4-3.6), estimate (Eqs.
         3.7-3.11) and resample ``L`` (Fig. 3-1)."""
+        return self.update_bearings(belief, bearings_of(measurements), rng)
+
+    def update_bearings(
+        self, belief: MultiModelBelief, z: Array, rng: np.random.Generator | None = None
+    ) -> MultiModelBelief:
+        """:meth:`update` with the step's bearings ``z`` (rad, finite) as one array."""
         rng = rng if rng is not None else np.random.default_rng()
-        z = bearings_of(measurements)
         J = len(self.models)
         pred = belief.states.reshape(J, -1, 4)
         w, degenerate = self._joint_weights(pred, z)
@@ -253,9 +291,19 @@ class MultiModelBearingPF:
         rng: np.random.Generator | None = None,
     ) -> MultiModelBelief:
         """``update(predict(...))``, through the fused kernel when it implements the bank."""
+        return self.step_bearings(belief, dt, bearings_of(measurements), rng)
+
+    def step_bearings(
+        self,
+        belief: MultiModelBelief,
+        dt: float,
+        z: Array,
+        rng: np.random.Generator | None = None,
+    ) -> MultiModelBelief:
+        """:meth:`step` with the step's bearings ``z`` (rad, finite; what :func:`bearings_of`
+        makes of the measurements) as one array: no measurement objects per step."""
         rng = rng if rng is not None else np.random.default_rng()
-        z = bearings_of(measurements)
-        alphas = kernel_bank(self.models)
+        alphas = self.bank
         if (
             self.engine == "numpy"
             or alphas is None
@@ -263,7 +311,7 @@ class MultiModelBearingPF:
             or self.estimator != "consistent"
             or not belief.uniform_weights
         ):
-            return self.update(self.predict(belief, dt, rng), measurements, rng)
+            return self.update_bearings(self.predict(belief, dt, rng), z, rng)
         J, L = len(alphas), len(belief.states)
         pred, w_ml, est, deg = weigh_every_model(
             self, belief.states[None, None], z.reshape(1, -1), dt, rng
@@ -321,7 +369,7 @@ class MultiModelBearingPF:
         one vectorised coordinated-turn map with ``omega_j = alpha_j / speed`` (0 for CV),
         identical in law to calling each model's ``sample``.
         """
-        alphas = kernel_bank(self.models)
+        alphas = self.bank
         if alphas is None:
             return np.stack([m.sample(particles, dt, rng) for m in self.models])
         lead = particles.shape[:-1]

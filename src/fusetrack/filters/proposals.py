@@ -22,9 +22,10 @@ particle i with resampled ancestor i ("paired", the thesis's literal weight); "m
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+import functools
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Protocol, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -151,7 +152,21 @@ Move = Callable[[Array, Array, Callable[[Array], Array], float, np.random.Genera
 
 def is_gaussian_transition(motion: MotionModel, dt: float) -> bool:
     """Whether ``motion.log_density(x', x, dt) = log N(x'; motion.mean(x, dt), noise_cov(dt))``
-    with a positive-definite ``noise_cov`` (checked at two random pairs)."""
+    with a positive-definite ``noise_cov`` (checked at two random pairs; once per hashable
+    ``(motion, dt)``)."""
+    try:
+        hash((motion, dt))
+    except TypeError:  # a model with array fields: checked each time
+        return _check_gaussian_transition(motion, dt)
+    return _cached_gaussian_transition(cast(Hashable, motion), dt)
+
+
+@functools.lru_cache(maxsize=64)
+def _cached_gaussian_transition(motion: Any, dt: float) -> bool:
+    return _check_gaussian_transition(motion, dt)
+
+
+def _check_gaussian_transition(motion: MotionModel, dt: float) -> bool:
     try:
         cov = np.asarray(motion.noise_cov(dt), float)
         np.linalg.cholesky(cov)

@@ -27,13 +27,15 @@ from typing import Any
 
 import numpy as np
 
-from ..core import ConfigError, Measurement, invalid
+from ..core import ConfigError, invalid
 from ..filters import (
     MULTI_MODEL_ESTIMATORS,
     MultiModelBearingPF,
     MultiModelBelief,
+    finite_bearings,
     resample_l,
     reset_to_fix,
+    take_resampled,
     weigh_every_model,
 )
 from ..sensors import merge_close, simulate_bearings, true_bearings
@@ -69,11 +71,25 @@ def ellipse_trigger(estimate: Array, predictions: Array, chi2: float = CHI2_2_95
     p = np.asarray(estimate, float)[:2]
     for pts in np.asarray(predictions, float)[..., :2]:
         mu = pts.mean(axis=0)
-        cov = np.cov(pts.T) + 1e-12 * np.eye(2)
+        cov = _sample_cov(pts) + _RIDGE
         d = p - mu
         if float(d @ np.linalg.solve(cov, d)) <= chi2:
             return False
     return True
+
+
+_RIDGE = 1e-12 * np.eye(2)
+
+
+def _sample_cov(pts: Array) -> Array:
+    """``np.cov(pts.T)`` for ``pts (L, 2)`` without its argument handling: the same operations
+    on the same memory layout (a copy of the transpose, row means, ``dot``, times ``1 / (L - 1)``),
+    so the same bits (tested)."""
+    X = np.array(pts.T, dtype=float)
+    X -= X.mean(axis=1)[:, None]
+    c = np.dot(X, X.T.conj())
+    c *= np.true_divide(1, X.shape[1] - 1)
+    return c
 
 
 @dataclass(frozen=True)
@@ -213,12 +229,12 @@ def run_cooperation(
     for k in range(T):
         z = simulate_bearings(truth[k, :, :2], audible[k], sensor, sigma, rng, tracker.dz_critical)
         res.n_bearings[k] = len(z)
-        bearings = [Measurement(k * tracker.dt, "acoustic", z_i) for z_i in z]
+        bearings = finite_bearings(z)  # what filt.step makes of one measurement per bearing
         est: dict[int, Array] = {}
         steps = {}
         if k > 0:
             for o, b in list(parts.items()):
-                parts[o] = steps[o] = filt.step(b, tracker.dt, bearings, rng)
+                parts[o] = steps[o] = filt.step_bearings(b, tracker.dt, bearings, rng)
                 est[o] = steps[o].mean
                 res.degenerate_steps += steps[o].degenerate
         else:
@@ -381,13 +397,12 @@ def run_periodic_batch(
         pred, w_ml, est, degenerate = weigh_every_model(filt, parts, z, tracker.dt, rng)
         res.degenerate_steps += degenerate
         idx = resample_l(w_ml, L, rng)  # (B, O, L) indices into J*L
-        flat = pred.reshape(B, O, -1, 4)
-        parts = np.take_along_axis(flat, idx[..., None], axis=2)
+        parts = take_resampled(pred, idx)
         ask = (periods > 0) & (k % np.maximum(periods, 1) == 0)
-        if ask.any():
+        if ask.any():  # every run draws; only the asking ones use the draws
             fixes = truth[k, :, :2] + tracker.sigma_r * rng.standard_normal((B, O, 2))
-            moved = fixes[:, :, None, :] + tracker.sigma_r * rng.standard_normal((B, O, L, 2))
-            parts[ask, :, :, :2] = moved[ask]
+            noise = rng.standard_normal((B, O, L, 2))
+            parts[ask, :, :, :2] = fixes[ask][:, :, None, :] + tracker.sigma_r * noise[ask]
             est[ask, :, :2] = fixes[ask]
             res.camera_updates[k, ask] = True
         res.estimates[k] = est

@@ -7,6 +7,7 @@ Every model here is ``x_k = f(x_{k-1}, dt) + w`` with ``w ~ N(0, Q(dt))``;
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -72,14 +73,58 @@ def as_state(x: ArrayLike, dim: int, names: tuple[str, ...], field: str = "x") -
     return a
 
 
+def _cache_key(cov: Array) -> tuple[tuple[int, ...], str, bytes]:
+    """A covariance's exact identity (shape, dtype, bytes): the key of the per-``cov`` caches."""
+    a = np.asarray(cov)
+    return a.shape, a.dtype.str, a.tobytes()
+
+
+def _from_key(key: tuple[tuple[int, ...], str, bytes]) -> Array:
+    shape, dtype, data = key
+    return np.frombuffer(data, dtype=dtype).reshape(shape)
+
+
 def psd_factor(cov: Array) -> Array:
-    """A matrix ``G`` with ``G @ G.T == cov`` for a symmetric positive semi-definite ``cov``."""
+    """A matrix ``G`` with ``G @ G.T == cov`` for a symmetric positive semi-definite ``cov``
+    (factorised once per distinct ``cov``; a fresh copy each call)."""
+    return _psd_factor(_cache_key(cov)).copy()
+
+
+@functools.lru_cache(maxsize=256)
+def _psd_factor(key: tuple[tuple[int, ...], str, bytes]) -> Array:
+    cov = _from_key(key)
     try:
         return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
     except np.linalg.LinAlgError:  # singular Q (dt = 0, q = 0, Wiener-sequence noise)
         s, v = np.linalg.eigh(cov)
         s = np.where(s > _RANK_RTOL * s.max(initial=0.0), s, 0.0)  # rounding noise is not noise
         return np.asarray(v * np.sqrt(s), dtype=np.float64)
+
+
+@functools.lru_cache(maxsize=256)
+def _full_rank_plan(key: tuple[tuple[int, ...], str, bytes]) -> tuple[Array, Array, float] | None:
+    """:func:`gaussian_logpdf`'s ``cov``-only work on its full-rank route: the standard
+    deviations, ``inv(chol(corr)).T`` and the log-determinant; None when ``cov`` takes the
+    eigen route (a zero variance, rank below ``d``, or a failed Cholesky)."""
+    cov = _from_key(key)
+    d = cov.shape[-1]
+    var = np.diag(cov)
+    pos = var > 0.0
+    if not pos.all():
+        return None
+    sd = np.sqrt(var[pos])
+    corr = cov[np.ix_(pos, pos)] / np.outer(sd, sd)
+    s_corr = np.linalg.eigvalsh(corr)
+    if int(np.sum(s_corr > _RANK_RTOL * s_corr.max())) != d:
+        return None
+    try:
+        chol = np.linalg.cholesky(corr)
+    except np.linalg.LinAlgError:  # borderline: the eigen route
+        return None
+    logdet = 2.0 * float(np.sum(np.log(np.diag(chol))) + np.sum(np.log(sd)))
+    inv_t = np.linalg.inv(chol).T
+    sd.flags.writeable = inv_t.flags.writeable = False
+    return sd, inv_t, logdet
 
 
 def gaussian_logpdf(resid: Array, cov: Array, scale: Array | float = 0.0) -> Array:
@@ -95,6 +140,12 @@ def gaussian_logpdf(resid: Array, cov: Array, scale: Array | float = 0.0) -> Arr
     raises :class:`ConfigError`.
     """
     d = cov.shape[-1]
+    plan = _full_rank_plan(_cache_key(cov))
+    if plan is not None:  # the full-rank route, its cov-only work done once per cov
+        sd_all, inv_t, logdet = plan
+        z = (resid / sd_all) @ inv_t
+        out = -0.5 * (d * _LOG_2PI + logdet + np.sum(np.square(z), axis=-1))
+        return np.asarray(out, dtype=np.float64)
     var = np.diag(cov)
     pos = var > 0.0
     if not pos.any():
@@ -105,16 +156,6 @@ def gaussian_logpdf(resid: Array, cov: Array, scale: Array | float = 0.0) -> Arr
     corr = cov[np.ix_(pos, pos)] / np.outer(sd, sd)
     s_corr = np.linalg.eigvalsh(corr)
     rank = int(np.sum(s_corr > _RANK_RTOL * s_corr.max()))
-    if rank == d:
-        try:
-            chol = np.linalg.cholesky(corr)
-        except np.linalg.LinAlgError:  # borderline: fall through to the eigen route
-            pass
-        else:
-            z = (resid / sd) @ np.linalg.inv(chol).T
-            logdet = 2.0 * float(np.sum(np.log(np.diag(chol))) + np.sum(np.log(sd)))
-            out = -0.5 * (d * _LOG_2PI + logdet + np.sum(np.square(z), axis=-1))
-            return np.asarray(out, dtype=np.float64)
     s, v = np.linalg.eigh(cov)  # ascending: the last `rank` span the support
     s_keep, v_keep, v_null = s[d - rank :], v[:, d - rank :], v[:, : d - rank]
     maha = np.sum(np.square(resid @ (v_keep / np.sqrt(s_keep))), axis=-1)

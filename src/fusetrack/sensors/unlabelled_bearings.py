@@ -33,8 +33,8 @@ def merge_close(bearings: Array, dz_critical: float) -> Array:
     if np.all(gaps < dz_critical):  # everything in one cluster around the circle
         return np.array([math.atan2(np.sin(b).sum(), np.cos(b).sum())])
     start = int(np.argmax(gaps >= dz_critical)) + 1  # begin just after a real gap
-    order = np.roll(b, -start)
-    g = np.roll(gaps, -start)
+    order = np.concatenate((b[start:], b[:start]))  # np.roll(b, -start), without its overhead
+    g = np.concatenate((gaps[start:], gaps[:start]))
     groups, cur = [], [order[0]]
     for k in range(1, len(order)):
         if g[k - 1] < dz_critical:

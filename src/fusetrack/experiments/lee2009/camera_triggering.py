@@ -15,6 +15,7 @@ Parts (spec 000, Sec. 5.5):
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Mapping, Sequence
@@ -117,6 +118,13 @@ READINGS = {
 DEFAULT_READING = "alpha=1"
 
 
+def _read_only(*arrays: np.ndarray) -> None:
+    """Freeze the cached truths (every run of a worker process shares them)."""
+    for a in arrays:
+        a.flags.writeable = False
+
+
+@functools.cache
 def truth_e31(scenario: str = "spec", alpha: float = ALPHA_33) -> np.ndarray:
     """E3.1/E3.2: O1 (50, 30), O2 (35, 50), O3 (45, 45), CV with one-step turns at k = 51, 101,
     151; velocities :data:`VELOCITIES_31` ``[scenario]``."""
@@ -124,11 +132,15 @@ def truth_e31(scenario: str = "spec", alpha: float = ALPHA_33) -> np.ndarray:
     x0 = np.hstack([x0, np.asarray(VELOCITIES_31[scenario], float)])
     signs = {51: (-1, 1, -1), 101: (1, -1, -1), 151: (-1, 1, 1)}  # CT = -1, ACT = +1 (spec choice)
     sched = [[(k - 1.0, k, s[o] * alpha) for k, s in signs.items()] for o in range(3)]
-    return piecewise_truth(x0, sched, 1.0, T_33)
+    truth = piecewise_truth(x0, sched, 1.0, T_33)
+    _read_only(truth)
+    return truth
 
 
+@functools.cache
 def truth_e33(alpha: float = ALPHA_33) -> tuple[np.ndarray, np.ndarray]:
-    """E3.3/E3.4: sensor at (25, 25); O1 enters at 25, O2 leaves at 175, O3 present 63-187."""
+    """E3.3/E3.4: sensor at (25, 25); O1 enters at 25, O2 leaves at 175, O3 present 63-187
+    (computed once per process and alpha; read-only)."""
     x0 = np.array([[5, 3, 0.2, 0.2], [22, 3, -0.2, 0.2], [40, 12, -0.2, 0.15]], float)
     sched = [
         [(50.0, 51.0, -alpha), (100.0, 101.0, alpha), (150.0, 151.0, -alpha)],
@@ -140,6 +152,7 @@ def truth_e33(alpha: float = ALPHA_33) -> tuple[np.ndarray, np.ndarray]:
     present[25:, 0] = True
     present[:175, 1] = True
     present[63:188, 2] = True
+    _read_only(truth, present)
     return truth, present
 
 
@@ -150,7 +163,9 @@ CAMERAS_35 = {"V1": (1.9, 6.3), "V2": (13.4, 5.0), "V3": (5.5, 0.3)}
 DT_35, T_35 = 0.01, 1900
 
 
+@functools.cache
 def truth_e35() -> np.ndarray:
+    """E3.5: the room's three objects (computed once per process; read-only)."""
     x0 = np.array([[2.9, 4.5, 0.0, -0.3], [4.8, 3.5, 0.3, -0.1], [5.1, 8.2, 0.0, 0.0]], float)
     sched = [
         [(3.6, 7.1, 0.15), (13.5, 15.0, 0.20)],
@@ -162,6 +177,7 @@ def truth_e35() -> np.ndarray:
     tr[k13:, 2, 2:] = (0.0, -0.3)  # O3 starts moving at 13 s (speed not given: spec choice)
     for k in range(k13 + 1, T_35):
         tr[k, 2, :2] = tr[k - 1, 2, :2] + DT_35 * tr[k - 1, 2, 2:]
+    _read_only(tr)
     return tr
 
 
