@@ -289,7 +289,7 @@ Median over runs of the 3-D error (m) at the steps of the paper's Fig. 58:
 
 
 def run(ctx: RunContext) -> Outcome:
-    runs_n = ctx.n_runs(full=5, quick=1)
+    runs_n = ctx.n_runs(full=4, quick=1)  # ~100 s per run on a shared core
     cfg = {
         "steps": 8 if ctx.quick else 91,
         "n_particles": 150 if ctx.quick else 500,
