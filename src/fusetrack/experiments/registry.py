@@ -299,6 +299,13 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Kushwaha 2010 Ch. V (seed 003)",
         ),
         ExperimentInfo(
+            "kushwaha2010-cameras-lcr",
+            "kushwaha2010.camera_lcr:run",
+            "Kushwaha 2010 Ch. V LCR analogue (Figs 57-60, A-V-18): a textured box carried through "
+            "a 10 x 8 m room, 4 cameras, tracker T3 against its ellipsoid model (T2, T0 beside)",
+            "Kushwaha 2010 Ch. V (seed 003)",
+        ),
+        ExperimentInfo(
             "kushwaha2010-outdoor-triangle",
             "kushwaha2010.outdoor_triangle:run",
             "Kushwaha 2010 Ch. IV outdoor experiment, simulated (Fig. 34b, H17): three nodes in a "

@@ -4,6 +4,8 @@ from .acoustics import harmonic_engine as harmonic_engine
 from .acoustics import pink_noise as pink_noise
 from .acoustics import propagate as propagate
 from .acoustics import speech_like as speech_like
+from .box_target import BoxTarget as BoxTarget
+from .box_target import render_box as render_box
 from .clocks import HopTranslation as HopTranslation
 from .clocks import NodeClock as NodeClock
 from .clocks import RbsDomain as RbsDomain
@@ -13,6 +15,7 @@ from .demo_scene import DemoScene as DemoScene
 from .demo_scene import simulate_demo as simulate_demo
 from .ellipsoid_scene import EllipsoidTarget as EllipsoidTarget
 from .ellipsoid_scene import Frames as Frames
+from .ellipsoid_scene import PaintedTarget as PaintedTarget
 from .ellipsoid_scene import Trajectory as Trajectory
 from .ellipsoid_scene import corner_cameras as corner_cameras
 from .ellipsoid_scene import cube_viewpoints as cube_viewpoints

@@ -10,13 +10,15 @@ exact ground truth: the target's pixels, its projected ellipse and the cameras t
 * :func:`smooth_trajectory` -- the random smooth paths of the experiments (0.2 m/step);
 * :func:`corner_cameras`, :func:`perimeter_cameras` -- setups A and B;
 * :func:`render_target` / :func:`render_frames` -- the frames; :func:`reference_views` -- the
-  target seen from the model's viewpoints by hypothetical cameras (Eqs. 66-68).
+  target seen from the model's viewpoints by hypothetical cameras (Eqs. 66-68). Both take any
+  :class:`PaintedTarget` (also :class:`fusetrack.world.box_target.BoxTarget`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import cv2
 import numpy as np
@@ -36,6 +38,19 @@ from ..sensors import (
 
 Array = NDArray[np.float64]
 Image = NDArray[np.uint8]
+
+
+class PaintedTarget(Protocol):
+    """A target the cameras can render: ``semi_axes`` (m) of the ellipsoid the trackers model it
+    with, and ``paint`` that draws it into an RGB image in place and returns its pixel mask."""
+
+    @property
+    def semi_axes(self) -> tuple[float, float, float]: ...
+
+    def paint(
+        self, image: Image, cam: EllipsoidCamera, position: ArrayLike, quaternion: ArrayLike
+    ) -> NDArray[np.bool_]: ...
+
 
 #: Octant colours (RGB) of the synthetic target, indexed by the signs of the body coordinates.
 OCTANT_COLOURS = np.array(
@@ -70,6 +85,12 @@ class EllipsoidTarget:
         phase = np.floor(np.arctan2(p[..., 1], p[..., 0]) / (2 * np.pi) * self.stripes) % 2
         bw = np.where(phase[..., None] > 0, 235.0, 20.0) * np.ones(3)
         return np.where(band[..., None], bw, rgb)
+
+    def paint(
+        self, image: Image, cam: EllipsoidCamera, position: ArrayLike, quaternion: ArrayLike
+    ) -> NDArray[np.bool_]:
+        """Draw the ellipsoid into ``image`` (in place): :func:`render_target`."""
+        return render_target(image, cam, self, position, quaternion)
 
 
 @dataclass(frozen=True)
@@ -276,7 +297,7 @@ class Frames:
 
 def render_frames(
     cams: Sequence[EllipsoidCamera],
-    target: EllipsoidTarget,
+    target: PaintedTarget,
     truth: Trajectory,
     rng: np.random.Generator,
     hidden: NDArray[np.bool_] | None = None,
@@ -298,7 +319,7 @@ def render_frames(
             noise = rng.normal(0.0, noise_sd, size=backgrounds[n].shape)
             img = np.clip(backgrounds[n] + noise, 0, 255).astype(np.uint8)
             if hidden is None or not hidden[t, n]:
-                mask = render_target(img, cam, target, truth.positions[t], truth.quaternions[t])
+                mask = target.paint(img, cam, truth.positions[t], truth.quaternions[t])
                 pixels[t, n] = int(mask.sum())
             row.append(img)
         images.append(row)
@@ -313,7 +334,7 @@ def cube_viewpoints() -> Array:
 
 
 def reference_views(
-    target: EllipsoidTarget,
+    target: PaintedTarget,
     viewpoints: ArrayLike,
     pixels_across: float = 60.0,
     size: tuple[int, int] = (96, 96),
@@ -335,7 +356,7 @@ def reference_views(
         c = L * ej
         cam = EllipsoidCamera("ref", PinholeCamera(K, look_at(c, np.zeros(3), up), c, w, h))
         img = np.full((h, w, 3), background, dtype=np.uint8)
-        render_target(img, cam, target, np.zeros(3), ident)
+        target.paint(img, cam, np.zeros(3), ident)
         yc, B = project_ellipsoid(cam.P, np.zeros(3), ellipsoid_matrix(target.semi_axes, ident))
         images.append(img)
         centres.append(yc)

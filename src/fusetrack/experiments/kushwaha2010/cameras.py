@@ -47,6 +47,7 @@ from ...sensors import AppearanceModel, EllipsoidCamera
 from ...world import (
     EllipsoidTarget,
     Frames,
+    PaintedTarget,
     Trajectory,
     corner_cameras,
     cube_viewpoints,
@@ -87,15 +88,19 @@ SETUPS = {
 
 
 @lru_cache(maxsize=8)
+def reference_model(target: PaintedTarget) -> AppearanceModel:
+    """The 26-view reference model of a target (rendered, Eqs. 66-69)."""
+    views = cube_viewpoints()
+    images, centres, shapes = reference_views(target, views)
+    return appearance_model_from_views(images, centres, shapes, views)
+
+
 def appearance_model(
     target: EllipsoidTarget | None = None,
 ) -> tuple[EllipsoidTarget, AppearanceModel]:
-    """The synthetic target (default: setup A/B's) and its 26-view reference model (rendered,
-    Eqs. 66-69)."""
+    """The synthetic target (default: setup A/B's) and its 26-view reference model."""
     target = EllipsoidTarget() if target is None else target
-    views = cube_viewpoints()
-    images, centres, shapes = reference_views(target, views)
-    return target, appearance_model_from_views(images, centres, shapes, views)
+    return target, reference_model(target)
 
 
 def gap_mask(
@@ -155,7 +160,7 @@ def render_scene(config: Mapping[str, Any], rng: np.random.Generator) -> Scene:
 
 def scene_from_truth(
     cams: list[EllipsoidCamera],
-    target: EllipsoidTarget,
+    target: PaintedTarget,
     model: AppearanceModel,
     truth: Trajectory,
     base: tuple[float, float, float],
