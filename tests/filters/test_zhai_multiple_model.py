@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian, Measurement
+from fusetrack.core import ConfigError, Gaussian, Measurement, Particles
 from fusetrack.filters.multiple_model import (
     MultipleModelParticleFilter,
     check_transition,
@@ -136,3 +136,16 @@ def test_cells_and_propose_expose_one_discretisation_step():
         d = np.abs(x[modes == r, None, 0] - centres[None, :, 0])
         assert np.all(np.any(d <= delta[0] / 2 + 1e-12, axis=1))
     np.testing.assert_allclose(np.bincount(modes) / 3000, pi.mean(axis=0), atol=0.03)
+
+
+def test_cells_and_propose_refuse_what_they_cannot_use():
+    sensor = PositionFix("p", cov=[[0.3]], position_index=(0,))
+    pi = [[0.9, 0.1], [0.1, 0.9]]
+    mm = MultipleModelParticleFilter([Jump(0.0), Jump(1.0)], pi, [sensor], 50, proposal="cells")
+    rng = np.random.default_rng(0)
+    ms = [Measurement(1.0, "p", [0.2])]
+    batch = mm.initialize(Gaussian(np.zeros(1), np.eye(1)), rng, (2,))
+    with pytest.raises(ConfigError, match="batch_shape"):
+        mm.cells(batch, 1.0, ms)
+    with pytest.raises(ConfigError, match=r"belief\.proposal"):
+        mm.propose(Particles(np.zeros((50, 1)), np.zeros(50)), 1.0, ms, rng)

@@ -32,12 +32,13 @@ from ..core import (
     Gaussian,
     Measurement,
     MotionModel,
+    Particles,
     SensorModel,
     invalid,
 )
 from ..motion import MarkovSwitching
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
-from .proposals import Array, LogLikelihood, ProposalContext, SISBelief, Zs, check_generator
+from .proposals import Array, LogLikelihood, ProposalContext, Zs, check_generator
 from .sis import ProposalParticleFilter
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw_rows
 
@@ -356,10 +357,12 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
         self.switching = switching
 
     def cells(
-        self, belief: SISBelief, dt: float, measurements: Sequence[Measurement]
+        self, belief: Particles, dt: float, measurements: Sequence[Measurement]
     ) -> list[tuple[Array, Array, Array]]:
         """Each model's cells for the step from ``belief`` (Algorithm 7, step 2; Fig 55): per
         model, the centres ``(C, d)``, weights ``(C,)`` and box side ``Δ`` (one set, no batch)."""
+        if belief.states.ndim != 2:
+            raise ConfigError(invalid("belief.batch_shape", belief.batch_shape, "() (one set)"))
         zs, side, _ = self._step_inputs(measurements, belief.batch_shape)
         ctx = self.context(side)
         return [
@@ -369,7 +372,7 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
 
     def propose(
         self,
-        belief: SISBelief,
+        belief: Particles,
         dt: float,
         measurements: Sequence[Measurement],
         rng: np.random.Generator,
@@ -378,9 +381,12 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
         ``(..., N, d)``, before weighting and resampling, and their regimes ``(..., N)``."""
         zs, side, _ = self._step_inputs(measurements, belief.batch_shape)
         gen = check_generator(rng)
-        x, _, state = self.switching.draw(
-            belief.proposal, belief.states, zs, dt, gen, self.context(side)
-        )
+        regimes = getattr(belief, "proposal", None)
+        if not isinstance(regimes, RegimeState):
+            raise ConfigError(
+                invalid("belief.proposal", regimes, "a RegimeState (from initialize)")
+            )
+        x, _, state = self.switching.draw(regimes, belief.states, zs, dt, gen, self.context(side))
         return x, state.modes
 
 
