@@ -19,7 +19,15 @@ EXPECTED = {
     "zhai2007-multiple-model": {"C9_order", "C9_stationary", "C10_ccw_peak_sigma0.05", "C11_order"},
     "zhai2007-bearings": {"C4_order_E2", "C4_ekf_diverges", "C4_order_E3"},
     "zhai2007-galerkin": {"C12_beats_bs2000", "C12_variance", "C13_saturation", "E13_turn"},
-    "zhai2007-discretisation": {"E15_along_bearing", "E16_order", "C14_S2A", "C14_S2B_turn"},
+    "zhai2007-discretisation": {
+        "E15_along_bearing",
+        "E16_order",
+        "C14_S2A",
+        "C14_S2B_turn",
+        "A7_truth_and_z_outside_CV_inside_another",
+        "A7_CA_fewest",
+        "A7_CA_closest",
+    },
     "zhai2007-sensor-network": {
         "C5_cpfsp_vs_bootstrap",
         "C6_threshold_78",

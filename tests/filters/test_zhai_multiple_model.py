@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian, Measurement
+from fusetrack.core import ConfigError, Gaussian, Measurement, Particles
 from fusetrack.filters.multiple_model import (
     MultipleModelParticleFilter,
     check_transition,
@@ -110,3 +110,42 @@ def test_bad_transition_matrices_are_refused():
         MultipleModelParticleFilter(
             [ConstantVelocity(), ConstantVelocity(ndim=3)], np.eye(2) * 0 + 0.5, []
         )
+
+
+def test_cells_and_propose_expose_one_discretisation_step():
+    """Algorithm 7's accessors (Figs 55-56): one cell set per model, centred on that model's
+    level, and every proposed particle inside a box of its own regime's cells; the regime shares
+    follow the transition rows from uniform initial regimes (Eq. 47)."""
+    levels = (-1.0, 0.0, 1.5)
+    pi = np.array([[0.8, 0.1, 0.1], [0.2, 0.7, 0.1], [0.2, 0.1, 0.7]])
+    sensor = PositionFix("p", cov=[[0.3]], position_index=(0,))
+    mm = MultipleModelParticleFilter(
+        [Jump(c) for c in levels], pi, [sensor], 3000, proposal="cells"
+    )
+    rng = np.random.default_rng(3)
+    b = mm.initialize(Gaussian(np.zeros(1), np.eye(1)), rng)
+    ms = [Measurement(1.0, "p", [0.2])]
+    cells = mm.cells(b, 1.0, ms)
+    assert len(cells) == 3
+    for (centres, w, _), level in zip(cells, levels):
+        np.testing.assert_allclose(centres[:, 0], level)  # Jump forgets the past: one point
+        assert np.isclose(w.sum(), 1.0)
+    x, modes = mm.propose(b, 1.0, ms, rng)
+    assert x.shape == (3000, 1) and modes.shape == (3000,)
+    for r, (centres, _, delta) in enumerate(cells):
+        d = np.abs(x[modes == r, None, 0] - centres[None, :, 0])
+        assert np.all(np.any(d <= delta[0] / 2 + 1e-12, axis=1))
+    np.testing.assert_allclose(np.bincount(modes) / 3000, pi.mean(axis=0), atol=0.03)
+
+
+def test_cells_and_propose_refuse_what_they_cannot_use():
+    sensor = PositionFix("p", cov=[[0.3]], position_index=(0,))
+    pi = [[0.9, 0.1], [0.1, 0.9]]
+    mm = MultipleModelParticleFilter([Jump(0.0), Jump(1.0)], pi, [sensor], 50, proposal="cells")
+    rng = np.random.default_rng(0)
+    ms = [Measurement(1.0, "p", [0.2])]
+    batch = mm.initialize(Gaussian(np.zeros(1), np.eye(1)), rng, (2,))
+    with pytest.raises(ConfigError, match="batch_shape"):
+        mm.cells(batch, 1.0, ms)
+    with pytest.raises(ConfigError, match=r"belief\.proposal"):
+        mm.propose(Particles(np.zeros((50, 1)), np.zeros(50)), 1.0, ms, rng)

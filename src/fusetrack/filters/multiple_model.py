@@ -30,14 +30,15 @@ from numpy.typing import ArrayLike, NDArray
 from ..core import (
     ConfigError,
     Gaussian,
-    Measurement,  # noqa: F401  (doctest)
+    Measurement,
     MotionModel,
+    Particles,
     SensorModel,
     invalid,
 )
 from ..motion import MarkovSwitching
 from .grid_proposals import DiscretisationProposal, complete_from_ancestors, sample_cells
-from .proposals import Array, LogLikelihood, ProposalContext, Zs
+from .proposals import Array, LogLikelihood, ProposalContext, Zs, check_generator
 from .sis import ProposalParticleFilter
 from .sp_pekf import BankState, SPPEKFBank, gaussian_draw_rows
 
@@ -239,6 +240,15 @@ class RegimeSwitchingProposal:
             log_r[sel] = lt - log_q  # Eq. 53 (likelihood added by the filter)
         return x, log_r, RegimeState(modes, len(self.models), tuple(banks))
 
+    def model_cells(
+        self, r: int, prev: Array, zs: Zs, dt: float, filt: ProposalContext
+    ) -> tuple[Array, Array, Array]:
+        """Regime ``r``'s cells (Algorithm 7, step 2): ``prev``'s cells propagated through model
+        ``r`` and weighted by the measurement (Eqs. 78-79): centres ``(C, d)``, weights ``(C,)``
+        and the side ``Δ`` of the position boxes."""
+        view = ProposalContext(self.models[r], filt.sensors, filt.stats)
+        return self.cell_proposal.cells(prev, zs, dt, view)
+
     def _from_cells(
         self,
         r: int,
@@ -255,8 +265,7 @@ class RegimeSwitchingProposal:
         if prev.ndim != 2:
             raise ConfigError(invalid("batch_shape", prev.shape[:-2], "() for proposal='cells'"))
         model = self.models[r]
-        view = ProposalContext(model, filt.sensors, filt.stats)
-        centre, w, delta = self.cell_proposal.cells(prev, zs, dt, view)
+        centre, w, delta = self.model_cells(r, prev, zs, dt, filt)
         pos = list(model.position_index)  # type: ignore[attr-defined]
         p, log_q = sample_cells(centre[:, pos], w, delta, n_r, rng)
         log_a = np.log(np.maximum(self.transition[prev_modes, r], 1e-300))
@@ -346,6 +355,39 @@ class MultipleModelParticleFilter(ProposalParticleFilter):
         super().__init__(models[0], sensors, switching, n_particles, resampler=resampler)
         self.models = models
         self.switching = switching
+
+    def cells(
+        self, belief: Particles, dt: float, measurements: Sequence[Measurement]
+    ) -> list[tuple[Array, Array, Array]]:
+        """Each model's cells for the step from ``belief`` (Algorithm 7, step 2; Fig 55): per
+        model, the centres ``(C, d)``, weights ``(C,)`` and box side ``Δ`` (one set, no batch)."""
+        if belief.states.ndim != 2:
+            raise ConfigError(invalid("belief.batch_shape", belief.batch_shape, "() (one set)"))
+        zs, side, _ = self._step_inputs(measurements, belief.batch_shape)
+        ctx = self.context(side)
+        return [
+            self.switching.model_cells(r, belief.states, zs, dt, ctx)
+            for r in range(len(self.models))
+        ]
+
+    def propose(
+        self,
+        belief: Particles,
+        dt: float,
+        measurements: Sequence[Measurement],
+        rng: np.random.Generator,
+    ) -> tuple[Array, IntArray]:
+        """The step's draw alone (Algorithm 7, steps 1-3; Fig 56): the proposed particles
+        ``(..., N, d)``, before weighting and resampling, and their regimes ``(..., N)``."""
+        zs, side, _ = self._step_inputs(measurements, belief.batch_shape)
+        gen = check_generator(rng)
+        regimes = getattr(belief, "proposal", None)
+        if not isinstance(regimes, RegimeState):
+            raise ConfigError(
+                invalid("belief.proposal", regimes, "a RegimeState (from initialize)")
+            )
+        x, _, state = self.switching.draw(regimes, belief.states, zs, dt, gen, self.context(side))
+        return x, state.modes
 
 
 def hmm_filter(transition: ArrayLike, loglik: Array, initial: ArrayLike) -> Array:

@@ -4,6 +4,8 @@
   weighted cells concentrate along the measured bearing.
 * E16 (Figs 53-54): the discretisation PF (200 particles) against the bootstrap (200) and the EKF
   on the E13 example-1 bearings-only track (spec choice).
+* Algorithm 7's demo (Figs 55-56, :mod:`.alg7_demo`): the four models' cells after one step,
+  the truth and the measurement, and the particles drawn from them, coloured by model.
 * E17 (Figs 58-72): the discretisation MMPF (CV, CCW, CW, CA on a 6-D state, Pi_B, 1000 particles,
   Algorithm 7) against a single-model (CA) bootstrap with 1000 particles, range-bearing from the
   origin (bearing noise given in degrees), three scenarios x two noise cases, 100 runs.
@@ -31,6 +33,7 @@ from ...filters import (
 )
 from ...motion import ConstantAcceleration, ConstantVelocity, CoordinatedTurn, ManeuverTurn
 from ...sensors import Bearing, RangeBearing
+from . import alg7_demo as a7
 from . import best_possible as bp
 from . import e13_readings
 from . import galerkin as e13
@@ -350,6 +353,14 @@ def run(ctx: RunContext) -> Outcome:
         )
     )
 
+    a7_seeds = [run_seed(ctx.seed, A7_SEED_TAG + k) for k in range(5 if ctx.quick else 200)]
+    a7_table = a7.demo_table(e17_models(0.1), PI_B, n17, a7_seeds)
+    a7_verdicts = a7.seed_verdicts(a7_table)
+    claims += a7.demo_claims(CLAIM_KINDS, a7_verdicts, a7_table)
+    a7_fig = a7.demo_figure(
+        ctx, a7.run_demo(e17_models(0.1), PI_B, n17, np.random.default_rng(a7_seeds[0]))
+    )
+
     cfgs = [
         {"experiment": "E17", "scenario": s, "case": c, "n_particles": n17}
         for s in ("S1", "S2", "S3")
@@ -365,10 +376,14 @@ def run(ctx: RunContext) -> Outcome:
     v16 = e16_verdicts(pd.concat([df16.assign(reading="printed"), dfr], ignore_index=True))
     claims += claims_e16_readings(v16)
     body = report_text(fig52, avg16, tab, figs17, (runs16, runs17), n17)
+    body += a7.demo_section(a7_fig, a7_verdicts, a7_table, n17)
     body += e16_section(v16, runs16, ctx.quick) + cmp.section
     df = pd.concat([df, dfr], ignore_index=True)
     return Outcome(df, claims, body, runs16, beyond_the_paper=cmp.summary)
 
+
+A7_SEED_TAG = 7000
+"""Algorithm 7's demo seeds are ``run_seed(seed, A7_SEED_TAG + k)`` (apart from the runs')."""
 
 E16_READINGS = ("T=0.25", "sigma_n^2=0.0001", "narrow DOA, wide prior")
 """E13's readings (:mod:`.e13_readings`) E16 reruns; with --quick only the last, fewer steps."""
@@ -460,6 +475,8 @@ CLAIM_KINDS = ClaimKinds(
         "E16_order": "paper",
         "C14_*": "paper",
         "R_*": "diagnostic",  # E16 under E13's unprinted readings (issue 19)
+        "A7_CA_fewer_than_CV": "diagnostic",  # what Pi_B does imply (beside A7_CA_fewest)
+        "A7_*": "paper",  # Algorithm 7's demo (Figs 55-56, issue 19)
     }
 )
 
