@@ -131,7 +131,7 @@ def agreement_claim(
         f"{what}: converged, the same at {n1} and {n2} particles",
         None,
         f"{v1:.3g} ± {s1:.2g} at {n1}, {v2:.3g} ± {s2:.2g} at {n2}",
-        f"|difference| <= {MARGIN_SE:g} combined s.e.",
+        f"abs(difference) <= {MARGIN_SE:g} combined s.e.",
         ok,
     )
 
