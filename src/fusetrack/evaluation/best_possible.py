@@ -16,6 +16,8 @@ compared with our mean (:func:`mean_with_se`).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 
@@ -124,7 +126,7 @@ def agreement_claim(
     agrees within :data:`MARGIN_SE` combined standard errors, so the larger count's value is
     the converged one (the posterior mean's). Fails: more particles are still needed."""
     (n1, v1, s1), (n2, v2, s2) = smaller, larger
-    se = float(np.hypot(*(s if np.isfinite(s) else 0.0 for s in (s1, s2))))
+    se = math.hypot(*(float(s) if np.isfinite(s) else 0.0 for s in (s1, s2)))
     ok = bool(abs(v2 - v1) <= MARGIN_SE * se)
     return kinds.claim(
         claim_id,
