@@ -19,7 +19,9 @@ Three kinds of row, all on the runs' own truths and measurements:
 Paper tables give the mean and the variance over runs of the per-run RMSE; the root mean square
 over runs, ``sqrt(mean^2 + var)``, is what a mean-square bound bounds (:func:`paper_rms`), and
 ours is compared the same way (:func:`rms_over_runs`). A paper number below the posterior
-mean's by more than three standard errors cannot come from the model as printed.
+mean's by more than three standard errors cannot come from the model as printed. The judging
+(statistics, verdicts, claims) is generic and lives in :mod:`fusetrack.evaluation.best_possible`;
+it is re-exported here under the names the Zhai experiments use.
 """
 
 from __future__ import annotations
@@ -29,20 +31,28 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from ...core import Gaussian, MotionModel, SensorModel
-from ...evaluation import Claim, ClaimKinds, posterior_crlb, rmse_bound
+from ...evaluation import (
+    IMPOSSIBLE,
+    MARGIN_SE,
+    NOT_FROM_MODEL,
+    POSSIBLE,
+    best_table,
+    converged_claim,
+    mean_with_se,
+    paper_rms,
+    possible_claim,
+    posterior_crlb,
+    rms_over_runs,
+    rmse_bound,
+)
+from ...evaluation import best_possible_verdict as verdict
 from ...filters import ProposalParticleFilter
 from .common import Array, Steps, timed_sis
 
 BEST_N = {"full": 10_000, "quick": 2_000}
 """Particles of the posterior-mean bootstrap at full size and with ``--quick``."""
-MARGIN_SE = 3.0
-"""A paper number counts as below the best possible when it is more than this many standard
-errors below the posterior mean's root mean square."""
-POSSIBLE = "possible"
-IMPOSSIBLE = "impossible on the printed model"
 
 
 def best_n(quick: bool) -> int:
@@ -117,97 +127,6 @@ def simulate_many(
     for _ in range(steps):
         xs.append(np.asarray(step(xs[-1], rng), dtype=float))
     return np.stack(xs, axis=1)
-
-
-def rms_over_runs(per_run_rmse: pd.Series | Array) -> tuple[float, float]:
-    """``sqrt(mean over runs of RMSE_run^2)`` and its standard error (delta method)."""
-    r2 = np.asarray(per_run_rmse, dtype=float) ** 2
-    m = float(np.mean(r2))
-    se_m = float(np.std(r2, ddof=1) / np.sqrt(len(r2))) if len(r2) > 1 else float("nan")
-    root = float(np.sqrt(m))
-    return root, se_m / (2.0 * root) if root > 0 else float("nan")
-
-
-def mean_with_se(values: pd.Series | Array) -> tuple[float, float]:
-    """Mean over runs and its standard error (for tables that average squared errors)."""
-    v = np.asarray(values, dtype=float)
-    se = float(np.std(v, ddof=1) / np.sqrt(len(v))) if len(v) > 1 else float("nan")
-    return float(np.mean(v)), se
-
-
-def paper_rms(mean: float, var: float) -> float:
-    """A paper's root mean square over runs of the per-run RMSE from its mean and variance."""
-    return float(np.sqrt(mean**2 + var))
-
-
-def verdict(
-    paper: float, best: float, se: float, bound: float | None = None, model: str = ""
-) -> str:
-    """:data:`POSSIBLE`, or :data:`IMPOSSIBLE` (``model``: another reading's name) when ``paper`` is below the PCRB ``bound`` or
-    more than :data:`MARGIN_SE` standard errors below the posterior mean's ``best``."""
-    margin = MARGIN_SE * (se if np.isfinite(se) else 0.0)
-    below = paper < best - margin or (bound is not None and paper < bound)
-    if not below:
-        return POSSIBLE
-    return IMPOSSIBLE if not model else f"impossible under '{model}'"
-
-
-def possible_claim(
-    kinds: ClaimKinds,
-    claim_id: str,
-    what: str,
-    paper: float,
-    best: tuple[float, float],
-    bound: float | None = None,
-    model: str = "",
-) -> Claim:
-    """Diagnostic: the paper's ``what`` (``paper``) is not below the best possible on the
-    printed model, or on the reading ``model`` (posterior mean ``best = (value, s.e.)``, PCRB
-    ``bound``). Fails: the number is *impossible on the printed model*, not merely not
-    reproduced."""
-    value, se = best
-    label = verdict(paper, value, se, bound, model)
-    pcrb = "" if bound is None else f", PCRB {bound:.3g}"
-    return kinds.claim(
-        claim_id,
-        f"{what}: the paper's number is not below the best possible on "
-        + (f"the reading '{model}'" if model else "the printed model"),
-        paper,
-        f"posterior mean {value:.3g} ± {se:.2g}{pcrb}: {label}",
-        f"paper >= posterior mean - {MARGIN_SE:g} s.e. and >= PCRB",
-        label == POSSIBLE,
-    )
-
-
-NOT_FROM_MODEL = "cannot come from the printed model"
-
-
-def converged_claim(
-    kinds: ClaimKinds,
-    claim_id: str,
-    what: str,
-    paper: float,
-    trivial: tuple[str, float],
-) -> Claim:
-    """Diagnostic for a paper's *bootstrap* row: a bootstrap filter converges to the posterior
-    mean, the best possible, so once ours has converged at the paper's particle count the
-    paper's row can be no worse than a trivial estimator (``trivial = (label, RMS)``). Fails:
-    the paper's level *cannot come from the printed model*."""
-    label, value = trivial
-    ok = paper <= value
-    return kinds.claim(
-        claim_id,
-        f"{what}: no worse than the trivial estimator '{label}' on the printed model",
-        paper,
-        f"{label} {value:.3g}: {'consistent' if ok else NOT_FROM_MODEL}",
-        "paper <= trivial estimator",
-        ok,
-    )
-
-
-def best_table(rows: dict[str, dict[str, float]]) -> pd.DataFrame:
-    """The rows beside a paper table, in the given order: ``{label: {column: value}}``."""
-    return pd.DataFrame.from_dict(rows, orient="index")
 
 
 __all__ = [
