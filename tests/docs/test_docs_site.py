@@ -83,7 +83,7 @@ def test_a_missing_report_figure_is_a_note_not_a_broken_link():
 def test_readme_commands_are_taken_from_the_readme():
     code = _hooks().readme_code("# fusetrack")
     assert code.startswith("```bash") and code.endswith("```")
-    assert 'pip install -e ".[dev,docs]" && .venv/bin/python -m pytest -q' in code
+    assert 'pip install -e ".[dev,docs]" && .venv/bin/python -m pytest -q -n auto' in code
     with pytest.raises(ValueError, match="no line"):
         _hooks().readme_code("## No such heading")
 
