@@ -51,8 +51,14 @@ VERDICT = PaperVerdict(
         ),
         Contribution(
             "Sec. 5.2.3: RFID virtual sensors refined by cameras beat the coarse RFID position, "
-            "with an accuracy roughly independent of the readers' layout",
-            refs("lee2009-rfid-camera", "C17_refined_beats_coarse", "C17_refined_flat"),
+            "with an accuracy roughly independent of the readers' layout and almost the same "
+            "from one or two reference points (Fig. 5-36)",
+            refs(
+                "lee2009-rfid-camera",
+                "C17_refined_beats_coarse",
+                "C17_refined_flat",
+                "C17_one_vs_two_references",
+            ),
         ),
     ),
 )
