@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.colors import to_rgb
 
 from fusetrack.evaluation import drawing, plots
 
@@ -305,3 +306,22 @@ def test_write_animation_writes_one_gif_frame_per_frame(tmp_path):
     out = plots.write_animation(fig, draw, range(3), tmp_path / "a.mp4", fps=5)
     assert out == tmp_path / "a.gif"  # no mp4 asked for
     assert Image.open(out).n_frames == 3
+
+
+def test_spread_band_fills_between_the_bounds_in_the_curve_colour_and_names_bad_shapes():
+    import pytest
+
+    from fusetrack.core import ShapeError
+
+    fig, ax = _axes()
+    x = np.arange(4.0)
+    plots.curve(ax, x, [1.0, 2.0, 3.0, 4.0], index=2, label="median")
+    plots.spread_band(ax, x, [0.5, 1.5, 2.5, 3.5], [1.5, 2.5, 3.5, 4.5], index=2, label="quartiles")
+    (band,) = ax.collections
+    path = band.get_paths()[0].vertices
+    assert path[:, 1].min() == 0.5 and path[:, 1].max() == 4.5  # from the lower to the upper bound
+    assert np.allclose(band.get_facecolor()[0][:3], to_rgb(ax.get_lines()[0].get_color()))
+    assert "quartiles" in plots.labelled(ax)
+    with pytest.raises(ShapeError, match=r"high\.shape"):
+        plots.spread_band(ax, x, x, x[:3], index=0)
+    plt.close(fig)

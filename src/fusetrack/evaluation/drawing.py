@@ -221,6 +221,17 @@ def curves(
         k += name not in (styles or {})
 
 
+def spread_band(
+    ax: Axes, x: ArrayLike, low: ArrayLike, high: ArrayLike, *, index: int, label: str | None = None
+) -> None:
+    """A translucent band between ``low`` and ``high`` (e.g. the inter-quartile range over runs)
+    in the colour of :func:`distinct_style` ``index``, so it goes with that curve."""
+    xs = np.asarray(x, float)
+    lo = _series(low, xs.size, "low.shape")
+    hi = _series(high, xs.size, "high.shape")
+    ax.fill_between(xs, lo, hi, color=f"C{index % 10}", alpha=0.18, lw=0, label=label)
+
+
 def reference_line(
     ax: Axes,
     value: float,
@@ -686,5 +697,6 @@ __all__ = [
     "save",
     "shade_intervals",
     "show_image",
+    "spread_band",
     "write_animation",
 ]

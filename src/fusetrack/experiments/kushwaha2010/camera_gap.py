@@ -31,6 +31,7 @@ from ...evaluation import (
 from ...filters import TrackerSettings
 from ...sensors import EllipsoidCamera
 from ...world import EllipsoidTarget, Trajectory, perimeter_cameras, smooth_trajectory
+from .camera_steps_figure import error_along_steps
 from .cameras import (
     ABLATIONS,
     SETUPS,
@@ -267,7 +268,22 @@ def _claims(df: pd.DataFrame, gap: int) -> list[Any]:
     ]
 
 
-def _text(df: pd.DataFrame, gap: int, runs: int, cfg: Mapping[str, Any]) -> str:
+def _figure(ctx: RunContext, df: pd.DataFrame, gap: int) -> str:
+    """Fig. 53a analogue over all runs: the error of T0 and T2 per step, the gap shaded."""
+    return error_along_steps(
+        ctx,
+        df,
+        GAP_TRACKERS,
+        (gap, gap + 1),
+        "one camera can use the target",
+        windows(gap),
+        "One-camera gap at QVGA (Fig. 53a analogue)",
+        "gap_error_vs_time",
+        count=df[df.tracker == "T0"].groupby("t")["usable"].median(),
+    )
+
+
+def _text(df: pd.DataFrame, gap: int, runs: int, cfg: Mapping[str, Any], fig: str) -> str:
     pre, post = window_errors(df, gap)
     table = pd.DataFrame(
         {
@@ -312,6 +328,12 @@ Median over runs of the 3-D error (m) at chosen steps:
 
 {along.to_markdown(floatfmt=".3f")}
 
+![error along the steps]({fig})
+
+Median over runs of the 3-D error per step, with the inter-quartile band; the gap shaded, the
+windows of the claims between the thin lines, the median number of cameras that can use the
+target dashed (right axis).
+
 ## Differences from the paper and their causes
 
 * The paper shows one trajectory (Fig. 53); here {runs} paths are built to have its camera count
@@ -332,7 +354,7 @@ def run(ctx: RunContext) -> Outcome:
         "n_particles_2d": 60 if ctx.quick else 200,
     }
     df = ctx.monte_carlo(run_once, [cfg], runs, desc="paths with a gap")
-    return Outcome(df, _claims(df, gap), _text(df, gap, runs, cfg), runs)
+    return Outcome(df, _claims(df, gap), _text(df, gap, runs, cfg, _figure(ctx, df, gap)), runs)
 
 
 __all__ = ["gap_trajectory", "qvga_cameras", "run", "run_once", "seen_by"]

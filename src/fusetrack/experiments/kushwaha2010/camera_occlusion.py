@@ -25,6 +25,7 @@ from ...filters import TrackerSettings
 from ...sensors import EllipsoidCamera
 from ...world import EllipsoidTarget, Frames, Trajectory, render_target, smooth_trajectory
 from .camera_gap import qvga_cameras, seen_by
+from .camera_steps_figure import error_along_steps
 from .cameras import ABLATIONS, SETUPS, TRACKERS, appearance_model, error_rows, scene_from_truth
 from .cameras import track as track_scene
 from .cameras import trackers as all_trackers
@@ -197,7 +198,21 @@ def _claims(df: pd.DataFrame) -> list[Any]:
     ]
 
 
-def _text(df: pd.DataFrame, runs: int, cfg: Mapping[str, Any]) -> str:
+def _figure(ctx: RunContext, df: pd.DataFrame) -> str:
+    """The error of T0 and T2 per step over all runs, the occluded steps shaded."""
+    return error_along_steps(
+        ctx,
+        df,
+        OCC_TRACKERS,
+        (OCCLUDED_STEPS[0], OCCLUDED_STEPS[-1]),
+        "occluder over the target in two cameras",
+        windows(int(df.t.max()) + 1),
+        "Occlusion in two cameras, no re-initialisation (FGH #2 analogue)",
+        "occlusion_error_vs_time",
+    )
+
+
+def _text(df: pd.DataFrame, runs: int, cfg: Mapping[str, Any], fig: str) -> str:
     pre, post = _errors(df)
     per_t = df.groupby(["tracker", "t"])["err3d"].median().unstack(0)
     steps = [t for t in (10, 18, 20, 22, 24, 26, 30, 35) if t in per_t.index]
@@ -228,6 +243,11 @@ Median over runs of the 3-D error (m) at chosen steps:
 
 {per_t.loc[steps].to_markdown(floatfmt=".3f")}
 
+![error along the steps]({fig})
+
+Median over runs of the 3-D error per step, with the inter-quartile band; the occluded steps
+shaded, the windows of the claims between the thin lines.
+
 ## Differences from the paper and their causes
 
 * The paper's FGH experiment has real people, six cameras and no ground truth; here the target
@@ -246,7 +266,7 @@ def run(ctx: RunContext) -> Outcome:
         "n_particles_2d": 60 if ctx.quick else 200,
     }
     df = ctx.monte_carlo(run_once, [cfg], runs, desc="paths with an occluder")
-    return Outcome(df, _claims(df), _text(df, runs, cfg), runs)
+    return Outcome(df, _claims(df), _text(df, runs, cfg, _figure(ctx, df)), runs)
 
 
 __all__ = ["OCCLUDER", "PlainEllipsoid", "occluder_position", "run", "run_once"]
