@@ -128,6 +128,17 @@ def _claims(
     ]
 
 
+def _outcome(res: NavigationResult) -> str:
+    """How a navigation ended, for a panel title: collision, oscillation or goal, at which step."""
+    if res.collided_at is not None:
+        return f"collides at step {res.collided_at}"
+    if res.reached_goal_at is not None:
+        return f"goal at step {res.reached_goal_at}"
+    if res.oscillation_at is not None:
+        return f"oscillates from step {res.oscillation_at}"
+    return f"no goal in {len(res.path) - 1} steps"
+
+
 def _figures(
     ctx: RunContext, fld: PotentialField, u: np.ndarray, results: Mapping[str, NavigationResult]
 ) -> tuple[Path, Path]:
@@ -147,15 +158,22 @@ def _figures(
                          "signed force along the diagonal", f"Fig. 5-26 {name}")  # fmt: skip
     plots.legend(axs[0], fontsize=7)
     fig526 = plots.save(fig, ctx.figure_path("fig5_26_force_profile"))
-    fig, ax = plots.panel(size=(5.5, 5.5))
-    plots.draw_paths(ax, [res.path for res in results.values()], labels=list(results))
-    ax.plot(*fld.obstacle, "ks", ms=10, label="obstacle")
-    ax.plot(*fld.goal, "g*", ms=14, label="goal")
-    ax.set_aspect("equal")
-    plots.label_axes(
-        ax, "x (field units)", "y (field units)", "Robot paths (Figs. 5-25, 5-28, 5-29)"
-    )
-    plots.legend(ax, fontsize=7)
+    # one panel per variant: the paths run on the same grid points and would hide one another
+    cols = 3
+    rows = -(-len(results) // cols)
+    fig, grid = plots.figure(rows, cols, size=(3.6 * cols, 3.9 * rows), sharex=True, sharey=True)
+    axs = grid.ravel()
+    plots.hide_unused(axs, len(results))
+    for k, (ax, (name, res)) in enumerate(zip(axs, results.items())):
+        plots.draw_paths(ax, [res.path], labels=["path"], start=k, mark_start=True)
+        ax.plot(*fld.obstacle, "ks", ms=9, label="obstacle")
+        ax.plot(*fld.goal, "g*", ms=13, label="goal")
+        ax.set_aspect("equal")
+        plots.label_axes(ax, "x (field units)", "y (field units)" if k % cols == 0 else "",
+                         f"{name}\n{_outcome(res)}")  # fmt: skip
+        ax.title.set_fontsize(8)
+    plots.legend(axs[0], fontsize=7)
+    fig.suptitle("Robot paths from (12, 12) (Figs. 5-25, 5-28, 5-29)")
     figpath = plots.save(fig, ctx.figure_path("robot_paths"))
     return fig526, figpath
 
