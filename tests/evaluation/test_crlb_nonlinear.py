@@ -146,5 +146,8 @@ def test_deterministic_crlb_nonlinear_motion_per_trajectory():
 
 
 def test_singular_process_noise_is_named():
+    """Prop. 1 needs Q^-1; a linear model takes the covariance form (test_crlb_covariance_form)."""
     with pytest.raises(ConfigError, match="noise_cov"):
-        posterior_crlb(ConstantVelocity(noise="discrete"), MICS, cv_truth(3, 1.0), 1.0, P0)
+        posterior_crlb(
+            ConstantVelocity(noise="discrete"), MICS, cv_truth(3, 1.0), 1.0, P0, form="information"
+        )
