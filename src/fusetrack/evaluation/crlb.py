@@ -173,10 +173,30 @@ def _jacobian(motion: MotionModel, x: Array, dt: float) -> Array:
         raise ShapeError(invalid("motion.jacobian(x, dt).shape", F.shape, valid)) from None
 
 
+def _given_information(information: ArrayLike | None, R: int, T: int, S: int, d: int) -> Any:
+    """The precomputed per-sensor information ``(R, T, S, d, d)`` (broadcast), or None."""
+    if information is None:
+        return None
+    a = np.asarray(information, dtype=float)
+    try:
+        a = np.broadcast_to(a, (R, T, S, d, d))
+    except ValueError:
+        valid = f"(T, S, d, d) = ({T}, {S}, {d}, {d}) or (R, T, S, d, d) with R = {R}"
+        raise ShapeError(invalid("information.shape", a.shape, valid)) from None
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(invalid("information", "non-finite values", "finite matrices"))
+    return a
+
+
 def _measurement_information(
-    sensors: list[SensorModel], x: Array, w: Array, use_detection_probability: bool
+    sensors: list[SensorModel],
+    x: Array,
+    w: Array,
+    use_detection_probability: bool,
+    given: Array | None = None,
 ) -> Array:
-    """``sum_s q_s(x) H_s^T R_s^-1 H_s`` at states ``x`` ``(R, d)``, factors ``w`` ``(R, S)``."""
+    """``sum_s q_s(x) H_s^T R_s^-1 H_s`` at states ``x`` ``(R, d)``, factors ``w`` ``(R, S)``;
+    ``given`` ``(R, S, d, d)``: the sensors' information there, precomputed."""
     R, d = x.shape
     info = np.zeros((R, d, d))
     for s, sensor in enumerate(sensors):
@@ -185,7 +205,8 @@ def _measurement_information(
             q = q * np.broadcast_to(np.asarray(sensor.detection_probability(x), dtype=float), (R,))
         if not np.any(q > 0):
             continue  # no report: no information (and no need to evaluate the geometry)
-        fi = np.broadcast_to(np.asarray(sensor.fisher_information(x), dtype=float), (R, d, d))
+        raw = sensor.fisher_information(x) if given is None else given[:, s]
+        fi = np.broadcast_to(np.asarray(raw, dtype=float), (R, d, d))
         info += np.where((q > 0)[:, None, None], q[:, None, None] * fi, 0.0)
     return info
 
@@ -199,6 +220,7 @@ class BoundOptions(TypedDict, total=False):
 
     mask: ArrayLike | None
     use_detection_probability: bool
+    information: ArrayLike | None
 
 
 class PosteriorOptions(BoundOptions, total=False):
@@ -221,11 +243,13 @@ class _Problem:
     weights: Array
     use_detection_probability: bool
     prior: Array
+    given: Array | None = None
 
     def information(self, k: int) -> Array:
         """``sum_s q_{s,k} H_s^T R_s^-1 H_s`` at step ``k`` per trajectory: ``(R, d, d)``."""
+        given = None if self.given is None else self.given[:, k]
         return _measurement_information(
-            self.sensors, self.x[:, k], self.weights[:, k], self.use_detection_probability
+            self.sensors, self.x[:, k], self.weights[:, k], self.use_detection_probability, given
         )
 
 
@@ -244,11 +268,9 @@ def _problem(
     steps = _steps(dt, T)
     w = _weights(options.get("mask"), R, T, len(sl))
     use_pd = bool(options.get("use_detection_probability", False))
-    return _Problem(x, single, sl, steps, w, use_pd, _prior_information(prior_cov, d))
-
-
-# --------------------------------------------------------------------------------------------
-# public
+    prior = _prior_information(prior_cov, d)
+    given = _given_information(options.get("information"), R, T, len(sl), d)
+    return _Problem(x, single, sl, steps, w, use_pd, prior, given)
 
 
 def _information_step(
@@ -285,6 +307,10 @@ def _common_jacobian(F: Array) -> Array | None:
     return F[:1] if bool(np.all(F == F[:1])) else None
 
 
+# --------------------------------------------------------------------------------------------
+# public
+
+
 def posterior_information(
     motion: MotionModel,
     sensors: Sensors,
@@ -304,7 +330,10 @@ def posterior_information(
     add no information), or any factors in [0, 1]. ``use_detection_probability=True`` multiplies
     every sensor's information by ``sensor.detection_probability(x_k)`` at the true state (its
     detection probability, field of view and range), the expected-information (information
-    reduction factor) bound. Both may be used together.
+    reduction factor) bound. Both may be used together. ``information`` ``(T, S, d, d)`` or
+    ``(R, T, S, d, d)``: each sensor's ``H^T R^-1 H`` at the true states, precomputed (in one
+    vectorised call over all steps, or once for several masks and priors), in place of calling
+    ``sensor.fisher_information`` at every step.
 
     ``average=True`` (default) takes the expectations over the ``R`` trajectories and returns
     ``(T, d, d)``; ``average=False`` runs the recursion along every trajectory separately (each
