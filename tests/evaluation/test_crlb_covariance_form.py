@@ -70,7 +70,8 @@ def test_nonlinear_motion_with_singular_noise_is_refused():
     ct = CoordinatedTurnRate(q=0.3, q_omega=0.0)
     rng = np.random.default_rng(2)
     x = np.empty((4, 5, 5))
-    x[:, 0] = np.column_stack([rng.normal(size=(4, 4)) + [5, 10, 1, 0], rng.normal(0, 0.1, 4)])
+    start = rng.normal(size=(4, 4)) + np.array([5.0, 10.0, 1.0, 0.0])
+    x[:, 0] = np.column_stack([start, rng.normal(0, 0.1, 4)])
     for k in range(4):
         x[:, k + 1] = ct.sample(x[:, k], 1.0, rng)
     p0 = np.diag([4.0, 4.0, 1.0, 1.0, 0.01])
