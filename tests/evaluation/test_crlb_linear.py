@@ -123,8 +123,8 @@ def test_rmse_bound_helpers():
 def test_errors():
     x = trajectories(1, 4, [1.0] * 3)
     discrete = ConstantVelocity(ndim=2, q=0.3, noise="discrete")
-    with pytest.raises(ConfigError, match=r"dt=0\.25"):
-        posterior_crlb(discrete, [TAG_A], x, 0.25, P0)
+    with pytest.raises(ConfigError, match=r"dt=0\.25"):  # Prop. 1 needs Q^-1
+        posterior_crlb(discrete, [TAG_A], x, 0.25, P0, form="information")
     with pytest.raises(ConfigError, match=r"dt\[1\]"):
         posterior_crlb(CV, [TAG_A], x, [1.0, 0.0, 1.0], P0)
     with pytest.raises(ShapeError, match="dt"):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from fusetrack.core import ConfigError
+from fusetrack.core import ConfigError, ShapeError
 from fusetrack.evaluation.crlb import (
     deterministic_crlb,
     posterior_crlb,
@@ -146,5 +146,21 @@ def test_deterministic_crlb_nonlinear_motion_per_trajectory():
 
 
 def test_singular_process_noise_is_named():
+    """Prop. 1 needs Q^-1; a linear model takes the covariance form (test_crlb_covariance_form)."""
     with pytest.raises(ConfigError, match="noise_cov"):
-        posterior_crlb(ConstantVelocity(noise="discrete"), MICS, cv_truth(3, 1.0), 1.0, P0)
+        posterior_crlb(
+            ConstantVelocity(noise="discrete"), MICS, cv_truth(3, 1.0), 1.0, P0, form="information"
+        )
+
+
+def test_precomputed_information_equals_the_per_step_calls():
+    """``information``: the sensors' H^T R^-1 H computed once over all steps (reusable across
+    masks and priors) gives the bound of the per-step calls; a wrong shape is named."""
+    x = cv_truth(12, 1.0, R=3)
+    mask = np.random.default_rng(5).random((12, 2)) < 0.7
+    info = np.stack([s.fisher_information(x) for s in MICS], axis=2)  # (R, T, S, d, d)
+    B = posterior_crlb(CV, MICS, x, 1.0, P0, mask=mask)
+    Bi = posterior_crlb(CV, MICS, x, 1.0, P0, mask=mask, information=info)
+    np.testing.assert_allclose(Bi, B, rtol=1e-12, atol=0)
+    with pytest.raises(ShapeError, match="information"):
+        posterior_crlb(CV, MICS, x, 1.0, P0, information=info[:, :, :1, :, :3])

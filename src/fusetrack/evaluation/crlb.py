@@ -23,6 +23,21 @@ Without clutter the reduction factor of a detection probability ``P_D`` is exact
 On a linear-Gaussian model the recursion is the Kalman filter's information-form covariance
 recursion, so ``J_k^-1`` equals the filter's posterior covariance.
 
+**Covariance form (singular Q).** When the motion's Jacobian ``F_k`` is the same at every true
+state the expectation is taken over (a linear motion model, or one trajectory with
+``average=False``), ``D11 = F^T Q^-1 F`` and ``D12 = -F^T Q^-1``, and the matrix inversion lemma
+turns Proposition 1 into::
+
+    J_{k+1} = (Q_k + F_k J_k^-1 F_k^T)^-1 + E[sum_s q_{s,k+1} H_s^T R_s^-1 H_s]
+
+(the PCRB for linear dynamics of Ristic, Arulampalam & Gordon 2004, Ch. 4; Bergman 2001), which
+needs no ``Q^-1``: it holds for rank-deficient process noise (a Wiener-sequence acceleration, a
+constant component), as the limit of the full-rank bound while ``Q + F J^-1 F^T`` stays
+invertible, and on a linear-Gaussian model ``J_k^-1`` is the Kalman filter's covariance.
+``form="auto"`` (default) takes the information form when ``Q`` is invertible and the
+covariance form otherwise; a singular ``Q`` with Jacobians that differ between the averaged
+trajectories (nonlinear motion) is a :class:`~fusetrack.core.ConfigError`.
+
 Step convention: ``trajectories[:, k]`` is the true state at step ``k``; ``dt[k]`` is the interval
 from step ``k`` to ``k + 1`` (irregular intervals are fine). ``prior_cov`` is the covariance of
 ``x_0`` *before* the measurements of step 0; mask out step 0 (``mask[..., 0, :] = False``) when
@@ -35,9 +50,9 @@ Models are used only through the :class:`~fusetrack.core.MotionModel` and
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TypedDict, Unpack
+from typing import Any, Literal, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -46,6 +61,8 @@ from ..core import ConfigError, MotionModel, SensorModel, ShapeError, invalid
 
 Array = NDArray[np.float64]
 Sensors = Mapping[str, SensorModel] | Sequence[SensorModel]
+Form = Literal["auto", "information", "covariance"]
+FORMS = ("auto", "information", "covariance")
 
 
 # --------------------------------------------------------------------------------------------
@@ -118,23 +135,32 @@ def _weights(mask: ArrayLike | None, R: int, T: int, S: int) -> Array:
     return m
 
 
-def _inverse_noise(motion: MotionModel, dt: float, d: int) -> Array:
-    """``Q(dt)^-1``; ConfigError naming ``dt`` when ``Q(dt)`` is singular."""
+def _noise(motion: MotionModel, dt: float, d: int) -> tuple[Array, Array | None]:
+    """``Q(dt)`` and ``Q(dt)^-1``, or None in its place when ``Q(dt)`` is singular."""
     Q = np.asarray(motion.noise_cov(dt), dtype=float)
     if Q.shape != (d, d):
         raise ShapeError(invalid(f"motion.noise_cov({dt!r}).shape", Q.shape, f"({d}, {d})"))
-    eig = np.linalg.eigvalsh(0.5 * (Q + Q.T)) if np.all(np.isfinite(Q)) else np.array([np.nan])
-    if not (np.all(np.isfinite(eig)) and eig[0] > d * np.finfo(float).eps * max(eig[-1], 0.0)):
-        raise ConfigError(
-            invalid(
-                f"motion.noise_cov(dt={dt!r})",
-                f"singular (eigenvalues {np.round(eig, 15).tolist()})",
-                "an invertible process-noise covariance: the PCRB needs Q^-1 (use a model with "
-                "full-rank noise, e.g. ConstantVelocity(noise='continuous'), or deterministic_crlb "
-                "for Q = 0)",
-            )
+    if not np.all(np.isfinite(Q)):
+        raise ConfigError(invalid(f"motion.noise_cov(dt={dt!r})", "non-finite", "finite entries"))
+    eig = np.linalg.eigvalsh(0.5 * (Q + Q.T))
+    if eig[0] > d * np.finfo(float).eps * max(eig[-1], 0.0):
+        return Q, np.linalg.inv(Q)
+    return Q, None
+
+
+def _singular_noise(Q: Array, dt: float, why: str) -> ConfigError:
+    """The error for a singular ``Q(dt)`` the information form would need to invert."""
+    eig = np.round(np.linalg.eigvalsh(0.5 * (Q + Q.T)), 15).tolist()
+    return ConfigError(
+        invalid(
+            f"motion.noise_cov(dt={dt!r})",
+            f"singular{why} (eigenvalues {eig})",
+            "an invertible process-noise covariance: the PCRB of nonlinear motion needs Q^-1 "
+            "(use a model with full-rank noise, e.g. ConstantVelocity(noise='continuous'), a "
+            "linear motion model, whose covariance form needs no Q^-1, or deterministic_crlb "
+            "for Q = 0)",
         )
-    return np.linalg.inv(Q)
+    )
 
 
 def _jacobian(motion: MotionModel, x: Array, dt: float) -> Array:
@@ -147,10 +173,30 @@ def _jacobian(motion: MotionModel, x: Array, dt: float) -> Array:
         raise ShapeError(invalid("motion.jacobian(x, dt).shape", F.shape, valid)) from None
 
 
+def _given_information(information: ArrayLike | None, R: int, T: int, S: int, d: int) -> Any:
+    """The precomputed per-sensor information ``(R, T, S, d, d)`` (broadcast), or None."""
+    if information is None:
+        return None
+    a = np.asarray(information, dtype=float)
+    try:
+        a = np.broadcast_to(a, (R, T, S, d, d))
+    except ValueError:
+        valid = f"(T, S, d, d) = ({T}, {S}, {d}, {d}) or (R, T, S, d, d) with R = {R}"
+        raise ShapeError(invalid("information.shape", a.shape, valid)) from None
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(invalid("information", "non-finite values", "finite matrices"))
+    return a
+
+
 def _measurement_information(
-    sensors: list[SensorModel], x: Array, w: Array, use_detection_probability: bool
+    sensors: list[SensorModel],
+    x: Array,
+    w: Array,
+    use_detection_probability: bool,
+    given: Array | None = None,
 ) -> Array:
-    """``sum_s q_s(x) H_s^T R_s^-1 H_s`` at states ``x`` ``(R, d)``, factors ``w`` ``(R, S)``."""
+    """``sum_s q_s(x) H_s^T R_s^-1 H_s`` at states ``x`` ``(R, d)``, factors ``w`` ``(R, S)``;
+    ``given`` ``(R, S, d, d)``: the sensors' information there, precomputed."""
     R, d = x.shape
     info = np.zeros((R, d, d))
     for s, sensor in enumerate(sensors):
@@ -159,7 +205,8 @@ def _measurement_information(
             q = q * np.broadcast_to(np.asarray(sensor.detection_probability(x), dtype=float), (R,))
         if not np.any(q > 0):
             continue  # no report: no information (and no need to evaluate the geometry)
-        fi = np.broadcast_to(np.asarray(sensor.fisher_information(x), dtype=float), (R, d, d))
+        raw = sensor.fisher_information(x) if given is None else given[:, s]
+        fi = np.broadcast_to(np.asarray(raw, dtype=float), (R, d, d))
         info += np.where((q > 0)[:, None, None], q[:, None, None] * fi, 0.0)
     return info
 
@@ -173,12 +220,15 @@ class BoundOptions(TypedDict, total=False):
 
     mask: ArrayLike | None
     use_detection_probability: bool
+    information: ArrayLike | None
 
 
 class PosteriorOptions(BoundOptions, total=False):
-    """Keyword options of the posterior bound: :class:`BoundOptions` and ``average``."""
+    """Keyword options of the posterior bound: :class:`BoundOptions`, ``average`` and
+    ``form``."""
 
     average: bool
+    form: Form
 
 
 @dataclass(frozen=True)
@@ -193,11 +243,13 @@ class _Problem:
     weights: Array
     use_detection_probability: bool
     prior: Array
+    given: Array | None = None
 
     def information(self, k: int) -> Array:
         """``sum_s q_{s,k} H_s^T R_s^-1 H_s`` at step ``k`` per trajectory: ``(R, d, d)``."""
+        given = None if self.given is None else self.given[:, k]
         return _measurement_information(
-            self.sensors, self.x[:, k], self.weights[:, k], self.use_detection_probability
+            self.sensors, self.x[:, k], self.weights[:, k], self.use_detection_probability, given
         )
 
 
@@ -216,7 +268,43 @@ def _problem(
     steps = _steps(dt, T)
     w = _weights(options.get("mask"), R, T, len(sl))
     use_pd = bool(options.get("use_detection_probability", False))
-    return _Problem(x, single, sl, steps, w, use_pd, _prior_information(prior_cov, d))
+    prior = _prior_information(prior_cov, d)
+    given = _given_information(options.get("information"), R, T, len(sl), d)
+    return _Problem(x, single, sl, steps, w, use_pd, prior, given)
+
+
+def _information_step(
+    J: Array, F: Array, Qi: Array, info: Array, expect: Callable[[Array], Array]
+) -> Array:
+    """Tichavský et al. 1998, Prop. 1: ``J_{k+1} = D22 - D21 (J_k + D11)^-1 D12``."""
+    D11 = expect(np.swapaxes(F, -1, -2) @ (Qi @ F))  # E[F^T Q^-1 F]
+    D12 = -np.swapaxes(expect(F), -1, -2) @ Qi  # -E[F]^T Q^-1
+    D22 = Qi + info
+    Y = np.linalg.solve(J + D11, D12)
+    return _symmetrise(D22 - np.swapaxes(D12, -1, -2) @ Y)
+
+
+def _covariance_step(J: Array, F: Array, Q: Array, info: Array, dt: float) -> Array:
+    """Prop. 1 for one Jacobian ``F``, by the matrix inversion lemma:
+    ``J_{k+1} = (Q + F J_k^-1 F^T)^-1 + info`` (no ``Q^-1``)."""
+    M = _symmetrise(Q + F @ np.linalg.solve(J, np.swapaxes(F, -1, -2)))
+    try:
+        L = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        raise ConfigError(
+            invalid(
+                f"motion.noise_cov(dt={dt!r}) + F J^-1 F^T",
+                "singular (a state component predicted exactly)",
+                "a positive-definite predicted covariance (an invertible F or a larger Q)",
+            )
+        ) from None
+    Linv = np.linalg.solve(L, np.broadcast_to(np.eye(M.shape[-1]), M.shape))
+    return _symmetrise(np.swapaxes(Linv, -1, -2) @ Linv + info)
+
+
+def _common_jacobian(F: Array) -> Array | None:
+    """``F[0]`` when every trajectory's Jacobian is the same (linear motion), else None."""
+    return F[:1] if bool(np.all(F == F[:1])) else None
 
 
 # --------------------------------------------------------------------------------------------
@@ -233,8 +321,7 @@ def posterior_information(
 ) -> Array:
     """Fisher information matrices ``J_k`` of the Tichavský et al. (1998) recursion.
 
-    ``motion``: a :class:`~fusetrack.core.MotionModel` whose ``noise_cov(dt)`` is invertible
-    (:class:`~fusetrack.core.ConfigError` naming ``dt`` otherwise). ``sensors``: a sequence or a
+    ``motion``: a :class:`~fusetrack.core.MotionModel`. ``sensors``: a sequence or a
     mapping of :class:`~fusetrack.core.SensorModel`; their order is the ``S`` axis of ``mask``.
     ``trajectories``: true states ``(R, T, d)`` (or ``(T, d)`` for one). ``dt``: a scalar or one
     interval per step ``(T - 1,)``. ``prior_cov``: ``P_0`` ``(d, d)``.
@@ -243,12 +330,23 @@ def posterior_information(
     add no information), or any factors in [0, 1]. ``use_detection_probability=True`` multiplies
     every sensor's information by ``sensor.detection_probability(x_k)`` at the true state (its
     detection probability, field of view and range), the expected-information (information
-    reduction factor) bound. Both may be used together.
+    reduction factor) bound. Both may be used together. ``information`` ``(T, S, d, d)`` or
+    ``(R, T, S, d, d)``: each sensor's ``H^T R^-1 H`` at the true states, precomputed (in one
+    vectorised call over all steps, or once for several masks and priors), in place of calling
+    ``sensor.fisher_information`` at every step.
 
     ``average=True`` (default) takes the expectations over the ``R`` trajectories and returns
     ``(T, d, d)``; ``average=False`` runs the recursion along every trajectory separately (each
     its own ``R = 1`` bound) and returns ``(R, T, d, d)``. Everything is vectorised over ``R``.
+
+    ``form``: ``"information"`` (Prop. 1, needs ``Q^-1``: :class:`~fusetrack.core.ConfigError`
+    naming ``dt`` when ``noise_cov(dt)`` is singular), ``"covariance"`` (the module docstring's
+    covariance form, needs one Jacobian over the averaged trajectories) or ``"auto"`` (default:
+    the information form when ``Q`` is invertible, else the covariance form).
     """
+    form = options.get("form", "auto")
+    if form not in FORMS:
+        raise ConfigError(invalid("form", form, f"one of {FORMS}"))
     pb = _problem(motion, sensors, trajectories, dt, prior_cov, options)
     average = options.get("average", True)
     R, T, d = pb.x.shape
@@ -259,19 +357,26 @@ def posterior_information(
     J = np.empty((R if not average else 1, T, d, d))
     # Tichavský et al. 1998: J_0 = P_0^-1, plus what the sensors report at step 0
     J[:, 0] = pb.prior + expect(pb.information(0))
-    Qinv_cache: dict[float, Array] = {}
+    noise: dict[float, tuple[Array, Array | None]] = {}
     for k in range(T - 1):  # loop over steps; every step is vectorised over the R trajectories
         h = float(pb.steps[k])
-        if h not in Qinv_cache:
-            Qinv_cache[h] = _inverse_noise(motion, h, d)
-        Qi = Qinv_cache[h]
+        if h not in noise:
+            noise[h] = _noise(motion, h, d)
+        Q, Qi = noise[h]
         F = _jacobian(motion, pb.x[:, k], h)
-        D11 = expect(np.swapaxes(F, -1, -2) @ (Qi @ F))  # E[F^T Q^-1 F]
-        D12 = -np.swapaxes(expect(F), -1, -2) @ Qi  # -E[F]^T Q^-1
-        D22 = Qi + expect(pb.information(k + 1))
-        # Tichavský et al. 1998, Prop. 1: J_{k+1} = D22 - D21 (J_k + D11)^-1 D12
-        Y = np.linalg.solve(J[:, k] + D11, D12)
-        J[:, k + 1] = _symmetrise(D22 - np.swapaxes(D12, -1, -2) @ Y)
+        info = expect(pb.information(k + 1))
+        if form == "information" or (form == "auto" and Qi is not None):
+            if Qi is None:
+                raise _singular_noise(Q, h, "")
+            J[:, k + 1] = _information_step(J[:, k], F, Qi, info, expect)
+            continue
+        Fc = F if not average else _common_jacobian(F)
+        if Fc is None and Qi is None:
+            raise _singular_noise(Q, h, ", motion.jacobian differs between trajectories")
+        if Fc is None:
+            valid = "'auto' or 'information' for motion whose Jacobian differs between trajectories"
+            raise ConfigError(invalid("form", form, valid))
+        J[:, k + 1] = _covariance_step(J[:, k], Fc, Q, info, h)
     return J[0] if average else J
 
 

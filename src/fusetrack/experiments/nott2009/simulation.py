@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
+from . import best_possible as bp
 from .scenario import METHOD_NAMES, run_once
 
 BURN_IN = 5
@@ -36,6 +37,14 @@ PROTO: dict[str, Any] = {  # spec Sec. 6.3 [PROTO] (CV / CA), mean Euclidean err
         60: (2.997, 0.270, 0.294),
     },
 }
+
+
+def proto_by_case() -> dict[str, dict[str, float]]:
+    """The [PROTO] mean errors as ``{case: {method: m}}``, the sweep's as ``sweep-L{L}``."""
+    out = {case: dict(v) for case, v in PROTO.items() if case != "sweep"}
+    for L, values in PROTO["sweep"].items():
+        out[f"sweep-L{L}"] = dict(zip(("B4", "J", "B5"), values))
+    return out
 
 
 def configs() -> list[dict[str, Any]]:
@@ -136,6 +145,7 @@ CLAIM_KINDS = ClaimKinds(
     {
         "consistency": "diagnostic",  # NEES: not in the thesis
         "V4-*": "diagnostic",  # a reading of the camera measurement (TP/BP points, spec E15)
+        "BP_*": "diagnostic",  # the best possible on the simulated model (issue 19, item 3)
         "H*": "paper",
     }
 )
@@ -577,9 +587,17 @@ def run(ctx: RunContext) -> Outcome:
         *_v4_claims(tables),
         _consistency_claim(df),
     ]
+    bounds = bp.estimate(df, configs(), BURN_IN)
+    proto = bp.proto_rows(bounds, proto_by_case())
+    claims += [
+        *bp.above_claims(CLAIM_KINDS, bounds),
+        *bp.proto_claims(CLAIM_KINDS, proto),
+        bp.prior_claim(CLAIM_KINDS, bounds),
+    ]
     figs = _figures(ctx, df, sweep)
     body = (
         _report_numbers(tables, sweep, rate, off, off_w, runs)
+        + bp.report(bounds, proto, runs, BURN_IN)
         + "\n".join(f"![{f}]({f})" for f in figs)
         + _report_differences(tables, sweep, rate, off_w)
     )
