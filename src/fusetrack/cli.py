@@ -79,6 +79,11 @@ def _add_run_options(p: argparse.ArgumentParser, default_out: str | None) -> Non
     )
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar (also -q)")
     p.add_argument(
+        "--no-resume",
+        action="store_true",
+        help="start afresh: ignore the runs an interrupted full-size run left in --out",
+    )
+    p.add_argument(
         "--out",
         type=Path,
         required=default_out is None,
@@ -296,6 +301,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         workers=args.workers,
         progress=False if args.no_progress or getattr(args, "quiet", 0) else None,
         extra=_extra_options(args),
+        resume=not getattr(args, "no_resume", False),
     )
     summary = run_experiment(ctx)
     _print_summary(summary, ctx.out_dir)

@@ -2,7 +2,8 @@
 
 The seed of run ``r`` is derived from the base seed and ``r`` alone (``SeedSequence([seed, r])``),
 so every configuration sees the same random numbers in the same run (common random numbers), and
-the rows are identical whatever the engine or the number of workers.
+the rows are identical whatever the engine or the number of workers -- or whether some of them
+were computed by an earlier, interrupted invocation and kept in a checkpoint (:mod:`.checkpoint`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import pandas as pd
 from threadpoolctl import threadpool_limits
 
 from ..core import ConfigError, invalid
+from .checkpoint import Checkpoint, job_key
 from .terminal import progress_bar
 
 RunFunction = Callable[[Mapping[str, Any], int], list[dict[str, Any]]]
@@ -75,22 +77,25 @@ def _jobs(
     ]
 
 
-def _local(jobs: list[_Job], workers: int, bar: Any) -> Iterator[list[dict[str, Any]]]:
+Finished = Iterator[tuple[_Job, list[dict[str, Any]]]]
+"""Each job with its rows, as the jobs finish."""
+
+
+def _local(jobs: list[_Job], workers: int, bar: Any) -> Finished:
     if workers <= 1 or len(jobs) == 1:
         for job in jobs:
-            yield job()
+            rows = job()
             bar.update()
+            yield job, rows
         return
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(_call, job) for job in jobs]
+        futures = {pool.submit(_call, job): job for job in jobs}
         for fut in as_completed(futures):
             bar.update()
-            yield fut.result()
+            yield futures[fut], fut.result()
 
 
-def _dask(
-    jobs: list[_Job], workers: int, scheduler: str | None, bar: Any
-) -> Iterator[list[dict[str, Any]]]:
+def _dask(jobs: list[_Job], workers: int, scheduler: str | None, bar: Any) -> Finished:
     from distributed import Client, LocalCluster
     from distributed import as_completed as dask_completed
 
@@ -104,9 +109,10 @@ def _dask(
         client = Client(scheduler)
     try:
         futures = client.map(_call, jobs, pure=False)
+        job_of = {fut.key: job for fut, job in zip(futures, jobs)}
         for fut in dask_completed(futures):
             bar.update()
-            yield fut.result()
+            yield job_of[fut.key], fut.result()
     finally:
         client.close()
         if cluster is not None:
@@ -124,6 +130,7 @@ def run_monte_carlo(
     scheduler: str | None = None,
     progress: bool | None = None,
     desc: str = "runs",
+    checkpoint: Checkpoint | None = None,
 ) -> pd.DataFrame:
     """Run ``fn(config, seed)`` for every configuration and run; return the tidy rows.
 
@@ -131,20 +138,36 @@ def run_monte_carlo(
     the columns ``config`` (index), ``run``, ``seed`` and the configuration's scalar parameters.
     Rows come back sorted by (config, run), identical for every engine and worker count.
     ``progress``: False hides it; otherwise a bar on a terminal and a plain line every few
-    seconds elsewhere (:func:`.terminal.progress_bar`).
+    seconds elsewhere (:func:`.terminal.progress_bar`). ``checkpoint``: runs already in it are
+    not run again, and every run that finishes is saved to it at once.
     """
     if engine not in ENGINES:
         raise ConfigError(invalid("engine", engine, f"one of {ENGINES}"))
     jobs = _jobs(fn, configs, runs, seed)
+    done = checkpoint.done if checkpoint is not None else {}
+    keys = {id(job): job_key(fn, job.config, job.run, job.seed) for job in jobs}
+    todo = [job for job in jobs if keys[id(job)] not in done]
+    chunks = {id(job): done[keys[id(job)]] for job in jobs if keys[id(job)] in done}
+    if chunks:
+        desc = f"{desc} ({len(chunks)} of {len(jobs)} from the checkpoint)"
     n_workers = workers if workers is not None else (os.cpu_count() or 1)
-    with progress_bar(len(jobs), desc, progress) as bar:
-        if engine == "local":
-            chunks = list(_local(jobs, n_workers, bar))
-        else:
-            chunks = list(_dask(jobs, n_workers, scheduler, bar))
-    rows = [row for chunk in chunks for row in chunk]
+    with progress_bar(len(todo), desc, progress) as bar:
+        finished = (
+            _local(todo, n_workers, bar)
+            if engine == "local"
+            else _dask(todo, n_workers, scheduler, bar)
+        )
+        for job, job_rows in finished if todo else ():
+            if checkpoint is not None:
+                checkpoint.save(keys[id(job)], job_rows)
+            chunks[id(job)] = job_rows
+    resumed = len(jobs) - len(todo)
+    rows = [row for job in jobs for row in chunks[id(job)]]
     if not rows:
-        return pd.DataFrame(columns=["config", "run", "seed"])
-    df = pd.DataFrame(rows)
-    order = [c for c in ("config", "run") if c in df.columns]
-    return df.sort_values(order, kind="stable").reset_index(drop=True)
+        df = pd.DataFrame(columns=["config", "run", "seed"])
+    else:
+        df = pd.DataFrame(rows)
+        order = [c for c in ("config", "run") if c in df.columns]
+        df = df.sort_values(order, kind="stable").reset_index(drop=True)
+    df.attrs["resumed_runs"] = resumed  # runs taken from the checkpoint, not run again
+    return df

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ..core import ConfigError, invalid
+from .checkpoint import CHECKPOINT_NAME, Checkpoint
 from .montecarlo import ENGINES, RunFunction, run_monte_carlo
 from .options import ExperimentOptions
 
@@ -101,6 +102,11 @@ class RunContext:
     progress: bool | None = None
     extra: dict[str, Any] = field(default_factory=dict)
     options: ExperimentOptions | None = None
+    resume: bool = True
+    """A full-size run keeps every finished Monte Carlo run in ``out_dir`` (:mod:`.checkpoint`)
+    and, started again after an interruption, resumes from it; False starts afresh."""
+    resumed_runs: int = field(default=0, init=False)
+    _checkpoint: Checkpoint | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.out_dir = Path(self.out_dir)
@@ -121,10 +127,22 @@ class RunContext:
         """Worker processes the Monte Carlo runs use: ``--workers``, else one per CPU."""
         return self.workers if self.workers is not None else (os.cpu_count() or 1)
 
+    def checkpoint(self) -> Checkpoint | None:
+        """The run's checkpoint (full-size runs only; quick runs are cheap to redo), opened once;
+        with ``resume=False`` an old one is deleted first."""
+        if self.quick:
+            return None
+        if self._checkpoint is None:
+            path = self.out_dir / CHECKPOINT_NAME
+            if not self.resume:
+                path.unlink(missing_ok=True)
+            self._checkpoint = Checkpoint(path)
+        return self._checkpoint
+
     def monte_carlo(
         self, fn: RunFunction, configs: Sequence[Mapping[str, Any]], runs: int, desc: str = "runs"
     ) -> pd.DataFrame:
-        return run_monte_carlo(
+        df = run_monte_carlo(
             fn,
             configs,
             runs,
@@ -134,7 +152,15 @@ class RunContext:
             scheduler=self.scheduler,
             progress=self.progress,
             desc=f"{self.name}: {desc}",
+            checkpoint=self.checkpoint(),
         )
+        self.resumed_runs += int(df.attrs.get("resumed_runs", 0))
+        return df
+
+    def discard_checkpoint(self) -> None:
+        """The run's outputs are written: nothing is left to resume."""
+        if self._checkpoint is not None:
+            self._checkpoint.remove()
 
     def figure_path(self, stem: str) -> Path:
         self.out_dir.mkdir(parents=True, exist_ok=True)
@@ -235,6 +261,8 @@ def write_outputs(
         "quick": ctx.quick,
         "engine": ctx.engine,
     }
+    if ctx.resumed_runs:
+        summary["resumed_runs"] = ctx.resumed_runs
     if outcome.beyond_the_paper:
         summary["beyond_the_paper"] = _jsonable(outcome.beyond_the_paper)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
@@ -245,10 +273,21 @@ def write_outputs(
         f" --engine {ctx.engine} --workers {ctx.n_workers()}{_option_flags(ctx.extra)}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
         f"{' (quick run: fewer runs, wider tolerances)' if ctx.quick else ''}.",
         "",
+        *(
+            [
+                f"Resumed: {ctx.resumed_runs} Monte Carlo runs came from the checkpoint of an "
+                "earlier, interrupted invocation of the same code; the seconds above count this "
+                "invocation only.",
+                "",
+            ]
+            if ctx.resumed_runs
+            else []
+        ),
         f"## Claims ({verdict_line(outcome.claims)})",
         "",
         claims_table(outcome.claims),
         "",
     ]
     (out / "report.md").write_text("\n".join(header) + "\n" + outcome.report.strip() + "\n")
+    ctx.discard_checkpoint()
     return summary
