@@ -19,11 +19,9 @@ WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-lab",
-    "ercan2013-prior-accuracy",
     "ercan2013-prior-calibration",
     "kushwaha2010-cameras-a",
     "kushwaha2010-sbe",
-    "nott2009-simulation",
 }
 """Reports known to be older than their code, each to be regenerated at full size (strict xfail: a
 name stays here only while its report really is stale)."""

@@ -22,6 +22,12 @@ VERDICT = PaperVerdict(
                     ),
                 ),
             ),
+            best_possible=refs(
+                "ercan2013-prior-accuracy",
+                "BP_possible_perfect",
+                "BP_possible_none",
+                "BP_possible_crossing",
+            ),
         ),
         Contribution(
             "E2 (Fig. 7): at realistic prior accuracy the occluder priors still gain 1.94x",
@@ -30,6 +36,9 @@ VERDICT = PaperVerdict(
                 Reading(
                     "sigma_v = 2", refs("ercan2013-prior-accuracy", "C4_gain_realistic_sigma_v_2")
                 ),
+            ),
+            best_possible=refs(
+                "ercan2013-prior-accuracy", "BP_possible_none", "BP_possible_crossing"
             ),
         ),
         Contribution(
