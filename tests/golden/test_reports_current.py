@@ -21,7 +21,6 @@ AWAITING_RERUN = {
     "ercan2013-lab",
     "ercan2013-prior-calibration",
     "kushwaha2010-cameras-a",
-    "kushwaha2010-sbe",
 }
 """Reports known to be older than their code, each to be regenerated at full size (strict xfail: a
 name stays here only while its report really is stale)."""
