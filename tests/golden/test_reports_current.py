@@ -18,7 +18,6 @@ QUICK = json.loads(FIXTURE.read_text())
 WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
     "ercan2013-cameras",
-    "ercan2013-lab",
     "ercan2013-prior-calibration",
     "kushwaha2010-cameras-a",
 }
