@@ -56,6 +56,8 @@ class Checkpoint:
         self.path = Path(path)
         self.done: dict[str, Rows] = {}
         self._load()
+        self.loaded = frozenset(self.done)
+        """The runs an earlier invocation left (not those this one saves)."""
 
     def _load(self) -> None:
         """Read the whole records of this code; cut a partial last record off the file."""

@@ -161,7 +161,10 @@ def run_monte_carlo(
             if checkpoint is not None:
                 checkpoint.save(keys[id(job)], job_rows)
             chunks[id(job)] = job_rows
-    resumed = len(jobs) - len(todo)
+    # runs an earlier invocation left, not those this one saved in an earlier call
+    resumed = (
+        sum(keys[id(job)] in checkpoint.loaded for job in jobs) if checkpoint is not None else 0
+    )
     rows = [row for job in jobs for row in chunks[id(job)]]
     if not rows:
         df = pd.DataFrame(columns=["config", "run", "seed"])
