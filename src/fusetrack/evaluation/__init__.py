@@ -18,6 +18,7 @@ from .best_possible import (
 from .crlb import (
     axis_bounds,
     deterministic_crlb,
+    expected_norm,
     position_rmse_bound,
     posterior_crlb,
     posterior_information,
@@ -126,6 +127,7 @@ __all__ = [
     "converged_claim",
     "describe_options",
     "deterministic_crlb",
+    "expected_norm",
     "direct3d_crlb",
     "fused_bound",
     "gospa",

@@ -56,6 +56,7 @@ from typing import Any, Literal, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.special import ellipe
 
 from ..core import ConfigError, MotionModel, SensorModel, ShapeError, invalid
 
@@ -471,3 +472,19 @@ def axis_bounds(bounds: ArrayLike, index: Sequence[int] | None = None) -> Array:
     if index is not None:
         diag = diag[..., [int(i) for i in index]]
     return np.sqrt(np.clip(diag, 0.0, None))
+
+
+def expected_norm(cov: ArrayLike) -> Array:
+    """``E|e|`` for ``e ~ N(0, cov)``, ``cov`` ``(..., 2, 2)``: ``sqrt(2 / pi) s_1 E(m)``,
+    ``m = 1 - s_2^2 / s_1^2`` (the norm over a uniform angle of a Rayleigh radius; ``E`` the
+    complete elliptic integral of the second kind).
+
+    With a bound's position block as ``cov`` it is the mean-Euclidean-error bound of an
+    estimator whose error is centred Gaussian with covariance at least the bound (Jensen: adding
+    independent noise cannot lower an expected norm), the bound a paper's *mean* error is
+    compared with (a mean-square bound bounds only the RMS error)."""
+    lam = np.clip(np.linalg.eigvalsh(np.asarray(cov, dtype=float)), 0.0, None)
+    lo, hi = lam[..., 0], lam[..., 1]
+    m = 1.0 - np.divide(lo, hi, out=np.ones_like(hi), where=hi > 0)
+    s1 = np.sqrt(hi)
+    return np.asarray(np.sqrt(2.0 / np.pi) * s1 * ellipe(m))

@@ -38,7 +38,8 @@ for a Kalman filter on a linear-Gaussian model, close for these EKFs), ``E|e_k| 
 B_k[pos])|`` (Jensen: adding independent noise cannot lower an expected norm), and
 ``E|N(0, C)| = sqrt(2 / pi) s_1 E(1 - s_2^2 / s_1^2)`` with ``s_1 >= s_2`` the standard deviations
 along ``C``'s axes and ``E`` the complete elliptic integral of the second kind
-(:func:`expected_norm`). That mean-error bound is what a [PROTO] mean error is compared with.
+(:func:`~fusetrack.evaluation.expected_norm`). That mean-error bound is what a [PROTO] mean
+error is compared with.
 """
 
 from __future__ import annotations
@@ -49,7 +50,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.special import ellipe
 
 from ...core import ConfigError, invalid
 from ...evaluation import (
@@ -60,6 +60,7 @@ from ...evaluation import (
     ClaimKinds,
     best_possible_verdict,
     best_table,
+    expected_norm,
     posterior_crlb,
     rms_over_runs,
 )
@@ -130,16 +131,6 @@ def position_bound(
         information=sensor_information(cfg, x) if information is None else information,
     )
     return np.asarray(B[:, :2, :2])
-
-
-def expected_norm(cov: Array) -> Array:
-    """``E|e|`` for ``e ~ N(0, cov)``, ``cov`` ``(..., 2, 2)``: ``sqrt(2 / pi) s_1 E(m)``,
-    ``m = 1 - s_2^2 / s_1^2`` (the norm over a uniform angle of a Rayleigh radius)."""
-    lam = np.clip(np.linalg.eigvalsh(np.asarray(cov, dtype=float)), 0.0, None)
-    lo, hi = lam[..., 0], lam[..., 1]
-    m = 1.0 - np.divide(lo, hi, out=np.ones_like(hi), where=hi > 0)
-    s1 = np.sqrt(hi)
-    return np.asarray(np.sqrt(2.0 / np.pi) * s1 * ellipe(m))
 
 
 @dataclass(frozen=True)
