@@ -82,6 +82,25 @@ def test_audio_doa_error_is_the_strongest_beam_minus_the_true_bearing():
     assert np.isnan(err[0, 1])  # no packet of A2
 
 
+def test_video_bearing_error_is_the_nearest_component_of_a_vehicle_in_view():
+    """One camera at the origin looking along +x: a blob on bins 80-84 points at bin 82's
+    angle; a vehicle 0.01 rad off it is in error by -0.01 rad; a vehicle behind the camera has
+    no bearing, nor, with ``apart``, two vehicles closer than it in view."""
+    camera = Layout(audio=(), video=(("V1", 0.0, 0.0, 0.0),))
+    values = np.zeros(160)
+    values[80:85] = 50.0
+    taken = [{"V1": Packet("V1", 0, 0.0, values, 0.0)}]
+    a = ab.VIDEO_ANGLES[82] + 0.01
+    centres = np.array([[[10 * np.cos(a), 10 * np.sin(a)], [-10.0, 0.0]]])  # (T=1, n=2, 2)
+    err = ab.video_bearing_errors(camera, taken, centres)
+    assert err.shape == (1, 1, 2)
+    assert err[0, 0, 0] == pytest.approx(-0.01, abs=1e-9)
+    assert np.isnan(err[0, 0, 1])  # behind the camera
+    near = np.array([[[10 * np.cos(a), 10 * np.sin(a)], [10.0, 10 * np.tan(a + 0.02)]]])
+    merged = ab.video_bearing_errors(camera, taken, near, apart=0.05)
+    assert np.isnan(merged).all()
+
+
 def test_comparison_keeps_only_ticks_with_two_bearings():
     B = np.stack([np.eye(2) * v for v in (100.0, 1.0, 4.0)])
     pb = ab.PassBound(B, np.array([False, True, True]))

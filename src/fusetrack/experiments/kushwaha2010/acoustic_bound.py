@@ -13,26 +13,30 @@ bound takes the bearings those functions point at, with the noise our simulated 
 * a camera's bearing is the mean of the Gaussian-mixture component (:func:`fit_angle_mixture`,
   as the trackers fit it) nearest the vehicle's centre of mass, only while the centre is in its
   field of view (known association: with several vehicles each is given its own component);
-* per modality one noise ``sigma``: the robust spread ``1.4826 MAD`` about the median of all the
-  runs' bearing errors (:func:`robust_sigma`). Beam quantisation, the smoothing lag and the
-  silhouette's offset are in it; gross errors (a wrong peak) are not, so the bound is that of
-  the sensors' Gaussian core, below what their outliers allow.
+* per modality one noise ``sigma``: the robust spread ``1.4826 MAD`` of all the runs' bearing
+  errors about each sensor's median over its pass (:func:`robust_sigma`; with several vehicles,
+  the bearings of a vehicle alone in a camera's view, elsewhere a component is often a merged
+  blob's). A bias that stays over a pass (the 10 cm array's anisotropy at engine frequencies,
+  the smoothing lag, a silhouette's offset) and gross errors (a wrong peak) are left out: both
+  only lower the information, so the bound is that of the sensors' Gaussian core, below what
+  their biases and outliers allow.
 
 A bearing with noise ``sigma`` at horizontal range ``r`` adds ``u u^T / (sigma^2 r^2)`` to the
 position information (``u`` the unit vector across the line of sight;
 :class:`~fusetrack.sensors.Bearing`).
 
 **Motion and prior.** The trackers' motion model: nearly constant velocity with white
-acceleration of 2 m/s² per 0.25 s step (MCMCDA's ``accel_std`` and the particle back end's
-``q = 4``; rank-2 noise, so the covariance form of :func:`~fusetrack.evaluation.posterior_crlb`),
+acceleration of 2 m/s² per 0.25 s step (MCMCDA's ``accel_std``; rank-2 noise, so the covariance
+form of :func:`~fusetrack.evaluation.posterior_crlb`),
 along the run's true constant-velocity path; the grid SBE's directional model has no Gaussian
 form. Prior ``N(truth, PRIOR_COV)`` before the first tick: 10 m in position (half the field),
 15 m/s in velocity (either direction at up to 13.4 m/s) -- what a tracker knows before it has
 heard anything.
 
-**Comparisons.** The bound bounds the mean square error: a tracker's RMS position error over
-its ticks is compared with ``sqrt(mean_k trace B_k)`` over the same ticks (a tracker below it
-by more than 3 standard errors means a wrong tracker or a wrong bound). The paper's numbers
+**Comparisons.** Only ticks with two or more bearings count (:class:`PassBound`). The bound
+bounds the mean square error: a tracker's RMS position error over those of its ticks is compared
+with ``sqrt(mean_k trace B_k)`` over the same ticks (a tracker below it by more than 3 standard
+errors means a wrong tracker or a wrong bound). The paper's numbers
 are mean Euclidean errors; assuming centred Gaussian errors with covariance at least ``B_k``,
 their bound is ``mean_k E|N(0, B_k)|`` (:func:`~fusetrack.evaluation.expected_norm`), and a
 paper number below it is *impossible on the printed model* (under that assumption and this
@@ -58,6 +62,7 @@ from ...evaluation import (
     posterior_crlb,
     rms_over_runs,
 )
+from ...management import Packet
 from ...motion import ConstantVelocity
 from ...perception import fit_angle_mixture
 from ...sensors import AngularSampling, Bearing
@@ -87,7 +92,7 @@ def true_bearings(sensors: Sequence[tuple[str, float, float, float]], points: Ar
     return np.asarray(np.arctan2(d[..., 1], d[..., 0]))
 
 
-def audio_doa_errors(layout: Layout, taken: Sequence[Mapping[str, object]], source: Array) -> Array:
+def audio_doa_errors(layout: Layout, taken: Sequence[Mapping[str, Packet]], source: Array) -> Array:
     """``(T, 6)``: each node's strongest-beam DOA minus the true bearing of ``source`` ``(T, 2)``
     at each tick (NaN where the fusion node took no packet of that node)."""
     truth = true_bearings(layout.audio, source)
@@ -96,13 +101,13 @@ def audio_doa_errors(layout: Layout, taken: Sequence[Mapping[str, object]], sour
         for s, (sid, _, _, heading) in enumerate(layout.audio):
             p = packets.get(sid)
             if p is not None:
-                est = heading + BEAM_ANGLES[int(np.argmax(p.values))]  # type: ignore[attr-defined]
+                est = heading + BEAM_ANGLES[int(np.argmax(p.values))]
                 out[k, s] = _wrap(est - truth[k, s])
     return out
 
 
 def video_bearing_errors(
-    layout: Layout, taken: Sequence[Mapping[str, object]], centres: Array, apart: float = 0.0
+    layout: Layout, taken: Sequence[Mapping[str, Packet]], centres: Array, apart: float = 0.0
 ) -> Array:
     """``(T, 3, n)``: per camera, the mixture component nearest each of the ``n`` vehicles'
     centres ``(T, n, 2)`` minus its true bearing (NaN where the camera took no packet, fitted no
@@ -122,7 +127,7 @@ def video_bearing_errors(
             p = packets.get(sid)
             if p is None:
                 continue
-            mix = fit_angle_mixture(p.values, VIDEO_ANGLES, min_mass=20.0)  # type: ignore[attr-defined]
+            mix = fit_angle_mixture(p.values, VIDEO_ANGLES, min_mass=20.0)
             if mix.empty:
                 continue
             seen = in_view[k, s] & alone[k, s]
@@ -202,7 +207,7 @@ def position_bound(
     return np.asarray(B[:, :2, :2])
 
 
-def noise_of(records: Sequence[Mapping[str, object]]) -> BearingNoise:
+def noise_of(records: Sequence[Mapping[str, Packet]]) -> BearingNoise:
     """:class:`BearingNoise` pooled over the runs' bearing records (``"audio"``: ``(T, 6)``,
     ``"video"``: ``(T, 3, ...)`` errors in rad; ``"video_clean"``, where given, in place of
     ``"video"``: the bearings of a vehicle alone in a camera's view, unless there are none; a
