@@ -24,7 +24,12 @@ EXPECTED = {
         "mcmcda_beats_sbe",
     },
     "kushwaha2010-crossing": {"three_tracks", "per_track_errors", "audio_merges_at_crossing"},
-    "kushwaha2010-beamformer": {"min_error_mid_range", "error_grows_far", "error_grows_near"},
+    "kushwaha2010-beamformer": {
+        "min_error_mid_range",
+        "error_grows_far",
+        "error_grows_near",
+        "BP_nearest_beam_mid_range",
+    },
     "kushwaha2010-timesync": {
         "residual_far_below_period",
         "offset_hurts_tracking",
