@@ -77,6 +77,8 @@ PRIOR_SD = 0.05
 """The manual initialisation's sd of every position and velocity component (m, m/step), as
 :meth:`~fusetrack.filters.SmartCameraTracker.initial_belief`."""
 STATE_DIM = 6
+DEFAULT_SETTINGS = TrackerSettings()
+"""The trackers' constants (the experiments use the defaults of the velocity filter)."""
 MIN_PIXELS = 12
 """Target pixels a frame must show for its camera to inform (``render_frames``' ``min_pixels``,
 the rule of ``Frames.participating``)."""
@@ -126,7 +128,7 @@ class PointProjection:
         """``d pi / dx`` ``(..., 2, 6)``: rows ``(P_i[:3] - u_i P_3[:3]) / (P_3 . [x; 1])``."""
         h = self._homogeneous(x)
         uv = h[..., :2] / h[..., 2:3]
-        dpos = (self.P[None, :2, :3] - uv[..., :, None] * self.P[2, :3]) / h[..., 2, None, None]
+        dpos = (self.P[:2, :3] - uv[..., :, None] * self.P[2, :3]) / h[..., 2, None, None]
         return np.concatenate([dpos, np.zeros_like(dpos)], axis=-1)
 
     def noise_cov(self, x: Array | None = None) -> Array:
@@ -159,7 +161,7 @@ def projections(
     return [PointProjection(c.sensor_id, np.asarray(c.P, float), sigma) for c in cams]
 
 
-def trackers_motion(settings: TrackerSettings = TrackerSettings()) -> ConstantVelocity:
+def trackers_motion(settings: TrackerSettings = DEFAULT_SETTINGS) -> ConstantVelocity:
     """The trackers' velocity-filter motion (``SmartCameraTracker.kf``)."""
     return ConstantVelocity(ndim=3, q=settings.kf_q)
 
@@ -183,7 +185,7 @@ def position_bound(
     positions: ArrayLike,
     visible: ArrayLike,
     sigma: float = PIXEL_SIGMA,
-    settings: TrackerSettings = TrackerSettings(),
+    settings: TrackerSettings = DEFAULT_SETTINGS,
 ) -> Array:
     """The PCRB's position block ``(T, 3, 3)`` (m^2) along one run's true positions ``(T, 3)``,
     with camera ``n`` informative at step ``t`` where ``visible[t, n]`` and never at step 0.
@@ -221,8 +223,8 @@ def expected_norm(cov: ArrayLike) -> Array:
     top = lam.max(axis=-1, keepdims=True)
     rel = np.divide(lam, top, out=np.zeros_like(lam), where=top > 0)
     s = np.exp(_NODES)
-    mgf = np.prod((1.0 + 2.0 * s[:, None] * rel[..., None, :]) ** -0.5, axis=-1)  # (..., n)
-    f = (1.0 - mgf) * np.exp(-0.5 * _NODES)
+    log_mgf = -0.5 * np.sum(np.log1p(2.0 * s[:, None] * rel[..., None, :]), axis=-1)  # (..., n)
+    f = -np.expm1(log_mgf) * np.exp(-0.5 * _NODES)  # 1 - E exp(-s Q) without cancellation
     integral = np.sum(f, axis=-1) * (_NODES[1] - _NODES[0])
     return np.asarray(np.sqrt(top[..., 0]) * integral / (2.0 * np.sqrt(np.pi)))
 
@@ -357,7 +359,7 @@ idealised detector that reports the pixel of the target's centre in every camera
 {PIXEL_SIGMA:.3f} px, the spread of rounding to the pixel: a pixel-exact detector ([C]: the
 dissertation and the spec give no measurement noise for Ch. V; at 1 px the bound is about 3.4
 times higher, and no floor: the trackers' 2-D reprojection errors are about a pixel), with the
-trackers' own constant-velocity model (q = {TrackerSettings().kf_q:g} m^2/step^3, one step per
+trackers' own constant-velocity model (q = {DEFAULT_SETTINGS.kf_q:g} m^2/step^3, one step per
 frame) and their manual initialisation (sd {PRIOR_SD:g} m and m/step about the truth at step 0),
 evaluated along each run's own truth (Tichavský et al. 1998). The trackers do not see a point but
 score appearance histograms, so this is the floor of a pixel-exact detector on the model they
