@@ -17,7 +17,7 @@ form T4-eq103 came out below the bound in a quick run of setup B. The trackers d
 they score appearance histograms over projected ellipses (Eqs. 70-76), and a blob of many pixels
 can in principle be located below a pixel, so the bound compares them with this idealised
 detector, not with the images' full information. With the process noise below the bound is
-nearly proportional to ``sigma`` (3.4 times higher at 1 px).
+nearly proportional to ``sigma`` where the cameras dominate (up to 3.4 times higher at 1 px).
 
 A camera carries information at a step when it sees the target: its rendered frame shows at least
 12 target pixels (``Frames.participating``, which is False where the target has left the view or
@@ -30,7 +30,7 @@ frame (``dt = 1``), white-noise acceleration of PSD ``kf_q`` (``TrackerSettings.
 m^2/step^3, full-rank ``Q``, the PCRB's information form; Tichavský, Muravchik & Nehorai 1998),
 and the manual initialisation's prior ``N(truth at step 0, 0.05^2 I_6)`` (:data:`PRIOR_SD`),
 with no measurement at step 0 (the trackers update from step 1). The bound is evaluated along
-each run's own simulated truth (``average=False``: the run's ``R = 1`` bound). The truths are
+each run's own simulated truth (one trajectory, ``R = 1``: the run's own bound). The truths are
 smooth random paths, not draws from the constant-velocity model, so the bound is the error floor
 of the model the trackers assume at the run's geometry and visibility, not a theorem about the
 rendered runs; a tracker below it would be a finding to explain (it would have to use knowledge
@@ -357,7 +357,7 @@ What no tracker can beat (issue 19): the posterior Cramér-Rao bound of the 3-D 
 idealised detector that reports the pixel of the target's centre in every camera that sees it
 (at least {MIN_PIXELS} target pixels, not occluded), with Gaussian noise of sd 1/sqrt(12) =
 {PIXEL_SIGMA:.3f} px, the spread of rounding to the pixel: a pixel-exact detector ([C]: the
-dissertation and the spec give no measurement noise for Ch. V; at 1 px the bound is about 3.4
+dissertation and the spec give no measurement noise for Ch. V; at 1 px the bound is up to 3.4
 times higher, and no floor: the trackers' 2-D reprojection errors are about a pixel), with the
 trackers' own constant-velocity model (q = {DEFAULT_SETTINGS.kf_q:g} m^2/step^3, one step per
 frame) and their manual initialisation (sd {PRIOR_SD:g} m and m/step about the truth at step 0),
