@@ -8,7 +8,10 @@ import pickle
 
 import numpy as np
 import pandas as pd
+import pytest
 
+from fusetrack.cli import main
+from fusetrack.core import ConfigError
 from fusetrack.evaluation import checkpoint as ckpt
 from fusetrack.evaluation.checkpoint import CHECKPOINT_NAME, Checkpoint, job_key
 from fusetrack.evaluation.montecarlo import run_monte_carlo, run_seed
@@ -68,6 +71,27 @@ def test_a_record_cut_short_is_dropped_and_the_file_truncated(tmp_path):
     assert Checkpoint(path).done == {"a": [{"x": 1}], "c": [{"x": 3}]}
 
 
+@pytest.mark.parametrize("cut", [1, 7])
+def test_a_first_record_cut_short_leaves_an_empty_checkpoint(tmp_path, cut):
+    path = tmp_path / CHECKPOINT_NAME
+    Checkpoint(path).save("a", [{"x": 1}])
+    with path.open("r+b") as f:
+        f.truncate(cut)  # killed while writing the first record
+    assert Checkpoint(path).done == {}
+    assert path.stat().st_size == 0
+
+
+@pytest.mark.parametrize(
+    "content", [b"results of another program\n", pickle.dumps({"not": "a record"})]
+)
+def test_a_foreign_file_at_the_checkpoint_name_is_refused_not_emptied(tmp_path, content):
+    path = tmp_path / CHECKPOINT_NAME
+    path.write_bytes(content)
+    with pytest.raises(ConfigError, match=r"checkpoint.*--no-resume"):
+        Checkpoint(path)
+    assert path.read_bytes() == content
+
+
 def test_records_of_other_code_are_ignored(tmp_path, monkeypatch):
     path = tmp_path / CHECKPOINT_NAME
     with path.open("wb") as f:
@@ -113,3 +137,11 @@ def test_a_full_size_context_checkpoints_and_cleans_up_a_quick_one_does_not(tmp_
     quick = RunContext("x", tmp_path / "quick", quick=True, workers=1, progress=False)
     quick.monte_carlo(counted_mean, CONFIGS, 2)
     assert not (tmp_path / "quick" / CHECKPOINT_NAME).exists()
+
+
+def test_the_cli_refuses_a_foreign_checkpoint_before_any_work(tmp_path, capsys):
+    (tmp_path / CHECKPOINT_NAME).write_bytes(b"not ours")
+    assert main(["run", "lee2009-network-traffic", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert CHECKPOINT_NAME in err and "--no-resume" in err and "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == [CHECKPOINT_NAME]  # nothing ran

@@ -29,10 +29,17 @@ def test_quick_run_writes_the_claims_and_both_figures(tmp_path):
         "lcr_t3_tracks_box": "paper",
         "lcr_t3_beats_t2": "diagnostic",
         "lcr_t0_beats_t3": "diagnostic",
+        "BP_lcr_trackers_above_bound": "diagnostic",
     }
     df = pd.read_parquet(out / "results.parquet")
     assert set(df.tracker) == {"T0", "T2", "T3"}
     assert {"x", "y", "z", "true_x", "min_camera_fraction"} <= set(df.columns)
+    # the best possible beside the error table (issue 19): a row there and its own section
+    report = (out / "report.md").read_text()
+    assert "| PCRB (best possible)" in report
+    assert "## The best possible (PCRB)" in report
+    assert {"pcrb_mse", "pcrb_mean", "trivial_err"} <= set(df.columns)
+    assert (df.pcrb_mean > 0).all() and (df.pcrb_mean < df.pcrb_mse**0.5 + 1e-12).all()
     for png in ("lcr_trajectory.png", "lcr_pixel_fraction.png"):
         assert (out / png).exists()
 

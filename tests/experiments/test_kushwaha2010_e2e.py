@@ -33,7 +33,12 @@ EXPECTED = {
         "BP_crossing_above_bound",
         "BP_fig26_track_1_possible",
     },
-    "kushwaha2010-beamformer": {"min_error_mid_range", "error_grows_far", "error_grows_near"},
+    "kushwaha2010-beamformer": {
+        "min_error_mid_range",
+        "error_grows_far",
+        "error_grows_near",
+        "BP_nearest_beam_mid_range",
+    },
     "kushwaha2010-timesync": {
         "residual_far_below_period",
         "offset_hurts_tracking",

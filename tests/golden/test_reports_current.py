@@ -19,9 +19,17 @@ WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-prior-calibration",
+    "kushwaha2010-beamformer",
+    "kushwaha2010-cameras-a",
+    "kushwaha2010-cameras-area",
+    "kushwaha2010-cameras-b",
+    "kushwaha2010-cameras-gap",
+    "kushwaha2010-cameras-lcr",
+    "kushwaha2010-cameras-occlusion",
     "kushwaha2010-crossing",  # the best possible beside the tables (BP_* claims, issue 19)
     "kushwaha2010-mcmcda",
     "kushwaha2010-outdoor-triangle",
+    "lee2009-projected-planes-audio",
 }
 """Reports known to be older than their code, each to be regenerated at full size (strict xfail: a
 name stays here only while its report really is stale)."""

@@ -22,6 +22,8 @@ from typing import Any
 
 import fusetrack
 
+from ..core import ConfigError
+
 Rows = list[dict[str, Any]]
 
 CHECKPOINT_NAME = ".monte_carlo_checkpoint.pkl"
@@ -49,6 +51,18 @@ def job_key(fn: Callable[..., Any], config: Mapping[str, Any], run: int, seed: i
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+_HEADER = pickle.dumps(None, protocol=pickle.HIGHEST_PROTOCOL)[:2]
+"""How every record starts: the pickle protocol opcode and version."""
+
+
+def _foreign(path: Path, err: Exception) -> bool:
+    """A first record that failed to load is another program's file, not one cut short by a kill:
+    it does not start like a record, or it is a whole pickle of another shape."""
+    with path.open("rb") as f:
+        start = f.read(len(_HEADER))
+    return start != _HEADER[: len(start)] or isinstance(err, (ValueError, TypeError))
+
+
 class Checkpoint:
     """The finished runs of one output folder: ``done[key]`` their rows; :meth:`save` adds one."""
 
@@ -70,8 +84,14 @@ class Checkpoint:
                     fingerprint, key, rows = pickle.load(f)
                 except EOFError:
                     break
-                except (pickle.UnpicklingError, ValueError, TypeError, AttributeError):
-                    break  # a record cut short by a kill, or not ours: keep what came before
+                except (pickle.UnpicklingError, ValueError, TypeError, AttributeError) as err:
+                    if good == 0 and _foreign(self.path, err):
+                        raise ConfigError(
+                            f"checkpoint={str(self.path)!r} is not a file fusetrack wrote (a "
+                            "full-size run keeps its finished runs there): move it away, or pass "
+                            "--no-resume to delete it"
+                        ) from err
+                    break  # a record cut short by a kill: keep what came before
                 good = f.tell()
                 if fingerprint == code_fingerprint():
                     self.done[key] = rows

@@ -381,10 +381,11 @@ def validate_options(name: str, raw: dict[str, Any]) -> ExperimentOptions:
 
 
 def run_experiment(ctx: RunContext) -> dict[str, Any]:
-    """Validate the options of the experiment ``ctx.name`` (before any work), run it and write
-    its three output files; return the summary."""
+    """Validate the options of the experiment ``ctx.name`` and open its checkpoint (before any
+    work), run it and write its three output files; return the summary."""
     info = describe(ctx.name)
     ctx.options = validate_options(ctx.name, ctx.extra)
+    ctx.checkpoint()  # a file at the checkpoint's name that fusetrack did not write: refused now
     fn = getattr(_module(info), info.target.split(":")[1])
     start = time.perf_counter()
     outcome: Outcome = fn(ctx)

@@ -56,6 +56,7 @@ from ...world import (
     render_frames,
     smooth_trajectory,
 )
+from . import best_possible as bp
 
 TRACKERS = ("P", "T0", "T1", "T2", "T3", "T4")
 #: T0 variants that isolate two choices the paper leaves open or gets wrong (cheap: T0 is fast)
@@ -272,7 +273,16 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     for name, tracker in trackers(scene.net, settings).items():
         trng = np.random.default_rng([seed, [*TRACKERS, *ABLATIONS].index(name)])
         rows += error_rows(name, track(tracker, scene, trng), scene, extras if name == "T0" else ())
-    return rows
+    return scene_bound(rows, scene)
+
+
+def scene_bound(rows: list[dict[str, Any]], scene: Scene) -> list[dict[str, Any]]:
+    """``rows`` with the best possible along the scene's truth (:mod:`.best_possible`): the
+    cameras inform where their frames show the target (``Frames.participating``)."""
+    truth = scene.truth
+    return bp.with_bound(
+        rows, scene.cameras, truth.positions, truth.velocities[0], scene.frames.participating
+    )
 
 
 def _configs(setup: str, ctx: RunContext) -> tuple[list[dict[str, Any]], dict[str, int]]:
@@ -335,6 +345,7 @@ def _means(df: pd.DataFrame) -> pd.DataFrame:
 # Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
 CLAIM_KINDS = ClaimKinds(
     {
+        "BP_*": "diagnostic",  # the best possible (issue 19): every tracker above the PCRB
         "?_gap_one_camera": "diagnostic",  # checks of our set-up against the paper's
         "a_t0_mmse_beats_mle_map": "diagnostic",  # the paper offers all three, compares none
         "?_small_target": "diagnostic",
@@ -482,8 +493,35 @@ def outcome_a(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     table = _means(df)
     claims = _claims_a(table) + _t0_estimate_claims(df)
     claims += _bandwidth_claims(table, "a_")
+    best, best_claims = best_possible(df, table, "a")
     figs = _figures(ctx, df, table, "a")
-    return Outcome(df, claims, _text_a(df, table, figs), int(df.experiment_run.nunique()))
+    return Outcome(
+        df, claims + best_claims, _text_a(df, table, figs, best), int(df.experiment_run.nunique())
+    )
+
+
+def best_possible(df: pd.DataFrame, table: pd.DataFrame, setup: str) -> tuple[str, list[Claim]]:
+    """The report's best-possible section and its claim (none for rows recorded before the
+    bound was added, e.g. an old results.parquet given to :func:`rewrite_report`)."""
+    if not bp.has_bound(df):
+        return "", []
+    names = [k for k in table.index if k in set(df.tracker)]
+    best = bp.bound_table(df, names, run=("experiment_run",))
+    claim_id = f"BP_{setup}_trackers_above_bound"
+    claim = bp.above_claim(CLAIM_KINDS, claim_id, best, f"setup {setup.upper()}")
+    return bp.section(best, claim_id), [claim]
+
+
+def _with_bound_rows(table: pd.DataFrame, df: pd.DataFrame) -> pd.DataFrame:
+    """The error table with the bound's and the trivial estimator's mean 3-D error as rows
+    (all runs, fixed and rotating ones)."""
+    if not bp.has_bound(df):
+        return table
+    run = ("experiment_run",)
+    cols = {"err3d": df, "err3d_fixed": df[~df.rotating], "err3d_rotating": df[df.rotating]}
+    values = {c: bp.bound_row(d, run) if len(d) else {} for c, d in cols.items()}
+    extra = pd.DataFrame({c: v for c, v in values.items() if v})
+    return pd.concat([table, extra])
 
 
 def _t0_estimate_claims(df: pd.DataFrame) -> list[Claim]:
@@ -578,7 +616,7 @@ def _claims_a(table: pd.DataFrame) -> list[Claim]:
     return claims
 
 
-def _text_a(df: pd.DataFrame, table: pd.DataFrame, figs: list[str]) -> str:
+def _text_a(df: pd.DataFrame, table: pd.DataFrame, figs: list[str], best: str = "") -> str:
     """Setup A's report: set-up, paper vs ours, differences."""
     pix = df[df.tracker == "T0"].pixel_fraction
     body = f"""
@@ -606,16 +644,17 @@ Ours (mean over runs of the per-run mean error, steps 1-{int(df.t.max())}):
 
 {_paper_vs_ours(table, "a")}
 
-All rows (errors by orientation, bytes, steps without anything to fuse):
+All rows (errors by orientation, bytes, steps without anything to fuse; the last rows: the best
+possible and a trivial estimator, see below):
 
-{_table_md(table)}
+{_table_md(_with_bound_rows(table, df))}
 
 3-D error order: {_order(table)}. Median over runs of the per-run mean error:
 {_order(table, "err3d_median_run")}; worst run: {_order(table, "err3d_worst_run")}.
 The rows T0-MLE and T0-MAP are T0's other estimates (Eqs. 83-84: the particle of largest fused
 weight, and of largest weight times the prior N(x0, Σ0) the particles were drawn from), taken
 from the same particles at every step; T0 itself tracks with its MMSE (Eq. 82).
-
+{best}
 ![errors]({figs[0]})
 
 ![error against time]({figs[1]})
@@ -640,9 +679,10 @@ def outcome_b(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     claims = _claims_b(df, table, pre, post)
     claims += _median_claims_b(df)
     claims += _bandwidth_claims(table, "b_")
+    best, best_claims = best_possible(df, table, "b")
     figs = _figures(ctx, df, table, "b")
-    body = _text_b(df, table, pre, post, figs)
-    return Outcome(df, claims, body, int(df.experiment_run.nunique()))
+    body = _text_b(df, table, pre, post, figs, best)
+    return Outcome(df, claims + best_claims, body, int(df.experiment_run.nunique()))
 
 
 def _gap_errors(df: pd.DataFrame) -> tuple[pd.Series, pd.Series]:
@@ -856,7 +896,12 @@ def _median_claims_b(df: pd.DataFrame) -> list[Claim]:
 
 
 def _text_b(
-    df: pd.DataFrame, table: pd.DataFrame, pre: pd.Series, post: pd.Series, figs: list[str]
+    df: pd.DataFrame,
+    table: pd.DataFrame,
+    pre: pd.Series,
+    post: pd.Series,
+    figs: list[str],
+    best: str = "",
 ) -> str:
     """Setup B's report: set-up, paper vs ours, the gap, differences."""
     runs = df.experiment_run.nunique()
@@ -890,9 +935,10 @@ T2 re-converges after the single-camera gap, T0 does not. Ours:
 
 {_paper_vs_ours(table, "b")}
 
-All rows (errors by orientation, bytes, steps without anything to fuse):
+All rows (errors by orientation, bytes, steps without anything to fuse; the last rows: the best
+possible and a trivial estimator, see below):
 
-{_table_md(table)}
+{_table_md(_with_bound_rows(table, df))}
 
 3-D error order: {_order(table)}.
 
@@ -920,8 +966,8 @@ Mean 3-D error over runs before (steps {GAP_START - 8}-{GAP_START - 1}) and afte
         GAP_START + 4
     }-{GAP_START + 12}) the gap:
 
-{gap_table.to_markdown(floatfmt=".3f")}
-
+{_gap_bound_rows(gap_table, df).to_markdown(floatfmt=".3f")}
+{best}
 ![errors]({figs[0]})
 
 ![error against time]({figs[1]})
@@ -930,6 +976,19 @@ Mean 3-D error over runs before (steps {GAP_START - 8}-{GAP_START - 1}) and afte
 
 {_differences_b(table, pix, recovered)}"""
     return body
+
+
+def _gap_bound_rows(gap_table: pd.DataFrame, df: pd.DataFrame) -> pd.DataFrame:
+    """The gap table with the best possible's mean-error bound and the trivial estimator over
+    the same windows as rows."""
+    if not bp.has_bound(df):
+        return gap_table
+    windows = {
+        "before gap": df[df.t.between(GAP_START - 8, GAP_START - 1)],
+        "after gap": df[df.t.between(GAP_START + 4, GAP_START + 12)],
+    }
+    rows = {c: bp.bound_row(d, ("experiment_run",)) for c, d in windows.items() if len(d)}
+    return pd.concat([gap_table, pd.DataFrame(rows)])
 
 
 def _differences_b(table: pd.DataFrame, pix: pd.DataFrame, recovered: pd.Series) -> str:

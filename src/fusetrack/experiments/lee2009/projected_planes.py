@@ -105,7 +105,9 @@ def scenario_truth(name: str) -> np.ndarray:
     return AccelTurn(3, SCN_ACCEL).trajectory(np.array(p0 + v0), SCN_DT, SCN_STEPS)
 
 
-def _start(x0: np.ndarray, rng: np.random.Generator, pos_std: float, vel_std: float) -> np.ndarray:
+def start_state(
+    x0: np.ndarray, rng: np.random.Generator, pos_std: float, vel_std: float
+) -> np.ndarray:
     """The filters' initial mean: the given state plus a draw of the prior (so the CRLB applies)."""
     std = np.array([pos_std] * 3 + [vel_std] * 3)
     return x0 + std * rng.standard_normal(6)
@@ -175,7 +177,7 @@ def run_weight_sums(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]
     z = sensor.simulate(truth[:, :3], rng)[:, None, :]
     model = AccelTurn(3, SCN_ACCEL, sigma_a=0.1)
     n = int(config["n_particles"])
-    x0 = _start(truth[0], rng, PRIOR_STD, PRIOR_STD)
+    x0 = start_state(truth[0], rng, PRIOR_STD, PRIOR_STD)
     pps = ProjectedPlanesTracker([sensor], model, n, init_std=(PRIOR_STD, PRIOR_STD)).run(
         z, SCN_DT, x0, rng
     )
@@ -198,7 +200,7 @@ def run_scenario(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     z = np.stack([s.simulate(truth[:, :3], rng) for s in sensors], axis=1)
     # "given": particles around the true initial state (the text); "prior": around a draw of
     # N(truth, P_0), which is what the CRLB with J_0 = P_0^-1 bounds.
-    x0 = truth[0] if config["init"] == "given" else _start(truth[0], rng, PRIOR_STD, PRIOR_STD)
+    x0 = truth[0] if config["init"] == "given" else start_state(truth[0], rng, PRIOR_STD, PRIOR_STD)
     rows = []
     for sel in ("literal", "minvar"):
         tracker = ProjectedPlanesTracker(
