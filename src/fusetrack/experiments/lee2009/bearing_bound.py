@@ -178,4 +178,6 @@ def periodic_bound_ms(
     camera = np.zeros((T, O), bool)
     if period > 0:
         camera[period::period] = True
-    return run_bound_ms(truth, alphas, dt, sensor, sigma, every, every, camera, sigma_r, velocity_std)
+    return run_bound_ms(
+        truth, alphas, dt, sensor, sigma, every, every, camera, sigma_r, velocity_std
+    )

@@ -715,7 +715,9 @@ def _e31_best(e31: pd.DataFrame) -> tuple[list[Claim], str]:
     claims = [bp.above_claim(CLAIM_KINDS, "BP_ours_above_bound_e31", "E3.1, sigma^2 > 0", tab)]
     paper = dict(zip(bp.OBJECTS, PAPER_E31, strict=True))
     for sc in VELOCITIES_31:
-        at5 = tab[(tab.scenario == sc) & (tab.reading == DEFAULT_READING) & (tab.variance_deg2 == 5)]
+        at5 = tab[
+            (tab.scenario == sc) & (tab.reading == DEFAULT_READING) & (tab.variance_deg2 == 5)
+        ]
         claims += bp.paper_claims(
             CLAIM_KINDS, "BP_possible_e31" + _suffix(DEFAULT_READING, sc),
             "acoustic-only RMS at sigma^2 = 5 (Fig. 3-4)", paper,
