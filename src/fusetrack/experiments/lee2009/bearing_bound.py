@@ -23,7 +23,7 @@ Gordon 2004, Ch. 4; :func:`~fusetrack.evaluation.deterministic_crlb`)::
     I_c = I / sigma_r^2 on the position
 
 with ``F_k`` the Jacobian of the true step's map at the true state (the scheduled turn, central
-differences), ``q_b = 1`` wherever the object is audible after its start step and ``q_c = 1`` at
+differences; passed as ``jacobians=``, the motion argument only gives the state's size), ``q_b = 1`` wherever the object is audible after its start step and ``q_c = 1`` at
 the steps its camera fix was used (periodic every ``T_v``, or the run's own triggered steps). The
 bound is for an estimator told the manoeuvre schedule and the association: every object has its
 own bearing at every audible step (merged bearings, Eq. 3.4, and association errors are
@@ -45,7 +45,7 @@ import numpy as np
 
 from ...core import ConfigError, invalid
 from ...evaluation import deterministic_crlb
-from ...motion import AccelTurn
+from ...motion import AccelTurn, ConstantVelocity
 from ...sensors import Bearing, PositionFix
 
 Array = np.ndarray
@@ -119,7 +119,7 @@ def position_bound(
     mask = np.column_stack([bearings, camera]).astype(float)
     mask[0] = 0.0  # the start: the prior is the fix; the filter does not update there
     B = deterministic_crlb(
-        AccelTurn(2), sensors, truth, dt, prior_cov, mask=mask, information=info,
+        ConstantVelocity(ndim=2, q=0.0), sensors, truth, dt, prior_cov, mask=mask, information=info,
         jacobians=transition_jacobians(truth, alphas, dt),
     )  # fmt: skip
     return np.asarray(np.trace(B[:, :2, :2], axis1=-2, axis2=-1))
