@@ -10,7 +10,11 @@ Parts (spec 000, Sec. 5.5):
   cooperation (Figs. 3-15 ... 3-21; C11);
 * readings of what the text leaves open (:data:`READINGS`, :data:`VELOCITIES_31`): E3.1 with
   velocities whose bearings never merge, alpha = 0.01 m/s^2, and the printed estimator; C7, C9,
-  C10 judged under each.
+  C10 judged under each;
+* the best possible beside E3.1, E3.2 and Table 3.1 (issue 19, item 3): the CRLB of each object's
+  position on the simulated model, per run from its own camera steps (:mod:`.bearing_bound`),
+  our filters checked against it and the paper's numbers judged on it (:mod:`.best_possible`;
+  ``BP_*`` claims, kind diagnostic).
 """
 
 from __future__ import annotations
