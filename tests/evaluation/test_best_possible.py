@@ -4,6 +4,7 @@ mean by more than three standard errors is impossible; two particle counts agree
 import numpy as np
 import pytest
 
+from fusetrack.core import ConfigError
 from fusetrack.evaluation import (
     IMPOSSIBLE,
     POSSIBLE,
@@ -37,3 +38,14 @@ def test_agreement_within_three_combined_standard_errors():
     assert not far.holds and far.kind == "diagnostic" and "5000" in far.statement
     # one run: no s.e., only exact agreement holds
     assert not agreement_claim(KINDS, "BP_c", "f", (1, 3.0, np.nan), (2, 3.1, np.nan)).holds
+
+
+def test_possible_claim_on_a_bound_alone():
+    """No posterior mean (NaN): judged on the PCRB only, and the text names only the bound."""
+    nan = (float("nan"), float("nan"))
+    ok = possible_claim(KINDS, "BP_a", "x", 0.64, nan, 0.02)
+    bad = possible_claim(KINDS, "BP_b", "x", 1.08, nan, 1.17, model="spec velocities")
+    assert ok.holds and ok.ours == "PCRB 0.02: possible" and ok.tolerance == "paper >= PCRB"
+    assert not bad.holds and bad.ours == "PCRB 1.17: impossible under 'spec velocities'"
+    with pytest.raises(ConfigError, match="posterior mean or a PCRB"):
+        possible_claim(KINDS, "BP_c", "x", 1.0, nan)

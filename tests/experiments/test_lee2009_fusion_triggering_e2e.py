@@ -37,4 +37,13 @@ def test_camera_triggering_quick(tmp_path):
     assert any(i.startswith("C11") for i in ids)
     df = pd.read_parquet(tmp_path / "results.parquet")
     assert {"E3.1", "E3.2", "E3.4", "E3.5"} <= set(df["part"])
-    assert "Table 3.1" in (tmp_path / "report.md").read_text()
+    report = (tmp_path / "report.md").read_text()
+    assert "Table 3.1" in report
+    # the best possible beside the tables: E3.1, E3.2 and Table 3.1, and the paper judged on it
+    assert report.count("mean-RMS bound") >= 3 and "camera every step" in report
+    claims = {c["id"]: c for c in s["claims"]}
+    for cid in ("BP_ours_above_bound_e31", "BP_ours_above_bound_e32", "BP_ours_above_bound_e34"):
+        assert claims[cid]["holds"] and claims[cid]["kind"] == "diagnostic", cid
+    judged = [c for c in claims if c.startswith("BP_possible_t31_")]
+    assert len(judged) == 8 and all(claims[c]["holds"] for c in judged)  # far above the bound
+    assert claims["BP_possible_e31_O3"]["paper"] == 1.08

@@ -21,6 +21,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from ..core import ConfigError, invalid
 from .report import Claim, ClaimKinds
 
 MARGIN_SE = 3.0
@@ -76,18 +77,25 @@ def possible_claim(
 ) -> Claim:
     """Diagnostic: the paper's ``what`` (``paper``) is not below the best possible on the
     printed model, or on the reading ``model`` (posterior mean ``best = (value, s.e.)``, PCRB
-    ``bound``). Fails: the number is *impossible on the printed model*, not merely not
-    reproduced."""
+    ``bound``; a NaN posterior mean where only the PCRB is known). Fails: the number is
+    *impossible on the printed model*, not merely not reproduced."""
     value, se = best
     label = best_possible_verdict(paper, value, se, bound, model)
-    pcrb = "" if bound is None else f", PCRB {bound:.3g}"
+    pcrb = "" if bound is None else f"PCRB {bound:.3g}"
+    if np.isnan(value):
+        if bound is None:
+            raise ConfigError(invalid("best, bound", (best, bound), "a posterior mean or a PCRB"))
+        ours, tolerance = f"{pcrb}: {label}", "paper >= PCRB"
+    else:
+        ours = f"posterior mean {value:.3g} ± {se:.2g}{', ' + pcrb if pcrb else ''}: {label}"
+        tolerance = f"paper >= posterior mean - {MARGIN_SE:g} s.e. and >= PCRB"
     return kinds.claim(
         claim_id,
         f"{what}: the paper's number is not below the best possible on "
         + (f"the reading '{model}'" if model else "the printed model"),
         paper,
-        f"posterior mean {value:.3g} ± {se:.2g}{pcrb}: {label}",
-        f"paper >= posterior mean - {MARGIN_SE:g} s.e. and >= PCRB",
+        ours,
+        tolerance,
         label == POSSIBLE,
     )
 

@@ -174,6 +174,22 @@ def _jacobian(motion: MotionModel, x: Array, dt: float) -> Array:
         raise ShapeError(invalid("motion.jacobian(x, dt).shape", F.shape, valid)) from None
 
 
+def _given_jacobians(jacobians: ArrayLike | None, R: int, T: int, d: int) -> Any:
+    """The precomputed transition Jacobians ``(R, T - 1, d, d)`` (broadcast), or None."""
+    if jacobians is None:
+        return None
+    a = np.asarray(jacobians, dtype=float)
+    n = max(T - 1, 0)
+    try:
+        a = np.broadcast_to(a, (R, n, d, d))
+    except ValueError:
+        valid = f"(T - 1, d, d) = ({n}, {d}, {d}) or (R, T - 1, d, d) with R = {R}"
+        raise ShapeError(invalid("jacobians.shape", a.shape, valid)) from None
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(invalid("jacobians", "non-finite values", "finite matrices"))
+    return a
+
+
 def _given_information(information: ArrayLike | None, R: int, T: int, S: int, d: int) -> Any:
     """The precomputed per-sensor information ``(R, T, S, d, d)`` (broadcast), or None."""
     if information is None:
@@ -222,6 +238,7 @@ class BoundOptions(TypedDict, total=False):
     mask: ArrayLike | None
     use_detection_probability: bool
     information: ArrayLike | None
+    jacobians: ArrayLike | None
 
 
 class PosteriorOptions(BoundOptions, total=False):
@@ -245,6 +262,13 @@ class _Problem:
     use_detection_probability: bool
     prior: Array
     given: Array | None = None
+    transitions: Array | None = None
+
+    def jacobian(self, motion: MotionModel, k: int) -> Array:
+        """The transition Jacobian from step ``k`` to ``k + 1`` per trajectory: ``(R, d, d)``."""
+        if self.transitions is not None:
+            return np.asarray(self.transitions[:, k])
+        return _jacobian(motion, self.x[:, k], float(self.steps[k]))
 
     def information(self, k: int) -> Array:
         """``sum_s q_{s,k} H_s^T R_s^-1 H_s`` at step ``k`` per trajectory: ``(R, d, d)``."""
@@ -271,7 +295,8 @@ def _problem(
     use_pd = bool(options.get("use_detection_probability", False))
     prior = _prior_information(prior_cov, d)
     given = _given_information(options.get("information"), R, T, len(sl), d)
-    return _Problem(x, single, sl, steps, w, use_pd, prior, given)
+    transitions = _given_jacobians(options.get("jacobians"), R, T, d)
+    return _Problem(x, single, sl, steps, w, use_pd, prior, given, transitions)
 
 
 def _information_step(
@@ -334,7 +359,10 @@ def posterior_information(
     reduction factor) bound. Both may be used together. ``information`` ``(T, S, d, d)`` or
     ``(R, T, S, d, d)``: each sensor's ``H^T R^-1 H`` at the true states, precomputed (in one
     vectorised call over all steps, or once for several masks and priors), in place of calling
-    ``sensor.fisher_information`` at every step.
+    ``sensor.fisher_information`` at every step. ``jacobians`` ``(T - 1, d, d)`` or
+    ``(R, T - 1, d, d)``: the transition Jacobian ``F_k`` of each step at the true states,
+    precomputed, in place of ``motion.jacobian`` (a motion whose model changes at known steps,
+    e.g. manoeuvres on a schedule; ``motion`` then gives only ``noise_cov``).
 
     ``average=True`` (default) takes the expectations over the ``R`` trajectories and returns
     ``(T, d, d)``; ``average=False`` runs the recursion along every trajectory separately (each
@@ -364,7 +392,7 @@ def posterior_information(
         if h not in noise:
             noise[h] = _noise(motion, h, d)
         Q, Qi = noise[h]
-        F = _jacobian(motion, pb.x[:, k], h)
+        F = pb.jacobian(motion, k)
         info = expect(pb.information(k + 1))
         if form == "information" or (form == "auto" and Qi is not None):
             if Qi is None:
@@ -416,14 +444,15 @@ def deterministic_crlb(
 
     Evaluated per trajectory (the state is a fixed parameter): returns ``J_k^-1`` as
     ``(R, T, d, d)``, or ``(T, d, d)`` for ``(T, d)`` input. Other arguments (``mask``,
-    ``use_detection_probability``) as :func:`posterior_information`.
+    ``use_detection_probability``, ``information``, ``jacobians``) as
+    :func:`posterior_information`.
     """
     pb = _problem(motion, sensors, trajectories, dt, prior_cov, options)
     R, T, d = pb.x.shape
     J = np.empty((R, T, d, d))
     J[:, 0] = pb.prior + pb.information(0)
     for k in range(T - 1):
-        F = _jacobian(motion, pb.x[:, k], float(pb.steps[k]))
+        F = pb.jacobian(motion, k)
         FT = np.swapaxes(F, -1, -2)
         try:
             Y = np.linalg.solve(FT, J[:, k])  # F^-T J

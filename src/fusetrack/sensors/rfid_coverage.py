@@ -136,6 +136,28 @@ class WallCameraPair:
             u = u + self.pixel_sigma * rng.standard_normal(2)
         return u
 
+    def jacobian(self, p: Array) -> Array:
+        """``d(u1, u2)/d(x, y)`` at floor points ``p`` ``(..., 2)``: ``(..., 2, 2)``, with
+        ``u1 = f (y - c1y) / (x - c1x)`` and ``u2 = f (x - c2x) / (y - c2y)``."""
+        p = np.asarray(p, float)
+        d1 = p[..., 0] - self.cam1[0]  # camera 1's depth
+        o1 = p[..., 1] - self.cam1[1]
+        d2 = p[..., 1] - self.cam2[1]  # camera 2's depth
+        o2 = p[..., 0] - self.cam2[0]
+        if np.any(d1 <= 0) or np.any(d2 <= 0):
+            raise ConfigError(invalid("p", "a point behind a camera", "points inside the room"))
+        row1 = np.stack([-self.f * o1 / d1**2, self.f / d1], axis=-1)
+        row2 = np.stack([self.f / d2, -self.f * o2 / d2**2], axis=-1)
+        return np.stack([row1, row2], axis=-2)
+
+    def fisher_information(self, p: Array) -> Array:
+        """``H^T H / pixel_sigma^2`` (1/m^2) at floor points ``p`` ``(..., 2)``: the Fisher
+        information of the two image coordinates (independent Gaussian pixel noise)."""
+        if not self.pixel_sigma > 0:
+            raise ConfigError(invalid("pixel_sigma", self.pixel_sigma, "> 0 for a finite bound"))
+        H = self.jacobian(p)
+        return np.asarray(np.swapaxes(H, -1, -2) @ H / self.pixel_sigma**2)
+
     def refine(self, coarse: Array, u_obj: Array, *, depth_corrected: bool = True) -> Array:
         """Refined position from the coarse reference point and the tag's image coordinates.
 
