@@ -19,7 +19,6 @@ WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-prior-calibration",
-    "kushwaha2010-beamformer",
     "kushwaha2010-cameras-a",
     "kushwaha2010-cameras-area",
     "kushwaha2010-cameras-b",
