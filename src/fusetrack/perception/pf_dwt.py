@@ -220,7 +220,7 @@ def _raster_posterior_mean(
 
 
 def raster_posterior_mean(
-    pf: RasterParticleFilter, noisy: Array, half_width: float = 8.0, nodes: int = 1601
+    pf: RasterParticleFilter, noisy: Array, half_width: float = 8.0, nodes: int = 401
 ) -> Array:
     """The ``n_particles -> infinity`` limit of ``pf`` on ``noisy``: the same raster recursion
     with each pixel's particle mean replaced by its exact posterior mean under the printed

@@ -9,6 +9,10 @@ Images: "Lena" is not shipped with any package we may use, so the spec's substit
 unclipped reading runs beside it on the same noise draws (issue 19), its ISNR reported as mean
 +- std over the seeds. The thesis names no wavelet: db4 (spec choice) and haar both run on the
 PF's output.
+
+The best possible (issue 19) sits beside the paper's ISNRs: the PF stage's exact posterior mean
+on the printed model, with no Monte Carlo error (:func:`best_possible`), and trivial estimators;
+claims ``BP_*`` label a paper ISNR above it *impossible on the printed model*.
 """
 
 from __future__ import annotations
