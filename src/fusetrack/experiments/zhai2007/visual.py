@@ -649,10 +649,12 @@ def run(ctx: RunContext) -> Outcome:
 
 
 def best_possible_runs(ctx: RunContext, grid: int) -> list[pd.DataFrame]:
-    """The posterior-mean filter (:mod:`.visual_best`) on the first runs of each experiment
-    (quick runs: one run of one experiment per measurement family)."""
+    """The posterior-mean filter (:mod:`.visual_best`) on the first runs of each experiment, at
+    most :data:`~.visual_best.BEST_RUNS` whatever ``--runs`` says (quick runs: one run of one
+    experiment per measurement family)."""
     size = "quick" if ctx.quick else "full"
-    n_best, runs = vb.BEST_N[size], ctx.n_runs(full=vb.BEST_RUNS["full"], quick=1)
+    n_best = vb.BEST_N[size]
+    runs = min(ctx.n_runs(full=vb.BEST_RUNS[size], quick=vb.BEST_RUNS[size]), vb.BEST_RUNS[size])
     exps = vb.QUICK_EXPERIMENTS if ctx.quick else tuple(EXPERIMENTS)
     cfgs = [{"exp": e, "grid": grid, "best": True, "n_best": n_best} for e in exps]
     return [ctx.monte_carlo(run_once, [c], runs, desc=f"{c['exp']} best possible") for c in cfgs]
