@@ -49,8 +49,9 @@ def test_pcrb_of_app_b_random_walk_by_hand():
 
 
 def test_best_possible_rows_claims_and_section():
-    """A posterior-mean filter lost in 4 of 5 runs makes 'keeps lock in every realisation'
-    impossible; lost in 1 of 5, possible. The section shows both beside the proposed tracker."""
+    """E10: the posterior-mean filter lost in 4 of 5 runs and every tracker in 5 of 5, so 'keeps
+    lock in every realisation' is impossible; E12: the same posterior-mean filter, but
+    condensation keeps lock in every run, so it is possible; E21: lost in 1 of 5, possible."""
 
     def rows(exp, method, lost, **extra):
         return pd.DataFrame(
@@ -59,17 +60,30 @@ def test_best_possible_rows_claims_and_section():
         )  # fmt: skip
 
     first = pd.concat(
-        [rows("E10", "MMPF-SP", [0] * 5), rows("E21", "App. B condensation", [0] * 5)]
+        [
+            rows("E10", "MMPF-SP", [1] * 5),
+            rows("E10", "condensation", [1] * 5),
+            rows("E12", "MMPF-SP", [1] * 5),
+            rows("E12", "condensation", [0] * 5),
+            rows("E21", "App. B condensation", [0] * 5),
+        ]
     )
+    lossy = [1, 1, 1, 1, 0]
     best = pd.concat(
         [
-            rows("E10", vb.BEST, [1, 1, 1, 1, 0], n_best=2000),
+            rows("E10", vb.BEST, lossy, n_best=2000),
+            rows("E12", vb.BEST, lossy, n_best=2000),
             rows("E21", vb.BEST, [1, 0, 0, 0, 0], n_best=2000),
         ]
     )
     claims, md = best_possible(first, best)
     by_id = {c.id: c for c in claims}
-    assert not by_id["BP_E10_keeps_lock"].holds and "impossible" in by_id["BP_E10_keeps_lock"].ours
+    e10 = by_id["BP_E10_keeps_lock"]
+    assert not e10.holds and "impossible" in e10.ours and "(posterior mean)" in e10.statement
+    assert (
+        by_id["BP_E12_keeps_lock"].holds
+        and "(condensation)" in by_id["BP_E12_keeps_lock"].statement
+    )
     assert by_id["BP_E21_keeps_lock"].holds and by_id["BP_E21_keeps_lock"].kind == "diagnostic"
     assert "### The best possible on the printed model" in md
     assert "E10: posterior mean (2000 particles)" in md and "E21: App. B condensation" in md

@@ -28,11 +28,12 @@ scenes it is the model's own yardstick, and the posterior-mean filter is the bes
 the printed model, not for the scene.
 
 The thesis's visual statements are qualitative: "keeps lock in every realisation" is a loss
-rate of 0. A lost track dominates the mean-square error the posterior mean minimises, so when
-the posterior-mean filter is lost in a share of runs more than
-:data:`~.best_possible.MARGIN_SE` standard errors above 0, no filter on the printed model
-keeps lock in every realisation: the statement is *impossible on the printed model* (claims
-``BP_<exp>_keeps_lock``).
+rate of 0. A lost track dominates the mean-square error the posterior mean minimises, so the
+posterior-mean filter is the filter most likely to keep lock on the printed model; but it
+minimises the mean-square error, not the loss rate, and the scenes are not drawn from the model,
+so every other filter run on the same frames counts too (:func:`lowest_loss`). When even the
+lowest of these loss rates is more than :data:`~.best_possible.MARGIN_SE` standard errors above
+0, the statement is *impossible on the printed model* (claims ``BP_<exp>_keeps_lock``).
 
 Cost: the posterior-mean filter runs on the first :data:`BEST_RUNS` runs of each experiment
 (quick runs: one run of :data:`QUICK_EXPERIMENTS` with 500 particles).
@@ -41,7 +42,7 @@ Cost: the posterior-mean filter runs on the first :data:`BEST_RUNS` runs of each
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -68,53 +69,76 @@ def pcrb_rmse(motion: Any, sensors: Sequence[Any], frames: int, prior_cov: Any) 
     return float(np.sqrt(np.mean(np.asarray(b) ** 2)))
 
 
+class BestRows(NamedTuple):
+    """One experiment's per-run rows (frame 0) on the posterior-mean filter's runs: the proposed
+    tracker's, the posterior-mean filter's and every tracker's and comparator's."""
+
+    own: pd.DataFrame
+    best: pd.DataFrame
+    filters: pd.DataFrame
+
+
 def best_rows(
     first: pd.DataFrame, best: pd.DataFrame, new_method: Mapping[str, str]
-) -> dict[str, tuple[pd.DataFrame, pd.DataFrame]]:
-    """Per experiment with best-possible runs: the proposed tracker's and the posterior-mean
-    filter's per-run rows (frame 0) on those runs."""
+) -> dict[str, BestRows]:
+    """Per experiment with best-possible runs, its :class:`BestRows`."""
     out = {}
     for exp, b in best.groupby("exp", sort=False):
-        runs = b["run"].unique()
-        own = first[
-            (first["exp"] == exp)
-            & (first["method"] == new_method[str(exp)])
-            & first["run"].isin(runs)
-        ]
-        out[str(exp)] = (own, b)
+        filters = first[(first["exp"] == exp) & first["run"].isin(b["run"].unique())]
+        own = filters[filters["method"] == new_method[str(exp)]]
+        out[str(exp)] = BestRows(own, b, filters)
     return out
+
+
+def lowest_loss(rows: BestRows) -> tuple[str, tuple[float, float]]:
+    """The filter with the lowest loss rate on the runs, the posterior-mean filter first among
+    equals, and its loss rate with its standard error. Any filter that ran on all the runs
+    counts: it shows what a filter can achieve on these frames (the posterior mean minimises
+    the mean-square error, not the loss rate, and the scenes are not drawn from the model)."""
+    n = len(rows.best)
+    rates = {BEST: bp.mean_with_se(rows.best["lost"].astype(float))}
+    for m, r in rows.filters.groupby("method", sort=False):
+        if len(r) == n:
+            rates[str(m)] = bp.mean_with_se(r["lost"].astype(float))
+    who = min(rates, key=lambda m: rates[m][0])  # first minimum: the posterior-mean filter
+    return who, rates[who]
 
 
 def keeps_lock_claims(
     kinds: ClaimKinds,
-    rows: Mapping[str, tuple[pd.DataFrame, pd.DataFrame]],
+    rows: Mapping[str, BestRows],
     scenes: Mapping[str, str],
     new_method: Mapping[str, str],
 ) -> list[Claim]:
-    """``BP_<exp>_keeps_lock``: the thesis's loss rate 0 is not below the posterior-mean
-    filter's loss rate by more than :data:`~.best_possible.MARGIN_SE` standard errors."""
-    return [
-        bp.possible_claim(
-            kinds,
-            f"BP_{exp}_keeps_lock",
-            f"{exp} ({scenes[exp]}): loss rate of {new_method[exp]}, 'keeps lock in every "
-            f"realisation' (0), against the posterior-mean filter's over {len(b)} runs",
-            0.0,
-            bp.mean_with_se(b["lost"].astype(float)),
+    """``BP_<exp>_keeps_lock``: the thesis's loss rate 0 is not below the lowest loss rate of
+    the posterior-mean filter and every filter run on the same frames (:func:`lowest_loss`) by
+    more than :data:`~.best_possible.MARGIN_SE` standard errors."""
+    claims = []
+    for exp, r in rows.items():
+        who, rate = lowest_loss(r)
+        claims.append(
+            bp.possible_claim(
+                kinds,
+                f"BP_{exp}_keeps_lock",
+                f"{exp} ({scenes[exp]}): loss rate of {new_method[exp]}, 'keeps lock in every "
+                f"realisation' (0), against the lowest of the posterior-mean filter's and every "
+                f"filter's over {len(r.best)} runs ({who})",
+                0.0,
+                rate,
+            )
         )
-        for exp, (_, b) in rows.items()
-    ]
+    return claims
 
 
 def best_table(
-    rows: Mapping[str, tuple[pd.DataFrame, pd.DataFrame]],
+    rows: Mapping[str, BestRows],
     new_method: Mapping[str, str],
     pcrb: Mapping[str, float],
 ) -> pd.DataFrame:
     """Loss rate and mean per-run RMSE of the proposed tracker and the posterior-mean filter
     on the same runs, and the PCRB on the per-run RMSE where the model has one."""
     table: dict[str, dict[str, float]] = {}
-    for exp, (own, b) in rows.items():
+    for exp, (own, b, _) in rows.items():
         table[f"{exp}: {new_method[exp]}"] = {
             "runs": float(len(own)),
             "loss rate": float(own["lost"].mean()),
@@ -143,8 +167,9 @@ App. B's random walk with var_o = 1), beside the same kind of posterior-mean fil
 on the first runs of each experiment only (cost); the proposed tracker's row is on the same
 runs. The scenes are scripted, not drawn from the models, so the PCRB is the model's yardstick
 rather than a bound on these runs. The thesis says its trackers keep lock in every
-realisation (loss rate 0): when even the posterior-mean filter is lost in a share of runs more
-than 3 standard errors above 0, that is *impossible on the printed model*.
+realisation (loss rate 0): when even the posterior-mean filter, and every other filter run on
+the same frames, is lost in a share of runs more than 3 standard errors above 0, that is
+*impossible on the printed model* (the claim names the filter with the lowest loss rate).
 
 {table.to_markdown(floatfmt=".3g")}
 
@@ -156,9 +181,11 @@ __all__ = [
     "BEST_N",
     "BEST_RUNS",
     "QUICK_EXPERIMENTS",
+    "BestRows",
     "best_rows",
     "best_section",
     "best_table",
     "keeps_lock_claims",
+    "lowest_loss",
     "pcrb_rmse",
 ]
