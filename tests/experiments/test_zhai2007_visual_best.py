@@ -84,6 +84,7 @@ def test_best_possible_rows_claims_and_section():
         by_id["BP_E12_keeps_lock"].holds
         and "(condensation)" in by_id["BP_E12_keeps_lock"].statement
     )
+    assert by_id["BP_E12_keeps_lock"].ours.startswith("condensation 0 ")
     assert by_id["BP_E21_keeps_lock"].holds and by_id["BP_E21_keeps_lock"].kind == "diagnostic"
     assert "### The best possible on the printed model" in md
     assert "E10: posterior mean (2000 particles)" in md and "E21: App. B condensation" in md

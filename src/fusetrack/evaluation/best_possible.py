@@ -87,11 +87,12 @@ def possible_claim(
     bound: float | None = None,
     model: str = "",
     better: Literal["lower", "higher"] = "lower",
+    best_label: str = "posterior mean",
 ) -> Claim:
     """Diagnostic: the paper's ``what`` (``paper``) is not below the best possible on the
-    printed model, or on the reading ``model`` (posterior mean ``best = (value, s.e.)``, PCRB
-    ``bound``); with ``better="higher"`` (a score), not above it. Fails: the number is
-    *impossible on the printed model*, not merely not reproduced."""
+    printed model, or on the reading ``model`` (posterior mean ``best = (value, s.e.)``, or
+    what ``best_label`` names; PCRB ``bound``); with ``better="higher"`` (a score), not above
+    it. Fails: the number is *impossible on the printed model*, not merely not reproduced."""
     value, se = best
     label = best_possible_verdict(paper, value, se, bound, model, better)
     pcrb = "" if bound is None else f", PCRB {bound:.3g}"
@@ -101,7 +102,7 @@ def possible_claim(
         f"{what}: the paper's number is not {side} the best possible on "
         + (f"the reading '{model}'" if model else "the printed model"),
         paper,
-        f"posterior mean {value:.3g} ± {se:.2g}{pcrb}: {label}",
+        f"{best_label} {value:.3g} ± {se:.2g}{pcrb}: {label}",
         f"paper {ge} posterior mean {pm} {MARGIN_SE:g} s.e. and {ge} PCRB",
         label == POSSIBLE,
     )

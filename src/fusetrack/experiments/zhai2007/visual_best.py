@@ -125,6 +125,7 @@ def keeps_lock_claims(
                 f"filter's over {len(r.best)} runs ({who})",
                 0.0,
                 rate,
+                best_label="posterior mean" if who == BEST else who,
             )
         )
     return claims
