@@ -4,7 +4,7 @@ a rank-deficient model, the posterior-mean bootstrap and the trivial estimators.
 import numpy as np
 import pytest
 
-from fusetrack.core import Gaussian
+from fusetrack.core import ConfigError, Gaussian
 from fusetrack.evaluation import ClaimKinds
 from fusetrack.experiments.zhai2007 import best_possible as bp
 from fusetrack.experiments.zhai2007 import galerkin, scalar, sensor_network
@@ -32,6 +32,17 @@ def test_verdict_and_claims_label_a_number_below_the_best_possible():
     assert bp.possible_claim(KINDS, "BP_b", "row", 2.5, (2.0, 0.1)).holds
     far = bp.converged_claim(KINDS, "BP_c", "bootstrap", 1.18, ("cube root", 0.26))
     assert not far.holds and bp.NOT_FROM_MODEL in far.ours
+
+
+def test_verdict_of_a_score_where_higher_is_better():
+    """An ISNR above the best possible's (by more than 3 s.e.) is the impossible side."""
+    assert bp.verdict(9.0, 8.0, 0.1, better="higher") == bp.IMPOSSIBLE
+    assert bp.verdict(8.25, 8.0, 0.1, better="higher") == bp.POSSIBLE  # within 3 s.e.
+    assert bp.verdict(3.0, 8.0, 0.1, better="higher") == bp.POSSIBLE  # below: merely worse
+    high = bp.possible_claim(KINDS, "BP_d", "ISNR", 9.0, (8.0, 0.1), better="higher")
+    assert not high.holds and "not above" in high.statement and "<=" in high.tolerance
+    with pytest.raises(ConfigError, match="better"):
+        bp.verdict(1.0, 2.0, 0.1, better="up")  # type: ignore[arg-type]
 
 
 def test_pcrb_of_a_rank_deficient_cv_model_equals_the_linear_recursion():

@@ -58,3 +58,52 @@ def test_wavelet_threshold_zero_threshold_is_identity():
     np.testing.assert_allclose(
         wavelet_threshold(img, "hard", level=2, threshold=0.0), img, atol=1e-9
     )
+
+
+def test_raster_posterior_mean_of_one_pixel_matches_quadrature_by_hand():
+    """A 2 x 2 image has one filtered pixel: its prior mean is h . (median-3x3 neighbours)
+    and its estimate the posterior mean of N(m, q1) times the Voigt likelihood, by scipy quad."""
+    from scipy import integrate
+
+    from fusetrack.perception import raster_posterior_mean
+
+    pf = RasterParticleFilter(q1=1000.0)
+    y = np.array([[100.0, 120.0], [90.0, 300.0]])  # an outlier at (1, 1)
+    got = raster_posterior_mean(pf, y)
+    m = pf.h[0] * 100.0 + pf.h[1] * 120.0 + pf.h[2] * 100.0  # median3: [[100, 120], [100, 120]]
+
+    def f(x, p):
+        return x**p * np.exp(-0.5 * (x - m) ** 2 / 1000.0) * voigt_profile(300.0 - x, 200**0.5, 5)
+
+    lim = (m - 400.0, m + 400.0)
+    want = (
+        integrate.quad(f, *lim, args=(1,), points=[300.0], limit=200)[0]
+        / integrate.quad(f, *lim, args=(0,), points=[300.0], limit=200)[0]
+    )
+    assert got[1, 1] == pytest.approx(want, abs=1e-4)
+    assert m < got[1, 1] < m + 15.0  # the outlier barely moves it: the Cauchy tail explains it
+    np.testing.assert_array_equal(got[0], [100.0, 120.0])  # first row: the 3 x 3 median
+
+
+def test_particle_filter_tends_to_the_exact_posterior_mean():
+    """The PF stage at 100 particles is further from the exact recursion than at 3000."""
+    from fusetrack.perception import raster_posterior_mean
+
+    img = _image(32)
+    noisy = add_mixed_noise(img, np.random.default_rng(5))
+    exact = raster_posterior_mean(RasterParticleFilter(), noisy)
+    gap = [
+        np.sqrt(np.mean((RasterParticleFilter(n_particles=n)(noisy, seed=2) - exact) ** 2))
+        for n in (100, 3000)
+    ]
+    assert gap[1] < 0.5 * gap[0] and gap[1] < 1.0, gap
+
+
+def test_raster_posterior_mean_rejects_bad_input():
+    from fusetrack.core import ConfigError, ShapeError
+    from fusetrack.perception import raster_posterior_mean
+
+    with pytest.raises(ShapeError, match="noisy"):
+        raster_posterior_mean(RasterParticleFilter(), np.zeros(5))
+    with pytest.raises(ConfigError, match="nodes"):
+        raster_posterior_mean(RasterParticleFilter(), np.zeros((4, 4)), nodes=2)

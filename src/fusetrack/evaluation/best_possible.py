@@ -17,6 +17,7 @@ compared with our mean (:func:`mean_with_se`).
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
 import pandas as pd
@@ -54,13 +55,24 @@ def paper_rms(mean: float, var: float) -> float:
 
 
 def best_possible_verdict(
-    paper: float, best: float, se: float, bound: float | None = None, model: str = ""
+    paper: float,
+    best: float,
+    se: float,
+    bound: float | None = None,
+    model: str = "",
+    better: Literal["lower", "higher"] = "lower",
 ) -> str:
     """:data:`POSSIBLE`, or :data:`IMPOSSIBLE` (``model``: another reading's name) when
     ``paper`` is below the PCRB ``bound`` or more than :data:`MARGIN_SE` standard errors below
-    the posterior mean's ``best`` (a NaN ``se``, one run, counts as 0)."""
+    the posterior mean's ``best`` (a NaN ``se``, one run, counts as 0). With ``better="higher"``
+    (a score such as an ISNR, where the best possible is a maximum) the same with "above"."""
+    if better not in ("lower", "higher"):
+        raise ConfigError(invalid("better", better, "'lower' or 'higher'"))
+    sign = 1.0 if better == "lower" else -1.0
     margin = MARGIN_SE * (se if np.isfinite(se) else 0.0)
-    below = paper < best - margin or (bound is not None and paper < bound)
+    below = sign * paper < sign * best - margin or (
+        bound is not None and sign * paper < sign * bound
+    )
     if not below:
         return POSSIBLE
     return IMPOSSIBLE if not model else f"impossible under '{model}'"
@@ -74,24 +86,28 @@ def possible_claim(
     best: tuple[float, float],
     bound: float | None = None,
     model: str = "",
+    better: Literal["lower", "higher"] = "lower",
+    best_label: str = "posterior mean",
 ) -> Claim:
     """Diagnostic: the paper's ``what`` (``paper``) is not below the best possible on the
-    printed model, or on the reading ``model`` (posterior mean ``best = (value, s.e.)``, PCRB
-    ``bound``; a NaN posterior mean where only the PCRB is known). Fails: the number is
-    *impossible on the printed model*, not merely not reproduced."""
+    printed model, or on the reading ``model`` (posterior mean ``best = (value, s.e.)``, or
+    what ``best_label`` names, NaN where only the PCRB is known; PCRB ``bound``); with
+    ``better="higher"`` (a score), not above it. Fails: the number is *impossible on the printed
+    model*, not merely not reproduced."""
     value, se = best
-    label = best_possible_verdict(paper, value, se, bound, model)
+    label = best_possible_verdict(paper, value, se, bound, model, better)
     pcrb = "" if bound is None else f"PCRB {bound:.3g}"
+    side, ge, pm = ("below", ">=", "-") if better == "lower" else ("above", "<=", "+")
     if np.isnan(value):
         if bound is None:
             raise ConfigError(invalid("best, bound", (best, bound), "a posterior mean or a PCRB"))
-        ours, tolerance = f"{pcrb}: {label}", "paper >= PCRB"
+        ours, tolerance = f"{pcrb}: {label}", f"paper {ge} PCRB"
     else:
-        ours = f"posterior mean {value:.3g} ± {se:.2g}{', ' + pcrb if pcrb else ''}: {label}"
-        tolerance = f"paper >= posterior mean - {MARGIN_SE:g} s.e. and >= PCRB"
+        ours = f"{best_label} {value:.3g} ± {se:.2g}{', ' + pcrb if pcrb else ''}: {label}"
+        tolerance = f"paper {ge} {best_label} {pm} {MARGIN_SE:g} s.e. and {ge} PCRB"
     return kinds.claim(
         claim_id,
-        f"{what}: the paper's number is not below the best possible on "
+        f"{what}: the paper's number is not {side} the best possible on "
         + (f"the reading '{model}'" if model else "the printed model"),
         paper,
         ours,

@@ -28,6 +28,7 @@ from .pf_dwt import RasterParticleFilter as RasterParticleFilter
 from .pf_dwt import add_mixed_noise as add_mixed_noise
 from .pf_dwt import isnr as isnr
 from .pf_dwt import median3 as median3
+from .pf_dwt import raster_posterior_mean as raster_posterior_mean
 from .pf_dwt import ti_threshold as ti_threshold
 from .source_localisation import AcousticNetwork as AcousticNetwork
 from .source_localisation import BeamformModel as BeamformModel

@@ -30,6 +30,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import voigt_profile
 
+from ..core import ConfigError, ShapeError, invalid
+
 Array = NDArray[np.float64]
 _TABLE_HALF, _TABLE_STEP = 3000.0, 0.25
 
@@ -179,6 +181,67 @@ class RasterParticleFilter:
                 int(seed),
             )
         )
+
+
+@numba.njit(cache=True)
+def _raster_posterior_mean(
+    y: np.ndarray,
+    init: np.ndarray,
+    h: np.ndarray,
+    q1: float,
+    table: np.ndarray,
+    x0: float,
+    dx: float,
+    gamma: float,
+    nodes: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - jit
+    rows, cols = y.shape
+    est = init.copy()
+    sd = np.sqrt(q1)
+    logw = np.empty(nodes.shape[0])
+    for i in range(1, rows):
+        for j in range(1, cols):
+            m_p = h[0] * est[i, j - 1] + h[1] * est[i - 1, j] + h[2] * est[i - 1, j - 1]
+            top = -1e300
+            for k in range(nodes.shape[0]):
+                xk = m_p + sd * nodes[k]
+                lw = -0.5 * nodes[k] ** 2 + _log_lik(y[i, j] - xk, table, x0, dx, gamma)
+                logw[k] = lw
+                if lw > top:
+                    top = lw
+            num = 0.0
+            den = 0.0
+            for k in range(nodes.shape[0]):
+                w = np.exp(logw[k] - top)
+                num += w * nodes[k]
+                den += w
+            est[i, j] = m_p + sd * num / den
+    return est
+
+
+def raster_posterior_mean(
+    pf: RasterParticleFilter, noisy: Array, half_width: float = 8.0, nodes: int = 401
+) -> Array:
+    """The ``n_particles -> infinity`` limit of ``pf`` on ``noisy``: the same raster recursion
+    with each pixel's particle mean replaced by its exact posterior mean under the printed
+    per-pixel model, prior ``N(h1 Î(i,j-1) + h2 Î(i-1,j) + h3 Î(i-1,j-1), q1)`` times the Voigt
+    likelihood (Eqs. 95-102), summed on a uniform grid of ``nodes`` points over
+    ``+- half_width`` prior standard deviations (the Kalman proposal only shapes the particle
+    filter's Monte Carlo error, so it has no part here; first row and column as in ``pf``)."""
+    y = np.asarray(noisy, dtype=np.float64)
+    if y.ndim != 2 or min(y.shape) < 2:
+        raise ShapeError(invalid("noisy", y.shape, "a 2-D image of at least 2 x 2 pixels"))
+    if half_width <= 0 or nodes < 3:
+        raise ConfigError(
+            invalid("(half_width, nodes)", (half_width, nodes), "half_width > 0, nodes >= 3")
+        )
+    table, x0, dx = voigt_log_table(float(np.sqrt(pf.noise_var)), pf.cauchy_scale)
+    u = np.linspace(-half_width, half_width, int(nodes))
+    return np.asarray(
+        _raster_posterior_mean(
+            y, median3(y), np.asarray(pf.h, float), pf.q1, table, x0, dx, pf.cauchy_scale, u
+        )
+    )
 
 
 def universal_threshold(img: Array, wavelet: str = "db4") -> float:

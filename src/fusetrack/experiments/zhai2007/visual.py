@@ -23,6 +23,9 @@ Trackers (all ordinary fusetrack filters; the frame enters through a sensor or a
   with the grey template as its only cue;
 * the Appendix B demo: condensation with a 7 x 7 correlation template re-cut every frame, a
   41 x 41 aid window, ``var_w = 5``, ``var_o = 1`` and one shared velocity.
+
+Beside the tables, the best possible on each printed model (:mod:`.visual_best`: a large-N
+posterior-mean filter on the first runs, the PCRB where the measurement model is Gaussian).
 """
 
 from __future__ import annotations
@@ -56,6 +59,8 @@ from ...perception import (
     track_frames,
 )
 from ...sensors import PositionFix
+from . import best_possible as bp
+from . import visual_best as vb
 from .comparators import (
     beyond_section,
     beyond_summary,
@@ -227,6 +232,8 @@ def make_tracker(method: str, seq: Any, config: Mapping[str, Any]) -> TrackerSet
     lang = Langevin()
     if method in BEYOND:
         return comparator(method, seq, str(config["exp"]), config)
+    if method == vb.BEST:
+        return best_tracker(seq, str(config["exp"]), int(config["n_best"]))
     if method.startswith(("condensation", "PF-SP-PEKF", "MMPF-SP", "Galerkin")):
         sensor = EllipseEdgeSensor("head", H, W, axes)
         zs: list[list[np.ndarray | None]] = [[sensor.measurement(e)] for e in edge_maps(seq)]
@@ -312,6 +319,42 @@ def comparator(method: str, seq: Any, exp: str, config: Mapping[str, Any]) -> Tr
     return TrackerSetup(ProposalParticleFilter(motion, sensors, prop, n), prior, fe)
 
 
+def best_tracker(seq: Any, exp: str, n: int) -> TrackerSetup:
+    """The best possible (:mod:`.visual_best`): a bootstrap with ``n`` particles on the printed
+    model of ``exp``'s proposed tracker, with its likelihood and front end: Langevin (E9, E14),
+    the MMPF's four models and Pi_B (E10-E12, E18), App. B's random walk and template (E21)."""
+    family, mm = FAMILY[exp], NEW_METHOD[exp] in ("MMPF-SP", "multi-cue MMPF")
+    prior = Gaussian(seq.truth[0].copy(), P0)
+    fe: Any
+    if family == "edge":
+        H, W = seq.frames.shape[1:3]
+        axes = (seq.sprite.axes[0] * seq.scale[0], seq.sprite.axes[1] * seq.scale[0])
+        sensors: list[Any] = [EllipseEdgeSensor("head", H, W, axes)]
+        fe = PrecomputedMeasurements([[sensors[0].measurement(e)] for e in edge_maps(seq)])
+    elif family == "cues":
+        sensors = [PositionFix(c, cov=CUE_SIGMA**2 * np.eye(2)) for c in CUES]
+        fe = MultiCueFrontEnd(_box(seq.sprite.axes, float(seq.scale[0])), correlation="normalised")
+    else:
+        setup = make_tracker("App. B condensation", seq, {"particles": n})
+        return setup
+    if mm:
+        filt = MultipleModelParticleFilter(mm_models(), PI_B, sensors, n, proposal="prior")
+        return TrackerSetup(filt, _prior6(prior), fe)
+    return TrackerSetup(ProposalParticleFilter(Langevin(), sensors, None, n), prior, fe)
+
+
+def pcrb_model(exp: str) -> tuple[Any, list[Any], np.ndarray] | None:
+    """The motion, sensors and prior covariance of ``exp``'s PCRB where its measurement model is
+    Gaussian (:mod:`.visual_best`): E18's three cues under Langevin, E21's grey template under
+    App. B's random walk from its all-at-``ctr_1`` prior; ``None`` on the edge scenes."""
+    if FAMILY[exp] == "cues":
+        return Langevin(), [PositionFix(c, cov=CUE_SIGMA**2 * np.eye(2)) for c in CUES], P0
+    if FAMILY[exp] == "appb":
+        walk = bp.Regularised(Langevin(beta=0.0, v_mean=0.0, position_var=5.0), 1e-9)
+        return walk, [PositionFix("grey", cov=np.eye(2))], 1e-9 * np.eye(4)
+    return None
+
+
 def shared_velocity(history: list[np.ndarray]) -> Any:
     """App. B: every particle's velocity := est(t) - est(t-1) (one deterministic velocity)."""
 
@@ -334,12 +377,16 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     scene, _, methods = EXPERIMENTS[exp]
     if config.get("beyond", False):
         methods = tuple(m for m in BEYOND if (exp, m) not in NOT_RUN)
+    if config.get("best", False):
+        methods = (vb.BEST,)
     seq = build(scene, np.random.default_rng([seed, 0]))
     truth = seq.truth
     rows: list[dict[str, Any]] = []
     for k, method in enumerate(methods):
-        hook = shared_velocity([truth[0].copy()]) if method.startswith("App. B") else None
+        app_b = method.startswith("App. B") or (method == vb.BEST and FAMILY[exp] == "appb")
+        hook = shared_velocity([truth[0].copy()]) if app_b else None
         stream = 1 + k + (len(EXPERIMENTS[exp][2]) if config.get("beyond", False) else 0)
+        stream += 100 if config.get("best", False) else 0
         setup = make_tracker(method, seq, config)
         tk = setup.track(seq.frames, np.random.default_rng([seed, stream]), after_step=hook)
         est = tk.means
@@ -414,6 +461,7 @@ CLAIM_KINDS = ClaimKinds(
         "E*_beats_baseline": "paper",
         "E10_rmse": "paper",
         "E18-1_grey_lost_at_70": "paper",
+        "BP_*": "diagnostic",  # the best possible on the printed model (issue 19)
     }
 )
 
@@ -596,21 +644,34 @@ def run(ctx: RunContext) -> Outcome:
         beyond = {**cfg, "beyond": True, "n_equal": n_eq, "target_seconds": target}
         nb = min(n, max(runs, 20 if exp == "E10" and not ctx.quick else 1))
         frames.append(ctx.monte_carlo(run_once, [beyond], nb, desc=f"{exp} beyond"))
+    frames += best_possible_runs(ctx, grid)
     return analyse(ctx, pd.concat(frames, ignore_index=True))
+
+
+def best_possible_runs(ctx: RunContext, grid: int) -> list[pd.DataFrame]:
+    """The posterior-mean filter (:mod:`.visual_best`) on the first runs of each experiment, at
+    most :data:`~.visual_best.BEST_RUNS` whatever ``--runs`` says (quick runs: one run of one
+    experiment per measurement family)."""
+    size = "quick" if ctx.quick else "full"
+    n_best = vb.BEST_N[size]
+    runs = min(ctx.n_runs(full=vb.BEST_RUNS[size], quick=vb.BEST_RUNS[size]), vb.BEST_RUNS[size])
+    exps = vb.QUICK_EXPERIMENTS if ctx.quick else tuple(EXPERIMENTS)
+    cfgs = [{"exp": e, "grid": grid, "best": True, "n_best": n_best} for e in exps]
+    return [ctx.monte_carlo(run_once, [c], runs, desc=f"{c['exp']} best possible") for c in cfgs]
 
 
 def analyse(ctx: RunContext, df: pd.DataFrame) -> Outcome:
     """Claims, figures and report from the tidy rows (also usable on a saved results.parquet)."""
+    results, is_best = df, _flag(df, "best")
+    best, df = df[is_best], df[~is_best]
     per_run = df[df["frame"] == 0].groupby("exp")["run"].nunique()
     runs_e10, runs = int(per_run["E10"]), int(per_run.drop("E10").min())
     grid = int(df["grid"].iloc[0]) if "grid" in df else 50
-    is_beyond = (
-        df["beyond"].astype(str).str.lower().isin(["true", "1", "1.0"])  # parquet: "true"/"null"
-        if "beyond" in df
-        else pd.Series(False, index=df.index)
-    )
+    is_beyond = _flag(df, "beyond")
     summary = summarise(df[~is_beyond])
     claims = build_claims(summary, ctx.quick)
+    best_claims, best_md = best_possible(df[df["frame"] == 0], best)
+    claims += best_claims
     e10 = df[df["exp"] == "E10"]
     rm = e10.groupby(["method", "frame"])["error"].apply(lambda e: np.sqrt(np.mean(e**2)))
     rv = (
@@ -643,11 +704,37 @@ def analyse(ctx: RunContext, df: pd.DataFrame) -> Outcome:
         {"the thesis (qualitative)": [EXPERIMENTS[e][1] for e in EXPERIMENTS]},
         index=list(EXPERIMENTS),
     )
-    body = report_body(summary, paper, cues, runs_e10, runs, grid, [fig37, fig38, strips, curves])
+    figs = [fig37, fig38, strips, curves]
+    body = report_body(summary, paper, cues, runs_e10, runs, grid, figs, best_md)
     beyond_md, beyond_json = "", dict[str, Any]()
     if bool(is_beyond.any()):
         beyond_md, beyond_json = beyond_the_paper(ctx, df, is_beyond)
-    return Outcome(df, claims, body + beyond_md, runs_e10, beyond_the_paper=beyond_json)
+    return Outcome(results, claims, body + beyond_md, runs_e10, beyond_the_paper=beyond_json)
+
+
+def _flag(df: pd.DataFrame, column: str) -> pd.Series:
+    """The boolean config column ``column`` of the rows (False where absent; parquet stores
+    "true"/"null")."""
+    if column not in df:
+        return pd.Series(False, index=df.index)
+    return df[column].astype(str).str.lower().isin(["true", "1", "1.0"])
+
+
+def best_possible(first: pd.DataFrame, best: pd.DataFrame) -> tuple[list[Claim], str]:
+    """The best-possible claims and section (:mod:`.visual_best`) from the tidy rows of the
+    trackers at frame 0 (``first``) and of the posterior-mean filter (``best``, every frame)."""
+    if best.empty:
+        return [], ""
+    rows = vb.best_rows(first, best[best["frame"] == 0], NEW_METHOD)
+    frames = best.groupby("exp")["frame"].max() + 1
+    pcrb = {}
+    for exp in rows:
+        model = pcrb_model(exp)
+        if model is not None:
+            pcrb[exp] = vb.pcrb_rmse(model[0], model[1], int(frames[exp]), model[2])
+    scenes = {e: EXPERIMENTS[e][0] for e in rows}
+    claims = vb.keeps_lock_claims(CLAIM_KINDS, rows, scenes, NEW_METHOD)
+    return claims, vb.best_section(vb.best_table(rows, NEW_METHOD, pcrb))
 
 
 _EQUAL_TIME_TEXT = (
@@ -769,12 +856,14 @@ def report_body(
     runs: int,
     grid: int,
     figs: list[Any],
+    best: str = "",
 ) -> str:
-    """The report: what is reproduced, the thesis beside ours, the differences and their causes."""
+    """The report: what is reproduced, the thesis beside ours and the best possible (``best``,
+    markdown), the differences and their causes."""
     return (
         "\n"
         + _setup_text(runs_e10, runs, grid)
-        + _results_text(summary, paper, cues, figs)
+        + _results_text(summary, paper, cues, figs, best)
         + _edge_differences(summary, runs_e10, grid)
         + _cue_differences(summary)
     )
@@ -809,8 +898,10 @@ thesis: 100 x 100; quick runs use 30 x 30).
 """
 
 
-def _results_text(s: pd.DataFrame, paper: pd.DataFrame, cues: pd.DataFrame, figs: list[Any]) -> str:
-    """The thesis's statements beside ours, the figures, the cue accuracy."""
+def _results_text(
+    s: pd.DataFrame, paper: pd.DataFrame, cues: pd.DataFrame, figs: list[Any], best: str
+) -> str:
+    """The thesis's statements beside ours and the best possible, the figures, the cue accuracy."""
     fig37, fig38, strips, curves = figs
     return f"""## The thesis's statements beside ours
 
@@ -818,7 +909,7 @@ def _results_text(s: pd.DataFrame, paper: pd.DataFrame, cues: pd.DataFrame, figs
 
 {s.to_markdown(floatfmt=".3g")}
 
-![E10 location RMSE]({fig37.name})
+{best}![E10 location RMSE]({fig37.name})
 
 ![E10 velocity RMSE]({fig38.name})
 
