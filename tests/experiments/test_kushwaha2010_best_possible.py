@@ -9,9 +9,8 @@ import pandas as pd
 import pytest
 
 from fusetrack.core import Gaussian, Measurement, ShapeError
-from fusetrack.evaluation import ClaimKinds
+from fusetrack.evaluation import ClaimKinds, expected_norm
 from fusetrack.experiments.kushwaha2010 import best_possible as bp
-from fusetrack.experiments.nott2009.best_possible import expected_norm as expected_norm_2d
 from fusetrack.filters import KalmanFilter, SmartCameraTracker
 from fusetrack.sensors import EllipsoidCamera, LinearGaussianSensor, PinholeCamera
 from fusetrack.world import render_frames
@@ -120,15 +119,16 @@ def test_prior_motion_and_visibility_rule_are_the_trackers():
 
 def test_expected_norm_of_gaussians():
     s = 0.3
+    np.testing.assert_allclose(expected_norm(s**2 * np.eye(3)), s * np.sqrt(8 / np.pi), rtol=1e-9)
     np.testing.assert_allclose(
-        bp.expected_norm(s**2 * np.eye(3)), s * np.sqrt(8 / np.pi), rtol=1e-9
+        expected_norm(np.diag([s**2, 0, 0])), s * np.sqrt(2 / np.pi), rtol=1e-9
     )
-    np.testing.assert_allclose(
-        bp.expected_norm(np.diag([s**2, 0, 0])), s * np.sqrt(2 / np.pi), rtol=1e-9
-    )
+    # the 3-D integral with a zero third axis against the 2-D closed form (elliptic integral)
     C = np.array([[0.04, 0.01], [0.01, 0.01]])
-    np.testing.assert_allclose(bp.expected_norm(C), expected_norm_2d(C), rtol=1e-8)
-    assert bp.expected_norm(np.zeros((3, 3))) == 0.0
+    C3 = np.zeros((3, 3))
+    C3[:2, :2] = C
+    np.testing.assert_allclose(expected_norm(C3), expected_norm(C), rtol=1e-8)
+    assert expected_norm(np.zeros((3, 3))) == 0.0
 
 
 def test_run_bound_trivial_estimator_and_rows():

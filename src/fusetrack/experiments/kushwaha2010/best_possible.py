@@ -63,7 +63,14 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from ...core import ShapeError, check_positive, invalid
-from ...evaluation import MARGIN_SE, Claim, ClaimKinds, posterior_information, rms_over_runs
+from ...evaluation import (
+    MARGIN_SE,
+    Claim,
+    ClaimKinds,
+    expected_norm,
+    posterior_information,
+    rms_over_runs,
+)
 from ...filters import TrackerSettings
 from ...motion import ConstantVelocity
 from ...sensors import EllipsoidCamera
@@ -208,25 +215,6 @@ def position_bound(
         information=info,
     )
     return np.asarray(np.linalg.inv(J)[:, :3, :3])
-
-
-_NODES = np.linspace(-60.0, 60.0, 1201)  # u = log s: tails ~ exp(-30), rule ~ exp(-2 pi^2 / 0.1)
-
-
-def expected_norm(cov: ArrayLike) -> Array:
-    """``E|e|`` for ``e ~ N(0, cov)``, ``cov`` ``(..., d, d)``, by the exact 1-D integral
-    ``E sqrt(Q) = (1 / (2 sqrt(pi))) int_0^inf (1 - E exp(-s Q)) s^(-3/2) ds`` with
-    ``E exp(-s Q) = prod_i (1 + 2 s lam_i)^(-1/2)`` (``Q = |e|^2``, ``lam`` the eigenvalues),
-    in ``u = log s`` by the trapezoid rule (the integrand is analytic in a strip, so the rule
-    converges geometrically)."""
-    lam = np.clip(np.linalg.eigvalsh(np.asarray(cov, dtype=float)), 0.0, None)
-    top = lam.max(axis=-1, keepdims=True)
-    rel = np.divide(lam, top, out=np.zeros_like(lam), where=top > 0)
-    s = np.exp(_NODES)
-    log_mgf = -0.5 * np.sum(np.log1p(2.0 * s[:, None] * rel[..., None, :]), axis=-1)  # (..., n)
-    f = -np.expm1(log_mgf) * np.exp(-0.5 * _NODES)  # 1 - E exp(-s Q) without cancellation
-    integral = np.sum(f, axis=-1) * (_NODES[1] - _NODES[0])
-    return np.asarray(np.sqrt(top[..., 0]) * integral / (2.0 * np.sqrt(np.pi)))
 
 
 def run_bound(
@@ -388,7 +376,6 @@ __all__ = [
     "above_claim",
     "bound_row",
     "bound_table",
-    "expected_norm",
     "has_bound",
     "position_bound",
     "projections",
