@@ -19,15 +19,8 @@ WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-prior-calibration",
-    "kushwaha2010-cameras-a",
-    "kushwaha2010-cameras-b",
-    "kushwaha2010-cameras-gap",
-    "kushwaha2010-crossing",
-    "kushwaha2010-mcmcda",
-    "kushwaha2010-outdoor-triangle",
     "lee2009-camera-triggering",
     "lee2009-periodic-sweep",
-    "lee2009-rfid-camera",
     "zhai2007-denoising",
     "zhai2007-visual",
 }
