@@ -21,7 +21,6 @@ AWAITING_RERUN = {
     "ercan2013-prior-calibration",
     "lee2009-camera-triggering",
     "lee2009-periodic-sweep",
-    "zhai2007-denoising",
     "zhai2007-visual",
 }
 """Reports known to be older than their code, each to be regenerated at full size (strict xfail: a
