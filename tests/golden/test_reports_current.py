@@ -19,6 +19,7 @@ WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-prior-calibration",
+    "kushwaha2010-harmonic-sources",
     "lee2009-camera-triggering",
     "lee2009-periodic-sweep",
     "zhai2007-visual",

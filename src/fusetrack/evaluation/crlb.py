@@ -534,3 +534,55 @@ def expected_norm(cov: ArrayLike) -> Array:
     f = -np.expm1(log_mgf) * np.exp(-0.5 * _LOG_NODES)  # 1 - E exp(-s Q) without cancellation
     integral = np.sum(f, axis=-1) * (_LOG_NODES[1] - _LOG_NODES[0])
     return np.asarray(np.sqrt(top[..., 0]) * integral / (2.0 * np.sqrt(np.pi)))
+
+
+def gaussian_information(
+    jacobian: ArrayLike, variance: ArrayLike, nuisance: ArrayLike | None = None
+) -> Array:
+    """Fisher information ``(..., p, p)`` of ``θ`` from ``y ~ N(μ(θ, η), σ² I)`` (``n`` values).
+
+    ``jacobian`` ``(..., n, p)``: ``∂μ/∂θ``; ``variance`` ``(...)``: ``σ²``; ``nuisance``
+    ``(..., n, q)``: ``∂μ/∂η`` of unknown nuisance parameters, whose information is taken out
+    (the Schur complement of the joint information, Kay 1993, Vol. I, §3.9 and Eq. 3.13;
+    ``G^T (I - Π_N) G / σ²`` with ``Π_N`` the projector onto the columns of ``N``)."""
+    G = np.asarray(jacobian, dtype=float)
+    if G.ndim < 2:
+        raise ShapeError(invalid("jacobian.shape", G.shape, "(..., n, p)"))
+    var = np.asarray(variance, dtype=float)
+    if np.any(~(var > 0)):
+        raise ConfigError(invalid("variance", variance, "variances > 0"))
+    if nuisance is not None:
+        N = np.asarray(nuisance, dtype=float)
+        if N.shape[:-1] != G.shape[:-1]:
+            raise ShapeError(invalid("nuisance.shape", N.shape, f"{G.shape[:-1]} + (q,)"))
+        G = G - N @ (np.linalg.pinv(N) @ G)  # the part of G that no nuisance change explains
+    return np.asarray(np.swapaxes(G, -1, -2) @ G / var[..., None, None])
+
+
+def harmonic_frequency_crlb(
+    amplitudes: ArrayLike, sigma: float, n_samples: int, fs: float = 1.0
+) -> Array:
+    """Standard-deviation bound (Hz) of a fundamental ``f0`` observed in channels
+    ``y_c[n] = Σ_h A_ch cos(2π h f0 n / fs + φ_ch) + w_c[n]`` (``n_samples`` each, white noise of
+    std ``sigma`` independent across channels, amplitudes and phases unknown).
+
+    One real sinusoid: ``var(f) >= 12 / ((2π)² η N (N² - 1))`` in cycles per sample with
+    ``η = A² / (2σ²)`` (Kay 1993, Vol. I, Eq. 3.41, asymptotic in ``N``). Harmonic ``h`` moves as ``h f0``, so it adds
+    ``h²`` times its information, and independent channels add theirs (Christensen & Jakobsson
+    2009, *Multi-Pitch Estimation*, Eq. 2.37)::
+
+        var(f0) >= 24 σ² fs² / ((2π)² N (N² - 1) Σ_c Σ_h h² A_ch²)
+
+    ``amplitudes`` ``(..., C, H)``: column ``h - 1`` is harmonic ``h``; returns ``(...)``."""
+    a = np.asarray(amplitudes, dtype=float)
+    if a.ndim < 2:
+        raise ShapeError(invalid("amplitudes.shape", a.shape, "(..., C, H)"))
+    if not (sigma > 0 and n_samples >= 2 and fs > 0):
+        raise ConfigError(
+            invalid("sigma, n_samples, fs", (sigma, n_samples, fs), "sigma > 0, N >= 2, fs > 0")
+        )
+    h = np.arange(1, a.shape[-1] + 1, dtype=float)
+    n = float(n_samples)
+    info = (2 * np.pi) ** 2 * n * (n * n - 1) * np.sum(h**2 * a**2, axis=(-2, -1))
+    with np.errstate(divide="ignore"):
+        return np.asarray(fs * np.sqrt(24.0 * sigma**2 / info))

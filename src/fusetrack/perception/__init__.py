@@ -33,6 +33,7 @@ from .pf_dwt import ti_threshold as ti_threshold
 from .source_localisation import AcousticNetwork as AcousticNetwork
 from .source_localisation import BeamformModel as BeamformModel
 from .source_localisation import FrequencyModel as FrequencyModel
+from .source_localisation import SourceBeamform as SourceBeamform
 from .source_localisation import energy_localise as energy_localise
 from .source_localisation import estimate_frequencies as estimate_frequencies
 from .source_localisation import harmonic_powers as harmonic_powers

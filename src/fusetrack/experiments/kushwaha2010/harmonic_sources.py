@@ -13,6 +13,10 @@ Sweeps (Fig. 30a–c, 31, 32a): number of sources 1–4; SNR 7–52 dB (two sour
 0.1–8 m (two sources); harmonicity (two sources, band-limited noise added to each source);
 directivity β (two sources, random facing), with energy-based localisation (EBL) on the same
 data; and the 0.1 Hz frequency discrimination of Fig. 29.
+
+The best possible beside every table (issue 19): the CRLB of the localiser's own beamform model,
+the CRLB of the fundamentals from the simulated samples, and the field centre
+(:mod:`.harmonic_bound`, which says which model each bound is for).
 """
 
 from __future__ import annotations
@@ -57,6 +61,13 @@ from ...perception import (
 )
 from ...perception import beamform as beamform_energies
 from ...world import HarmonicSource, noise_sigma, random_sources, received_signals
+from .harmonic_bound import (
+    SWEEP_KEYS,
+    best_possible_claims,
+    best_possible_text,
+    scene_bound,
+    sweep_best,
+)
 
 
 class Options(ExperimentOptions):
@@ -106,7 +117,7 @@ def simulate_features(
     """Every node's beamform (``BEAM_SAMPLES``, all four mics) and compressed PSD (1 s of mic 0,
     ``n_peaks`` pairs), with white noise at ``snr_db`` (mean received power over all microphones /
     σ_w²)."""
-    return simulate_features_multi(sources, net, snr_db, rng, (n_peaks,))[n_peaks]
+    return simulate_features_multi(sources, net, snr_db, rng, (n_peaks,))[0][n_peaks]
 
 
 def simulate_features_multi(
@@ -115,8 +126,9 @@ def simulate_features_multi(
     snr_db: float,
     rng: np.random.Generator,
     n_peaks: tuple[int, ...],
-) -> dict[int, list[NodeFeatures]]:
-    """:func:`simulate_features` for several PSD sizes from one simulated scene."""
+) -> tuple[dict[int, list[NodeFeatures]], float]:
+    """:func:`simulate_features` for several PSD sizes from one simulated scene, and the white
+    noise's σ_w."""
     mics = net.microphones()  # (K, P, 2)
     k, p, _ = mics.shape
     n_beam = BEAM_SAMPLES + 64  # the delays need at most 33 extra samples
@@ -131,7 +143,7 @@ def simulate_features_multi(
         b = beamform_energies(x[i, :, -n_beam:], net.array, fs=FS, c=net.c, length=BEAM_SAMPLES)
         for n in n_peaks:
             out[n].append(NodeFeatures(b, compress_psd(f, pw, n)))
-    return out
+    return out, sigma
 
 
 def separated_pair(separation: float, rng: np.random.Generator) -> np.ndarray:
@@ -173,9 +185,13 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     truth = np.array([s.position for s in sources])
     true_f0 = np.array([s.f0 for s in sources])
     sizes = tuple(config.get("n_psd_values", (30,)))
-    scenes = simulate_features_multi(sources, net, float(config.get("snr_db", 25.0)), rng, sizes)
+    snr = float(config.get("snr_db", 25.0))
+    scenes, sigma = simulate_features_multi(sources, net, snr, rng, sizes)
     model = BeamformModel(field_box=FIELD, n_samples=int(config["gibbs_samples"]))
-    base = {k: v for k, v in config.items() if k != "n_psd_values"}
+    best = scene_bound(
+        net, sources, sigma, rel_sigma=model.rel_sigma, field_box=FIELD, seconds=PSD_SECONDS
+    )
+    base = {k: v for k, v in config.items() if k != "n_psd_values"} | best.row()
     rows: list[dict[str, Any]] = []
     for n_psd, feats in scenes.items():
         rows += _score(config, base | {"n_psd": n_psd}, net, feats, truth, true_f0, model, rng)
@@ -314,9 +330,15 @@ def analyse(ctx: RunContext, df: pd.DataFrame, runs: int, gibbs: int) -> Outcome
     extended = bool((df["method"] == RANGE_AWARE).any() and (df["sweep"] == "harmonicity-1").any())
     claims += _extension_claims(df) if extended else []  # results saved before they existed
     views = _sweep_views(s.by_m, s.per_node, s.by_snr, s.by_sep, s.by_h, s.bf, s.ebl, s.by_n)
+    bounded = "bound_mean" in df  # results saved before the best possible existed have none
+    if bounded:
+        fine = s.f0_errors.get(2, np.zeros(0))
+        claims += best_possible_claims(CLAIM_KINDS, df, fine[fine <= 0.5], s.by_m)
+        views = [_with_best(v, df, sweep, key) for v, (sweep, key) in zip(views, VIEW_KEYS)]
     figs = [_plot_sweep(ctx, v) for v in views]
     table = "\n\n".join(_sweep_table(v) for v in views)
     body = _setup_text(ctx, s, table, figs, runs, gibbs)
+    body += best_possible_text(df, s.f0_rms) if bounded else ""
     body += _extension_text(df) if extended else ""
     body += _differences_text(s, runs)
     return Outcome(df, claims, body, runs)
@@ -407,6 +429,7 @@ def _summarise(df: pd.DataFrame) -> _Summary:
 # Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
 CLAIM_KINDS = ClaimKinds(
     {
+        "BP_*": "diagnostic",  # the best possible (issue 19): CRLBs, the field centre
         "f0_discrimination_0p1hz_60_pairs": "diagnostic",  # a reading: N_PSD is not given
         "f0_*": "paper",
         "error_*": "paper",
@@ -1006,6 +1029,15 @@ def _sweep_views(
             {"error (m)": by_n},
         ),
     ]
+
+
+VIEW_KEYS = tuple(SWEEP_KEYS.items())
+"""The (sweep, swept column) of each of :func:`_sweep_views`' views, in order."""
+
+
+def _with_best(view: _SweepView, df: pd.DataFrame, sweep: str, key: str) -> _SweepView:
+    """The view with the best possible's rows (:func:`~.harmonic_bound.sweep_best`) added."""
+    return replace(view, rows=view.rows | dict(sweep_best(df, sweep, key)))
 
 
 def _sweep_table(view: _SweepView) -> str:

@@ -11,6 +11,7 @@ from .harmonic import LocalisationResult as LocalisationResult
 from .harmonic import localise as localise
 from .harmonic import match_error as match_error
 from .harmonic_beamform import AcousticNetwork as AcousticNetwork
+from .harmonic_beamform import SourceBeamform as SourceBeamform
 from .harmonic_frequencies import FrequencyModel as FrequencyModel
 from .harmonic_frequencies import estimate_frequencies as estimate_frequencies
 from .harmonic_frequencies import harmonic_powers as harmonic_powers
