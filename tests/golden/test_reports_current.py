@@ -21,6 +21,7 @@ AWAITING_RERUN = {
     "ercan2013-prior-calibration",
     "lee2009-camera-triggering",
     "lee2009-periodic-sweep",
+    "nott2009-video",
     "zhai2007-denoising",
     "zhai2007-visual",
 }
