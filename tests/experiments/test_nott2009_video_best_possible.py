@@ -3,6 +3,8 @@ covariance of the trackers' tag-only model, the camera's frames follow the rende
 trackers' updates, and the report shows the bound beside the trackers with claims that fail
 when a tracker beats it."""
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -76,6 +78,16 @@ def test_without_the_camera_the_bound_is_the_kalman_filter_covariance():
         assert cb.rms["run"]["B1"][0] == pytest.approx(0.4)
 
 
+def test_a_sharper_foot_point_lowers_the_bound_where_the_camera_reports():
+    df = _rows(occluded=False, reason="visible")
+    sharper = VideoRadioTracker(replace(TRACKER.cfg, sigma_px=0.25))
+    sens = vbp.noise_sensitivity(df, {"1 px": TRACKER, "0.25 px": sharper}, DT, TAG_EVERY)
+    assert sens["PCRB RMS (m)"].iloc[1] < 0.5 * sens["PCRB RMS (m)"].iloc[0]
+    # without the camera the pixel noise does not matter
+    blind = vbp.noise_sensitivity(_rows(), {"1 px": TRACKER, "0.25 px": sharper}, DT, TAG_EVERY)
+    assert blind["PCRB RMS (m)"].iloc[1] == pytest.approx(blind["PCRB RMS (m)"].iloc[0])
+
+
 def test_the_camera_reports_where_the_subject_is_visible_or_a_tracker_updated():
     visible = vbp.case_rows(_rows(occluded=False, reason="visible"), "single-drop")
     j = visible[visible["method"] == "J"]
@@ -93,8 +105,12 @@ def test_the_camera_reports_where_the_subject_is_visible_or_a_tracker_updated():
 
 
 def test_report_shows_the_bound_and_the_claims_fail_below_it():
-    bounds = vbp.estimate(_rows(err=1e-3), TRACKER, DT, TAG_EVERY)
-    text = vbp.report(bounds, 2)
+    df = _rows(err=1e-3)
+    bounds = vbp.estimate(df, TRACKER, DT, TAG_EVERY)
+    sharper = VideoRadioTracker(replace(TRACKER.cfg, sigma_px=0.25))
+    sens = vbp.noise_sensitivity(df, {"1 px": TRACKER, "0.25 px": sharper}, DT, TAG_EVERY)
+    assert sens["PCRB RMS (m)"].iloc[0] == pytest.approx(bounds["single"].bound.rms["run"])
+    text = vbp.report(bounds, 2, sens)
     assert "PCRB RMS (m)" in text and "mean-error bound (m)" in text
     assert f"{bounds['wall'].bound.rms['run']:.3g}" in text
     assert not any(c.holds for c in vbp.claims(KINDS, bounds))  # 1 mm: impossible on the model
