@@ -121,7 +121,7 @@ def case_rows(tr: pd.DataFrame, name: str) -> pd.DataFrame:
         )
     rows = pd.concat(out, ignore_index=True).rename(columns={"step": "frame"})
     j = rows[rows["method"] == "J"]
-    window = ~_grid(j, "camera").astype(bool).all(axis=0)  # (T,): no camera in some run
+    window: Array = ~np.all(_grid(j, "camera").astype(bool), axis=0)  # (T,): none in some run
     return rows.assign(occluded=window[rows["frame"].to_numpy()]).rename(columns={"frame": "step"})
 
 
