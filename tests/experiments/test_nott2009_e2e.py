@@ -23,7 +23,17 @@ CASES = {
     ),
     "nott2009-video": (
         ["--quick"],
-        {"H10-straight-head", "H8-recall", "H5", "H6", "speed-front-end", "Ry-known", "V4-video"},
+        {
+            "H10-straight-head",
+            "H8-recall",
+            "H5",
+            "H6",
+            "speed-front-end",
+            "Ry-known",
+            "V4-video",
+            "BP_J_above_bound_single",
+            "BP_J_above_bound_single-drop",
+        },
     ),
 }
 
@@ -58,6 +68,10 @@ def test_experiment_writes_the_contract(name, tmp_path):
         assert set(c) >= {"id", "statement", "paper", "ours", "tolerance", "holds"}
         assert isinstance(c["holds"], bool)
     assert len(pd.read_parquet(out / "results.parquet")) > 0
+    if name == "nott2009-video":  # the bound beside the error tables (issue 19)
+        report = (out / "report.md").read_text()
+        assert "## The best possible on the trackers' model" in report
+        assert "PCRB RMS (m)" in report
     report = (out / "report.md").read_text()
     assert "Differences" in report
     for line in report.splitlines():

@@ -63,6 +63,7 @@ from ...world import (
     single_person_walk,
     straight_training_walk,
 )
+from . import video_best_possible
 from .camera_model import (
     camera_model_claims,
     camera_model_report,
@@ -620,6 +621,7 @@ CLAIM_KINDS = ClaimKinds(
         "track-video": "beyond",
         "Ry-*": "diagnostic",  # Sec. 3.15's pixel noise: the thesis gives the method only
         "V4-video": "diagnostic",  # a reading of the camera measurement (spec E15)
+        "BP_*": "diagnostic",  # the best possible on the trackers' model (issue 19)
         "H5": "paper",
         "H5-bgs": "paper",
         "H6": "paper",
@@ -1133,6 +1135,20 @@ def _report_differences(t: _Tracking) -> str:
 """
 
 
+def _noise_readings(noise: Any, foot_med: float) -> dict[str, VideoRadioTracker]:
+    """The joint tracker's model with the foot point's noise as given to the trackers and as
+    the camera section measures it (standing std, RMS over u and v; walking median error)."""
+    standing = float(np.sqrt(np.mean(np.square(noise.known_std))))
+    return {
+        label: _tracker({}, _tag(0), sigma_px=sigma)
+        for label, sigma in (
+            ("the trackers' (bound above)", TrackerConfig.sigma_px),
+            ("standing std (measured)", standing),
+            ("walking median (measured)", foot_med),
+        )
+    }
+
+
 def run(ctx: RunContext) -> Outcome:
     """Sec. 5.2 on rendered video: scenario, estimation, claims, figures and report text."""
     runs = ctx.n_runs(full=5, quick=1)
@@ -1151,6 +1167,11 @@ def run(ctx: RunContext) -> Outcome:
     claims += [*_speed_claims(fps, step), _offset_claim(t)]
     noise, v4 = pixel_noise(df), v4_rmse(t.single)
     claims += camera_model_claims(CLAIM_KINDS, noise, v4, TrackerConfig.sigma_px)
+    bounds = video_best_possible.estimate(df, _tracker({}, _tag(0)), 1.0 / FPS, TAG_EVERY)
+    claims += video_best_possible.claims(CLAIM_KINDS, bounds)
+    sensitivity = video_best_possible.noise_sensitivity(
+        df, _noise_readings(noise, t.foot_med), 1.0 / FPS, TAG_EVERY
+    )
     tool = _run_tool(ctx)
     claims.append(_tool_claim(tool))
     figs = _figures(ctx, df, t.single, t.cj)
@@ -1159,6 +1180,7 @@ def run(ctx: RunContext) -> Outcome:
     )
     body = (
         _report_results(ctx, df, (c, g, t, tool), fps, step, runs)
+        + video_best_possible.report(bounds, runs, sensitivity)
         + camera_model_report(noise, v4, c.st_head, t.foot_med, runs)
         + "\n".join(f"![{f}]({f})" for f in figs)
         + _report_differences(t)
