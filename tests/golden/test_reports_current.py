@@ -21,7 +21,6 @@ AWAITING_RERUN = {
     "ercan2013-prior-calibration",
     "kushwaha2010-harmonic-sources",
     "lee2009-camera-triggering",
-    "lee2009-periodic-sweep",
     "nott2009-video",
     "zhai2007-visual",
 }
