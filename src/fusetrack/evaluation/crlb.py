@@ -174,35 +174,31 @@ def _jacobian(motion: MotionModel, x: Array, dt: float) -> Array:
         raise ShapeError(invalid("motion.jacobian(x, dt).shape", F.shape, valid)) from None
 
 
+def _given(name: str, value: ArrayLike | None, shape: tuple[int, ...], valid: str) -> Any:
+    """A precomputed per-run array broadcast to ``shape`` and checked finite, or None."""
+    if value is None:
+        return None
+    a = np.asarray(value, dtype=float)
+    try:
+        a = np.broadcast_to(a, shape)
+    except ValueError:
+        raise ShapeError(invalid(f"{name}.shape", a.shape, valid)) from None
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(invalid(name, "non-finite values", "finite matrices"))
+    return a
+
+
 def _given_jacobians(jacobians: ArrayLike | None, R: int, T: int, d: int) -> Any:
     """The precomputed transition Jacobians ``(R, T - 1, d, d)`` (broadcast), or None."""
-    if jacobians is None:
-        return None
-    a = np.asarray(jacobians, dtype=float)
     n = max(T - 1, 0)
-    try:
-        a = np.broadcast_to(a, (R, n, d, d))
-    except ValueError:
-        valid = f"(T - 1, d, d) = ({n}, {d}, {d}) or (R, T - 1, d, d) with R = {R}"
-        raise ShapeError(invalid("jacobians.shape", a.shape, valid)) from None
-    if not np.all(np.isfinite(a)):
-        raise ConfigError(invalid("jacobians", "non-finite values", "finite matrices"))
-    return a
+    valid = f"(T - 1, d, d) = ({n}, {d}, {d}) or (R, T - 1, d, d) with R = {R}"
+    return _given("jacobians", jacobians, (R, n, d, d), valid)
 
 
 def _given_information(information: ArrayLike | None, R: int, T: int, S: int, d: int) -> Any:
     """The precomputed per-sensor information ``(R, T, S, d, d)`` (broadcast), or None."""
-    if information is None:
-        return None
-    a = np.asarray(information, dtype=float)
-    try:
-        a = np.broadcast_to(a, (R, T, S, d, d))
-    except ValueError:
-        valid = f"(T, S, d, d) = ({T}, {S}, {d}, {d}) or (R, T, S, d, d) with R = {R}"
-        raise ShapeError(invalid("information.shape", a.shape, valid)) from None
-    if not np.all(np.isfinite(a)):
-        raise ConfigError(invalid("information", "non-finite values", "finite matrices"))
-    return a
+    valid = f"(T, S, d, d) = ({T}, {S}, {d}, {d}) or (R, T, S, d, d) with R = {R}"
+    return _given("information", information, (R, T, S, d, d), valid)
 
 
 def _measurement_information(
