@@ -298,15 +298,8 @@ def comparator(method: str, seq: Any, exp: str, config: Mapping[str, Any]) -> Tr
     truth = seq.truth
     prior = Gaussian(truth[0].copy(), P0)
     motion: Any = Langevin()
-    fe: Any
-    if family == "edge":
-        H, W = seq.frames.shape[1:3]
-        axes = (seq.sprite.axes[0] * seq.scale[0], seq.sprite.axes[1] * seq.scale[0])
-        sensors: list[Any] = [EllipseEdgeSensor("head", H, W, axes)]
-        fe = PrecomputedMeasurements([[sensors[0].measurement(e)] for e in edge_maps(seq)])
-    elif family == "cues":
-        sensors = [PositionFix(c, cov=CUE_SIGMA**2 * np.eye(2)) for c in CUES]
-        fe = MultiCueFrontEnd(_box(seq.sprite.axes, float(seq.scale[0])), correlation="normalised")
+    if family in ("edge", "cues"):
+        sensors, fe = _measurements(seq, family)
     else:  # App. B's template, motion and observation variances, without the shared velocity
         sensors = [PositionFix("grey", cov=np.eye(2))]
         fe = MultiCueFrontEnd((7, 7), 20, ("grey",), half_life=None, correlation="plain")
@@ -325,22 +318,26 @@ def best_tracker(seq: Any, exp: str, n: int) -> TrackerSetup:
     the MMPF's four models and Pi_B (E10-E12, E18), App. B's random walk and template (E21)."""
     family, mm = FAMILY[exp], NEW_METHOD[exp] in ("MMPF-SP", "multi-cue MMPF")
     prior = Gaussian(seq.truth[0].copy(), P0)
-    fe: Any
-    if family == "edge":
-        H, W = seq.frames.shape[1:3]
-        axes = (seq.sprite.axes[0] * seq.scale[0], seq.sprite.axes[1] * seq.scale[0])
-        sensors: list[Any] = [EllipseEdgeSensor("head", H, W, axes)]
-        fe = PrecomputedMeasurements([[sensors[0].measurement(e)] for e in edge_maps(seq)])
-    elif family == "cues":
-        sensors = [PositionFix(c, cov=CUE_SIGMA**2 * np.eye(2)) for c in CUES]
-        fe = MultiCueFrontEnd(_box(seq.sprite.axes, float(seq.scale[0])), correlation="normalised")
-    else:
-        setup = make_tracker("App. B condensation", seq, {"particles": n})
-        return setup
+    if family not in ("edge", "cues"):
+        return make_tracker("App. B condensation", seq, {"particles": n})
+    sensors, fe = _measurements(seq, family)
     if mm:
         filt = MultipleModelParticleFilter(mm_models(), PI_B, sensors, n, proposal="prior")
         return TrackerSetup(filt, _prior6(prior), fe)
     return TrackerSetup(ProposalParticleFilter(Langevin(), sensors, None, n), prior, fe)
+
+
+def _measurements(seq: Any, family: str) -> tuple[list[Any], Any]:
+    """The sensors and front end of an edge (E9-E14: the ellipse-edge sensor on precomputed edge
+    maps) or multi-cue (E18: the three cue locations as position fixes) experiment."""
+    if family == "edge":
+        H, W = seq.frames.shape[1:3]
+        axes = (seq.sprite.axes[0] * seq.scale[0], seq.sprite.axes[1] * seq.scale[0])
+        edge = EllipseEdgeSensor("head", H, W, axes)
+        return [edge], PrecomputedMeasurements([[edge.measurement(e)] for e in edge_maps(seq)])
+    sensors: list[Any] = [PositionFix(c, cov=CUE_SIGMA**2 * np.eye(2)) for c in CUES]
+    box = _box(seq.sprite.axes, float(seq.scale[0]))
+    return sensors, MultiCueFrontEnd(box, correlation="normalised")
 
 
 def pcrb_model(exp: str) -> tuple[Any, list[Any], np.ndarray] | None:
