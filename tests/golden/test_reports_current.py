@@ -20,7 +20,6 @@ AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-prior-calibration",
     "kushwaha2010-harmonic-sources",
-    "lee2009-camera-triggering",
     "nott2009-video",
     "zhai2007-visual",
 }

@@ -36,6 +36,14 @@ VERDICT = PaperVerdict(
                     ("printed", "the printed estimator chain (3.7)-(3.11)"),
                 )
             ),
+            best_possible=refs(
+                "lee2009-camera-triggering",
+                *(
+                    f"BP_possible_t31_{policy}_{who}"
+                    for policy in ("none", "trigger")
+                    for who in ("O1", "O2", "O3", "average")
+                ),
+            ),
         ),
         Contribution(
             "Ch. 4: quality-weighted fusion of camera detections with a dynamic prior rejects the "
