@@ -15,6 +15,8 @@ EXPECTED = {
         "two_audio_fix_false_video_peaks",
         "product_more_fragile",
         "packet_loss_degrades_gracefully",
+        "BP_sbe_above_bound",
+        "BP_average_2m_possible",
     },
     "kushwaha2010-mcmcda": {
         "product_lower_error",
@@ -48,6 +50,7 @@ EXPECTED = {
 # Reports that show the best possible beside their error tables (issue 19): the heading and
 # the bound's column.
 BEST_POSSIBLE = {
+    "kushwaha2010-sbe": ("## The best possible: PCRB", "PCRB mean-error bound (m)"),
     "kushwaha2010-mcmcda": ("## The best possible: PCRB", "PCRB mean-error bound (m)"),
     "kushwaha2010-crossing": ("## The best possible: PCRB", "PCRB mean-error bound (m)"),
 }

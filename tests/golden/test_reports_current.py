@@ -20,6 +20,7 @@ AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-prior-calibration",
     "kushwaha2010-harmonic-sources",
+    "kushwaha2010-sbe",
     "nott2009-video",
     "zhai2007-visual",
 }

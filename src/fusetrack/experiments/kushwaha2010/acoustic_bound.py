@@ -48,6 +48,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,7 +67,7 @@ from ...management import Packet
 from ...motion import ConstantVelocity
 from ...perception import fit_angle_mixture
 from ...sensors import AngularSampling, Bearing
-from .scene import CAMERA_FOV, DT, VIDEO_ANGLES, Layout
+from .scene import CAMERA_FOV, DT, VIDEO_ANGLES, FusionInput, Layout, SinglePass
 
 Array = NDArray[np.float64]
 PRIOR_COV = np.diag([10.0**2, 10.0**2, 15.0**2, 15.0**2])
@@ -135,6 +136,20 @@ def video_bearing_errors(
             nearest = diff[np.argmin(np.abs(diff), axis=0), np.arange(diff.shape[1])]
             out[k, s] = np.where(seen, nearest, np.nan)
     return out
+
+
+def bearing_record(layout: Layout, sim: SinglePass, fin: FusionInput) -> dict[str, Any]:
+    """What the PCRB needs of one single-vehicle pass (:func:`pass_bounds`): the bearing errors
+    of every node and camera at every tick, the true path of the centre and the engine, the
+    velocity."""
+    engine = sim.vehicle.engine(sim.rec.ticks)[:, :2]
+    return {
+        "audio": audio_doa_errors(layout, fin.taken, engine).tolist(),
+        "video": video_bearing_errors(layout, fin.taken, sim.truth[:, None])[..., 0].tolist(),
+        "centre": sim.truth.tolist(),
+        "engine": engine.tolist(),
+        "velocity": [sim.vehicle.speed, 0.0],
+    }
 
 
 def robust_sigma(errors: Sequence[Array]) -> float:
@@ -362,6 +377,7 @@ __all__ = [
     "PassBound",
     "above_bound_claim",
     "audio_doa_errors",
+    "bearing_record",
     "bound_row",
     "noise_of",
     "paper_possible_claims",

@@ -37,18 +37,15 @@ from ...filters import SensorLikelihoods, fuse
 from .acoustic_bound import (
     BearingNoise,
     above_bound_claim,
-    audio_doa_errors,
+    bearing_record,
     bound_row,
     noise_of,
     paper_possible_claims,
     pass_bounds,
-    video_bearing_errors,
 )
 from .scene import (
     DT,
-    FusionInput,
     Layout,
-    SinglePass,
     all_likelihoods,
     audio_prior,
     default_layout,
@@ -180,21 +177,8 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
                     "sbe_start": int(start),
                 }
             )
-    rows[0]["bearings"] = _bearing_record(layout, sim, fin)  # dropped from results.parquet
+    rows[0]["bearings"] = bearing_record(layout, sim, fin)  # dropped from results.parquet
     return rows
-
-
-def _bearing_record(layout: Layout, sim: SinglePass, fin: FusionInput) -> dict[str, Any]:
-    """What the PCRB needs of one pass (:mod:`.acoustic_bound`): the bearing errors of every
-    node and camera at every tick, the true path of the centre and the engine, the velocity."""
-    engine = sim.vehicle.engine(sim.rec.ticks)[:, :2]
-    return {
-        "audio": audio_doa_errors(layout, fin.taken, engine).tolist(),
-        "video": video_bearing_errors(layout, fin.taken, sim.truth[:, None])[..., 0].tolist(),
-        "centre": sim.truth.tolist(),
-        "engine": engine.tolist(),
-        "velocity": [sim.vehicle.speed, 0.0],
-    }
 
 
 def run(ctx: RunContext) -> Outcome:
