@@ -321,7 +321,8 @@ def _best_possible(base: pd.DataFrame) -> tuple[pd.DataFrame, list[Claim], Beari
             )
             for r in d.itertuples()
         ]
-        row = bound_row(*(np.array(v) for v in zip(*over))) if over else bound_row([], [], [])
+        rms, bound_mean, bound_rms = ([o[i] for o in over] for i in range(3))
+        row = bound_row(rms, bound_mean, bound_rms)
         rows[str(variant)] = row
         table[str(variant)] = {
             "our error (m)": float(d.error.mean()),
