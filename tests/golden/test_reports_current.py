@@ -19,8 +19,6 @@ WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
     "ercan2013-cameras",
     "ercan2013-prior-calibration",
-    "kushwaha2010-sbe",
-    "nott2009-video",
 }
 """Reports known to be older than their code, each to be regenerated at full size (strict xfail: a
 name stays here only while its report really is stale)."""
