@@ -45,6 +45,34 @@ def test_fused_kernel_equals_the_reference(scene_name: str, floor: float, exclus
             np.testing.assert_allclose(np.exp(fast[ok]), np.exp(ref[ok]), rtol=1e-3, atol=1e-9)
 
 
+def test_isotropic_priors_row_path_equals_the_general_path_bit_for_bit() -> None:
+    """With every prior isotropic the kernels compute q a sight line at a time (the SIMD row);
+    one extra tilted occluder far outside the room forces the triple-by-triple path, adds q = 0
+    everywhere, and must leave every value identical, not merely close."""
+    from fusetrack.world.occlusion_kernels import occlusion_probability_kernel
+
+    scene = get_scene("square")
+    obj, occ, z = world_and_readings(scene, 40, 40, 3)
+    rng = np.random.default_rng(2)
+    sel = np.arange(6)
+    cams = np.asarray(scene.cameras.positions, dtype=float)
+    for t, sd in ((10, 1.5), (35, 7.3)):
+        x = obj[t] + rng.normal(0, 4, (400, 2))
+        mu = occ[t] + rng.normal(0, sd, (40, 2))
+        far_mu = np.vstack([mu, [[1e5, 1e5]]])
+        cov = np.eye(2)[None] * (sd * rng.uniform(0.5, 1.5, 41))[:, None, None] ** 2
+        cov[40] = [[2.0, 0.5], [0.5, 1.0]]
+        lik = OcclusionAwareLikelihood(scene.cameras, scene.room, scene.diameter, "gaussian", 1e-3, 3.33)
+        row = lik.log_likelihood(z[t, sel], sel, x, OccluderPriors(mu, cov[:40]))
+        general = lik.log_likelihood(z[t, sel], sel, x, OccluderPriors(far_mu, cov))
+        assert np.isfinite(row).sum() > 100
+        assert np.array_equal(row, general)
+        q_row = occlusion_probability_kernel(cams, x, mu, cov[:40], scene.diameter, 3.33)
+        q_general = occlusion_probability_kernel(cams, x, far_mu, cov, scene.diameter, 3.33)
+        assert (q_row > 0).mean() > 0.05
+        assert np.array_equal(q_row, q_general[:, :, :40]) and not q_general[:, :, 40].any()
+
+
 def _cross_of_cameras() -> tuple[object, object]:
     cams = ring_of_cameras(
         [(0, 50), (50, 0), (100, 50), (50, 100)], [0, 90, 180, 270], 90.0, **NOISE

@@ -19,8 +19,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import MARGIN_SE, Claim, ClaimKinds, Outcome, RunContext, rms_over_runs
-from ...evaluation.projected_planes_crlb import direct3d_crlb
+from ...evaluation import (
+    MARGIN_SE,
+    Claim,
+    ClaimKinds,
+    Outcome,
+    RunContext,
+    direct3d_crlb,
+    rms_over_runs,
+)
 from ...filters import Direct3DFilter, ProjectedPlanesTracker
 from ...motion import AccelTurn
 from ...perception import AudioDoaArray
@@ -121,7 +128,7 @@ def run(ctx: RunContext) -> Outcome:
         ["angle_err_std_theta_deg", "angle_err_std_phi_deg", "angle_err_rms_deg"]
     ].mean()
     g = tab.loc["gaussian (3 deg^2)", ("rmse_avg", "PPS literal")]
-    best = _bound_table(df, truth, {k: c["audio_sigma_deg"] for k, c in zip(MEASUREMENTS, configs)})
+    best = _bound_table(df, truth, {k: sigmas.get(k, math.degrees(SIGMA)) for k in MEASUREMENTS})
     claims = [_above_bound_claim(best, "gaussian (3 deg^2)", "direct 3-D")]
     for kind in MEASUREMENTS:
         if MEASUREMENTS[kind] is None:
