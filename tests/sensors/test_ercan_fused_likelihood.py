@@ -62,7 +62,9 @@ def test_isotropic_priors_row_path_equals_the_general_path_bit_for_bit() -> None
         far_mu = np.vstack([mu, [[1e5, 1e5]]])
         cov = np.eye(2)[None] * (sd * rng.uniform(0.5, 1.5, 41))[:, None, None] ** 2
         cov[40] = [[2.0, 0.5], [0.5, 1.0]]
-        lik = OcclusionAwareLikelihood(scene.cameras, scene.room, scene.diameter, "gaussian", 1e-3, 3.33)
+        lik = OcclusionAwareLikelihood(
+            scene.cameras, scene.room, scene.diameter, "gaussian", 1e-3, 3.33
+        )
         row = lik.log_likelihood(z[t, sel], sel, x, OccluderPriors(mu, cov[:40]))
         general = lik.log_likelihood(z[t, sel], sel, x, OccluderPriors(far_mu, cov))
         assert np.isfinite(row).sum() > 100

@@ -331,7 +331,14 @@ def _q_factors(
 
 @numba.njit(cache=True, inline="always")
 def _q_iso(
-    u1: float, u2: float, r_eff: float, m1: float, m2: float, inv_sd: float, reach: float, half: float
+    u1: float,
+    u2: float,
+    r_eff: float,
+    m1: float,
+    m2: float,
+    inv_sd: float,
+    reach: float,
+    half: float,
 ) -> float:  # pragma: no cover - jit
     """q of one triple with an isotropic occluder prior (sd ``1 / inv_sd``), 0 when the ray is
     farther than ``reach`` from it; branch-free so that :func:`_q_row_iso` runs in SIMD lanes."""
@@ -394,7 +401,9 @@ def _q_one(
     if (abs(phi) - half) ** 2 > CUTOFF * CUTOFF * sp2 and abs(phi) > half:
         return 0.0
     a = p11 * u1 * u1 + 2.0 * p12 * u1 * u2 + p22 * u2 * u2
-    return _q_factors(phi, (u1 * pm1 + u2 * pm2) / a, r_eff, 1.0 / math.sqrt(sp2), math.sqrt(a), half)
+    return _q_factors(
+        phi, (u1 * pm1 + u2 * pm2) / a, r_eff, 1.0 / math.sqrt(sp2), math.sqrt(a), half
+    )
 
 
 @numba.njit(cache=True, inline="always")
@@ -692,8 +701,13 @@ def _prior_tables(x, cam_pos, occ_mu, occ_cov, half, mode):  # pragma: no cover 
 
 @numba.njit(cache=True, inline="always")
 def _iso_rows(
-    use: np.ndarray, n_use: np.ndarray, m1: np.ndarray, m2: np.ndarray, inv_sd: np.ndarray,
-    reach: np.ndarray, iso: np.ndarray,
+    use: np.ndarray,
+    n_use: np.ndarray,
+    m1: np.ndarray,
+    m2: np.ndarray,
+    inv_sd: np.ndarray,
+    reach: np.ndarray,
+    iso: np.ndarray,
 ) -> tuple:  # pragma: no cover - jit
     """Whether every occluder is isotropic, and then per camera the rows :func:`_q_row_iso` reads:
     ``m1, m2, inv_sd, reach`` of the occluders it cannot skip (``use[i, :n_use[i]]``) side by side."""
