@@ -45,6 +45,9 @@ EXPECTED = {
         "residual_far_below_period",
         "offset_hurts_tracking",
         "small_offset_harmless",
+        "BP_sync_not_below_crlb",
+        "BP_sync_attains_crlb",
+        "BP_tracking_above_pcrb",
     },
 }
 # Reports that show the best possible beside their error tables (issue 19): the heading and
@@ -53,6 +56,7 @@ BEST_POSSIBLE = {
     "kushwaha2010-sbe": ("## The best possible: PCRB", "PCRB mean-error bound (m)"),
     "kushwaha2010-mcmcda": ("## The best possible: PCRB", "PCRB mean-error bound (m)"),
     "kushwaha2010-crossing": ("## The best possible: PCRB", "PCRB mean-error bound (m)"),
+    "kushwaha2010-timesync": ("CRLB RMS, RBS window (µs)", "PCRB of the synchronised bearings"),
 }
 
 

@@ -35,4 +35,6 @@ def test_robot_experiment_end_to_end(tmp_path):
     assert main(["run", "lee2009-robot-navigation", "--quick", "--out", str(tmp_path)]) == 0
     s = json.loads((tmp_path / "summary.json").read_text())
     assert all(c["holds"] for c in s["claims"])
+    assert "BP_goal_not_before_shortest_path" in {c["id"] for c in s["claims"]}
+    assert "No Cramér-Rao bound applies here" in (tmp_path / "report.md").read_text()
     assert (tmp_path / "robot_paths.png").exists()

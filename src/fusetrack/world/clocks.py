@@ -95,14 +95,20 @@ class RbsDomain:
             for k, c in self.clocks.items()
         }
 
-    def to_reference(self, node: str, local: float) -> float:
-        """``local`` (node clock) → reference clock, from the beacons received before it."""
+    def beacons_for(self, node: str, local: float) -> slice:
+        """The beacons :meth:`to_reference` fits for ``local``: the last ``window`` received
+        before it (the first ``window`` if fewer than two were)."""
         s = self.stamps[node]
         n = int(np.searchsorted(s, local, side="right"))
         lo = max(0, n - self.window)
         if n - lo < 2:
             lo, n = 0, min(self.window, s.size)
-        a, b = fit_clock_map(s[lo:n], self.stamps[self.reference][lo:n])
+        return slice(lo, n)
+
+    def to_reference(self, node: str, local: float) -> float:
+        """``local`` (node clock) → reference clock, from the beacons received before it."""
+        used = self.beacons_for(node, local)
+        a, b = fit_clock_map(self.stamps[node][used], self.stamps[self.reference][used])
         return a + b * local
 
 

@@ -67,13 +67,19 @@ from ...management import Packet
 from ...motion import ConstantVelocity
 from ...perception import fit_angle_mixture
 from ...sensors import AngularSampling, Bearing
-from .scene import CAMERA_FOV, DT, VIDEO_ANGLES, FusionInput, Layout, SinglePass
+from .scene import CAMERA_FOV, DT, VARIANTS, VIDEO_ANGLES, FusionInput, Layout, SinglePass
 
 Array = NDArray[np.float64]
 PRIOR_COV = np.diag([10.0**2, 10.0**2, 15.0**2, 15.0**2])
 """The bound's prior covariance of ``[x, y, vx, vy]`` about the truth before the first tick."""
 BEAM_ANGLES = AngularSampling.beams(36).angles
 MODALITY_SETS = {"A": ("audio",), "V": ("video",), "AV": ("audio", "video")}
+
+
+def modality_set(variant: str) -> str:
+    """The :data:`MODALITY_SETS` name of an SBE approach's sensors (:data:`.scene.VARIANTS`)."""
+    sensors = VARIANTS[variant][0]
+    return next(k for k, v in MODALITY_SETS.items() if v == sensors)
 
 
 def tracker_motion() -> ConstantVelocity:
@@ -379,6 +385,7 @@ __all__ = [
     "audio_doa_errors",
     "bearing_record",
     "bound_row",
+    "modality_set",
     "noise_of",
     "paper_possible_claims",
     "pass_bounds",

@@ -39,11 +39,11 @@ from ...evaluation import (
 )
 from ...filters import SensorLikelihoods
 from .acoustic_bound import (
-    MODALITY_SETS,
     BearingNoise,
     above_bound_claim,
     bearing_record,
     bound_row,
+    modality_set,
     noise_of,
     paper_possible_claims,
     pass_bounds,
@@ -298,12 +298,6 @@ CLAIM_KINDS = ClaimKinds(
 )
 
 
-def _modality_set(variant: str) -> str:
-    """The :data:`~.acoustic_bound.MODALITY_SETS` name of an approach's sensors."""
-    sensors = VARIANTS[variant][0]
-    return next(k for k, v in MODALITY_SETS.items() if v == sensors)
-
-
 def _best_possible(base: pd.DataFrame) -> tuple[pd.DataFrame, list[Claim], BearingNoise]:
     """Each approach of the error table against the PCRB of its bearings over the crossed ticks
     of its own tracks (:mod:`.acoustic_bound`), and the claims: no approach below the bound, and
@@ -315,7 +309,7 @@ def _best_possible(base: pd.DataFrame) -> tuple[pd.DataFrame, list[Claim], Beari
     rows, table = {}, {}
     for variant, d in base.groupby("variant", sort=False):
         over = [  # start_tick is a float column (rows without a track have none)
-            bounds[r.run][_modality_set(str(variant))].over(
+            bounds[r.run][modality_set(str(variant))].over(
                 range(int(r.start_tick), int(r.start_tick) + len(r.error_series)),
                 r.error_series,
             )

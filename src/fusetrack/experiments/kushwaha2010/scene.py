@@ -59,9 +59,11 @@ from ...world import (
     pink_noise,
     propagate,
 )
+from .sync_bound import chained_variance, hop_variance, map_value_variance
 
 FS = 100e3
 DT = 0.25
+GATEWAY_JITTER = 20e-6  # the gateway's mote and PC readings of a serial pair (s, std)
 LATENCY_ALLOWANCE = 0.15  # the scheduler fires this long after each fusion timestamp
 MIC_HEIGHT = 1.0
 ENGINE_HEIGHT = 0.5
@@ -204,6 +206,9 @@ class Recording:
     t_end: float
     sync_residuals: NDArray[np.float64]  # translated - true timestamp of every packet (s)
     audio_threshold: float
+    # per packet, the CRLB variance (s²) of its timestamp: with the RBS window's beacons, with
+    # every beacon before it (:mod:`.sync_bound`); empty for a recording built by hand
+    sync_bounds: NDArray[np.float64] = field(default_factory=lambda: np.empty((0, 2)))
 
     @property
     def ticks(self) -> NDArray[np.float64]:
@@ -360,14 +365,15 @@ def simulate_recording(
     net = _Network(layout, t_sim0, t_end, rng)
     _audio_packets(layout, config, sources, emit_t0, t_sim0, t_end, net, rng)
     _video_packets(layout, vehicles, config, t_sim0, t_end, net, rng)
-    net.packets.sort(key=lambda p: p.arrival)
+    order = np.argsort([p.arrival for p in net.packets], kind="stable")
     return Recording(
-        net.packets,
+        [net.packets[i] for i in order],
         list(vehicles),
         t_start,
         t_end,
-        np.array(net.residuals),
+        np.array(net.residuals)[order],
         _audio_threshold(layout, config, rng),
+        np.array(net.bounds).reshape(-1, 2)[order],
     )
 
 
@@ -411,14 +417,47 @@ class _Network:
         self.rbs = RbsDomain(pcs, "fusion", rng)
         self.rbs.broadcast_until(t_end + 2.0, t_sim0 - 10.0)
         # gateway: mote clock -> PC clock from paired readings (serial link, 20 µs jitter)
-        pair_t = np.linspace(t_sim0 - 10, t_end + 2, 16)
+        self.pair_t = np.linspace(t_sim0 - 10, t_end + 2, 16)
         self.gw_a, self.gw_b = fit_clock_map(
-            clocks["gateway_mote"].local(pair_t) + rng.normal(0, 20e-6, pair_t.size),
-            clocks["gateway_pc"].local(pair_t) + rng.normal(0, 20e-6, pair_t.size),
+            clocks["gateway_mote"].local(self.pair_t) + rng.normal(0, GATEWAY_JITTER, 16),
+            clocks["gateway_pc"].local(self.pair_t) + rng.normal(0, GATEWAY_JITTER, 16),
         )
         self.hop = HopTranslation()
         self.packets: list[Packet] = []
         self.residuals: list[float] = []
+        self.bounds: list[tuple[float, float]] = []
+
+    def _slope(self, to: str, frm: str) -> float:
+        """d(clock ``to``)/d(clock ``frm``)."""
+        return (1 + self.clocks[to].skew) / (1 + self.clocks[frm].skew)
+
+    def _rbs_variances(self, node: str, local: float) -> tuple[float, float]:
+        """CRLB (s², fusion clock) of RBS's map of ``local`` from ``node``'s clock: with the
+        protocol's window of beacons, and with every beacon received before it."""
+        used = self.rbs.beacons_for(node, local)
+        beta, var = self._slope("fusion", node), self.rbs.jitter**2
+        x = self.clocks[node].local(self.rbs.beacons)
+        window = map_value_variance(x[used], beta, var, var, local)
+        return window, map_value_variance(x[: used.stop], beta, var, var, local)
+
+    def _stamp_bounds(self, sid: str, t_event: float, local_gw: float, hops: int) -> None:
+        """The packet's timestamp CRLB (:mod:`.sync_bound`), both RBS variants, in true time."""
+        to_true = 1.0 / (1 + self.clocks["fusion"].skew)
+        if sid.startswith("A"):
+            b_gw = self._slope("gateway_pc", "gateway_mote")
+            x_gw = self.clocks["gateway_mote"].local(self.pair_t)
+            gw = map_value_variance(x_gw, b_gw, GATEWAY_JITTER**2, GATEWAY_JITTER**2, local_gw)
+            pc_local = self.gw_a + self.gw_b * local_gw
+            early = [
+                (hop_variance(hops, self.hop.jitter), b_gw),
+                (gw, self._slope("fusion", "gateway_pc")),
+            ]
+            rbs = self._rbs_variances("gateway_pc", pc_local)
+        else:
+            early = []
+            rbs = self._rbs_variances(sid, float(self.clocks[sid].local(t_event)))
+        w, c = (chained_variance([*early, (r, to_true)]) for r in rbs)
+        self.bounds.append((w, c))
 
     def deliver(
         self, sid: str, seq: int, t_event: float, values: NDArray[np.float64], hops: int
@@ -433,12 +472,29 @@ class _Network:
             pc_local = self.gw_a + self.gw_b * local_gw
             ref = self.rbs.to_reference("gateway_pc", pc_local)
             arrive += rng.uniform(0.01, 0.05)
+            self._stamp_bounds(sid, t_event, local_gw, hops)
         else:
             ref = self.rbs.to_reference(sid, float(clocks[sid].local(t_event)))
             arrive = t_event + rng.uniform(0.01, 0.05)
+            self._stamp_bounds(sid, t_event, 0.0, hops)
         stamp = float(clocks["fusion"].true_time(ref))
         self.residuals.append(stamp - t_event)
         self.packets.append(Packet(sid, seq, stamp, values, arrive))
+
+
+def stamp_trial(
+    layout: Layout, rng: np.random.Generator, duration: float = 5.0
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+    """One fresh network (clocks, beacons, gateway pairs) stamping one event per sensor at a
+    uniform time in ``[0.5, duration]`` s, routed as in a pass (audio over ``1 + i % 3`` hops):
+    the residuals (s), their CRLB variances ``(n, 2)`` (:mod:`.sync_bound`) and which are audio.
+    Trials are independent, unlike a pass's packets, which share their map fits."""
+    net = _Network(layout, 0.0, duration, rng)
+    for i, sid in enumerate(layout.sensor_ids):
+        hops = 1 + i % 3 if sid.startswith("A") else 1
+        net.deliver(sid, 0, float(rng.uniform(0.5, duration)), np.zeros(1), hops)
+    audio = np.array([sid.startswith("A") for sid in layout.sensor_ids])
+    return np.array(net.residuals), np.array(net.bounds), audio
 
 
 def _audio_packets(

@@ -12,8 +12,11 @@ import pandas as pd
 
 from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
 from ...world import NavigationResult, PotentialField, navigate
+from .navigation_bound import min_steps, shortest_path_length
 
 PAPER_FORCES = {(12.0, 12.0): -8.46, (10.0, 10.0): -5.34, (9.0, 9.0): -1.21}
+VARIANT_START = (12.0, 12.0)
+"""The robot's start in every variant (:func:`~fusetrack.world.navigate`'s default)."""
 
 
 VARIANTS: dict[str, dict[str, Any]] = {
@@ -37,9 +40,10 @@ def run(ctx: RunContext) -> Outcome:
     forces = {p: float(fld.total(np.array(p)) @ u) for p in PAPER_FORCES}
     delta = fld.zero_force_distance()
     results = {name: navigate(fld, **kw) for name, kw in VARIANTS.items()}
-    claims = _claims(forces, delta, results)
+    best = _best_possible(fld, results)
+    claims = [*_claims(forces, delta, results), _best_claim(best)]
     fig526, figpath = _figures(ctx, fld, u, results)
-    body = _report_text(forces, delta, results, fig526, figpath)
+    body = _report_text(forces, delta, results, fig526, figpath) + _best_text(best)
     return Outcome(pd.DataFrame(_path_rows(results)), claims, body, 1)
 
 
@@ -66,8 +70,53 @@ def _path_rows(results: Mapping[str, NavigationResult]) -> list[dict[str, Any]]:
 CLAIM_KINDS = ClaimKinds(
     {
         "C15_*": "paper",
+        "BP_*": "diagnostic",  # the best possible (issue 19): the shortest path's steps
     }
 )
+
+
+def _best_possible(fld: PotentialField, results: Mapping[str, NavigationResult]) -> pd.DataFrame:
+    """Per variant that reaches the goal: its steps and path length beside the shortest path
+    that keeps ``r_r + r_o`` from the obstacle and the fewest steps of ``s_r T_s`` along it
+    (:mod:`.navigation_bound`)."""
+    start = VARIANT_START
+    rows = {}
+    for name, res in results.items():
+        if res.reached_goal_at is None:
+            continue
+        kw = VARIANTS[name]
+        clearance = kw.get("r_robot", 0.0) + kw.get("r_obstacle", 0.0)
+        shortest = shortest_path_length(start, fld.goal, fld.obstacle, clearance)
+        rows[name] = {
+            "steps to the goal": res.reached_goal_at,
+            "fewest possible steps": min_steps(shortest, math.sqrt(2.0)),
+            "path length": float(np.sum(np.hypot(*np.diff(res.path, axis=0).T))),
+            "shortest path length": shortest,
+        }
+    int_columns = {"steps to the goal": int, "fewest possible steps": int}
+    return pd.DataFrame.from_dict(rows, orient="index").astype(int_columns)
+
+
+def _best_claim(best: pd.DataFrame) -> Claim:
+    """Diagnostic: no variant reaches the goal in fewer steps, or along a shorter path, than the
+    shortest path allows (fails only if a step is longer than s_r T_s or cuts the obstacle)."""
+    ok = bool(
+        len(best)
+        and (best["steps to the goal"] >= best["fewest possible steps"]).all()
+        and (best["path length"] >= best["shortest path length"] - 1e-9).all()
+    )
+    return CLAIM_KINDS.claim(
+        "BP_goal_not_before_shortest_path",
+        "the variants that reach the goal take no fewer steps (and no shorter path) than the "
+        "shortest path clearing the obstacle by r_r + r_o allows; ours: steps / fewest",
+        "not in the paper",
+        {
+            str(k): f"{int(r['steps to the goal'])} / {int(r['fewest possible steps'])}"
+            for k, r in best.iterrows()
+        },
+        "steps >= fewest and length >= shortest",
+        ok,
+    )
 
 
 def _claims(
@@ -205,4 +254,31 @@ The escape step is not fully specified in the text (its step 3, Fig. 5-29): we t
 anticlockwise by theta_osc = the top of the applicable range (pi/2 when the robot is within
 s_r T_s + r_r + r_o of the obstacle, Eq. 5.30 with arcsin for the printed csc) for one step and then
 follow the field again.
+"""
+
+
+def _best_text(best: pd.DataFrame) -> str:
+    """The report's best-possible section."""
+    gap = "; ".join(
+        f"{name}: {int(r['steps to the goal'])} steps where {int(r['fewest possible steps'])} "
+        "might do"
+        for name, r in best.iterrows()
+    )
+    return f"""
+## The best possible
+
+No Cramér-Rao bound applies here: the example estimates nothing. The field is evaluated at the
+robot's exact position, with no sensor and no noise, and every number above (forces, delta,
+the collision step) is computed exactly and compared exactly; there is no error to bound and no
+paper number that a model's noise could make impossible. What the escape does have is a best
+possible: no planner moving at most s_r T_s = sqrt 2 per step reaches the goal in fewer steps
+than the shortest path from (12, 12) to (6, 6) that keeps the robot's centre r_r + r_o from the
+obstacle's allows (straight, or tangent, arc, tangent; `navigation_bound`; with r = 0 the
+infimum is the straight line, which a path may approach but not follow).
+
+{best.to_markdown(floatfmt=("", ".0f", ".0f", ".3f", ".3f"))}
+
+`BP_goal_not_before_shortest_path` holds unless a step is longer than s_r T_s or cuts the
+obstacle. Its 90° turn takes the robot off the diagonal before the field brings it back: {gap}.
+The paper gives no step count to judge.
 """
