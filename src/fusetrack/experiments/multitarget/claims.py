@@ -49,7 +49,7 @@ def summary_table(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index(["arrays", "method"])
 
 
-def _claim(
+def claim(
     kind: str, cid: str, statement: str, expected: str, ours: Any, tol: str, holds: bool
 ) -> Claim:
     return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds), kind)
@@ -73,7 +73,7 @@ def _ghost_claims(df: pd.DataFrame) -> list[Claim]:
         for n in (2, 3)
     }
     return [
-        _claim(
+        claim(
             "diagnostic",
             "ghost_candidates_outnumber_true",
             "with 2 arrays, triangulation gives more ghost (or clutter) candidates per scan than true ones",
@@ -82,7 +82,7 @@ def _ghost_claims(df: pd.DataFrame) -> list[Claim]:
             "none",
             ghost2 > true2,
         ),
-        _claim(
+        claim(
             "beyond",
             "three_arrays_fewer_false_tracks",
             "with 3 arrays the GOSPA false-track component is lower than with 2 (ghosts resolved), "
@@ -115,7 +115,7 @@ def _method_claims(df: pd.DataFrame, quick: bool) -> list[Claim]:
         for n in (2, 3)
     }
     return [
-        _claim(
+        claim(
             "beyond",
             "jpda_not_worse_than_gnn",
             "JPDA's GOSPA is at most GNN's plus k SE (k in the tolerance column; SE of the two means combined), 2 and 3 arrays",
@@ -124,7 +124,7 @@ def _method_claims(df: pd.DataFrame, quick: bool) -> list[Claim]:
             f"{k:g} SE",
             all(j[0] <= g[0] + k * np.hypot(j[1], g[1]) for j, g in jg.values()),
         ),
-        _claim(
+        claim(
             "beyond",
             "mcmcda_not_worse_than_jpda",
             "MCMCDA on the same candidates has GOSPA at most JPDA's plus k SE, 2 and 3 arrays",
@@ -133,7 +133,7 @@ def _method_claims(df: pd.DataFrame, quick: bool) -> list[Claim]:
             f"{k:g} SE",
             all(m[0] <= j[0] + k * np.hypot(m[1], j[1]) for m, j in mj.values()),
         ),
-        _claim(
+        claim(
             "beyond",
             "direct_bearings_no_ghost_tracks",
             "tracking the bearings directly (no triangulation) confirms no ghost track: fewer than "
@@ -153,7 +153,7 @@ def _identity_claims(df: pd.DataFrame, quick: bool) -> list[Claim]:
     sw = {f"{m} 3 arrays": mean_se(df, 3, m, "id_switches") for m in ("GNN", "JPDA", "direct")}
     d, j = sw["direct 3 arrays"], sw["JPDA 3 arrays"]
     return [
-        _claim(
+        claim(
             "beyond",
             "direct_fewest_id_switches",
             "with 3 arrays, direct bearing tracking has no more identity switches (CLEAR MOT) than "

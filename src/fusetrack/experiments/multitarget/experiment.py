@@ -5,7 +5,8 @@ One run (:func:`run_once`) simulates a scene (:mod:`.scenario`), triangulates ev
 bearings of two arrays (:mod:`.triangulation`, ghosts included), runs the five trackers of
 :mod:`.methods` on the same data and scores them (:mod:`.scoring`). :func:`run` repeats it for
 2 and 3 arrays, then builds the claims (:mod:`.claims`), figures (:mod:`.figures`) and text
-(:mod:`.text`).
+(:mod:`.text`); beside the table, what no tracker can beat (:mod:`.best_possible`: the oracle
+floor of :mod:`.gospa_floor` and the clairvoyant filter of :mod:`.clairvoyant`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pydantic import Field
 from ...core import Track
 from ...evaluation import ExperimentOptions, Outcome, RunContext, run_seed
 from . import methods
+from .best_possible import best_claims, best_possible_columns, best_text
 from .claims import claim_kinds, make_claims, summary_table
 from .figures import gospa_figure, scene_figure
 from .scenario import Scene, Truth, make_scene, simulate_scans, simulate_truth
@@ -84,6 +86,13 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
     opts = Options.model_validate(config["options"])
     res = simulate_run(config, seed)
     true_c, ghost_c = candidate_counts(res.scene, res.truth, res.candidates, opts.mot_threshold)
+    best = best_possible_columns(
+        res.scene,
+        res.truth,
+        opts.gospa_c,
+        float(config["duration"]),
+        np.random.default_rng(seed + 5),
+    )
     return [
         {
             "arrays": int(config["arrays"]),
@@ -91,6 +100,7 @@ def run_once(config: Mapping[str, Any], seed: int) -> list[dict[str, Any]]:
             "true_candidates": true_c,
             "ghost_candidates": ghost_c,
             **score(res.tracks[name], res.truth, opts.gospa_c, opts.mot_threshold),
+            **best,
         }
         for name in methods.METHODS
     ]
@@ -107,9 +117,12 @@ def run(ctx: RunContext) -> Outcome:
     df = ctx.monte_carlo(run_once, configs, runs, desc="scenes")
     df = df.drop(columns=["options"], errors="ignore")
     table = summary_table(df)
-    claims = make_claims(df, ctx.quick)
+    hypotheses = make_claims(df, ctx.quick)
+    best = best_claims(df)
     example = {n: simulate_run({**base, "arrays": n}, run_seed(ctx.seed, 0)) for n in ARRAY_COUNTS}
     figs = [scene_figure(ctx, example[n], n) for n in ARRAY_COUNTS]
     figs.append(gospa_figure(ctx, df, example[2].truth.times))
-    body = report_text(df, table, claims, figs, runs, duration, n_mc, opts)
+    best_section = best_text(df, best, opts.gospa_c)
+    body = report_text(df, table, hypotheses, figs, runs, duration, n_mc, opts, best_section)
+    claims = [*hypotheses, *best]
     return Outcome(df, claims, body, runs, beyond_the_paper={"claim_kinds": claim_kinds(claims)})

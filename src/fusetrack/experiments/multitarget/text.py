@@ -87,8 +87,10 @@ def report_text(
     duration: float,
     n_mc: int,
     opts: Options,
+    best: str,
 ) -> str:
-    """Set-up, verdict, the mean ± SE table, figures and what the numbers say."""
+    """Set-up, verdict (of the hypotheses ``claims``), the mean ± SE table, figures, the best
+    possible section ``best`` and what the numbers say."""
     arrays = ", ".join(ARRAYS_USED)
     return f"""
 Beyond the papers (fusetrack issue 17): several targets tracked from *unlabelled* bearings of
@@ -122,6 +124,7 @@ Candidates per scan (a candidate within {opts.mot_threshold:g} m of a target cou
 
 ![GOSPA over time]({figs[2].name})
 
+{best}
 ## Reading
 
 * Each claim above is a hypothesis stated before the run; those marked **no** failed on these
