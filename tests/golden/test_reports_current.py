@@ -17,7 +17,6 @@ REPORTS = Path(__file__).resolve().parents[2] / "reports"
 QUICK = json.loads(FIXTURE.read_text())
 WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
 AWAITING_RERUN = {
-    "ercan2013-cameras",
     "ercan2013-prior-calibration",
 }
 """Reports known to be older than their code, each to be regenerated at full size (strict xfail: a

@@ -8,6 +8,29 @@ VERDICT = PaperVerdict(
     "ercan2013",
     (
         Contribution(
+            "E1 (Figs. 5-6): the tracking error falls as cameras are added, and at every camera "
+            "count better occluder priors give a lower error (perfect <= Gaussian <= none)",
+            refs(
+                "ercan2013-cameras",
+                "C3_decreasing_perfect",
+                "C3_decreasing_gaussian",
+                "C3_decreasing_none",
+                "C3_ordering",
+            ),
+            readings=(
+                Reading(
+                    "sigma_v = 2",
+                    refs(
+                        "ercan2013-cameras",
+                        "C3_decreasing_perfect_sigma_v_2",
+                        "C3_decreasing_gaussian_sigma_v_2",
+                        "C3_decreasing_none_sigma_v_2",
+                        "C3_ordering_sigma_v_2",
+                    ),
+                ),
+            ),
+        ),
+        Contribution(
             "E2 (Fig. 7): the occlusion-aware particle filter with perfect occluder priors cuts "
             "the error of ignoring the occluders 2.34x, and priors pay off until their RMSE "
             "reaches 3.72",
