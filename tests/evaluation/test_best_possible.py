@@ -49,3 +49,7 @@ def test_possible_claim_on_a_bound_alone():
     assert not bad.holds and bad.ours == "PCRB 1.17: impossible under 'spec velocities'"
     with pytest.raises(ConfigError, match="posterior mean or a PCRB"):
         possible_claim(KINDS, "BP_c", "x", 1.0, nan)
+    # a static bound is named as what it is, in the value and the tolerance
+    crlb = possible_claim(KINDS, "BP_d", "x", 0.1, (0.5, 0.1), 0.2, bound_label="CRLB")
+    assert not crlb.holds and "CRLB 0.2" in crlb.ours and "PCRB" not in crlb.ours + crlb.tolerance
+    assert crlb.tolerance.endswith(">= CRLB")

@@ -88,23 +88,25 @@ def possible_claim(
     model: str = "",
     better: Literal["lower", "higher"] = "lower",
     best_label: str = "posterior mean",
+    bound_label: str = "PCRB",
 ) -> Claim:
     """Diagnostic: the paper's ``what`` (``paper``) is not below the best possible on the
     printed model, or on the reading ``model`` (posterior mean ``best = (value, s.e.)``, or
-    what ``best_label`` names, NaN where only the PCRB is known; PCRB ``bound``); with
+    what ``best_label`` names, NaN where only the bound is known; ``bound`` the PCRB, or what
+    ``bound_label`` names, e.g. a static CRLB); with
     ``better="higher"`` (a score), not above it. Fails: the number is *impossible on the printed
     model*, not merely not reproduced."""
     value, se = best
     label = best_possible_verdict(paper, value, se, bound, model, better)
-    pcrb = "" if bound is None else f"PCRB {bound:.3g}"
+    pcrb = "" if bound is None else f"{bound_label} {bound:.3g}"
     side, ge, pm = ("below", ">=", "-") if better == "lower" else ("above", "<=", "+")
     if np.isnan(value):
         if bound is None:
             raise ConfigError(invalid("best, bound", (best, bound), "a posterior mean or a PCRB"))
-        ours, tolerance = f"{pcrb}: {label}", f"paper {ge} PCRB"
+        ours, tolerance = f"{pcrb}: {label}", f"paper {ge} {bound_label}"
     else:
         ours = f"{best_label} {value:.3g} ± {se:.2g}{', ' + pcrb if pcrb else ''}: {label}"
-        tolerance = f"paper {ge} {best_label} {pm} {MARGIN_SE:g} s.e. and {ge} PCRB"
+        tolerance = f"paper {ge} {best_label} {pm} {MARGIN_SE:g} s.e. and {ge} {bound_label}"
     return kinds.claim(
         claim_id,
         f"{what}: the paper's number is not {side} the best possible on "

@@ -247,6 +247,7 @@ def best_possible_claims(
             PAPER_F0_SPREAD,
             (float("nan"), float("nan")),
             bound=f0_bound,
+            bound_label="CRLB",
         ),
         kinds.claim(
             "BP_f0_above_crlb",

@@ -175,6 +175,7 @@ def _best_claims(best: dict[str, Any], paper_se: float) -> list[Claim]:
             (best["mmse_mean"], paper_se),
             bound=best["crlb_mean"],
             best_label="one-reading MMSE (± Table 5.1's s.e.)",
+            bound_label="CRLB",
         ),
     ]
 
