@@ -1,6 +1,6 @@
-"""E2's best-possible rows (issue 19 item 3): the extra series, their statistics and the claims
-that label a paper number below the posterior mean impossible (hand-made run tables, no
-simulation)."""
+"""The best-possible rows of E1 and E2 (issue 19 item 3): the extra series, their statistics and
+the claims that label a paper number or ordering impossible on the printed model (hand-made run
+tables, no simulation)."""
 
 import math
 
@@ -8,17 +8,19 @@ import pandas as pd
 import pytest
 
 from fusetrack.experiments.ercan2013 import best_possible as bp
+from fusetrack.experiments.ercan2013 import camera_grid, cameras, cameras_sigma_v, prior_accuracy
 from fusetrack.experiments.ercan2013.common import sweep_config
-from fusetrack.experiments.ercan2013.prior_accuracy import CLAIM_KINDS
 
 SIZE = {"steps": 10, "particles": 100, "burn_in": 0}
 
 
-def test_only_the_extremes_are_rerun_at_the_larger_counts():
+def test_only_the_given_points_are_rerun_at_the_larger_counts():
     configs = [sweep_config(s, 4, SIZE) for s in (0.0, 2.0, math.inf)]
     counts = bp.particle_counts(False, 100)
     assert counts == (200, 500)
-    extra = bp.best_configs(configs, bp.particle_counts(True, 100), 100)  # 100 reuses the sweep
+    assert bp.particle_counts(False, 100, cameras.BEST_FACTORS) == (100, 200)
+    extremes = [c for c in configs if c["prior"] != "gaussian"]
+    extra = bp.best_configs(extremes, bp.particle_counts(True, 100), 100)  # 100 reuses the sweep
     assert [(c["label"], c["particles"]) for c in extra] == [
         ("best L=200|0", 200),
         ("best L=200|inf", 200),
@@ -26,33 +28,57 @@ def test_only_the_extremes_are_rerun_at_the_larger_counts():
     assert extra[0]["prior"] == "perfect" and extra[1]["prior"] == "none"
 
 
-def _runs(label: str, values: list[float]) -> pd.DataFrame:
-    return pd.DataFrame({"label": label, "rmse_tr": values, "rmse_max": 20.0})
+def _runs(label: str, prior: str, values: list[float], particles: int = 100, k: int = 4):
+    return pd.DataFrame(
+        {
+            "label": label,
+            "prior": prior,
+            "k": k,
+            "particles": particles,
+            "run": range(len(values)),
+            "rmse_tr": values,
+            "rmse_max": [20.0, 22.0][: len(values)],
+        }
+    )
 
 
-def _estimate(perfect_best: list[float]) -> bp.BestPossible:
-    sweep = pd.concat([_runs("0", [2.0, 2.2]), _runs("2", [9.0, 9.0]), _runs("inf", [5.0, 6.0])])
-    best = pd.concat(
+def _e2(perfect_best: list[float]) -> bp.BestPossible:
+    sweep = pd.concat(
         [
-            _runs("best L=200|0", [1.9, 2.1]),
-            _runs("best L=500|0", perfect_best),
-            _runs("best L=200|inf", [4.0, 5.0]),
-            _runs("best L=500|inf", [4.0, 4.4]),
+            _runs("0", "perfect", [2.0, 2.2]),
+            _runs("2", "gaussian", [9.0, 9.0]),
+            _runs("inf", "none", [5.0, 6.0]),
         ]
     )
-    return bp.estimate(sweep, best, (200, 500), 100)
+    best = pd.concat(
+        [
+            _runs("best L=200|0", "perfect", [1.9, 2.1], 200),
+            _runs("best L=500|0", "perfect", perfect_best, 500),
+            _runs("best L=200|inf", "none", [4.0, 5.0], 200),
+            _runs("best L=500|inf", "none", [4.0, 4.4], 500),
+        ]
+    )
+    return bp.estimate(sweep, best, (200, 500), 100, "prior")
 
 
-def test_estimate_groups_runs_by_particles_and_prior():
-    found = _estimate([2.0, 2.2])
-    assert found.values[(100, "0")] == (pytest.approx(2.1), pytest.approx(0.1))
-    assert found.best("inf") == (pytest.approx(4.2), pytest.approx(0.2))
-    assert found.trivial == (20.0, 0.0)
-    assert "2" not in {lab for _, lab in found.values}  # Gaussian priors: no best row
+def test_estimate_groups_runs_by_particles_and_point():
+    found = _e2([2.0, 2.2])
+    assert found.values[(100, "perfect")] == (pytest.approx(2.1), pytest.approx(0.1))
+    assert found.best("none") == (pytest.approx(4.2), pytest.approx(0.2))
+    assert found.trivial == (pytest.approx(21.0), pytest.approx(1.0))  # one value per run
+    assert "gaussian" not in {p for _, p in found.values}  # not rerun: no best row
+    rows = found.rows("none")
+    assert list(rows) == [
+        "ours at the paper's L",
+        "posterior mean (L = 200)",
+        "posterior mean (L = 500)",
+        bp.TRIVIAL,
+    ]
+    assert rows["ours at the paper's L"] == (100, pytest.approx(5.5), pytest.approx(0.5))
 
 
-def test_claims_hold_above_and_fail_below_the_posterior_mean():
-    held = {c.id: c for c in bp.claims(CLAIM_KINDS, _estimate([2.0, 2.2]))}
+def test_e2_claims_hold_above_and_fail_below_the_posterior_mean():
+    held = {c.id: c for c in prior_accuracy._best_claims(_e2([2.0, 2.2]))}
     assert all(c.holds and c.kind == "diagnostic" for c in held.values())
     assert set(held) == {
         "BP_possible_perfect",
@@ -63,8 +89,92 @@ def test_claims_hold_above_and_fail_below_the_posterior_mean():
     }
     # a posterior mean of 3.5 +- 0.1 with perfect priors: the paper's 3.1 is more than 3 s.e.
     # below it (impossible); its 3.72 at the crossing is not (3.72 >= 3.5 - 0.3)
-    low = {c.id: c for c in bp.claims(CLAIM_KINDS, _estimate([3.4, 3.6]))}
+    low = {c.id: c for c in prior_accuracy._best_claims(_e2([3.4, 3.6]))}
     assert not low["BP_possible_perfect"].holds
     assert "impossible on the printed model" in low["BP_possible_perfect"].ours
     assert low["BP_possible_crossing"].holds
     assert not low["BP_converged_perfect"].holds  # 2.0 +- 0.1 at 200 against 3.5 +- 0.1
+
+
+def test_not_above_allows_three_combined_standard_errors():
+    assert bp.not_above((1.0, 0.1), (1.0, 0.1))
+    assert bp.not_above((1.4, 0.1), (1.0, 0.1))  # 0.4 <= 3 * hypot(0.1, 0.1) = 0.42
+    assert not bp.not_above((1.5, 0.1), (1.0, 0.1))
+    assert not bp.not_above((1.01, math.nan), (1.0, math.nan))  # one run: no margin
+
+
+def _e1(perfect_best: dict[int, list[float]]) -> bp.BestPossible:
+    """E1's best possible at k = 2 and 8 (L = 100 the grid's own runs, 200 the reruns)."""
+    sweep, best = [], []
+    for k, none_best in ((2, [6.0, 6.2]), (8, [2.0, 2.2])):
+        sweep += [
+            _runs("corrected", p, v, k=k)
+            for p, v in (("perfect", [3.0, 3.4]), ("gaussian", [9.0, 9.2]), ("none", [6.0, 6.4]))
+        ]
+        best += [
+            _runs("best L=200|corrected", "perfect", perfect_best[k], 200, k),
+            _runs("best L=200|corrected", "none", none_best, 200, k),
+        ]
+    return bp.estimate(pd.concat(sweep), pd.concat(best), (100, 200), 100, ["prior", "k"])
+
+
+def test_e1_ordering_is_possible_while_the_posterior_means_are_in_order():
+    found = _e1({2: [3.0, 3.2], 8: [1.0, 1.2]})
+    assert found.best(("perfect", 8)) == (pytest.approx(1.1), pytest.approx(0.1))
+    gaussian = {2: (5.0, 0.1), 8: (2.1, 0.1)}
+    claims = {c.id: c for c in cameras.best_claims(found, gaussian)}
+    assert claims["BP_ordering_possible"].holds
+    assert claims["BP_ordering_possible"].ours.endswith(": possible")
+    assert claims["BP_gaussian_not_above_no_prior_best"].holds
+    assert {i for i in claims if i.startswith("BP_converged_")} == {
+        f"BP_converged_{p}_k{k}" for p in ("perfect", "none") for k in (2, 8)
+    }
+    assert all(c.kind == "diagnostic" for c in claims.values())
+    # perfect priors' posterior mean far above no priors' at k = 8: the ordering cannot hold
+    reversed_ = {
+        c.id: c for c in cameras.best_claims(_e1({2: [3.0, 3.2], 8: [4.0, 4.2]}), gaussian)
+    }
+    assert not reversed_["BP_ordering_possible"].holds
+    assert "1 of 2" in reversed_["BP_ordering_possible"].ours
+    assert "impossible on the printed model" in reversed_["BP_ordering_possible"].ours
+    # a Gaussian-prior tracker far above the no-prior best possible at k = 2 (6.1 +- 0.1)
+    worse = {c.id: c for c in cameras.best_claims(found, {2: (7.0, 0.1), 8: (2.1, 0.1)})}
+    assert not worse["BP_gaussian_not_above_no_prior_best"].holds
+
+
+def test_e1_best_rows_lay_out_every_camera_count_and_the_room_centre():
+    table = cameras.best_rows(_e1({2: [3.0, 3.2], 8: [1.0, 1.2]}), {2: (5.0, 0.1), 8: (2.1, 0.1)})
+    assert list(table["k"]) == [2, 2, 8, 8, "any"]
+    assert list(table["gaussian"]) == ["5 ± 0.1", "–", "2.1 ± 0.1", "–", "21 ± 1"]
+    assert table.iloc[3]["perfect"] == "1.1 ± 0.1"
+
+
+def test_sigma_v_experiment_reruns_the_paper_grid_with_only_the_tracker_changed():
+    class Ctx:
+        quick = False
+
+    configs = cameras_sigma_v._configs(Ctx(), SIZE)
+    grid = camera_grid.grid_configs(False, SIZE)
+    assert len(configs) == 2 * len(grid)
+    for sv, half in zip((1.0, 2.0), (configs[: len(grid)], configs[len(grid) :]), strict=True):
+        for c, g in zip(half, grid, strict=True):
+            assert c == {**g, "tracker_sigma_v": sv, "label": f"sigma_v {sv:g}"}
+
+
+def test_c3_claims_from_a_pivot():
+    pivot = pd.DataFrame(
+        {"perfect": [3.0, 2.0, 1.0], "gaussian": [4.0, 1.5, 1.2], "none": [5.0, 3.0, 1.1]},
+        index=pd.Index([2, 4, 8], name="k"),
+    )
+    assert camera_grid.ordered_share(pivot) == pytest.approx(1 / 3)  # k = 4: Gaussian < perfect
+    kinds = cameras_sigma_v.CLAIM_KINDS
+    fails = camera_grid.ordering_claim(kinds, "C3_ordering_sigma_v_2", "s", 1 / 3, quick=False)
+    assert not fails.holds and fails.tolerance == ">= 0.75"
+    falls = camera_grid.decreasing_claim(
+        kinds, "C3_decreasing_none_sigma_v_2", "s", pivot, "none", False
+    )
+    assert falls.holds and falls.ours == pytest.approx(-1.0)
+    rises = pivot.assign(none=[1.0, 2.0, 3.0])
+    assert not camera_grid.decreasing_claim(
+        kinds, "C3_decreasing_none_sigma_v_2", "s", rises, "none", False
+    ).holds

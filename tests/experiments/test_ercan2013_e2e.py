@@ -10,6 +10,7 @@ from fusetrack.cli import main
 EXPERIMENTS = [
     "ercan2013-occlusion-probability",
     "ercan2013-cameras",
+    "ercan2013-cameras-sigma-v",
     "ercan2013-prior-accuracy",
     "ercan2013-tradeoff",
     "ercan2013-prior-calibration",

@@ -152,6 +152,12 @@ REGISTRY: dict[str, ExperimentInfo] = {
             "Ercan, El Gamal, Guibas 2013 (seed 002)",
         ),
         ExperimentInfo(
+            "ercan2013-cameras-sigma-v",
+            "ercan2013.cameras_sigma_v:run",
+            "Ercan 2013 E1 (Figs. 5-6) along the tracker's unstated motion noise sigma_v: C3 judged at sigma_v = 1 and 2",
+            "Ercan, El Gamal, Guibas 2013 (seed 002)",
+        ),
+        ExperimentInfo(
             "ercan2013-prior-accuracy",
             "ercan2013.prior_accuracy:run",
             "Ercan 2013 E2 (Fig. 7): tracker RMSE vs occluder-prior RMSE; the 2.34x and 1.94x gains, the 3.72 crossing",

@@ -1,73 +1,62 @@
-"""What no tracker can beat on Fig. 7's model (issue 19, item 3): the rows printed beside E2's
-table and the claims that label a paper number below them *impossible on the printed model*.
+"""What no tracker can beat on an Ercan simulation (issue 19, item 3): the rows printed beside a
+figure's table, for any points of its grid (E1's prior levels x camera counts, E2's extremes).
 
 On the same simulated runs (same seeds, so the same walkers, camera noise and filter streams):
 
 * **posterior mean**: the same occlusion-aware ASIR (Algorithm 1, the likelihood of Sec. 4 with
-  perfect or no occluder priors) with many more particles than the paper's L. Its estimate
-  converges to the posterior mean of the tracker's model, which minimises every step's mean-square
-  error among estimators that see the same readings (Anderson & Moore 1979, Sec. 2.3); it is
-  shown at two large particle counts whose agreement shows that it has converged.
+  perfect or no occluder priors) with more particles than the paper's L. Its estimate converges
+  to the posterior mean of the tracker's model, which minimises every step's mean-square error
+  among estimators that see the same readings (Anderson & Moore 1979, Sec. 2.3); it is shown at
+  two particle counts whose agreement shows that it has converged. With perfect or no occluder
+  priors the tracker's model is the simulation's (up to Eq. 7's approximation); Gaussian priors
+  from the random-walk Kalman filters are overconfident, so their large-L limit is no best
+  possible and is not run.
 * **trivial estimator**: the room centre, whose error is the paper's RMSE_max (Sec. 6).
 * **PCRB**: does not apply: the seen / not-seen reports make the likelihood discontinuous in the
   position (Eq. 7's shadows) and the waypoint dynamics switch regimes, so the regularity
   conditions of Tichavský et al. 1998 fail.
 
-The paper gives Fig. 7's mean RMSE_tr over 5 runs; its perfect- and no-prior values are implied
-by the quoted ratios (spec C4: ~7.2 / 2.34 ~ 3.1 and 1.94 x 3.72 ~ 7.2), and ours is compared
-the same way, mean over runs of the per-run RMSE_tr with its standard error
-(:func:`~fusetrack.evaluation.mean_with_se`).
+The paper's numbers are means over runs of the per-run RMSE_tr, and ours are compared the same
+way, with their standard error (:func:`~fusetrack.evaluation.mean_with_se`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import pandas as pd
 
-from ...evaluation import (
-    Claim,
-    ClaimKinds,
-    agreement_claim,
-    best_table,
-    mean_with_se,
-    possible_claim,
-)
-from .common import md
+from ...evaluation import MARGIN_SE, Claim, ClaimKinds, agreement_claim, mean_with_se
 
 BEST_PREFIX = "best L="
-"""Label prefix of a posterior-mean series: ``best L=5000|0`` (perfect priors), ``|inf`` (none)."""
+"""Label prefix of a posterior-mean run: ``best L=5000|0`` (the sweep point labelled "0")."""
 FACTORS = {"full": (2, 5), "quick": (1, 2)}
 """Particle counts of the two posterior-mean series, as multiples of the run's L (a multiple
 of 1 reuses the sweep's own runs)."""
-PRIORS = {"0": "perfect", "inf": "none"}
-"""Fig. 7's two extremes by sweep label: perfect occluder priors and no priors."""
-WITH = {"0": "with perfect occluder priors", "inf": "with no occluder priors"}
-PAPER_RMSE_TR = {"0": 3.1, "inf": 7.2}
-"""The paper's mean RMSE_tr at the two extremes (implied by Sec. 6.1's ratios, spec C4)."""
-PAPER_CROSSING = 3.72
-"""The paper's mean RMSE_tr where it equals RMSE_occ (Sec. 6.1), with Gaussian priors."""
+TRIVIAL = "room centre (trivial, RMSE_max)"
 
 
-def particle_counts(quick: bool, particles: int) -> tuple[int, int]:
+def particle_counts(
+    quick: bool, particles: int, factors: Mapping[str, tuple[int, int]] = FACTORS
+) -> tuple[int, int]:
     """The two posterior-mean particle counts for a run of ``particles`` (the paper's L)."""
-    small, large = FACTORS["quick" if quick else "full"]
+    small, large = factors["quick" if quick else "full"]
     return small * particles, large * particles
 
 
 def best_configs(
-    configs: Sequence[dict[str, Any]], counts: Sequence[int], particles: int
+    points: Sequence[dict[str, Any]], counts: Sequence[int], particles: int
 ) -> list[dict[str, Any]]:
-    """The perfect- and no-prior points of ``configs`` again at every count of ``counts`` other
-    than the sweep's own ``particles``."""
+    """The sweep's configurations ``points`` again at every count of ``counts`` other than the
+    sweep's own ``particles``."""
     return [
         {**c, "particles": n, "label": f"{BEST_PREFIX}{n}|{c['label']}"}
         for n in counts
         if n != particles
-        for c in configs
-        if c["label"] in PRIORS
+        for c in points
     ]
 
 
@@ -78,92 +67,81 @@ def is_best(results: pd.DataFrame) -> pd.Series:
 
 @dataclass(frozen=True)
 class BestPossible:
-    """Mean RMSE_tr and its standard error per ``(particles, sweep label)``, the counts, the
-    paper's L and the room centre's error (``rmse_max``, mean and s.e.)."""
+    """Mean RMSE_tr and its standard error per ``(particles, point)`` (a point: the value of the
+    grid column, or the tuple of the grid columns, that names it), the counts, the paper's L and
+    the room centre's error (``rmse_max``: mean and s.e. over runs)."""
 
-    values: dict[tuple[int, str], tuple[float, float]]
+    values: dict[tuple[int, Hashable], tuple[float, float]]
     counts: tuple[int, int]
     particles: int
     trivial: tuple[float, float]
 
-    def best(self, label: str) -> tuple[float, float]:
+    def best(self, point: Hashable) -> tuple[float, float]:
         """The posterior mean's RMSE_tr (mean, s.e.) at the larger count."""
-        return self.values[(self.counts[1], label)]
+        return self.values[(self.counts[1], point)]
+
+    def rows(self, point: Hashable) -> dict[str, tuple[int | None, float, float]]:
+        """``{estimator: (particles or None, mean, s.e.)}`` of one point: ours at the paper's L,
+        the posterior mean at each other count, the room centre."""
+        out: dict[str, tuple[int | None, float, float]] = {
+            "ours at the paper's L": (self.particles, *self.values[(self.particles, point)])
+        }
+        for n in (n for n in self.counts if n != self.particles):
+            out[f"posterior mean (L = {n})"] = (n, *self.values[(n, point)])
+        return out | {TRIVIAL: (None, *self.trivial)}
 
 
 def estimate(
-    sweep: pd.DataFrame, best_runs: pd.DataFrame, counts: tuple[int, int], particles: int
+    sweep: pd.DataFrame,
+    best_runs: pd.DataFrame,
+    counts: tuple[int, int],
+    particles: int,
+    by: str | Sequence[str],
 ) -> BestPossible:
-    """The best-possible rows from the sweep ``sweep`` (labels "0", "inf" at the paper's L) and
-    the posterior-mean runs ``best_runs`` (labels ``best L=n|label``)."""
-    sweep, best_runs = sweep.reset_index(drop=True), best_runs.reset_index(drop=True)
-    parts = best_runs["label"].str[len(BEST_PREFIX) :].str.split("|", expand=True)
-    more = best_runs.assign(particles=parts[0].astype(int), prior_label=parts[1])
-    base = sweep[sweep["label"].isin(PRIORS)].assign(
-        particles=particles, prior_label=sweep["label"]
-    )
-    both = pd.concat([base, more])
-    values = {
-        (int(n), str(lab)): mean_with_se(g["rmse_tr"])
-        for (n, lab), g in both.groupby(["particles", "prior_label"])
-    }
-    return BestPossible(values, counts, particles, mean_with_se(sweep["rmse_max"]))
+    """The best-possible rows from the sweep's runs ``sweep`` (at the paper's L) and the
+    posterior-mean runs ``best_runs``, per point named by the column(s) ``by``; only the points
+    rerun in ``best_runs`` are kept. The room centre's error is one value per run."""
+    cols = [by] if isinstance(by, str) else list(by)
+    points = best_runs[cols].drop_duplicates()
+    base = sweep.merge(points, on=cols).assign(particles=particles)
+    both = pd.concat([base, best_runs])
+    values = {}
+    for key, g in both.groupby(["particles", *cols], sort=False):
+        n, *point = key
+        values[(int(n), point[0] if isinstance(by, str) else tuple(point))] = mean_with_se(
+            g["rmse_tr"]
+        )
+    trivial = mean_with_se(sweep.groupby("run")["rmse_max"].first())
+    return BestPossible(values, counts, particles, trivial)
 
 
-def claims(kinds: ClaimKinds, bp: BestPossible) -> list[Claim]:
-    """Diagnostics: each paper number is not below the best possible, and the posterior mean
-    has converged (the two large counts agree)."""
-    out = [
-        possible_claim(
-            kinds,
-            f"BP_possible_{PRIORS[lab]}",
-            f"mean RMSE_tr {WITH[lab]} (Fig. 7, implied)",
-            PAPER_RMSE_TR[lab],
-            bp.best(lab),
-        )
-        for lab in PRIORS
-    ]
-    out.append(
-        possible_claim(
-            kinds,
-            "BP_possible_crossing",
-            "mean RMSE_tr at the crossing RMSE_tr = RMSE_occ (Gaussian priors); no prior can "
-            "beat knowing the occluders, so compared with the perfect-prior best possible",
-            PAPER_CROSSING,
-            bp.best("0"),
-        )
-    )
+def not_above(a: tuple[float, float], b: tuple[float, float]) -> bool:
+    """Mean ``a = (mean, s.e.)`` is not above mean ``b`` by more than MARGIN_SE combined
+    standard errors (a NaN s.e., one run, counts as 0)."""
+    se = math.hypot(*(x if math.isfinite(x) else 0.0 for x in (a[1], b[1])))
+    return a[0] <= b[0] + MARGIN_SE * se
+
+
+def converged_claims(
+    kinds: ClaimKinds, bp: BestPossible, points: Mapping[Hashable, tuple[str, str]]
+) -> list[Claim]:
+    """``BP_converged_{suffix}`` for each ``point -> (suffix, "with ...")``: the posterior mean
+    at the two counts agrees, so the larger count's value is the converged one."""
     n1, n2 = bp.counts
-    out += [
+    return [
         agreement_claim(
             kinds,
-            f"BP_converged_{PRIORS[lab]}",
-            f"posterior-mean RMSE_tr {WITH[lab]}",
-            (n1, *bp.values[(n1, lab)]),
-            (n2, *bp.values[(n2, lab)]),
+            f"BP_converged_{suffix}",
+            f"posterior-mean RMSE_tr {what}",
+            (n1, *bp.values[(n1, point)]),
+            (n2, *bp.values[(n2, point)]),
         )
-        for lab in PRIORS
+        for point, (suffix, what) in points.items()
     ]
-    return out
 
 
-def report(bp: BestPossible, runs: int) -> str:
-    """Report text: the best-possible rows beside Fig. 7's extremes."""
-    rows: dict[str, dict[str, Any]] = {}
-
-    def row(name: str, n: int | None, get: Any) -> None:
-        rows[name] = {"particles": "" if n is None else str(n)}
-        for lab, prior in PRIORS.items():
-            mean, se = get(lab)
-            rows[name] |= {f"RMSE_tr {prior}": mean, f"s.e. {prior}": se}
-
-    nan = float("nan")
-    row("paper (implied by Sec. 6.1)", None, lambda lab: (PAPER_RMSE_TR[lab], nan))
-    row("ours at the paper's L", bp.particles, lambda lab: bp.values[(bp.particles, lab)])
-    for n in (n for n in bp.counts if n != bp.particles):
-        row(f"posterior mean (L = {n})", n, lambda lab, n=n: bp.values[(n, lab)])
-    row("room centre (trivial, RMSE_max)", None, lambda lab: bp.trivial)
-    table = best_table(rows).rename_axis("estimator").reset_index()
+def intro(bp: BestPossible, runs: int) -> str:
+    """The opening of a best-possible section: what is shown and why no PCRB applies."""
     n1, n2 = bp.counts
     return f"""## The best possible on the printed model
 
@@ -171,10 +149,4 @@ What no tracker can beat on these {runs} runs (issue 19): the same occlusion-awa
 L = {n1} and L = {n2} particles (the paper's L = {bp.particles}), whose estimate converges to the
 posterior mean of the tracker's model, and the room centre (the trivial estimator, RMSE_max).
 The PCRB does not apply (seen / not-seen reports make the likelihood discontinuous, the dynamics
-switch regimes). A paper number more than 3 standard errors below the posterior mean at
-L = {n2} is *impossible on the printed model* (claims `BP_possible_*`); `BP_converged_*` check
-that L = {n1} and L = {n2} agree. Mean over runs of the per-run RMSE_tr, ± its standard error.
-
-{md(table)}
-
-"""
+switch regimes)."""

@@ -129,6 +129,14 @@ def timed_monte_carlo(
     return Timed(results, wall, load_start, os.getloadavg())
 
 
+def cost_text(ctx: RunContext, timed: Timed) -> str:
+    """The Monte Carlo's wall time, worker processes and load averages (the machine is shared)."""
+    wall, start, end = timed.wall, timed.load_start, timed.load_end
+    return f"""Tracking wall time {wall:.0f} s ({wall / 60:.1f} min) with {ctx.workers or os.cpu_count()} worker processes, load average
+{start[0]:.2f} / {start[1]:.2f} / {start[2]:.2f} at the start and {end[0]:.2f} / {end[1]:.2f} /
+{end[2]:.2f} at the end (1 / 5 / 15 min; the machine has {os.cpu_count()} cores and is shared)."""
+
+
 def mean_std(df: pd.DataFrame, by: Sequence[str], value: str = "rmse_tr") -> pd.DataFrame:
     """Mean, standard deviation (ddof 1; 0 for one run) and count of ``value`` per group."""
     g = df.groupby(list(by))[value]

@@ -13,7 +13,7 @@ from __future__ import annotations
 import pandas as pd
 
 from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, run_seed
-from .cameras import SIGMA_PSI
+from .camera_grid import SIGMA_PSI
 from .common import curve_plot, md, mean_std, smoke
 from .simulation import run_tracking
 

@@ -54,7 +54,7 @@ SIGMA_V_QUICK = (2.0,)
 """Tracker motion noise sigma_v (Eq. 5, not given) at which the diagnosis is rerun: E2's curve
 (ercan2013-prior-accuracy) comes out in the paper's order at 2 (issue 19 item 4). One value: each
 costs ~920 CPU s at full size (the main series ~2600), and the full run must stay under 30 minutes
-with 2 workers (issue 19 item 6); ercan2013-cameras sweeps 1 and 2."""
+with 2 workers (issue 19 item 6); ercan2013-cameras-sigma-v sweeps 1 and 2."""
 SIGMA_V_SERIES = ("random-walk", "random-walk, gamma 0.1")
 """The series rerun at each sigma_v (with perfect and no priors): the default priors and the most
 tempered evidence, the two the repeated-counting diagnosis compares."""
