@@ -40,7 +40,11 @@ def test_quick_run_writes_report_claims_and_figures(tmp_path):
         "mht_not_worse_than_jpda_crossing",
         "phd_cardinality_unbiased",
         "scenario_statistics",
+        "BP_trackers_above_floor",
+        "BP_clairvoyant_attains_floor",
     } <= set(ids)
+    assert kinds["BP_trackers_above_floor"] == kinds["BP_clairvoyant_attains_floor"] == "diagnostic"
+    assert "## Best possible" in report and "oracle floor, whole run" in report
     assert sorted(kinds) == sorted(ids) and set(kinds.values()) == {"beyond", "diagnostic"}
     for c in summary["claims"]:
         assert isinstance(c["holds"], bool) and c["id"] in report
@@ -49,7 +53,7 @@ def test_quick_run_writes_report_claims_and_figures(tmp_path):
     df = pd.read_parquet(out / "results.parquet")
     assert set(df.tracker) == {"GNN", "JPDA", "MHT", "MCMCDA", "GM-PHD", "PMB"}
     assert set(df.scenario) == {"sparse", "dense", "crossing"}
-    for col in ("gospa", "ospa2", "mota", "motp", "id_switches", "fragmentations"):
+    for col in ("gospa", "ospa2", "mota", "motp", "id_switches", "fragmentations", "floor_online"):
         assert col in df.columns
 
 

@@ -1,5 +1,7 @@
-"""The oracle floor of ``multitarget-bearings`` (multitarget/gospa_floor.py): Eq. (1) against the
-GOSPA implementation, Eq. (2) by hand and by Monte Carlo, the position bounds by hand."""
+"""The oracle floor of ``multitarget-bearings`` and ``multitarget-benchmark``
+(multitarget/gospa_floor.py): Eq. (1) against the GOSPA implementation, Eq. (2) by hand and by
+Monte Carlo, the position bounds by hand, the whole-run bound against the inverse of the whole
+path's information."""
 
 from __future__ import annotations
 
@@ -8,8 +10,9 @@ import pytest
 
 from fusetrack.evaluation import gospa
 from fusetrack.experiments.multitarget.gospa_floor import (
+    bearing_oracle,
     entry_prior_cov,
-    position_bounds,
+    smoothed_bounds,
     states,
     truncated_square_floor,
 )
@@ -56,7 +59,7 @@ def test_one_scan_bound_by_hand():
     """Arrays 10 m west and 10 m south of the target: each bearing informs one axis with
     P_D / (sigma r)^2 = 0.9 / (0.1 * 10)^2 = 0.9; with a unit prior the bound is 1 / 1.9 I."""
     scene = _scene((("w", -10.0, 0.0), ("s", 0.0, -10.0)))
-    online, whole = position_bounds(scene, np.zeros((1, 4)), np.eye(4))
+    online, whole = bearing_oracle(scene).position_bounds(np.zeros((1, 4)), np.eye(4))
     np.testing.assert_allclose(online[0], np.eye(2) / 1.9, atol=1e-12)
     np.testing.assert_allclose(whole[0], online[0], atol=1e-12)
 
@@ -78,7 +81,7 @@ def test_whole_run_bound_is_the_information_of_every_scan():
         return J
 
     J0 = np.eye(4) + info(x[0, :2])
-    online, whole = position_bounds(scene, x, np.eye(4))
+    online, whole = bearing_oracle(scene).position_bounds(x, np.eye(4))
     Fi = np.linalg.inv(F)
     np.testing.assert_allclose(online[1], np.linalg.inv(Fi.T @ J0 @ Fi + info(x[1, :2]))[:2, :2])
     np.testing.assert_allclose(whole[0], np.linalg.inv(J0 + F.T @ info(x[1, :2]) @ F)[:2, :2])
@@ -94,3 +97,34 @@ def test_entry_prior_spread_is_the_model_draws():
     on, x = states(np.array([[np.nan, np.nan], [1.0, 2.0], [2.0, 2.5]]), 0.25)
     assert on.tolist() == [1, 2]
     np.testing.assert_allclose(x[:, 2:], [[4.0, 2.0], [4.0, 2.0]])
+
+
+def test_whole_run_bound_is_the_inverse_of_the_whole_path_information():
+    """With process noise the whole-run bound at each scan is the diagonal block of the inverse of
+    the path's block-tridiagonal information (prior, motion, measurements), built by hand."""
+    rng = np.random.default_rng(3)
+    d, T = 2, 4
+    F = np.array([[1.0, 0.5], [0.0, 1.0]])
+    Q = np.array([[0.2, 0.1], [0.1, 0.3]])
+    I_k = [np.diag(rng.uniform(0.1, 2.0, d)) for _ in range(T)]
+    P0 = np.diag([4.0, 1.0])
+    # online bounds: the Kalman covariance recursion with measurement information I_k
+    online = [np.linalg.inv(np.linalg.inv(P0) + I_k[0])]
+    for k in range(1, T):
+        online.append(np.linalg.inv(np.linalg.inv(F @ online[-1] @ F.T + Q) + I_k[k]))
+    Qi = np.linalg.inv(Q)
+    J = np.zeros((d * T, d * T))
+    J[:d, :d] = np.linalg.inv(P0)
+    for k in range(T):
+        J[k * d : (k + 1) * d, k * d : (k + 1) * d] += I_k[k]
+    for k in range(T - 1):
+        a, b = slice(k * d, (k + 1) * d), slice((k + 1) * d, (k + 2) * d)
+        J[a, a] += F.T @ Qi @ F
+        J[b, b] += Qi
+        J[a, b] -= F.T @ Qi
+        J[b, a] -= Qi @ F
+    full = np.linalg.inv(J)
+    S = smoothed_bounds(np.array(online), F, Q)
+    for k in range(T):
+        np.testing.assert_allclose(S[k], full[k * d : (k + 1) * d, k * d : (k + 1) * d], rtol=1e-10)
+    np.testing.assert_allclose(S[-1], online[-1])

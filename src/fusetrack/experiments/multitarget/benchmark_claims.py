@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ...evaluation import Claim
-from .claims import KIND_PREFIX, claim_kinds
+from .claims import claim, claim_kinds
 
 if TYPE_CHECKING:
     from .benchmark import Options
@@ -54,12 +54,6 @@ def summary_table(df: pd.DataFrame, metrics: tuple[str, ...] = METRICS) -> pd.Da
     return pd.DataFrame(rows).set_index(["scenario", "tracker"])
 
 
-def _claim(
-    kind: str, cid: str, statement: str, expected: Any, ours: Any, tol: str, holds: bool
-) -> Claim:
-    return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds), kind)
-
-
 def _at_most(d: tuple[float, float], k: float) -> bool:
     return d[0] <= k * d[1]
 
@@ -72,7 +66,7 @@ def _comparison_claims(df: pd.DataFrame, k: float) -> list[Claim]:
     pp = paired_difference(df, "dense", "PMB", "GM-PHD", "gospa")
     tol = f"{k:g} SE of the paired difference"
     return [
-        _claim(
+        claim(
             "beyond",
             "pmb_not_worse_than_phd_dense",
             "in dense clutter the PMB filter's GOSPA is at most the GM-PHD's: mean paired "
@@ -83,7 +77,7 @@ def _comparison_claims(df: pd.DataFrame, k: float) -> list[Claim]:
             tol,
             _at_most(pp, k),
         ),
-        _claim(
+        claim(
             "beyond",
             "jpda_not_worse_than_gnn_dense",
             "in dense clutter JPDA's GOSPA is at most GNN's: mean paired difference JPDA - GNN "
@@ -93,7 +87,7 @@ def _comparison_claims(df: pd.DataFrame, k: float) -> list[Claim]:
             tol,
             _at_most(jg, k),
         ),
-        _claim(
+        claim(
             "beyond",
             "mht_not_worse_than_jpda_crossing",
             "at the crossing MHT's GOSPA is at most JPDA's: mean paired difference MHT - JPDA "
@@ -103,7 +97,7 @@ def _comparison_claims(df: pd.DataFrame, k: float) -> list[Claim]:
             tol,
             _at_most(mj, k),
         ),
-        _claim(
+        claim(
             "beyond",
             "mht_no_more_id_switches_than_jpda_crossing",
             "at the crossing MHT switches identities (CLEAR MOT) no more often than JPDA: mean "
@@ -120,7 +114,7 @@ def _cardinality_claims(df: pd.DataFrame, k: float, settle: int) -> list[Claim]:
     """The PHD's intensity mass is an unbiased estimate of the number of targets."""
     bias = {s: mean_se(values(df, s, "GM-PHD", "count_bias")) for s in ("sparse", "dense")}
     return [
-        _claim(
+        claim(
             "beyond",
             "phd_cardinality_unbiased",
             f"the GM-PHD's expected number of targets (its intensity's mass) minus the true "
@@ -181,7 +175,7 @@ def _diagnostic_claims(df: pd.DataFrame, opts: Options, k: float) -> list[Claim]
         s: max(float(values(df, s, t, "gospa").mean()) for t in df.tracker.unique()) for s in empty
     }
     return [
-        _claim(
+        claim(
             "diagnostic",
             "scenario_statistics",
             "the simulation draws what it should: clutter reports per sensor per scan (sparse "
@@ -192,7 +186,7 @@ def _diagnostic_claims(df: pd.DataFrame, opts: Options, k: float) -> list[Claim]
             f"{k:g} sd (Poisson / binomial)",
             stats_ok,
         ),
-        _claim(
+        claim(
             "diagnostic",
             "every_tracker_beats_no_tracker",
             "in every scenario every tracker's mean GOSPA is below that of reporting no target "

@@ -53,6 +53,7 @@ RADAR_BOX = (
     float(np.arctan2(_FAR, _NEAR)),
 )
 SENSOR_IDS = ("pos", "radar")
+SCENARIOS = ("sparse", "dense", "crossing")  # births and deaths in 2 clutter levels; crossings
 ENTRIES = ((-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0))  # W, E, S, N (unit vectors)
 
 

@@ -125,8 +125,10 @@ def report_text(
     scans: int,
     n_mc: int,
     opts: Options,
+    best: str,
 ) -> str:
-    """Set-up, verdict, the mean ± SE tables, figures and what the numbers say."""
+    """Set-up, verdict (of the hypotheses ``claims``), the mean ± SE tables, figures, the best
+    possible section ``best`` and what the numbers say."""
     mot = summary_table(df, MOT_METRICS)
     return f"""
 Beyond the papers (fusetrack issue 17): every multi-target tracker of the library (GNN, JPDA,
@@ -155,6 +157,7 @@ CLEAR MOT:
 
 ![one run's tracks over the truth]({figs[2].name})
 
+{best}
 ## Reading
 
 * Each claim above is a hypothesis stated before the run; those marked **no** failed on these

@@ -50,7 +50,7 @@ def summary_table(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def claim(
-    kind: str, cid: str, statement: str, expected: str, ours: Any, tol: str, holds: bool
+    kind: str, cid: str, statement: str, expected: Any, ours: Any, tol: str, holds: bool
 ) -> Claim:
     return Claim(cid, KIND_PREFIX[kind] + statement, expected, ours, tol, bool(holds), kind)
 

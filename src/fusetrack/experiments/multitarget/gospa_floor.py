@@ -1,24 +1,30 @@
-"""What no multi-target tracker can beat on ``multitarget-bearings``' simulated model (issue 19,
-item 3): a floor on the mean over scans of GOSPA², from each target's Cramér-Rao bound.
+"""What no multi-target tracker can beat on a simulated model with known target paths (issue 19,
+item 3): a floor on the mean over scans of GOSPA², from each target's Cramér-Rao bound. Used by
+``multitarget-bearings`` (bearings of 2-3 arrays, straight paths) and ``multitarget-benchmark``
+(position sensor and radar, nearly constant velocity, births and deaths).
 
-**The oracle.** It knows the number of targets, which bearing is whose and which are clutter,
-and that every target moves on a straight line at constant speed (the truth has no process
-noise). Its information about target ``i`` is then that of its own bearings alone: the
-deterministic CRLB of :func:`~fusetrack.evaluation.deterministic_crlb` (Taylor 1979; Ristic,
-Arulampalam & Gordon 2004, Ch. 4) with ``Q = 0``, one :class:`~fusetrack.sensors.Bearing` per
-array and the information reduction factor ``P_D`` per bearing (missed detections; Hernandez,
-Farina & Ristic 2006). Its prior at the target's first scan is Gaussian with the covariance of
-the model's own entry draws (:func:`entry_prior_cov`: the state at the first scan over many
-:func:`~.scenario.simulate_truth` draws). ``online``: the bound at scan ``k`` from the bearings up
-to ``k`` (a filter); ``whole_run``: from every bearing of the run, ``B_k = G B_last G^T`` with
-``G = F(-(last - k) dt)`` (no process noise: the state at ``k`` is the last one run backwards),
-the bound of any estimate made after the run, such as a tracker's retrospective confirmations or
-MCMCDA's fixed-lag decisions. Unlabelled, merged and cluttered bearings are a garbling of the
-oracle's data (merging ignored, as in Lee 2009's bound, :mod:`..lee2009.bearing_bound`), so a
-tracker can only do worse. Two readings, as in that bound: the bound is evaluated along each
-run's true path (not averaged over the prior first, as the Van Trees bound would be), and the
-prior is a Gaussian stand-in for the model's uniform draws (an estimator using the draws' edges
-could do a little better in a target's first scans, before its bearings dominate).
+**The oracle.** It knows the number of targets, which report is whose and which are clutter,
+and the motion model of the truth (for straight paths: that they are straight, ``Q = 0``). Its
+information about target ``i`` is then that of its own reports alone: the posterior CRLB of
+:func:`~fusetrack.evaluation.posterior_crlb` (Tichavský, Muravchik & Nehorai 1998; for ``Q = 0``
+the deterministic bound of Taylor 1979; Ristic, Arulampalam & Gordon 2004, Ch. 4) along the
+target's true path, one sensor model per sensor and the information reduction factor ``P_D`` per
+report (missed detections; Hernandez, Farina & Ristic 2006; the expected information, a lower
+bound on the mean over detection sequences by Jensen's inequality). Its prior at the target's
+first scan is a Gaussian ``P_0`` given by the experiment (``multitarget-bearings``: the
+covariance of the model's own entry draws, :func:`entry_prior_cov`; ``multitarget-benchmark``:
+the birth intensity's covariance). ``online``: the bound at scan ``k`` from the reports up to
+``k`` (a filter); ``whole_run``: from every report of the target's life, the bound of any
+estimate made after the run (a tracker's retrospective confirmations, MCMCDA's fixed-lag
+decisions): the Rauch-Tung-Striebel backward pass over the bounds (:func:`smoothed_bounds`; the
+diagonal blocks of the inverse of the whole path's block-tridiagonal information, exact for
+linear motion), with ``Q = 0`` the last scan's bound run backwards, ``F^-1 B F^-T``.
+Unlabelled, merged and cluttered reports are a garbling of the oracle's data (merging ignored,
+as in Lee 2009's bound, :mod:`..lee2009.bearing_bound`), so a tracker can only do worse. Two
+readings, as in that bound: the bound is evaluated along each run's true path (not averaged over
+the prior first, as the Van Trees bound would be), and the prior is a Gaussian (for
+``multitarget-bearings`` a stand-in for the model's uniform draws: an estimator using the draws'
+edges could do a little better in a target's first scans, before its bearings dominate).
 
 **From the bound to GOSPA** (``p = 2``, ``alpha = 2``, cut-off ``c``). For any estimate set of
 ``m`` points and ``n`` targets, with ``D_i`` target ``i``'s distance to its nearest estimate::
@@ -46,15 +52,18 @@ target's nearest one closer costs ``c^2 / 2`` in (1), more than the floor of a w
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ...evaluation import deterministic_crlb
+from ...core import MotionModel, SensorModel
+from ...evaluation import posterior_crlb
 from ...motion import ConstantVelocity
 from ...sensors import Bearing
-from .scenario import Scene, Truth, simulate_truth
+from .scenario import Scene, simulate_truth
 
 Array = NDArray[np.float64]
 PRIOR_DRAWS = 4000
@@ -95,29 +104,61 @@ def entry_prior_cov(scene: Scene, n_targets: int, duration: float) -> Array:
     return np.stack([np.cov(np.array(d), rowvar=False) for d in draws])
 
 
-def position_bounds(scene: Scene, x: Array, prior_cov: Array) -> tuple[Array, Array]:
-    """``(online, whole_run)`` position bounds ``(T, 2, 2)`` of one target along its states
-    ``x`` ``(T, 4)`` (module docstring)."""
+def smoothed_bounds(online: Array, F: Array, Q: Array) -> Array:
+    """The whole-run bounds ``(T, d, d)`` from the online ones ``(T, d, d)`` of a linear motion
+    ``x_{k+1} = F x_k + w``, ``w ~ N(0, Q)``: the Rauch-Tung-Striebel backward pass
+    ``S_k = B_k + C_k (S_{k+1} - F B_k F^T - Q) C_k^T``, ``C_k = B_k F^T (F B_k F^T + Q)^-1``
+    (``Q = 0``: ``S_k = F^-1 S_{k+1} F^-T``)."""
+    S = np.array(online, dtype=float, copy=True)
+    for k in range(len(S) - 2, -1, -1):
+        B = S[k]
+        P = F @ B @ F.T + Q
+        C = np.linalg.solve(P, F @ B).T  # B F^T P^-1 (P, B symmetric)
+        D = C @ (S[k + 1] - P) @ C.T
+        S[k] = B + 0.5 * (D + D.T)
+    return S
+
+
+@dataclass(frozen=True)
+class Oracle:
+    """The oracle's model of one target: the truth's motion, the sensors (the order of their
+    reports), the scan interval and the detection probability of every sensor."""
+
+    motion: MotionModel
+    sensors: Sequence[SensorModel]
+    dt: float
+    p_detect: float
+
+    def position_bounds(self, x: Array, prior_cov: Array) -> tuple[Array, Array]:
+        """``(online, whole_run)`` position bounds ``(T, 2, 2)`` of one target along its states
+        ``x`` ``(T, d)`` at consecutive scans (module docstring)."""
+        mask = np.full((len(x), len(self.sensors)), self.p_detect)
+        B = posterior_crlb(self.motion, list(self.sensors), x, self.dt, prior_cov, mask=mask)
+        F = self.motion.jacobian(x[0], self.dt)
+        S = smoothed_bounds(B, F, self.motion.noise_cov(self.dt))
+        return B[:, :2, :2], S[:, :2, :2]
+
+
+def bearing_oracle(scene: Scene) -> Oracle:
+    """``multitarget-bearings``' oracle: straight paths (``q = 0``), one bearing per array."""
     sensors = [Bearing(sid, position=[sx, sy], sigma=scene.sigma) for sid, sx, sy in scene.arrays]
-    motion = ConstantVelocity(ndim=2, q=0.0)
-    mask = np.full((len(x), len(sensors)), scene.p_detect)
-    B = deterministic_crlb(motion, sensors, x, scene.dt, prior_cov, mask=mask)
-    back = np.arange(len(x))[::-1] * scene.dt  # time from scan k to the last one
-    G = np.broadcast_to(np.eye(4), (len(x), 4, 4)).copy()
-    G[:, 0, 2] = G[:, 1, 3] = -back
-    S = G @ B[-1] @ np.swapaxes(G, -1, -2)
-    return B[:, :2, :2], S[:, :2, :2]
+    return Oracle(ConstantVelocity(ndim=2, q=0.0), sensors, scene.dt, scene.p_detect)
 
 
-def run_floors(scene: Scene, truth: Truth, c: float, prior_covs: Array) -> dict[str, float]:
-    """The floors of one run (m²): the mean over its scans of the sum over the targets present of
-    Eq. (2), ``online`` and ``whole_run``."""
-    K, n = truth.positions.shape[:2]
-    out = {"online": np.zeros(K), "whole_run": np.zeros(K)}
-    for i in range(n):
-        on, x = states(truth.positions[:, i], scene.dt)
+Path = tuple[NDArray[np.intp], Array]
+"""One target's scans ``(T,)`` (consecutive) and its true states there ``(T, d)``."""
+
+
+def run_floors(
+    oracle: Oracle, paths: Sequence[Path], n_scans: int, c: float, prior_covs: Sequence[Array]
+) -> dict[str, float]:
+    """The floors of one run (m²): the mean over its ``n_scans`` scans of the sum over the
+    targets present (``paths``, each with its prior ``prior_covs[i]``) of Eq. (2), ``online``
+    and ``whole_run``."""
+    out = {"online": np.zeros(n_scans), "whole_run": np.zeros(n_scans)}
+    for (on, x), prior in zip(paths, prior_covs):
         if len(on) == 0:
             continue
-        for name, B in zip(out, position_bounds(scene, x, prior_covs[i])):
+        for name, B in zip(out, oracle.position_bounds(x, prior)):
             out[name][on] += truncated_square_floor(B, c**2 / 2.0)
     return {name: float(v.mean()) for name, v in out.items()}
