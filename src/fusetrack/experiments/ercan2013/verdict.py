@@ -21,7 +21,7 @@ VERDICT = PaperVerdict(
                 Reading(
                     "sigma_v = 2",
                     refs(
-                        "ercan2013-cameras",
+                        "ercan2013-cameras-sigma-v",
                         "C3_decreasing_perfect_sigma_v_2",
                         "C3_decreasing_gaussian_sigma_v_2",
                         "C3_decreasing_none_sigma_v_2",
@@ -29,6 +29,7 @@ VERDICT = PaperVerdict(
                     ),
                 ),
             ),
+            best_possible=refs("ercan2013-cameras", "BP_ordering_possible"),
         ),
         Contribution(
             "E2 (Fig. 7): the occlusion-aware particle filter with perfect occluder priors cuts "
