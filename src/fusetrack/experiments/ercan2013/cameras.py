@@ -18,8 +18,16 @@ from typing import Any
 
 import pandas as pd
 
-from ...evaluation import MARGIN_SE, Claim, ClaimKinds, Outcome, RunContext, mean_with_se
-from ...evaluation.best_possible import IMPOSSIBLE, POSSIBLE
+from ...evaluation import (
+    IMPOSSIBLE,
+    MARGIN_SE,
+    POSSIBLE,
+    Claim,
+    ClaimKinds,
+    Outcome,
+    RunContext,
+    mean_with_se,
+)
 from . import best_possible as bp
 from .camera_grid import (
     PRIORS,
