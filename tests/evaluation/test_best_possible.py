@@ -1,6 +1,8 @@
 """The generic best-possible judgement (issue 19 item 3): a paper number below the posterior
 mean by more than three standard errors is impossible; two particle counts agree or not."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -12,6 +14,7 @@ from fusetrack.evaluation import (
     agreement_claim,
     best_possible_verdict,
     mean_with_se,
+    not_above,
     possible_claim,
 )
 
@@ -53,3 +56,10 @@ def test_possible_claim_on_a_bound_alone():
     crlb = possible_claim(KINDS, "BP_d", "x", 0.1, (0.5, 0.1), 0.2, bound_label="CRLB")
     assert not crlb.holds and "CRLB 0.2" in crlb.ours and "PCRB" not in crlb.ours + crlb.tolerance
     assert crlb.tolerance.endswith(">= CRLB")
+
+
+def test_not_above_allows_three_combined_standard_errors():
+    assert not_above((1.0, 0.1), (1.0, 0.1))
+    assert not_above((1.4, 0.1), (1.0, 0.1))  # 0.4 <= 3 * hypot(0.1, 0.1) = 0.42
+    assert not not_above((1.5, 0.1), (1.0, 0.1))
+    assert not not_above((1.01, math.nan), (1.0, math.nan))  # one run: no margin

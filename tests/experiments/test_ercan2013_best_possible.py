@@ -96,13 +96,6 @@ def test_e2_claims_hold_above_and_fail_below_the_posterior_mean():
     assert not low["BP_converged_perfect"].holds  # 2.0 +- 0.1 at 200 against 3.5 +- 0.1
 
 
-def test_not_above_allows_three_combined_standard_errors():
-    assert bp.not_above((1.0, 0.1), (1.0, 0.1))
-    assert bp.not_above((1.4, 0.1), (1.0, 0.1))  # 0.4 <= 3 * hypot(0.1, 0.1) = 0.42
-    assert not bp.not_above((1.5, 0.1), (1.0, 0.1))
-    assert not bp.not_above((1.01, math.nan), (1.0, math.nan))  # one run: no margin
-
-
 def _e1(perfect_best: dict[int, list[float]]) -> bp.BestPossible:
     """E1's best possible at k = 2 and 8 (L = 100 the grid's own runs, 200 the reruns)."""
     sweep, best = [], []

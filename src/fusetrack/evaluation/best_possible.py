@@ -141,6 +141,18 @@ def converged_claim(
     )
 
 
+def combined_se(*se: float) -> float:
+    """The standard error of a difference of independent means, ``hypot`` of theirs (a NaN
+    s.e., one run, counts as 0)."""
+    return math.hypot(*(float(x) if np.isfinite(x) else 0.0 for x in se))
+
+
+def not_above(a: tuple[float, float], b: tuple[float, float]) -> bool:
+    """Mean ``a = (mean, s.e.)`` is not above mean ``b`` by more than :data:`MARGIN_SE`
+    combined standard errors."""
+    return a[0] <= b[0] + MARGIN_SE * combined_se(a[1], b[1])
+
+
 def agreement_claim(
     kinds: ClaimKinds,
     claim_id: str,
@@ -152,8 +164,7 @@ def agreement_claim(
     agrees within :data:`MARGIN_SE` combined standard errors, so the larger count's value is
     the converged one (the posterior mean's). Fails: more particles are still needed."""
     (n1, v1, s1), (n2, v2, s2) = smaller, larger
-    se = math.hypot(*(float(s) if np.isfinite(s) else 0.0 for s in (s1, s2)))
-    ok = bool(abs(v2 - v1) <= MARGIN_SE * se)
+    ok = bool(abs(v2 - v1) <= MARGIN_SE * combined_se(s1, s2))
     return kinds.claim(
         claim_id,
         f"{what}: converged, the same at {n1} and {n2} particles",

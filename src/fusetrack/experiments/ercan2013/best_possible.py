@@ -22,14 +22,13 @@ way, with their standard error (:func:`~fusetrack.evaluation.mean_with_se`).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Hashable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import pandas as pd
 
-from ...evaluation import MARGIN_SE, Claim, ClaimKinds, agreement_claim, mean_with_se
+from ...evaluation import Claim, ClaimKinds, agreement_claim, mean_with_se
 
 BEST_PREFIX = "best L="
 """Label prefix of a posterior-mean run: ``best L=5000|0`` (the sweep point labelled "0")."""
@@ -113,13 +112,6 @@ def estimate(
         )
     trivial = mean_with_se(sweep.groupby("run")["rmse_max"].first())
     return BestPossible(values, counts, particles, trivial)
-
-
-def not_above(a: tuple[float, float], b: tuple[float, float]) -> bool:
-    """Mean ``a = (mean, s.e.)`` is not above mean ``b`` by more than MARGIN_SE combined
-    standard errors (a NaN s.e., one run, counts as 0)."""
-    se = math.hypot(*(x if math.isfinite(x) else 0.0 for x in (a[1], b[1])))
-    return a[0] <= b[0] + MARGIN_SE * se
 
 
 def converged_claims(

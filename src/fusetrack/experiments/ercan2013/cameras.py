@@ -27,6 +27,7 @@ from ...evaluation import (
     Outcome,
     RunContext,
     mean_with_se,
+    not_above,
 )
 from . import best_possible as bp
 from .camera_grid import (
@@ -325,9 +326,9 @@ def best_claims(best: bp.BestPossible, gaussian: Mapping[int, tuple[float, float
     posterior means in that order, and a Gaussian-prior tracker above the no-prior one makes its
     priors worse than no information. ``gaussian``: that tracker's (mean, s.e.) per camera count."""
     ks = _best_ks(best)
-    ordered = [k for k in ks if bp.not_above(best.best(("perfect", k)), best.best(("none", k)))]
+    ordered = [k for k in ks if not_above(best.best(("perfect", k)), best.best(("none", k)))]
     label = POSSIBLE if len(ordered) == len(ks) else IMPOSSIBLE
-    within = [k for k in ks if bp.not_above(gaussian[k], best.best(("none", k)))]
+    within = [k for k in ks if not_above(gaussian[k], best.best(("none", k)))]
     margin = f"{MARGIN_SE:g} combined s.e."
     n2 = best.counts[1]
     return [

@@ -34,17 +34,17 @@ is the reduction factor's Jensen gap (``P_D`` averaged in the information, not i
 and the radar's linearisation."""
 
 LAYOUT = Layout(
-    "scenario",
-    SCENARIOS,
-    "",
-    "tracker",
-    TRACKERS,
-    NEAR,
-    "known association, births and deaths, the truth's motion model",
-    "one EKF per target on its own reports",
-    "clairvoyant EKF, own reports",
-    "report",
-    "MHT and MCMCDA decide with later scans",
+    by="scenario",
+    groups=SCENARIOS,
+    unit="",
+    method="tracker",
+    methods=TRACKERS,
+    near=NEAR,
+    knows="known association, births and deaths, the truth's motion model",
+    clairvoyant="one EKF per target on its own reports",
+    row="clairvoyant EKF, own reports",
+    datum="report",
+    later="MHT and MCMCDA decide with later scans",
 )
 
 

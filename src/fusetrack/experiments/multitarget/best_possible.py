@@ -55,22 +55,22 @@ class Layout:
 
     @property
     def every_group(self) -> str:
-        names = [self.label(g).removesuffix(self.unit) for g in self.groups]
+        names = [str(g) for g in self.groups]
         return f"{', '.join(names[:-1])} and {names[-1]}{self.unit}"
 
 
 BEARINGS = Layout(
-    "arrays",
-    ARRAYS,
-    " arrays",
-    "method",
-    METHODS,
-    NEAR,
-    "known association and number of targets, straight paths",
-    "one UKF per target on its own bearings",
-    "clairvoyant UKF, own bearings",
-    "bearing",
-    "trackers confirm and MCMCDA decides with later scans",
+    by="arrays",
+    groups=ARRAYS,
+    unit=" arrays",
+    method="method",
+    methods=METHODS,
+    near=NEAR,
+    knows="known association and number of targets, straight paths",
+    clairvoyant="one UKF per target on its own bearings",
+    row="clairvoyant UKF, own bearings",
+    datum="bearing",
+    later="trackers confirm and MCMCDA decides with later scans",
 )
 
 
