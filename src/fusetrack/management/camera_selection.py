@@ -40,12 +40,20 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal, cast
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core import ConfigError, ShapeError, invalid
 from ..sensors import MIN_DEPTH, CameraArray
-from ..world import OccluderPriors, Room, disks_block, occlusion_probability, pair_visibility_kernel
+from ..world import (
+    OccluderPriors,
+    Room,
+    disks_block,
+    occlusion_probability,
+    pair_visibility_kernel,
+    pair_visibility_per_particle_kernel,
+)
 
 Array = NDArray[np.float64]
 CameraModel = Literal["perspective", "weak", "perspective-joint"]
@@ -144,13 +152,7 @@ def visibility_per_particle(
     assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
     if prior_mode == "gaussian":
         q = _gaussian_occlusion(cameras, x, occluders, diameter, exclusion)  # (N, L, M)
-        p1 = assigned * np.prod(np.clip(1.0 - q, 0.0, None), axis=-1)
-        both = assigned[:, None, :] & assigned[None, :, :]
-        pair = np.prod(np.clip(1.0 - q[:, None] - q[None, :], 0.0, None), axis=-1)
-        p2 = both * pair
-        diag = np.arange(len(p1))
-        p2[diag, diag] = p1
-        return p1, p2
+        return pair_visibility_per_particle_kernel(q, np.ascontiguousarray(assigned))
     vis = _certain_visibility(cameras, x, occluders, diameter, prior_mode, assigned)
     v = vis.astype(float)
     return v, v[:, None, :] * v[None, :, :]
@@ -250,8 +252,97 @@ def selection_moments(
     return SelectionMoments(mu, sigma_x, p1, p2, cov_zx, cov_z)
 
 
+CONDITION_LIMIT = 1e6
+"""Largest bound ``tr(A) tr(A^-1)`` on the condition number of a subset's scaled ``Sigma_Z`` that
+:func:`subset_mse` solves by Cholesky; above it (and for a matrix that is not positive definite)
+the pseudo-inverse is used, whose cut-off (1e-10 of the largest eigenvalue) then may matter."""
+
+
+@numba.njit(cache=True, nogil=True)
+def _subset_gain_kernel(
+    cov_zx: Array, cov_z: Array, subsets: NDArray[np.intp], limit: float
+) -> Array:  # pragma: no cover - jit
+    """``Tr(Sigma_Zx' Sigma_Z^-1 Sigma_Zx)`` of each subset by a Cholesky factor ``A = L L'`` of
+    ``Sigma_Z / max|Sigma_Z|`` (rows of cameras with ``Sigma_Z,ii = 0`` left out, as the
+    pseudo-inverse does); NaN where ``A`` is not positive definite or the bound
+    ``tr(A) tr(A^-1) = tr(A) |L^-1|_F^2`` on its condition number exceeds ``limit``."""
+    n_sub, k = subsets.shape
+    out = np.empty(n_sub)
+    chol = np.zeros((k, k))
+    inv = np.zeros((k, k))
+    idx = np.empty(k, dtype=np.int64)
+    for b in range(n_sub):
+        scale = 0.0
+        for r in range(k):
+            for c in range(k):
+                scale = max(scale, abs(cov_z[subsets[b, r], subsets[b, c]]))
+        scale = max(scale, 1e-300)
+        n, ok = 0, True
+        for r in range(k):
+            i = subsets[b, r]
+            if cov_z[i, i] != 0.0:
+                idx[n] = i
+                n += 1
+                continue
+            for c in range(k):  # a zero diagonal with a non-zero row: not a covariance
+                ok = ok and cov_z[i, subsets[b, c]] == 0.0 and cov_z[subsets[b, c], i] == 0.0
+        trace_a = 0.0
+        for r in range(n):
+            if not ok:
+                break
+            for c in range(r + 1):
+                v = cov_z[idx[r], idx[c]] / scale
+                for p in range(c):
+                    v -= chol[r, p] * chol[c, p]
+                if r != c:
+                    chol[r, c] = v / chol[c, c]
+                elif v > 0.0:
+                    chol[r, r] = math.sqrt(v)
+                    trace_a += cov_z[idx[r], idx[r]] / scale
+                else:
+                    ok = False
+        if not ok:
+            out[b] = np.nan
+            continue
+        inv_norm2 = 0.0  # |L^-1|_F^2 = tr(A^-1), column by column of L^-1
+        for c in range(n):
+            for r in range(n):
+                v = 1.0 if r == c else 0.0
+                for p in range(c, r):
+                    v -= chol[r, p] * inv[p, c]
+                inv[r, c] = v / chol[r, r] if r >= c else 0.0
+                inv_norm2 += inv[r, c] * inv[r, c]
+        if trace_a * inv_norm2 > limit:
+            out[b] = np.nan
+            continue
+        gain = 0.0  # sum over the two columns of |L^-1 Sigma_Zx|^2, over the scale
+        for col in range(cov_zx.shape[1]):
+            for r in range(n):
+                v = 0.0
+                for p in range(r + 1):
+                    v += inv[r, p] * cov_zx[idx[p], col]
+                gain += v * v
+        out[b] = gain / scale
+    return out
+
+
+def _subset_mse_pinv(czx_all: Array, cz_all: Array, s: NDArray[np.intp], trace: float) -> Array:
+    """:func:`subset_mse` by the batched pseudo-inverse (every subset, any conditioning)."""
+    czx = czx_all[s]  # (B, k, 2)
+    cz = cz_all[s[:, :, None], s[:, None, :]]  # (B, k, k)
+    scale = np.maximum(np.abs(cz).max(axis=(1, 2), keepdims=True), 1e-300)
+    inv = np.linalg.pinv(cz / scale, rcond=1e-10, hermitian=True) / scale
+    gain = np.einsum("bki,bkl,blj->bij", czx, inv, czx)
+    return np.asarray(trace - np.trace(gain, axis1=1, axis2=2))
+
+
 def subset_mse(moments: SelectionMoments, subsets: ArrayLike, model: str = "perspective") -> Array:
-    """``MSE(S) = Tr(Sigma_x - Sigma_Zx' Sigma_Z^+ Sigma_Zx)`` for each row of ``subsets (B, k)``."""
+    """``MSE(S) = Tr(Sigma_x - Sigma_Zx' Sigma_Z^+ Sigma_Zx)`` for each row of ``subsets (B, k)``.
+
+    A Cholesky solve per subset where ``Sigma_Z`` (less the cameras it gives zero variance) is
+    positive definite with a condition number below :data:`CONDITION_LIMIT` -- there the
+    pseudo-inverse's cut-off removes nothing, so both give the same value up to rounding -- and
+    the pseudo-inverse for the rest."""
     if model not in moments.cov_z:
         raise ConfigError(invalid("model", model, f"one of {sorted(moments.cov_z)}"))
     s = np.asarray(subsets, dtype=np.intp)
@@ -260,12 +351,17 @@ def subset_mse(moments: SelectionMoments, subsets: ArrayLike, model: str = "pers
     trace = float(np.trace(moments.sigma_x))
     if s.shape[1] == 0:
         return np.full(len(s), trace)
-    czx = moments.cov_zx[model][s]  # (B, k, 2)
-    cz = moments.cov_z[model][s[:, :, None], s[:, None, :]]  # (B, k, k)
-    scale = np.maximum(np.abs(cz).max(axis=(1, 2), keepdims=True), 1e-300)
-    inv = np.linalg.pinv(cz / scale, rcond=1e-10, hermitian=True) / scale
-    gain = np.einsum("bki,bkl,blj->bij", czx, inv, czx)
-    return np.asarray(trace - np.trace(gain, axis1=1, axis2=2))
+    czx_all, cz_all = moments.cov_zx[model], moments.cov_z[model]
+    if s.min() < 0 or s.max() >= len(cz_all):
+        raise ConfigError(invalid("subsets", s.tolist(), f"camera indices in [0, {len(cz_all)})"))
+    mse = trace - _subset_gain_kernel(
+        np.ascontiguousarray(czx_all), np.ascontiguousarray(cz_all), np.ascontiguousarray(s),
+        CONDITION_LIMIT,
+    )  # fmt: skip
+    rest = np.isnan(mse)
+    if rest.any():
+        mse[rest] = _subset_mse_pinv(czx_all, cz_all, s[rest], trace)
+    return np.asarray(mse)
 
 
 def _check_k(k: int, n: int) -> int:

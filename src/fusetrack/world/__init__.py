@@ -49,6 +49,9 @@ from .occlusion import occlusion_probability_reference as occlusion_probability_
 from .occlusion import pattern_probability as pattern_probability
 from .occlusion_kernels import camera_likelihood_kernel as camera_likelihood_kernel
 from .occlusion_kernels import pair_visibility_kernel as pair_visibility_kernel
+from .occlusion_kernels import (
+    pair_visibility_per_particle_kernel as pair_visibility_per_particle_kernel,
+)
 from .occlusion_kernels import prior_draw_hits_kernel as prior_draw_hits_kernel
 from .potential_field import NavigationResult as NavigationResult
 from .potential_field import PotentialField as PotentialField

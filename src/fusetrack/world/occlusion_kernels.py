@@ -270,38 +270,72 @@ def segments_cross_edges_paired_kernel(
     return out
 
 
+@numba.njit(cache=True, inline="always")
+def _seen_by_one(q: np.ndarray, i: int, l: int) -> float:  # pragma: no cover - jit
+    """P{eta_i = 1 | u_l} = prod_j max(1 - q_ij, 0) (Eq. 8, Q = {i})."""
+    prod = 1.0
+    for j in range(q.shape[2]):
+        f = 1.0 - q[i, l, j]
+        prod *= f if f > 0.0 else 0.0
+    return prod
+
+
+@numba.njit(cache=True, inline="always")
+def _seen_by_both(q: np.ndarray, i: int, k: int, l: int) -> float:  # pragma: no cover - jit
+    """P{eta_i = 1, eta_k = 1 | u_l} = prod_j max(1 - q_ij - q_kj, 0) (Eq. 8, Q = {i, k})."""
+    prod = 1.0
+    for j in range(q.shape[2]):
+        f = 1.0 - q[i, l, j] - q[k, l, j]
+        if f <= 0.0:
+            return 0.0
+        prod *= f
+    return prod
+
+
 @numba.njit(cache=True, nogil=True)
 def pair_visibility_kernel(
     q: np.ndarray, assigned: np.ndarray, w: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
     """P{eta_i = 1} and P{eta_i = 1, eta_j = 1} averaged over weighted particles (Eq. 8, Q = {i, j})."""
-    N, L, M = q.shape
+    N, L = q.shape[0], q.shape[1]
     p1 = np.zeros(N)
     p2 = np.zeros((N, N))
     for l in range(L):
         for i in range(N):
             if not assigned[i, l]:
                 continue
-            prod = 1.0
-            for j in range(M):
-                f = 1.0 - q[i, l, j]
-                prod *= f if f > 0.0 else 0.0
-            p1[i] += w[l] * prod
+            p1[i] += w[l] * _seen_by_one(q, i, l)
             for k in range(i + 1, N):
-                if not assigned[k, l]:
-                    continue
-                prod = 1.0
-                for j in range(M):
-                    f = 1.0 - q[i, l, j] - q[k, l, j]
-                    if f <= 0.0:
-                        prod = 0.0
-                        break
-                    prod *= f
-                p2[i, k] += w[l] * prod
+                if assigned[k, l]:
+                    p2[i, k] += w[l] * _seen_by_both(q, i, k, l)
     for i in range(N):
         p2[i, i] = p1[i]
         for k in range(i + 1, N):
             p2[k, i] = p2[i, k]
+    return p1, p2
+
+
+@numba.njit(cache=True, nogil=True)
+def pair_visibility_per_particle_kernel(
+    q: np.ndarray, assigned: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
+    """The terms :func:`pair_visibility_kernel` sums: P{eta_i = 1 | u_l} ``(N, L)`` and
+    P{eta_i = 1, eta_k = 1 | u_l} ``(N, N, L)`` (0 off the assigned cameras; the diagonal is
+    the first)."""
+    N, L = q.shape[0], q.shape[1]
+    p1 = np.zeros((N, L))
+    p2 = np.zeros((N, N, L))
+    for i in range(N):
+        for l in range(L):
+            if assigned[i, l]:
+                p1[i, l] = _seen_by_one(q, i, l)
+                p2[i, i, l] = p1[i, l]
+        for k in range(i + 1, N):
+            for l in range(L):
+                if assigned[i, l] and assigned[k, l]:
+                    v = _seen_by_both(q, i, k, l)
+                    p2[i, k, l] = v
+                    p2[k, i, l] = v
     return p1, p2
 
 

@@ -1,0 +1,52 @@
+"""P{eta_i = 1 | u} and P{eta_i = 1, eta_k = 1 | u} (Ercan et al. 2013, Eq. 8) per particle and
+averaged: the kernels against the products written out in NumPy, and a hand-computed case."""
+
+import numpy as np
+
+from fusetrack.world import pair_visibility_kernel, pair_visibility_per_particle_kernel
+
+
+def _numpy_terms(q: np.ndarray, assigned: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    p1 = assigned * np.prod(np.clip(1.0 - q, 0.0, None), axis=-1)
+    both = assigned[:, None, :] & assigned[None, :, :]
+    p2 = both * np.prod(np.clip(1.0 - q[:, None] - q[None, :], 0.0, None), axis=-1)
+    diag = np.arange(len(p1))
+    p2[diag, diag] = p1
+    return p1, p2
+
+
+def _random_case(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    n, particles, m = 6, 50, 9
+    q = rng.random((n, particles, m)) * 0.6  # large enough that some 1 - q_i - q_k < 0
+    q[q < 0.25] = 0.0
+    assigned = rng.random((n, particles)) < 0.7
+    w = rng.random(particles)
+    return q, assigned, w / w.sum()
+
+
+def test_per_particle_terms_equal_the_numpy_products():
+    for seed in range(3):
+        q, assigned, _ = _random_case(seed)
+        p1, p2 = pair_visibility_per_particle_kernel(q, assigned)
+        e1, e2 = _numpy_terms(q, assigned)
+        np.testing.assert_allclose(p1, e1, rtol=1e-13, atol=0)  # NumPy multiplies in another order
+        np.testing.assert_allclose(p2, e2, rtol=1e-13, atol=0)
+        assert (p2 == 0).any() and (p2[~np.eye(6, dtype=bool)] > 0).any()  # both regimes met
+
+
+def test_averaged_kernel_is_the_weighted_sum_of_the_terms():
+    q, assigned, w = _random_case(5)
+    p1, p2 = pair_visibility_kernel(q, assigned, w)
+    t1, t2 = pair_visibility_per_particle_kernel(q, assigned)
+    np.testing.assert_allclose(p1, t1 @ w, rtol=1e-13)
+    np.testing.assert_allclose(p2, t2 @ w, rtol=1e-13, atol=1e-16)
+
+
+def test_hand_computed_pair():
+    q = np.array([[[0.1, 0.2]], [[0.3, 0.5]]])  # 2 cameras, 1 particle, 2 occluders
+    p1, p2 = pair_visibility_per_particle_kernel(q, np.ones((2, 1), dtype=bool))
+    assert p1[:, 0].tolist() == [0.9 * 0.8, 0.7 * 0.5]
+    assert p2[0, 1, 0] == p2[1, 0, 0] == (1 - 0.1 - 0.3) * max(1 - 0.2 - 0.5, 0.0)
+    p1, p2 = pair_visibility_per_particle_kernel(q, np.array([[True], [False]]))
+    assert p1[1, 0] == 0.0 and p2[0, 1, 0] == 0.0 and p2[0, 0, 0] == p1[0, 0]
