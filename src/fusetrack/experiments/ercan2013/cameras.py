@@ -12,22 +12,17 @@ adds the likelihood as printed, constant-velocity priors and the best possible
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import pandas as pd
 
 from ...evaluation import (
-    IMPOSSIBLE,
-    MARGIN_SE,
-    POSSIBLE,
     Claim,
     ClaimKinds,
     Outcome,
     RunContext,
-    mean_with_se,
-    not_above,
 )
 from . import best_possible as bp
 from .camera_grid import (
@@ -304,85 +299,14 @@ def _variant_claims(ctx: RunContext, s: _Series) -> list[Claim]:
     ]
 
 
-def _best_ks(best: bp.BestPossible) -> list[int]:
-    """The camera counts rerun for the best possible (points ``(prior, k)``)."""
-    return sorted({int(point[1]) for _, point in best.values})  # type: ignore[index]
-
-
-def gaussian_ours(df: pd.DataFrame, ks: Sequence[int]) -> dict[int, tuple[float, float]]:
-    """Our Gaussian-prior tracker's mean RMSE_tr at the paper's L and its s.e., per ``k``."""
-    gauss = df[df["prior"] == "gaussian"]
-    return {k: mean_with_se(gauss.loc[gauss["k"] == k, "rmse_tr"]) for k in ks}
-
-
 def best_claims(best: bp.BestPossible, gaussian: Mapping[int, tuple[float, float]]) -> list[Claim]:
-    """Diagnostics against the best possible: the paper's ordering is possible (the posterior
-    mean with perfect priors is not above the one with none), our Gaussian-prior tracker does
-    not lose to the no-prior best possible, and the posterior mean has converged.
-
-    Knowing the occluders exactly is more information than noisy priors of them, which are more
-    than none, so on the printed model the minimum mean-square errors are ordered
-    perfect <= Gaussian <= none (Blackwell 1953): the paper's ordering needs the two extremes'
-    posterior means in that order, and a Gaussian-prior tracker above the no-prior one makes its
-    priors worse than no information. ``gaussian``: that tracker's (mean, s.e.) per camera count."""
-    ks = _best_ks(best)
-    ordered = [k for k in ks if not_above(best.best(("perfect", k)), best.best(("none", k)))]
-    label = POSSIBLE if len(ordered) == len(ks) else IMPOSSIBLE
-    within = [k for k in ks if not_above(gaussian[k], best.best(("none", k)))]
-    margin = f"{MARGIN_SE:g} combined s.e."
-    n2 = best.counts[1]
-    return [
-        CLAIM_KINDS.claim(
-            "BP_ordering_possible",
-            "C3's ordering perfect <= Gaussian <= none needs the best possible in that order (on "
-            "the printed model the minimum mean-square errors are, since exact occluder positions "
-            "are more information than noisy or none): the posterior mean with perfect priors is "
-            f"not above the one with no priors (L = {n2}) by more than {margin}, at k in {ks}",
-            "perfect <= Gaussian <= none at every camera count",
-            f"in order at {len(ordered)} of {len(ks)} camera counts: {label}",
-            f"all camera counts (within {margin})",
-            len(ordered) == len(ks),
-        ),
-        CLAIM_KINDS.claim(
-            "BP_gaussian_not_above_no_prior_best",
-            "our tracker with Gaussian priors (L = "
-            f"{best.particles}) is not above the best possible without occluder priors (L = {n2}) "
-            f"by more than {margin} (else its priors are worse than no information), at k in {ks}",
-            "Gaussian <= none at every camera count",
-            f"not above at {len(within)} of {len(ks)} camera counts",
-            f"all camera counts (within {margin})",
-            len(within) == len(ks),
-        ),
-        *bp.converged_claims(
-            CLAIM_KINDS,
-            best,
-            {(p, k): (f"{p}_k{k}", f"with {WITH[p]}, k = {k} cameras") for p in WITH for k in ks},
-        ),
-    ]
+    """C3's diagnostics against the best possible (:func:`.best_possible.grid_claims`)."""
+    return bp.grid_claims(CLAIM_KINDS, best, gaussian, "C3", WITH)
 
 
 def best_rows(best: bp.BestPossible, gaussian: Mapping[int, tuple[float, float]]) -> pd.DataFrame:
-    """The best-possible rows beside Fig. 6's table: per camera count, ours at the paper's L and
-    the posterior mean at each larger count (mean ± s.e.), and the room centre."""
-    ks = _best_ks(best)
-    rows: list[dict[str, Any]] = []
-    for k in ks:
-        rows_k = {p: best.rows((p, k)) for p in WITH}
-        for name, (n, _, _) in rows_k["perfect"].items():
-            if name == bp.TRIVIAL:
-                continue
-            cell = {p: "{1:.3g} ± {2:.2g}".format(*rows_k[p][name]) for p in WITH}
-            gauss = "{:.3g} ± {:.2g}".format(*gaussian[k]) if n == best.particles else "–"
-            rows.append(
-                {"k": k, "estimator": name, "particles": str(n), "perfect": cell["perfect"]}
-                | {"gaussian": gauss, "none": cell["none"]}
-            )
-    centre = "{:.3g} ± {:.2g}".format(*best.trivial)
-    rows.append(
-        {"k": "any", "estimator": bp.TRIVIAL, "particles": ""}
-        | {p: centre for p in ("perfect", "gaussian", "none")}
-    )
-    return pd.DataFrame(rows)
+    """The best-possible rows beside Fig. 6's table (:func:`.best_possible.grid_rows`)."""
+    return bp.grid_rows(best, gaussian, WITH)
 
 
 def _report_best(s: _Series, runs: int) -> str:
@@ -396,7 +320,7 @@ random-walk Kalman priors are overconfident, so their tracker's large-L limit is
 minimum mean-square error given them. Mean over runs of the per-run RMSE_tr ± its standard
 error; "–": not run.
 
-{md(best_rows(s.best, gaussian_ours(s.df, _best_ks(s.best))))}
+{md(best_rows(s.best, bp.gaussian_ours(s.df, bp.grid_ks(s.best))))}
 
 Fig. 6 is an image and the paper prints none of its values except RMSE_max = 24.4 (the room
 centre's error, itself the trivial row: ours {fmt(s.best.trivial[0])}), so no paper number can be labelled
@@ -416,7 +340,7 @@ def _claims(ctx: RunContext, s: _Series, cost: dict[str, Any]) -> list[Claim]:
         *_trend_claims(ctx, s),
         *_setup_claims(s),
         *_variant_claims(ctx, s),
-        *best_claims(s.best, gaussian_ours(s.df, _best_ks(s.best))),
+        *best_claims(s.best, bp.gaussian_ours(s.df, bp.grid_ks(s.best))),
     ]
     wall_main = cost["wall_seconds_paper_configurations_prorated"]
     if not ctx.quick:
