@@ -170,6 +170,7 @@ def grid_claims(
     gaussian: Mapping[int, tuple[float, float]],
     claim: str,
     extremes: Mapping[str, str],
+    gaussian_what: str = "Gaussian priors",
 ) -> list[Claim]:
     """Diagnostics of a prior x camera-count grid (``claim``: the paper's ordering claim, e.g.
     C3 on Fig. 6) against the best possible: the paper's ordering is possible (the posterior
@@ -180,7 +181,8 @@ def grid_claims(
     than none, so on the printed model the minimum mean-square errors are ordered
     perfect <= Gaussian <= none (Blackwell 1953): the paper's ordering needs the two extremes'
     posterior means in that order, and a Gaussian-prior tracker above the no-prior one makes its
-    priors worse than no information. ``gaussian``: that tracker's (mean, s.e.) per camera count."""
+    priors worse than no information. ``gaussian``: that tracker's (mean, s.e.) per camera count
+    (``gaussian_what``: which Gaussian priors, where a grid has several)."""
     ks = grid_ks(best)
     ordered = [k for k in ks if not_above(best.best(("perfect", k)), best.best(("none", k)))]
     label = POSSIBLE if len(ordered) == len(ks) else IMPOSSIBLE
@@ -201,7 +203,7 @@ def grid_claims(
         ),
         kinds.claim(
             "BP_gaussian_not_above_no_prior_best",
-            "our tracker with Gaussian priors (L = "
+            f"our tracker with {gaussian_what} (L = "
             f"{best.particles}) is not above the best possible without occluder priors (L = {n2}) "
             f"by more than {margin} (else its priors are worse than no information), at k in {ks}",
             "Gaussian <= none at every camera count",

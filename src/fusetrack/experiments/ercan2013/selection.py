@@ -20,6 +20,8 @@ import pandas as pd
 from pydantic import Field
 
 from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
+from . import best_possible as bp
+from . import selection_best
 from .common import (
     SizeOptions,
     curve_plot,
@@ -153,6 +155,8 @@ class _Tables:
     table: pd.DataFrame
     all_mean: float
     all_std: float
+    best_runs: pd.DataFrame
+    best: bp.BestPossible
 
     @property
     def piv(self) -> pd.DataFrame:
@@ -164,21 +168,23 @@ class _Tables:
 
 
 def _estimate(ctx: RunContext, st: _Setup) -> _Tables:
-    """Estimation: every method at every k, and all cameras, on the same worlds."""
-    df = ctx.monte_carlo(
-        run_tracking,
-        _configs(st.scene, st.ks, st.size, st.m, st.sigma_psi),
-        st.runs,
-        desc="E6 selection",
-    )
-    df = df.drop(columns=[c for c in ("scene_obj",) if c in df.columns])
+    """Estimation: every method at every k, all cameras, and the best possible (all cameras with
+    perfect priors, :mod:`.selection_best`), on the same worlds."""
+    configs = _configs(st.scene, st.ks, st.size, st.m, st.sigma_psi)
+    counts = bp.particle_counts(ctx.quick, st.size["particles"], selection_best.FACTORS)
+    all_config = next(c for c in configs if c["label"] == "all")
+    best_configs = selection_best.best_configs(all_config, counts)
+    df_all = ctx.monte_carlo(run_tracking, configs + best_configs, st.runs, desc="E6 selection")
+    df_all = df_all.drop(columns=[c for c in ("scene_obj",) if c in df_all.columns])
+    best_runs, df = df_all[bp.is_best(df_all)], df_all[~bp.is_best(df_all)]
     table = mean_std(df[df["label"] != "all"], ["label", "k"])
     all_row = df[df["label"] == "all"]["rmse_tr"]
     all_mean, all_std = (
         float(all_row.mean()),
         float(all_row.std(ddof=1)) if len(all_row) > 1 else 0.0,
     )
-    return _Tables(df, table, all_mean, all_std)
+    best = selection_best.estimate(df, best_runs, counts, st.size["particles"])
+    return _Tables(df, table, all_mean, all_std, best_runs, best)
 
 
 def _greedy_ratio_and_share(df: pd.DataFrame) -> tuple[float, float]:
@@ -203,6 +209,7 @@ CLAIM_KINDS = ClaimKinds(
         "rmse_max_L": "paper",
         "C8_*": "paper",
         "C9_*": "paper",
+        "BP_*": "diagnostic",  # the best possible on the printed model (issue 19 item 3)
     }
 )
 
@@ -508,7 +515,17 @@ def run(ctx: RunContext) -> Outcome:
     sigma_psi = Options.of(ctx).sigma_psi
     st = _Setup(scene, shown, cfg_path, ks, m, sigma_psi, size, runs)
     tb = _estimate(ctx, st)
-    claims = [*_method_claims(tb), *_ordering_claims(st, tb), *_search_claims(st, tb)]
+    means = selection_best.method_means(tb.table, runs)
+    claims = [
+        *_method_claims(tb),
+        *_ordering_claims(st, tb),
+        *_search_claims(st, tb),
+        *selection_best.claims(CLAIM_KINDS, tb.best, means),
+    ]
     _figures(ctx, st, tb)
-    report = _report_setup(ctx, st, tb) + _report_results(ctx, st, tb)
-    return Outcome(tb.df, claims, report, runs=runs)
+    report = (
+        _report_setup(ctx, st, tb)
+        + _report_results(ctx, st, tb)
+        + selection_best.section(tb.best, means, st.n, runs)
+    )
+    return Outcome(pd.concat([tb.df, tb.best_runs]), claims, report, runs=runs)

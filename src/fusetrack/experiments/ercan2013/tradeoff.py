@@ -16,7 +16,16 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext, plots
+from ...evaluation import (
+    Claim,
+    ClaimKinds,
+    Outcome,
+    RunContext,
+    mean_with_se,
+    plots,
+    possible_claim,
+)
+from . import best_possible as bp
 from .common import (
     PRINTED_PREFIX,
     fmt,
@@ -34,7 +43,7 @@ TARGET = 3.0
 SWEEP_FULL = (0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, math.inf)
 """sigma_psi of the full run (the spec's sweep, as E2's): perfect, six Gaussian accuracies, none;
 the measured RMSE_occ is in the report. With every k = 1..8 (:data:`KS_FULL`) the grid is 64
-configurations (71 with the printed series, 355 runs); a run costs 2-62 CPU s (more cameras and
+configurations (71 with the printed series, 77 with the best possible's, 385 runs); a run costs 2-62 CPU s (more cameras and
 wider priors cost more; 2/3 of it in the occlusion-aware likelihood kernel under cProfile),
 6,000 CPU s for the grid in the full-size run of 2026-12-02 (on a loaded machine)."""
 KS_FULL = tuple(range(1, 9))
@@ -45,6 +54,13 @@ PAPER_PERFECT_K4 = 3.1
 PRINTED_KS_FULL = (8,)
 PRINTED_KS_QUICK = (8,)
 """Camera counts also run with the likelihood as printed (floor 0, full Eq. 7 rectangles)."""
+BEST_KS = (2, 4, 8)
+"""Camera counts whose perfect- and no-prior points are rerun with 2L particles (the best
+possible; the quick run has k = 8 only): 4-12 CPU s per run at 2L, ~300 CPU s in all."""
+BEST_FACTORS = {"full": (1, 2), "quick": (1, 2)}
+"""The best possible's particle counts as multiples of L: the paper's L (the grid's own runs), 2L."""
+WITH = {"perfect": "perfect occluder priors", "none": "no occluder priors"}
+"""The sweep's two extremes, whose best possible is shown."""
 
 
 def tolerated(grp: pd.DataFrame, rmse_max: float, target: float = TARGET) -> float:
@@ -123,10 +139,14 @@ class _Tradeoff:
     rmse_max: float
     perfect_k4: pd.Series
     scaled: float
+    best: bp.BestPossible
+    gaussian: dict[int, tuple[float, float]]
+    gaussian_label: str
 
 
 def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
-    """Scenario: the (k, sigma_psi) grid and, at a few k, the printed-likelihood series."""
+    """Scenario: the (k, sigma_psi) grid, at a few k the printed-likelihood series, and the best
+    possible (the extremes at :data:`BEST_KS` with more particles)."""
     ks = list(KS_QUICK if ctx.quick else KS_FULL)
     sweep = SWEEP_QUICK if ctx.quick else SWEEP_FULL
     configs = [sweep_config(s, k, size) for k in ks for s in sweep]
@@ -134,7 +154,14 @@ def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
     printed = [  # neither correction enters the no-prior likelihood: those runs are shared
         printed_config(c) for c in configs if c["k"] in printed_ks and c["prior"] != "none"
     ]
-    return [*configs, *printed]
+    extremes = [c for c in configs if c["prior"] in WITH and c["k"] in BEST_KS]
+    best = bp.best_configs(extremes, _best_counts(ctx, size), size["particles"])
+    return [*configs, *printed, *best]
+
+
+def _best_counts(ctx: RunContext, size: dict[str, int]) -> tuple[int, int]:
+    """The best possible's two particle counts (BEST_FACTORS times L)."""
+    return bp.particle_counts(ctx.quick, size["particles"], BEST_FACTORS)
 
 
 def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Tradeoff:
@@ -142,7 +169,7 @@ def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Tradeoff:
     printed_ks = PRINTED_KS_QUICK if ctx.quick else PRINTED_KS_FULL
     df_all = ctx.monte_carlo(run_tracking, _configs(ctx, size), runs, desc="E3 trade-off")
     is_printed = df_all["label"].str.startswith(PRINTED_PREFIX)
-    df = df_all[~is_printed]
+    df = df_all[~is_printed & ~bp.is_best(df_all)]
     rmse_max = float(df["rmse_max"].mean())
     table = _grid(df)
     hard_table = _grid(printed_runs(df_all, df[(df["label"] == "inf") & df["k"].isin(printed_ks)]))
@@ -158,7 +185,17 @@ def _estimate(ctx: RunContext, size: dict[str, int], runs: int) -> _Tradeoff:
         tolerated(g, rmse_max, scaled) for _, g in table.groupby("k")
     ]
     curve["tolerated (printed likelihood)"] = curve["k"].map(hard_curve)
-    return _Tradeoff(df_all, df, table, hard_table, curve, hard_curve, rmse_max, perfect_k4, scaled)
+    counts = _best_counts(ctx, size)
+    best = bp.estimate(df, df_all[bp.is_best(df_all)], counts, size["particles"], ["prior", "k"])
+    finest = min(float(v) for v in df.loc[df["prior"] == "gaussian", "label"])  # most accurate
+    finest_runs = df[(df["prior"] == "gaussian") & (df["label"].astype(float) == finest)]
+    gaussian = {
+        k: mean_with_se(finest_runs.loc[finest_runs["k"] == k, "rmse_tr"]) for k in bp.grid_ks(best)
+    }
+    return _Tradeoff(
+        df_all, df, table, hard_table, curve, hard_curve, rmse_max, perfect_k4, scaled,
+        best, gaussian, f"{finest:g}",
+    )  # fmt: skip
 
 
 # Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
@@ -168,6 +205,7 @@ CLAIM_KINDS = ClaimKinds(
         "C5_no_prior_needed_printed": "diagnostic",
         "C5_monotone": "paper",
         "C5_no_prior_needed": "paper",
+        "BP_*": "diagnostic",  # the best possible on the printed model (issue 19 item 3)
     }
 )
 
@@ -221,6 +259,50 @@ def _claims(t: _Tradeoff, ks: list[int]) -> list[Claim]:
         )
     )
     return claims
+
+
+def _best_claims(t: _Tradeoff) -> list[Claim]:
+    """Against the best possible: the grid's ordering (which E3's read-off assumes), our most
+    accurate Gaussian priors against the no-prior best possible, convergence, and the paper's
+    implied perfect-prior RMSE_tr at k = 4 (when k = 4 is rerun)."""
+    claims = bp.grid_claims(
+        CLAIM_KINDS, t.best, t.gaussian, "E3's read-off (RMSE_tr rising with RMSE_occ)", WITH,
+        f"the sweep's most accurate Gaussian priors at sigma_psi = {t.gaussian_label}",
+    )  # fmt: skip
+    if 4 in bp.grid_ks(t.best):
+        claims.append(
+            possible_claim(
+                CLAIM_KINDS,
+                "BP_perfect_k4_possible",
+                f"RMSE_tr with perfect priors and k = 4 ({PAPER_PERFECT_K4:g}, implied by Sec. 6.1)",
+                PAPER_PERFECT_K4,
+                t.best.best(("perfect", 4)),
+            )
+        )
+    return claims
+
+
+def _report_best(t: _Tradeoff, runs: int) -> str:
+    """Report text: the best possible beside the grid."""
+    n1, n2 = t.best.counts
+    return f"""
+{bp.intro(t.best, runs)} Only perfect and no occluder priors are rerun, at k in
+{bp.grid_ks(t.best)}; the "gaussian" column is our tracker with the sweep's most accurate Gaussian
+priors (sigma_psi = {t.gaussian_label}), whose large-L limit is no best possible (the random-walk
+Kalman priors are overconfident). Mean over runs of the per-run RMSE_tr ± its standard error;
+"–": not run.
+
+{md(bp.grid_rows(t.best, t.gaussian, WITH))}
+
+Reading a tolerated RMSE_occ off the grid assumes that RMSE_tr rises with RMSE_occ; on the
+printed model the minimum mean-square errors do (exact occluder positions are more information
+than noisy ones, which are more than none), so the extremes' posterior means must be in order
+(`BP_ordering_possible`), and a Gaussian-prior tracker above the no-prior best possible has priors
+worse than no information (`BP_gaussian_not_above_no_prior_best`). The paper prints one number the
+best possible can judge, RMSE_tr = {PAPER_PERFECT_K4:g} with perfect priors at k = 4 (implied by
+Sec. 6.1; `BP_perfect_k4_possible`). `BP_converged_*` check that L = {n1} and L = {n2} agree.
+
+"""
 
 
 def _tradeoff_figure(ctx: RunContext, t: _Tradeoff, ks: list[int], runs: int) -> None:
@@ -313,9 +395,13 @@ def run(ctx: RunContext) -> Outcome:
     runs = ctx.n_runs(full=5, quick=2)
     ks = list(KS_QUICK if ctx.quick else KS_FULL)
     t = _estimate(ctx, size, runs)
-    claims = _claims(t, ks)
+    claims = _claims(t, ks) + _best_claims(t)
     _tradeoff_figure(ctx, t, ks, runs)
     grid_png = _grid_figure(ctx, t.table, [TARGET, t.scaled], runs)
     beats = _gaussian_vs_none(t.table)
-    report = _report_tables(ctx, t, size, runs) + _report_figures(grid_png, beats)
+    report = (
+        _report_tables(ctx, t, size, runs)
+        + _report_best(t, runs)
+        + _report_figures(grid_png, beats)
+    )
     return Outcome(t.df_all, claims, report, runs=runs)
