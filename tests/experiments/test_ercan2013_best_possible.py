@@ -171,3 +171,30 @@ def test_c3_claims_from_a_pivot():
     assert not camera_grid.decreasing_claim(
         kinds, "C3_decreasing_none_sigma_v_2", "s", rises, "none", False
     ).holds
+
+
+def test_e3_best_claims_judge_the_papers_perfect_prior_value_at_four_cameras():
+    from fusetrack.experiments.ercan2013 import tradeoff
+
+    def grid(perfect_k4_best: list[float]) -> bp.BestPossible:
+        values = {}
+        for k in (2, 4, 8):
+            values[(100, ("perfect", k))] = (2.0, 0.1)
+            values[(200, ("perfect", k))] = bp.mean_with_se(
+                perfect_k4_best if k == 4 else [1.9, 2.1]
+            )
+            values[(100, ("none", k))] = (3.0, 0.1)
+            values[(200, ("none", k))] = (3.0, 0.1)
+        return bp.BestPossible(values, (100, 200), 100, (20.0, 1.0))
+
+    def claims(best: bp.BestPossible) -> dict:
+        t = tradeoff._Tradeoff(
+            *[None] * 9, best, {2: (2.5, 0.1), 4: (2.5, 0.1), 8: (2.5, 0.1)}, "1"
+        )
+        return {c.id: c for c in tradeoff._best_claims(t)}
+
+    ok = claims(grid([1.9, 2.1]))
+    assert ok["BP_perfect_k4_possible"].holds and ok["BP_ordering_possible"].holds
+    assert "sigma_psi = 1" in ok["BP_gaussian_not_above_no_prior_best"].statement
+    assert not claims(grid([3.9, 4.1]))["BP_perfect_k4_possible"].holds  # 3.1 below a 4.0 floor
+    assert {c.kind for c in ok.values()} == {"diagnostic"}
