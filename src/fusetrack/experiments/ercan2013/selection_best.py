@@ -105,7 +105,9 @@ at best through Gaussian priors; all cameras with the occluders' exact positions
 information (Blackwell 1953), so its minimum mean-square error is a floor for every method at
 every k. It is the occlusion-aware tracker itself with all cameras and perfect priors, whose
 estimate converges to the posterior mean, at L = {n1} and L = {n2} on the same {runs} worlds
-(`BP_converged_all_perfect`: the two agree); the room centre is the trivial estimator. The PCRB
+(`BP_converged_all_perfect` checks that the two agree; where they do not, the floor at the larger L is
+still an upper estimate of the true one, which only makes `BP_no_method_below_floor` easier to fail); the
+room centre is the trivial estimator. The PCRB
 does not apply (seen / not-seen reports make the likelihood discontinuous). Mean over runs of
 the per-run RMSE_tr ± its standard error:
 
