@@ -46,7 +46,9 @@ def test_example_room_runs_end_to_end(tmp_path, monkeypatch):
         "closest",
         "all",
     }
-    assert set(df.loc[df["label"] != "all", "k"]) == {2, 5}
+    best = df["label"].str.startswith("best L=")  # the floor: all cameras, perfect priors
+    assert set(df.loc[best, "method"]) == {"all"} and set(df.loc[best, "prior"]) == {"perfect"}
+    assert set(df.loc[(df["label"] != "all") & ~best, "k"]) == {2, 5}
     assert np.isfinite(df["rmse_tr"]).all() and (df["rmse_tr"] > 0).all()
     summary = json.loads((out / "summary.json").read_text())
     assert summary["runs"] == 2 and len(summary["claims"]) >= 8
