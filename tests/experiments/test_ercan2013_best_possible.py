@@ -198,3 +198,48 @@ def test_e3_best_claims_judge_the_papers_perfect_prior_value_at_four_cameras():
     assert "sigma_psi = 1" in ok["BP_gaussian_not_above_no_prior_best"].statement
     assert not claims(grid([3.9, 4.1]))["BP_perfect_k4_possible"].holds  # 3.1 below a 4.0 floor
     assert {c.kind for c in ok.values()} == {"diagnostic"}
+
+
+def test_prior_calibration_judges_every_gaussian_point_against_the_no_prior_floor():
+    from fusetrack.experiments.ercan2013 import prior_calibration as pc
+
+    def runs(setting, series, sigma, values, sigma_v=pc.TRACKER_SIGMA_V):
+        prior = series if series in ("perfect", "none") else "gaussian"
+        return pd.DataFrame(
+            {"setting": setting, "series": series, "sigma": sigma, "sigma_v": sigma_v}
+            | {"prior": prior, "rmse_tr": values}
+        )
+
+    def estimate(e2_default: list[float]) -> pc._Estimate:
+        df = pd.concat(
+            [
+                runs("E2", "random-walk", "2", e2_default),
+                runs("E2", "random-walk", "8", [3.0, 3.2]),
+                runs("E2", "white", "2", [9.0, 9.2]),  # far above the floor: counted
+                runs("E2", "random-walk", "1", [50.0, 50.0], sigma_v=2.0),  # not at sigma_v 0.33
+                runs("E1", "random-walk", "2", [2.0, 2.2]),
+            ]
+        )
+        best = {}
+        for setting, (_, k) in pc.SETTINGS.items():
+            values = {}
+            for n in (100, 200):
+                values[(n, ("perfect", k))] = (1.0, 0.1)
+                values[(n, ("none", k))] = (4.0, 0.1)
+            best[setting] = bp.BestPossible(values, (100, 200), 100, (20.0, 1.0))
+        return pc._Estimate(df, df, pd.DataFrame(), best)
+
+    ok = estimate([2.0, 2.2])
+    assert pc._above_no_prior_best(ok, "E2") == (1, 3)  # the white priors at 9.1 only
+    assert pc._above_no_prior_best(ok, "E1") == (0, 1)
+    assert pc._default_finest(ok, "E2") == (2.0, {4: (pytest.approx(2.1), pytest.approx(0.1))})
+    claims = {c.id: c for c in pc._best_claims(ok)}
+    for setting, (_, k) in pc.SETTINGS.items():
+        assert claims[f"BP_ordering_possible_{setting}"].holds
+        assert claims[f"BP_gaussian_not_above_no_prior_best_{setting}"].holds
+        assert claims[f"BP_converged_none_k{k}"].holds
+    assert {c.kind for c in claims.values()} == {"diagnostic"}
+    # the default priors at their best sigma_psi above the no-prior floor: worse than no information
+    worse = {c.id: c for c in pc._best_claims(estimate([6.0, 6.2]))}
+    assert not worse["BP_gaussian_not_above_no_prior_best_E2"].holds
+    assert worse["BP_gaussian_not_above_no_prior_best_E1"].holds

@@ -171,6 +171,7 @@ def grid_claims(
     claim: str,
     extremes: Mapping[str, str],
     gaussian_what: str = "Gaussian priors",
+    suffix: str = "",
 ) -> list[Claim]:
     """Diagnostics of a prior x camera-count grid (``claim``: the paper's ordering claim, e.g.
     C3 on Fig. 6) against the best possible: the paper's ordering is possible (the posterior
@@ -182,7 +183,8 @@ def grid_claims(
     perfect <= Gaussian <= none (Blackwell 1953): the paper's ordering needs the two extremes'
     posterior means in that order, and a Gaussian-prior tracker above the no-prior one makes its
     priors worse than no information. ``gaussian``: that tracker's (mean, s.e.) per camera count
-    (``gaussian_what``: which Gaussian priors, where a grid has several)."""
+    (``gaussian_what``: which Gaussian priors, where a grid has several; ``suffix``: appended to
+    the ordering claims' ids, where one report judges several grids)."""
     ks = grid_ks(best)
     ordered = [k for k in ks if not_above(best.best(("perfect", k)), best.best(("none", k)))]
     label = POSSIBLE if len(ordered) == len(ks) else IMPOSSIBLE
@@ -191,7 +193,7 @@ def grid_claims(
     n2 = best.counts[1]
     return [
         kinds.claim(
-            "BP_ordering_possible",
+            f"BP_ordering_possible{suffix}",
             f"{claim}'s ordering perfect <= Gaussian <= none needs the best possible in that order (on "
             "the printed model the minimum mean-square errors are, since exact occluder positions "
             "are more information than noisy or none): the posterior mean with perfect priors is "
@@ -202,7 +204,7 @@ def grid_claims(
             len(ordered) == len(ks),
         ),
         kinds.claim(
-            "BP_gaussian_not_above_no_prior_best",
+            f"BP_gaussian_not_above_no_prior_best{suffix}",
             f"our tracker with {gaussian_what} (L = "
             f"{best.particles}) is not above the best possible without occluder priors (L = {n2}) "
             f"by more than {margin} (else its priors are worse than no information), at k in {ks}",

@@ -21,15 +21,29 @@ priors are made, at the same virtual-reading noise ``sigma_psi``
 
 Two settings: E2's (open room, k = 4) and E1's (static occluder, k = 3, where E1's Gaussian priors
 lost most). The claims are the paper's ordering (perfect <= Gaussian <= none) per construction.
+Beside them, the best possible of each setting (:mod:`.best_possible`: perfect and no priors with
+2L particles): whether the ordering is possible at all, and which Gaussian priors are worse than
+what no tracker without priors can beat.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pandas as pd
 
-from ...evaluation import Claim, ClaimKinds, Outcome, RunContext
+from ...evaluation import (
+    MARGIN_SE,
+    Claim,
+    ClaimKinds,
+    Outcome,
+    RunContext,
+    mean_with_se,
+    not_above,
+)
 from ...world import PRIOR_FILTERS
+from . import best_possible as bp
 from .common import curve_plot, fmt, md, mean_std, sizes
 from .simulation import run_tracking
 
@@ -59,6 +73,14 @@ SIGMA_V_SERIES = ("random-walk", "random-walk, gamma 0.1")
 """The series rerun at each sigma_v (with perfect and no priors): the default priors and the most
 tempered evidence, the two the repeated-counting diagnosis compares."""
 SIGMA_V_SETTINGS_QUICK = ("E2",)
+BEST_FACTORS = {"full": (1, 2), "quick": (1, 2)}
+"""The best possible's particle counts as multiples of L: the main series' own runs and 2L (perfect
+and no priors at the walkers' sigma_v only: under a tracker that assumes more motion noise than the
+walkers have, the posterior mean is not the best possible; ~300 CPU s at full size)."""
+WITH = {"perfect": "perfect occluder priors", "none": "no occluder priors"}
+"""The two extremes whose best possible is shown."""
+BEST_SERIES = "random-walk"
+"""The Gaussian-prior series judged against the no-prior best possible (the default priors)."""
 
 
 def _configs(
@@ -106,19 +128,34 @@ def _ordering(
     return float(np.mean((perfect <= g) & (g <= none))), float(np.mean(g <= none))
 
 
+@dataclass(frozen=True)
+class _Estimate:
+    """Every run (``df``: without the best possible's), the table of means per point, and the
+    best possible per setting."""
+
+    df_all: pd.DataFrame
+    df: pd.DataFrame
+    table: pd.DataFrame
+    best: dict[str, bp.BestPossible]
+
+
 def _estimate(
     ctx: RunContext, sweep: tuple[float, ...], size: dict[str, int], runs: int
-) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Estimation: every series in both settings, and the sigma_v reruns; RMSE_tr, RMSE_occ and
-    calibration per point (``sigma_v``: the tracker's motion noise)."""
+) -> _Estimate:
+    """Estimation: every series in both settings, the sigma_v reruns and the best possible;
+    RMSE_tr, RMSE_occ and calibration per point (``sigma_v``: the tracker's motion noise)."""
     settings = SIGMA_V_SETTINGS_QUICK if ctx.quick else tuple(SETTINGS)
     noisier = [
         c
         for sv in (SIGMA_V_QUICK if ctx.quick else SIGMA_V_FULL)
         for c in _configs(sweep, size, SIGMA_V_SERIES, settings, sv)
     ]
-    configs = [*_configs(sweep, size), *noisier]
-    df = ctx.monte_carlo(run_tracking, configs, runs, desc="prior calibration")
+    main = _configs(sweep, size)
+    counts = bp.particle_counts(ctx.quick, size["particles"], BEST_FACTORS)
+    extremes = [c for c in main if c["prior"] in WITH]
+    configs = [*main, *noisier, *bp.best_configs(extremes, counts, size["particles"])]
+    df_all = ctx.monte_carlo(run_tracking, configs, runs, desc="prior calibration")
+    df = df_all[~bp.is_best(df_all)]
     parts = df["label"].str.split("|", expand=True)
     sigma_v = parts[3].astype(float) if 3 in parts else pd.Series(np.nan, index=df.index)
     df = df.assign(
@@ -131,7 +168,19 @@ def _estimate(
     table = mean_std(df, keys)
     extra = df.groupby(keys)[["rmse_occ", "prior_nees"]].mean()
     table = table.join(extra, on=keys)
-    return df, table
+    best_runs = df_all[bp.is_best(df_all)]
+    at_walkers = df[df["sigma_v"] == TRACKER_SIGMA_V]
+    best = {
+        setting: bp.estimate(
+            at_walkers[at_walkers["setting"] == setting],
+            best_runs[best_runs["label"].str.split("|").str[1] == setting],
+            counts,
+            size["particles"],
+            ["prior", "k"],
+        )
+        for setting in SETTINGS
+    }
+    return _Estimate(df_all, df, table, best)
 
 
 # Each claim's kind (fusetrack.evaluation.KINDS), by id or fnmatch pattern, first match.
@@ -139,6 +188,7 @@ CLAIM_KINDS = ClaimKinds(
     {
         "ordering_*": "diagnostic",  # Figs. 6-7's ordering under our prior models
         "recounting*": "diagnostic",  # does tempering the occlusion evidence help (our diagnosis)
+        "BP_*": "diagnostic",  # the best possible on the printed model (issue 19 item 3)
     }
 )
 
@@ -220,6 +270,75 @@ def _sigma_v_claims(table: pd.DataFrame) -> list[Claim]:
                     )
                 )
     return claims
+
+
+def _default_finest(e: _Estimate, setting: str) -> tuple[float, dict[int, tuple[float, float]]]:
+    """The default priors (:data:`BEST_SERIES`) at the sweep's most accurate sigma_psi, at the
+    walkers' sigma_v: that sigma_psi and ``{k: (mean RMSE_tr, s.e.)}`` for the setting's k."""
+    d = e.df
+    rows = d[
+        (d["sigma_v"] == TRACKER_SIGMA_V) & (d["setting"] == setting) & (d["series"] == BEST_SERIES)
+    ]
+    finest = min(rows["sigma"].astype(float))
+    runs = rows[rows["sigma"].astype(float) == finest]
+    return finest, {SETTINGS[setting][1]: mean_with_se(runs["rmse_tr"])}
+
+
+def _best_claims(e: _Estimate) -> list[Claim]:
+    """Per setting, against the best possible: the paper's ordering is possible, the default
+    priors do not lose to the no-prior best possible, and the posterior mean has converged."""
+    claims: list[Claim] = []
+    for setting, (scene, k) in SETTINGS.items():
+        finest, gaussian = _default_finest(e, setting)
+        claims += bp.grid_claims(
+            CLAIM_KINDS, e.best[setting], gaussian,
+            f"Figs. 6-7 ({setting} setting: {scene}, k = {k})", WITH,
+            f"{BEST_SERIES} priors at sigma_psi = {finest:g} (the sweep's most accurate)",
+            suffix=f"_{setting}",
+        )  # fmt: skip
+    return claims
+
+
+def _above_no_prior_best(e: _Estimate, setting: str) -> tuple[int, int]:
+    """How many Gaussian-prior points (series x sigma_psi, walkers' sigma_v) of a setting are
+    above the no-prior best possible by more than the margin, of how many."""
+    d = e.df
+    d = d[
+        (d["sigma_v"] == TRACKER_SIGMA_V) & (d["setting"] == setting) & (d["prior"] == "gaussian")
+    ]
+    none = e.best[setting].best(("none", SETTINGS[setting][1]))
+    points = [mean_with_se(g["rmse_tr"]) for _, g in d.groupby(["series", "sigma"])]
+    return sum(not not_above(p, none) for p in points), len(points)
+
+
+def _report_best(e: _Estimate, runs: int) -> str:
+    """Report text: the best possible of each setting beside the series."""
+    first = e.best[next(iter(SETTINGS))]
+    rows = pd.concat(
+        [
+            bp.grid_rows(e.best[s], _default_finest(e, s)[1], WITH).assign(setting=s)
+            for s in SETTINGS
+        ]
+    )
+    rows = rows[["setting", *[c for c in rows.columns if c != "setting"]]]
+    above = {s: _above_no_prior_best(e, s) for s in SETTINGS}
+    finest = _default_finest(e, next(iter(SETTINGS)))[0]
+    return f"""
+{bp.intro(first, runs)} Per setting, perfect and no occluder priors are rerun with the tracker
+assuming the walkers' sigma_v = {TRACKER_SIGMA_V:g} (under a tracker that assumes more motion noise
+than the walkers have, the posterior mean is no best possible); the "gaussian" column is our
+tracker with the default {BEST_SERIES} priors at sigma_psi = {finest:g}. Mean over runs of the
+per-run RMSE_tr ± its standard error; "–": not run.
+
+{md(rows)}
+
+Gaussian priors worse than no information, judged against what no tracker without occluder priors
+can beat: of the Gaussian-prior points (every series and sigma_psi, walkers' sigma_v),
+{", ".join(f"{a} of {n} in {s}" for s, (a, n) in above.items())} lie above the no-prior posterior
+mean by more than {MARGIN_SE:g} combined s.e. (`BP_gaussian_not_above_no_prior_best_*` judges the
+default priors at the most accurate sigma_psi; `BP_ordering_possible_*` whether the paper's ordering
+is possible at all; `BP_converged_*` whether L = {first.counts[0]} and L = {first.counts[1]} agree).
+"""
 
 
 def _figures(ctx: RunContext, table: pd.DataFrame, size: dict[str, int], runs: int) -> list[str]:
@@ -399,13 +518,11 @@ def run(ctx: RunContext) -> Outcome:
     size = sizes(ctx)
     runs = ctx.n_runs(full=5, quick=2)
     sweep = SIGMA_PSI_QUICK if ctx.quick else SIGMA_PSI_FULL
-    df, everything = _estimate(ctx, sweep, size, runs)
-    table = everything[everything["sigma_v"] == TRACKER_SIGMA_V]
+    e = _estimate(ctx, sweep, size, runs)
+    table = e.table[e.table["sigma_v"] == TRACKER_SIGMA_V]
     claims, verdict = _claims(table)
-    claims += _sigma_v_claims(everything)
+    claims += _sigma_v_claims(e.table) + _best_claims(e)
     figures = _figures(ctx, table, size, runs)
     report = _report(verdict, _show_table(table), figures, sweep, size, runs)
-    report += _report_sigma_v(everything)
-    return Outcome(
-        df.drop(columns=["setting", "series", "sigma", "sigma_v"]), claims, report, runs=runs
-    )
+    report += _report_sigma_v(e.table) + _report_best(e, runs)
+    return Outcome(e.df_all, claims, report, runs=runs)
