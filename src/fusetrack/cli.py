@@ -192,9 +192,8 @@ def _print_summary(summary: dict, out: Path) -> None:
         ours = f"{c['ours']:.4g}" if isinstance(c["ours"], float) else c["ours"]
         word, colour = ("ok ", "green") if c["holds"] else ("NO ", "red")
         mark = coloured(word, colour, sys.stdout)
-        print(
-            f"  [{mark}] {c['id']} ({c['kind']}): {c['statement']} — ours {ours}, paper {c['paper']}"
-        )
+        paper = "" if c["paper"] is None else f", paper {c['paper']}"  # None: our own check
+        print(f"  [{mark}] {c['id']} ({c['kind']}): {c['statement']} — ours {ours}{paper}")
     print(f"report: {out / 'report.md'}")
 
 

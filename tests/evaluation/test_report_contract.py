@@ -102,3 +102,9 @@ def test_cli_list_and_unknown_experiment(capsys, tmp_path):
     assert main(["run", "no-such-thing", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "no-such-thing" in err and "demo" in err
+
+
+def test_a_claim_without_a_paper_value_shows_a_dash_not_none():
+    row = claims_table([Claim("conv", "s", None, 1.5, "tol", True, "diagnostic")]).splitlines()[2]
+    assert row == "| conv | diagnostic | s | – | 1.5 | tol | yes |"
+    assert "None" not in claims_table([Claim("p", "s", 0, 0.0, 0, True, "paper")])  # 0 is a value

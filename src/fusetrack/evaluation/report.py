@@ -201,7 +201,8 @@ def peak_memory_mb() -> float:
 
 
 def claims_table(claims: Sequence[Claim]) -> str:
-    """Markdown table of claims, with each claim's kind."""
+    """Markdown table of claims, with each claim's kind ("–" in the paper column: a check of
+    ours with no paper value, e.g. that a posterior mean has converged)."""
     lines = [
         "| id | kind | statement | paper | ours | tolerance | holds |",
         "|---|---|---|---|---|---|---|",
@@ -209,7 +210,8 @@ def claims_table(claims: Sequence[Claim]) -> str:
     for c in claims:
         ours = f"{c.ours:.4g}" if isinstance(c.ours, float) else str(c.ours)
         lines.append(
-            f"| {c.id} | {c.kind} | {c.statement} | {c.paper} | {ours} | {c.tolerance} "
+            f"| {c.id} | {c.kind} | {c.statement} | {'–' if c.paper is None else c.paper} "
+            f"| {ours} | {c.tolerance} "
             f"| {'yes' if c.holds else '**no**'} |"
         )
     return "\n".join(lines)
