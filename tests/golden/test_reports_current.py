@@ -16,7 +16,7 @@ from .golden import FIXTURE
 REPORTS = Path(__file__).resolve().parents[2] / "reports"
 QUICK = json.loads(FIXTURE.read_text())
 WITHOUT_REPORT = {"demo"}  # the README's demo, not a reproduction
-AWAITING_RERUN: set[str] = {"ercan2013-prior-calibration"}
+AWAITING_RERUN: set[str] = set()
 """Reports known to be older than their code, each to be regenerated at full size (strict xfail: a
 name stays here only while its report really is stale)."""
 
