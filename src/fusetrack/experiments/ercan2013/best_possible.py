@@ -45,6 +45,8 @@ FACTORS = {"full": (2, 5), "quick": (1, 2)}
 """Particle counts of the two posterior-mean series, as multiples of the run's L (a multiple
 of 1 reuses the sweep's own runs)."""
 TRIVIAL = "room centre (trivial, RMSE_max)"
+EXTREMES = {"perfect": "perfect occluder priors", "none": "no occluder priors"}
+"""The two prior levels whose posterior mean is a best possible (Gaussian priors' is not)."""
 
 
 def particle_counts(

@@ -66,8 +66,6 @@ BEST_FACTORS = {"full": (1, 2), "quick": (1, 2)}
 """Particle counts of the best possible as multiples of L: the paper's L itself (the grid's own
 runs) and 2L; Fig. 7's larger multiples (ercan2013-prior-accuracy: 2L and 5L) would cost ~2,000
 CPU s more here, past issue 19 item 6's 30 minutes with 2 workers."""
-WITH = {"perfect": "perfect occluder priors", "none": "no occluder priors"}
-"""Fig. 6's two extremes, whose best possible is shown."""
 
 
 @dataclass(frozen=True)
@@ -105,7 +103,7 @@ def _configs(ctx: RunContext, size: dict[str, int]) -> tuple[list[dict[str, Any]
         if c["k"] in printed_ks and c["prior"] != "none"
     ]
     calibrated = [{**c, **CV} for c in configs if c["prior"] == "gaussian"]
-    extremes = [c for c in configs if c["prior"] in WITH and c["k"] in BEST_KS]
+    extremes = [c for c in configs if c["prior"] in bp.EXTREMES and c["k"] in BEST_KS]
     best = bp.best_configs(extremes, _best_counts(ctx, size), size["particles"])
     return configs, printed, calibrated, best
 
@@ -301,12 +299,12 @@ def _variant_claims(ctx: RunContext, s: _Series) -> list[Claim]:
 
 def best_claims(best: bp.BestPossible, gaussian: Mapping[int, tuple[float, float]]) -> list[Claim]:
     """C3's diagnostics against the best possible (:func:`.best_possible.grid_claims`)."""
-    return bp.grid_claims(CLAIM_KINDS, best, gaussian, "C3", WITH)
+    return bp.grid_claims(CLAIM_KINDS, best, gaussian, "C3", bp.EXTREMES)
 
 
 def best_rows(best: bp.BestPossible, gaussian: Mapping[int, tuple[float, float]]) -> pd.DataFrame:
     """The best-possible rows beside Fig. 6's table (:func:`.best_possible.grid_rows`)."""
-    return bp.grid_rows(best, gaussian, WITH)
+    return bp.grid_rows(best, gaussian, bp.EXTREMES)
 
 
 def _report_best(s: _Series, runs: int) -> str:

@@ -52,8 +52,6 @@ BEST_KS = (2, 5, 9)
 best possible; the quick run has k = 2 and 9 only): ~1 CPU s per run, 300 runs."""
 BEST_FACTORS = {"full": (1, 2), "quick": (1, 2)}
 """The best possible's particle counts as multiples of L: the paper's L (Fig. 14's own runs), 2L."""
-WITH = {"perfect": "perfect occluder priors", "none": "no occluder priors"}
-"""Fig. 14's two extremes, whose best possible is shown."""
 
 METRICS = ("perspective", "perspective-joint")
 """Metrics greedy selection also runs with in E8, beside the paper's weak perspective: the
@@ -118,7 +116,9 @@ def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
     ]
     for c in configs:
         c["label"] = f"{c.pop('experiment')}:{c['label']}"
-    extremes = [c for c in configs if c["label"] in {f"E7:{p}" for p in WITH} and c["k"] in BEST_KS]
+    extremes = [
+        c for c in configs if c["label"] in {f"E7:{p}" for p in bp.EXTREMES} and c["k"] in BEST_KS
+    ]
     return configs + bp.best_configs(extremes, _best_counts(ctx, size), size["particles"])
 
 
@@ -259,7 +259,7 @@ def _report_best(lab: _Lab, runs: int) -> str:
 are overconfident, so their tracker's large-L limit is not the minimum mean-square error given
 them. Mean over runs of the per-run RMSE ± its standard error (inches); "–": not run.
 
-{md(bp.grid_rows(lab.best, lab.gaussian, WITH))}
+{md(bp.grid_rows(lab.best, lab.gaussian, bp.EXTREMES))}
 
 Fig. 14 is an image and the paper prints none of its values except RMSE_max = 77.5 in (the
 room centre's error, itself the trivial row: ours {fmt(lab.best.trivial[0])}), so no paper number
@@ -379,7 +379,7 @@ def run(ctx: RunContext) -> Outcome:
             "_fixed_calibration",
             " -- with fixed per-run camera calibration errors (yaw, position; spec §8 item 23)",
         ),
-        *bp.grid_claims(CLAIM_KINDS, lab.best, lab.gaussian, "C11 (Fig. 14)", WITH),
+        *bp.grid_claims(CLAIM_KINDS, lab.best, lab.gaussian, "C11 (Fig. 14)", bp.EXTREMES),
     ]
     _figures(ctx, lab, runs)
     return Outcome(lab.df, claims, _report(lab, size, runs), runs=runs)

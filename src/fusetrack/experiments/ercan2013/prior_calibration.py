@@ -76,9 +76,7 @@ SIGMA_V_SETTINGS_QUICK = ("E2",)
 BEST_FACTORS = {"full": (1, 2), "quick": (1, 2)}
 """The best possible's particle counts as multiples of L: the main series' own runs and 2L (perfect
 and no priors at the walkers' sigma_v only: under a tracker that assumes more motion noise than the
-walkers have, the posterior mean is not the best possible; ~300 CPU s at full size)."""
-WITH = {"perfect": "perfect occluder priors", "none": "no occluder priors"}
-"""The two extremes whose best possible is shown."""
+walkers have, the posterior mean is not the best possible; 162 CPU s at full size)."""
 BEST_SERIES = "random-walk"
 """The Gaussian-prior series judged against the no-prior best possible (the default priors)."""
 
@@ -152,7 +150,7 @@ def _estimate(
     ]
     main = _configs(sweep, size)
     counts = bp.particle_counts(ctx.quick, size["particles"], BEST_FACTORS)
-    extremes = [c for c in main if c["prior"] in WITH]
+    extremes = [c for c in main if c["prior"] in bp.EXTREMES]
     configs = [*main, *noisier, *bp.best_configs(extremes, counts, size["particles"])]
     df_all = ctx.monte_carlo(run_tracking, configs, runs, desc="prior calibration")
     df = df_all[~bp.is_best(df_all)]
@@ -292,7 +290,7 @@ def _best_claims(e: _Estimate) -> list[Claim]:
         finest, gaussian = _default_finest(e, setting)
         claims += bp.grid_claims(
             CLAIM_KINDS, e.best[setting], gaussian,
-            f"Figs. 6-7 ({setting} setting: {scene}, k = {k})", WITH,
+            f"Figs. 6-7 ({setting} setting: {scene}, k = {k})", bp.EXTREMES,
             f"{BEST_SERIES} priors at sigma_psi = {finest:g} (the sweep's most accurate)",
             suffix=f"_{setting}",
         )  # fmt: skip
@@ -316,7 +314,7 @@ def _report_best(e: _Estimate, runs: int) -> str:
     first = e.best[next(iter(SETTINGS))]
     rows = pd.concat(
         [
-            bp.grid_rows(e.best[s], _default_finest(e, s)[1], WITH).assign(setting=s)
+            bp.grid_rows(e.best[s], _default_finest(e, s)[1], bp.EXTREMES).assign(setting=s)
             for s in SETTINGS
         ]
     )

@@ -60,8 +60,6 @@ BEST_KS = (2, 4, 8)
 possible; the quick run has k = 8 only): 4-12 CPU s per run at 2L, ~300 CPU s in all."""
 BEST_FACTORS = {"full": (1, 2), "quick": (1, 2)}
 """The best possible's particle counts as multiples of L: the paper's L (the grid's own runs), 2L."""
-WITH = {"perfect": "perfect occluder priors", "none": "no occluder priors"}
-"""The sweep's two extremes, whose best possible is shown."""
 
 
 def tolerated(grp: pd.DataFrame, rmse_max: float, target: float = TARGET) -> float:
@@ -155,7 +153,7 @@ def _configs(ctx: RunContext, size: dict[str, int]) -> list[dict[str, Any]]:
     printed = [  # neither correction enters the no-prior likelihood: those runs are shared
         printed_config(c) for c in configs if c["k"] in printed_ks and c["prior"] != "none"
     ]
-    extremes = [c for c in configs if c["prior"] in WITH and c["k"] in BEST_KS]
+    extremes = [c for c in configs if c["prior"] in bp.EXTREMES and c["k"] in BEST_KS]
     best = bp.best_configs(extremes, _best_counts(ctx, size), size["particles"])
     return [*configs, *printed, *best]
 
@@ -267,7 +265,7 @@ def _best_claims(t: _Tradeoff) -> list[Claim]:
     accurate Gaussian priors against the no-prior best possible, convergence, and the paper's
     implied perfect-prior RMSE_tr at k = 4 (when k = 4 is rerun)."""
     claims = bp.grid_claims(
-        CLAIM_KINDS, t.best, t.gaussian, "E3's read-off (RMSE_tr rising with RMSE_occ)", WITH,
+        CLAIM_KINDS, t.best, t.gaussian, "E3's read-off (RMSE_tr rising with RMSE_occ)", bp.EXTREMES,
         f"the sweep's most accurate Gaussian priors at sigma_psi = {t.gaussian_label}",
     )  # fmt: skip
     if 4 in bp.grid_ks(t.best):
@@ -293,7 +291,7 @@ priors (sigma_psi = {t.gaussian_label}), whose large-L limit is no best possible
 Kalman priors are overconfident). Mean over runs of the per-run RMSE_tr ± its standard error;
 "–": not run.
 
-{md(bp.grid_rows(t.best, t.gaussian, WITH))}
+{md(bp.grid_rows(t.best, t.gaussian, bp.EXTREMES))}
 
 Reading a tolerated RMSE_occ off the grid assumes that RMSE_tr rises with RMSE_occ; on the
 printed model the minimum mean-square errors do (exact occluder positions are more information
