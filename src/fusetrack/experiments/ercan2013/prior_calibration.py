@@ -171,12 +171,12 @@ def _estimate(
     best = {
         setting: bp.estimate(
             at_walkers[at_walkers["setting"] == setting],
-            best_runs[best_runs["label"].str.split("|").str[1] == setting],
+            best_runs[(best_runs["scene"] == scene) & (best_runs["k"] == k)],
             counts,
             size["particles"],
             ["prior", "k"],
         )
-        for setting in SETTINGS
+        for setting, (scene, k) in SETTINGS.items()
     }
     return _Estimate(df_all, df, table, best)
 
