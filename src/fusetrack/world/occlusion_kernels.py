@@ -9,7 +9,10 @@ for L = 1000 particles, 8 cameras and 40 occluders take about a millisecond with
 priors instead of tens. With wide priors (sigma_psi = 32 in ``ercan2013-tradeoff``) nothing can
 be skipped: about 210 of the 320 (camera, occluder) pairs of a particle have q > 0, four normal
 CDF lookups each, and the inclusion-exclusion over ~4 occluded cameras has ~30 terms of 40
-factors; about 4.5 ms per call (of which ~3.2 ms q, ~0.8 ms inclusion-exclusion).
+factors. The q of one sight line against its occluders runs in passes that vectorise
+(:func:`_q_row_iso`, about 6.5 ns per triple against 11.6 in one loop); the likelihood of 1000
+particles with 4 cameras and sigma_psi = 8 then takes about 1.6 ms per call (2.1 before), of
+which q ~0.8, the inclusion-exclusion ~0.6.
 """
 
 from __future__ import annotations
@@ -83,15 +86,20 @@ assert _PHI_TABLE[-1, 0] == 1.0
 
 
 @numba.njit(cache=True, inline="always")
+def _tails(t: float, r: float) -> float:  # pragma: no cover - jit
+    """The table value ``r`` of :func:`_phi_fast` at ``t``, with its exact tails beyond -+8.5."""
+    r = 1.0 if t >= _TABLE_HALF_WIDTH else r
+    return 0.0 if t <= -_TABLE_HALF_WIDTH else r
+
+
+@numba.njit(cache=True, inline="always")
 def _phi_fast(t: float) -> float:  # pragma: no cover - jit
     """Standard normal CDF by table lookup and linear interpolation (|error| < 3.3e-8); exactly 0
     and 1 beyond -+8.5. Branch-free (the index clamped, the tails selected after the read), so
     that a loop of them over occluders runs in SIMD lanes."""
     pos = (t + _TABLE_HALF_WIDTH) * _TABLE_INV_STEP
     k = int(min(max(pos, 0.0), _TABLE_SIZE - 1.0))  # the last row is (1, 0): Phi(8.5) = 1.0
-    r = _PHI_TABLE[k, 0] + (pos - k) * _PHI_TABLE[k, 1]
-    r = 1.0 if t >= _TABLE_HALF_WIDTH else r
-    return 0.0 if t <= -_TABLE_HALF_WIDTH else r
+    return _tails(t, _PHI_TABLE[k, 0] + (pos - k) * _PHI_TABLE[k, 1])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -117,6 +125,7 @@ def occlusion_probability_kernel(
     m2 = np.empty(M)
     pm1 = np.empty(M)
     pm2 = np.empty(M)
+    work, index = np.empty((_ROW_WORK, M)), np.empty((4, M), dtype=np.int32)
     for i in range(K):
         cx, cy = cams[i, 0], cams[i, 1]
         for j in range(M):
@@ -129,7 +138,7 @@ def occlusion_probability_kernel(
             if r_eff <= 0.0:
                 continue
             if all_iso:
-                _q_row_iso(u1, u2, r_eff, m1, m2, inv_sd, reach, half, M, out[i, l])
+                _q_row_iso(u1, u2, r_eff, m1, m2, inv_sd, reach, half, M, out[i, l], work, index)
                 continue
             for j in range(M):
                 out[i, l, j] = _q_one(
@@ -383,6 +392,11 @@ def _q_iso(
     return 0.0 if far else v
 
 
+_ROW_WORK = 9
+"""Rows of the scratch array :func:`_q_row_iso` works in: 0-3 the four normal-CDF arguments of a
+triple, 4-7 their table offsets and then the CDF values, 8 whether the triple is far (1.0)."""
+
+
 @numba.njit(cache=True, inline="always")
 def _q_row_iso(
     u1: float,
@@ -395,12 +409,46 @@ def _q_row_iso(
     half: float,
     n: int,
     out: np.ndarray,
+    work: np.ndarray,
+    index: np.ndarray,
 ) -> None:  # pragma: no cover - jit
-    """``out[u] = q`` of one sight line against ``n`` isotropic occluders given by contiguous
-    rows (one loop without branches or scattered reads: it vectorises, ~1.6x faster than the
-    triples one by one, with the same values bit for bit)."""
+    """``out[u] = q`` of one sight line against ``n`` isotropic occluders given by contiguous rows:
+    :func:`_q_iso` bit for bit, in four passes over the occluders so that all but the table reads
+    run in SIMD lanes (one loop with the reads in it does not vectorise; ~2x faster). Pass 1: the
+    four CDF arguments and the far test; 2: table rows and offsets (:func:`_phi_fast`); 3: the
+    table reads; 4: the tails, Eq. 7's product and the clamps. ``work (9, >= n)`` and ``index (4,
+    >= n) int32``: scratch."""
     for u in range(n):
-        out[u] = _q_iso(u1, u2, r_eff, m1[u], m2[u], inv_sd[u], reach[u], half)
+        phi = -u2 * m1[u] + u1 * m2[u]
+        m_a = u1 * m1[u] + u2 * m2[u]
+        far = 1.0 if abs(phi) - half > reach[u] else 0.0
+        far = 1.0 if m_a - r_eff > reach[u] else far
+        work[8, u] = 1.0 if m_a < -reach[u] else far
+        s = inv_sd[u]
+        work[0, u] = (half - phi) * s
+        work[1, u] = (-half - phi) * s
+        work[2, u] = (r_eff - m_a) * s
+        work[3, u] = -m_a * s
+    for c in range(4):
+        for u in range(n):
+            pos = (work[c, u] + _TABLE_HALF_WIDTH) * _TABLE_INV_STEP
+            k = np.floor(min(max(pos, 0.0), _TABLE_SIZE - 1.0))
+            index[c, u] = np.int32(k)
+            work[4 + c, u] = pos - k
+    for c in range(4):
+        for u in range(n):
+            k = index[c, u]
+            work[4 + c, u] = _PHI_TABLE[k, 0] + work[4 + c, u] * _PHI_TABLE[k, 1]
+    for u in range(n):
+        a0 = _tails(work[0, u], work[4, u])
+        a1 = _tails(work[1, u], work[5, u])
+        a2 = _tails(work[2, u], work[6, u])
+        a3 = _tails(work[3, u], work[7, u])
+        across = a0 - a1
+        along = a2 - a3
+        v = min(max(along * across, 0.0), 1.0)
+        v = 0.0 if across < 1e-9 else v
+        out[u] = 0.0 if work[8, u] != 0.0 else v
 
 
 @numba.njit(cache=True, inline="always")
@@ -801,6 +849,7 @@ def camera_likelihood_kernel(
     )
     all_iso, rows = _iso_rows(use, n_use, m1, m2, inv_sd, reach, iso)
     q_row = np.empty(M)
+    work, index = np.empty((_ROW_WORK, M)), np.empty((4, M), dtype=np.int32)
     assigned = np.empty(K, dtype=np.bool_)
     q = np.zeros((K, M))
     s_v = np.empty(M)
@@ -847,7 +896,7 @@ def camera_likelihood_kernel(
                 n = n_use[i] if r_eff > 0.0 else 0
                 if all_iso:
                     _q_row_iso(u1, u2, r_eff, rows[0, i], rows[1, i], rows[2, i], rows[3, i],
-                               half, n, q_row)  # fmt: skip
+                               half, n, q_row, work, index)  # fmt: skip
                 for u in range(n):
                     j = use[i, u]
                     if all_iso:
