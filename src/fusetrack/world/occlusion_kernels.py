@@ -437,7 +437,7 @@ def _q_row_iso(
             work[4 + c, u] = pos - k
     for c in range(4):
         for u in range(n):
-            k = index[c, u]
+            k = np.uint32(index[c, u])  # unsigned: no wrap-around test for negative indices
             work[4 + c, u] = _PHI_TABLE[k, 0] + work[4 + c, u] * _PHI_TABLE[k, 1]
     for u in range(n):
         a0 = _tails(work[0, u], work[4, u])
@@ -621,20 +621,21 @@ def _split_touched(
     """Occluders that no occluded camera's rectangle reaches give the same factor
     ``1 - s_v[j]`` to every term of the inclusion-exclusion: their product ``common``. The rest,
     ``active[:na]``, get their seeing sums in ``s[:na]`` and the occluded cameras' ``q`` in
-    contiguous rows ``qa[b, :na]``."""
+    contiguous rows ``qa[b, :na]``. (``s`` first holds each occluder's largest q over the occluded
+    cameras, row by row so that the loops vectorise.)"""
+    M = s_v.shape[0]
+    for j in range(M):
+        s[j] = 0.0
+    for b in range(nz):
+        i = zeros[b]
+        for j in range(M):
+            s[j] = max(s[j], q[i, j])
     common = 1.0
     na = 0
-    for j in range(s_v.shape[0]):
-        touched = False
-        for b in range(nz):
-            if q[zeros[b], j] > 0.0:
-                touched = True
-                break
-        if touched:
+    for j in range(M):  # in order: active[na] = j and s[na] = s_v[j] only overwrite read entries
+        if s[j] > 0.0:
             active[na] = j
             s[na] = s_v[j]
-            for b in range(nz):
-                qa[b, na] = q[zeros[b], j]
             na += 1
         else:
             f = 1.0 - s_v[j]
@@ -642,6 +643,14 @@ def _split_touched(
                 return 0.0, 0
             if f < 1.0:
                 common *= f
+    for b in range(nz):
+        i = zeros[b]
+        if na == M:
+            for a in range(M):
+                qa[b, a] = q[i, a]
+        else:
+            for a in range(na):
+                qa[b, a] = q[i, active[a]]
     return common, na
 
 
