@@ -247,3 +247,16 @@ def test_row_of_occluders_is_the_one_triple_formula_bit_for_bit():
     both(u, m, 1 / sd, 5 * sd, D / 2, out_row, out_one)
     assert np.array_equal(out_row, out_one)
     assert 0.05 < np.mean(out_one == 0.0) < 0.95 and out_one.max() > 0.5  # both kinds occur
+
+
+@pytest.mark.parametrize("cov", [np.eye(2) * 4.0, np.array([[4.0, 1.0], [1.0, 2.0]])])
+def test_non_finite_points_give_nan_not_a_read_outside_the_table(cov):
+    """A NaN or infinite point (isotropic priors: the vectorised row; correlated ones: the one-
+    triple formula) gives NaN q, as before the row was vectorised, instead of a table index
+    outside the table; the finite point's q is unchanged."""
+    pri = OccluderPriors(np.array([[1.0, 2.0], [3.0, 1.0]]), np.broadcast_to(cov, (2, 2, 2)))
+    finite = occlusion_probability(np.zeros((1, 2)), np.array([[2.0, 2.0]]), pri, D)
+    x = np.array([[np.nan, 1.0], [2.0, 2.0], [np.inf, 0.0], [1.0, -np.inf]])
+    q = occlusion_probability(np.zeros((1, 2)), x, pri, D)
+    np.testing.assert_array_equal(q[:, 1], finite[:, 0])
+    assert np.all(finite > 0) and np.all(np.isnan(q[:, [0, 2, 3]]))

@@ -94,12 +94,20 @@ def _tails(t: float, r: float) -> float:  # pragma: no cover - jit
 
 
 @numba.njit(cache=True, inline="always")
+def _table_row(pos: float) -> float:  # pragma: no cover - jit
+    """The table row at or below grid position ``pos``, clamped to the table (as a float, so that
+    a loop of them vectorises); a NaN position gives row 0, not an index outside the table."""
+    k = pos if pos > 0.0 else 0.0
+    return np.floor(k if k < _TABLE_SIZE - 1.0 else _TABLE_SIZE - 1.0)
+
+
+@numba.njit(cache=True, inline="always")
 def _phi_fast(t: float) -> float:  # pragma: no cover - jit
     """Standard normal CDF by table lookup and linear interpolation (|error| < 3.3e-8); exactly 0
     and 1 beyond -+8.5. Branch-free (the index clamped, the tails selected after the read), so
     that a loop of them over occluders runs in SIMD lanes."""
     pos = (t + _TABLE_HALF_WIDTH) * _TABLE_INV_STEP
-    k = int(min(max(pos, 0.0), _TABLE_SIZE - 1.0))  # the last row is (1, 0): Phi(8.5) = 1.0
+    k = int(_table_row(pos))  # the last row is (1, 0): Phi(8.5) = 1.0
     return _tails(t, _PHI_TABLE[k, 0] + (pos - k) * _PHI_TABLE[k, 1])
 
 
@@ -433,7 +441,7 @@ def _q_row_iso(
     for c in range(4):
         for u in range(n):
             pos = (work[c, u] + _TABLE_HALF_WIDTH) * _TABLE_INV_STEP
-            k = np.floor(min(max(pos, 0.0), _TABLE_SIZE - 1.0))
+            k = _table_row(pos)
             index[c, u] = np.int32(k)
             work[4 + c, u] = pos - k
     for c in range(4):
