@@ -446,8 +446,8 @@ def _q_row_iso(
             work[4 + c, u] = pos - k
     for c in range(4):
         for u in range(n):
-            k = np.uint32(index[c, u])  # unsigned: no wrap-around test for negative indices
-            work[4 + c, u] = _PHI_TABLE[k, 0] + work[4 + c, u] * _PHI_TABLE[k, 1]
+            row = np.uint32(index[c, u])  # unsigned: no wrap-around test for negative indices
+            work[4 + c, u] = _PHI_TABLE[row, 0] + work[4 + c, u] * _PHI_TABLE[row, 1]
     for u in range(n):
         a0 = _tails(work[0, u], work[4, u])
         a1 = _tails(work[1, u], work[5, u])
