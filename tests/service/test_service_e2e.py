@@ -62,6 +62,10 @@ def _offline(cfg, scn):
 
 @pytest.mark.parametrize(("transport", "encoding"), [("udp", "msgpack"), ("http", "json")])
 def test_replayed_demo_gives_the_offline_tracks(network, transport, encoding):
+    # the end-of-stream flush after 2 wall seconds without a reading, not the fixture's 0.3: a
+    # 0.3 s stall of the sender on a loaded machine flushed early and made a later reading late
+    fusion = network.fusion.model_copy(update={"idle_flush": 2.0})
+    network = network.model_copy(update={"fusion": fusion})
     scn = demo_scenario(network, seed=1, duration=DURATION)
     with RunningNode(build_node(network)) as node:
         to = f"udp://{node.udp[0]}:{node.udp[1]}" if transport == "udp" else node.url
