@@ -25,7 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _results
-from fusetrack.world.occlusion_kernels import _q_iso, _q_row_iso
+from fusetrack.world.occlusion_kernels import _ROW_WORK, _q_iso, _q_row_iso
 
 HALF = 3.33 / 2
 
@@ -34,7 +34,7 @@ HALF = 3.33 / 2
 def rows(lines, m, inv_sd, reach, out):  # pragma: no cover - jit
     n = m.shape[0]
     m1, m2 = m[:, 0].copy(), m[:, 1].copy()
-    work, index = np.empty((9, n)), np.empty((4, n), dtype=np.int32)
+    work, index = np.empty((_ROW_WORK, n)), np.empty((4, n), dtype=np.int32)
     for l in range(lines.shape[0]):
         _q_row_iso(lines[l, 0], lines[l, 1], lines[l, 2], m1, m2, inv_sd, reach, HALF, n, out[l],
                    work, index)  # fmt: skip

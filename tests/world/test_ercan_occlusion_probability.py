@@ -223,12 +223,12 @@ def test_row_of_occluders_is_the_one_triple_formula_bit_for_bit():
     the exact tails beyond +-8.5."""
     import numba
 
-    from fusetrack.world.occlusion_kernels import _q_iso, _q_row_iso
+    from fusetrack.world.occlusion_kernels import _ROW_WORK, _q_iso, _q_row_iso
 
     @numba.njit
     def both(u, m, inv_sd, reach, half, out_row, out_one):
         n = m.shape[0]
-        work, index = np.empty((9, n + 3)), np.empty((4, n + 3), dtype=np.int32)
+        work, index = np.empty((_ROW_WORK, n + 3)), np.empty((4, n + 3), dtype=np.int32)
         for l in range(u.shape[0]):
             _q_row_iso(u[l, 0], u[l, 1], u[l, 2], m[:, 0].copy(), m[:, 1].copy(), inv_sd, reach,
                        half, n, out_row[l], work, index)  # fmt: skip
