@@ -91,3 +91,20 @@ def test_write_replaces_only_the_block(tmp_path, capsys):
     assert readme.read_text() == first + "\nAfter.\n"
     assert main(["reports", "tally", "--reports", str(tmp_path)]) == 0
     assert "| zhai2007-mcmc | 1 of 1 |" in capsys.readouterr().out
+
+
+def test_wall_times_against_the_30_minute_budget(tmp_path):
+    """Each experiment's row shows the wall time of the run that wrote its summary; runs over 30
+    minutes are bold and named in the line below the table; a summary without seconds shows -."""
+    claim = [{"id": "C15_order_N100", "holds": True}]
+    _summary(tmp_path / "zhai2007-mcmc", "zhai2007-mcmc", claim, seconds=561.2, workers=2)
+    _summary(tmp_path / "zhai2007-scalar", "zhai2007-scalar", [], seconds=1800.5, workers=1)
+    _summary(tmp_path / "zhai2007-galerkin", "zhai2007-galerkin", [])
+    block = tally_markdown(tmp_path)
+    assert "| zhai2007-mcmc | 1 of 1 | – | – | – | 9.4 min (2 workers) |" in block
+    assert "| zhai2007-scalar | – | – | – | – | **30.0 min (1 worker)** |" in block
+    assert "| zhai2007-galerkin | – | – | – | – | – |" in block
+    assert (
+        "1 of 2 within 30 minutes; over it (bold): zhai2007-scalar 30 min." in block
+        and "| Zhai 2007 | 1 of 1 | – | – | – |\n" in block  # per paper: no time column
+    )
