@@ -118,3 +118,18 @@ def test_heuristics_and_bad_k():
             greedy_selection(mom, bad)
         with pytest.raises(ConfigError, match="k="):
             brute_force_selection(mom, bad)
+
+
+def test_bad_cloud_is_refused_naming_the_field():
+    """A NaN particle, a negative or NaN weight and weights summing to 0 are clear errors, not
+    NaN moments."""
+    cams, room, x, w, pri = setup()
+    ok = selection_moments(cams, room, x, w, pri, 3.33, "gaussian")
+    assert np.all(np.isfinite(ok.cov_z["perspective"]))
+    bad = x.copy()
+    bad[7, 0] = np.nan
+    with pytest.raises(ConfigError, match=r"x\[7\]=\[nan, .*\] is invalid"):
+        selection_moments(cams, room, bad, w, pri, 3.33, "gaussian")
+    for weights in (np.r_[-1.0, w[1:]], np.r_[np.nan, w[1:]], np.zeros_like(w)):
+        with pytest.raises(ConfigError, match="finite weights >= 0 with a positive sum"):
+            selection_moments(cams, room, x, weights, pri, 3.33, "gaussian")

@@ -184,3 +184,33 @@ def test_camera_arrays_remembered_per_selection_give_the_same_likelihood() -> No
     assert np.array_equal(got[0], got[2])
     assert not np.array_equal(got[0], got[1])
     assert len(lik._camera_args) == 2
+
+
+def test_bad_inputs_are_refused_naming_the_field() -> None:
+    """Before the kernel: a camera index outside the network, an infinite reading (NaN means not
+    seen and is fine), a NaN particle position and a NaN occluder centre are each a clear error,
+    for the fused likelihood and its reference alike (a NaN position used to give NaN weights)."""
+    from fusetrack.core import ConfigError, MeasurementError
+
+    scene = get_scene("square")
+    obj, occ, z = world_and_readings(scene, 40, 5, 3)
+    sel = np.arange(4)
+    x = obj[2] + np.zeros((5, 2))
+    lik = OcclusionAwareLikelihood(scene.cameras, scene.room, scene.diameter, "perfect")
+    n = len(scene.cameras.positions)
+    for f in (lik.log_likelihood, lik.log_likelihood_reference):
+        assert np.all(np.isfinite(f(z[2, sel], sel, x, occ[2])) | np.isnan(z[2, sel]).any())
+        with pytest.raises(ConfigError, match=rf"selected=\[0, 1, {n}\] is invalid"):
+            f(z[2, :3], [0, 1, n], x, occ[2])
+        with pytest.raises(ConfigError, match="camera indices"):
+            f(z[2, :1], [-1], x, occ[2])
+        with pytest.raises(MeasurementError, match=r"z=.*finite readings, NaN where unseen"):
+            f(np.r_[z[2, :3], np.inf], sel, x, occ[2])
+        bad = x.copy()
+        bad[3, 1] = np.nan
+        with pytest.raises(ConfigError, match=r"x\[3\]=\[.*nan\] is invalid"):
+            f(z[2, sel], sel, bad, occ[2])
+        centres = occ[2].copy()
+        centres[0, 0] = np.nan
+        with pytest.raises(ConfigError, match=r"occluders\[0\]"):
+            f(z[2, sel], sel, x, centres)

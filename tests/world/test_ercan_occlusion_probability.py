@@ -5,7 +5,7 @@ import itertools
 import numpy as np
 import pytest
 
-from fusetrack.core.errors import ConfigError
+from fusetrack.core.errors import ConfigError, ShapeError
 from fusetrack.world.occlusion import (
     OccluderPriors,
     all_visible_probability,
@@ -18,6 +18,7 @@ from fusetrack.world.occlusion import (
     pattern_probability,
     pattern_probability_reference,
 )
+from fusetrack.world.occlusion_kernels import occlusion_probability_kernel
 
 D = 3.33
 
@@ -251,12 +252,19 @@ def test_row_of_occluders_is_the_one_triple_formula_bit_for_bit():
 
 @pytest.mark.parametrize("cov", [np.eye(2) * 4.0, np.array([[4.0, 1.0], [1.0, 2.0]])])
 def test_non_finite_points_give_nan_not_a_read_outside_the_table(cov):
-    """A NaN or infinite point (isotropic priors: the vectorised row; correlated ones: the one-
-    triple formula) gives NaN q, as before the row was vectorised, instead of a table index
-    outside the table; the finite point's q is unchanged."""
+    """In the kernel, a NaN or infinite point (isotropic priors: the vectorised row; correlated
+    ones: the one-triple formula) gives NaN q instead of a table index outside the table; the
+    finite point's q is unchanged. The public function refuses such points before the kernel,
+    naming the first one."""
     pri = OccluderPriors(np.array([[1.0, 2.0], [3.0, 1.0]]), np.broadcast_to(cov, (2, 2, 2)))
     finite = occlusion_probability(np.zeros((1, 2)), np.array([[2.0, 2.0]]), pri, D)
-    x = np.array([[np.nan, 1.0], [2.0, 2.0], [np.inf, 0.0], [1.0, -np.inf]])
-    q = occlusion_probability(np.zeros((1, 2)), x, pri, D)
-    np.testing.assert_array_equal(q[:, 1], finite[:, 0])
-    assert np.all(finite > 0) and np.all(np.isnan(q[:, [0, 2, 3]]))
+    x = np.array([[2.0, 2.0], [np.nan, 1.0], [np.inf, 0.0], [1.0, -np.inf]])
+    q = occlusion_probability_kernel(np.zeros((1, 2)), x, pri.mean, pri.cov, D)
+    np.testing.assert_array_equal(q[:, 0], finite[:, 0])
+    assert np.all(finite > 0) and np.all(np.isnan(q[:, 1:]))
+    with pytest.raises(ConfigError, match=r"points\[1\]=\[nan, 1.0\] is invalid"):
+        occlusion_probability(np.zeros((1, 2)), x, pri, D)
+    with pytest.raises(ConfigError, match=r"viewers\[0\]=\[inf, 0.0\] is invalid"):
+        occlusion_probability([[np.inf, 0.0]], x[:1], pri, D)
+    with pytest.raises(ShapeError, match="2 numbers per point"):
+        occlusion_probability(np.zeros((1, 2)), [1.0, 2.0, 3.0], pri, D)

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
 
 class FusetrackError(Exception):
     """Base class of every error fusetrack raises on purpose."""
@@ -70,3 +73,25 @@ def check_probability(field: str, value: float) -> float:
     if not 0.0 <= v <= 1.0:
         raise ConfigError(invalid(field, value, "a probability in [0, 1]"))
     return v
+
+
+def check_points(field: str, value: ArrayLike, dim: int = 2) -> NDArray[np.float64]:
+    """``value`` as a C-contiguous float ``(n, dim)`` array of finite coordinates.
+
+    :class:`ShapeError` if its size is not a whole number of points, :class:`ConfigError`
+    naming the first point with a NaN or infinite coordinate (a NaN position would otherwise give
+    NaN probabilities downstream, silently)."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(invalid(field, value, f"numbers, {dim} per point")) from None
+    if a.size % dim:
+        raise ShapeError(invalid(f"{field}.shape", a.shape, f"(n, {dim}): {dim} numbers per point"))
+    pts = np.ascontiguousarray(a.reshape(-1, dim))
+    bad = ~np.isfinite(pts).all(axis=1)
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise ConfigError(
+            invalid(f"{field}[{row}]", pts[row].tolist(), "finite coordinates (no NaN or inf)")
+        )
+    return pts

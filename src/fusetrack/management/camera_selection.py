@@ -44,7 +44,7 @@ import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, check_points, invalid
 from ..sensors import MIN_DEPTH, CameraArray
 from ..world import (
     OccluderPriors,
@@ -201,10 +201,12 @@ def selection_moments(
 
     ``exclusion``: shortened Eq. 7 rectangles, as in the likelihood (see
     :func:`visibility_probabilities`)."""
-    x = cast(Array, np.asarray(x, float)[:, :2])
+    x = check_points("x", np.asarray(x, float)[:, :2])
     w_in = np.asarray(w, float)
     if w_in.shape != (len(x),):
         raise ShapeError(invalid("w.shape", w_in.shape, f"({len(x)},)"))
+    if not (np.all(np.isfinite(w_in)) and np.all(w_in >= 0) and w_in.sum() > 0):
+        raise ConfigError(invalid("w", w_in.tolist(), "finite weights >= 0 with a positive sum"))
     w = cast(Array, w_in / w_in.sum())
     mu = w @ x
     dx = x - mu

@@ -63,7 +63,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core import ConfigError, MeasurementError, ShapeError, invalid
+from ..core import ConfigError, MeasurementError, ShapeError, check_points, invalid
 from ..world.geometry import Array
 from ..world.occlusion import (
     OccluderPriors,
@@ -141,13 +141,20 @@ class OcclusionAwareLikelihood:
     def _inputs(
         self, z: ArrayLike, selected: ArrayLike, x: ArrayLike
     ) -> tuple[Array, NDArray[np.intp], Array]:
+        """Readings ``(K,)``, camera indices ``(K,)`` and particle positions ``(L, 2)``, checked:
+        indices in range, one reading each (NaN: not seen, inf refused), finite positions."""
         sel = np.asarray(selected, dtype=np.intp).reshape(-1)
+        n = len(self.cameras.positions)
+        if sel.size and not (sel.min() >= 0 and sel.max() < n):
+            raise ConfigError(invalid("selected", sel.tolist(), f"camera indices in [0, {n})"))
         zz = np.asarray(z, float).reshape(-1)
         if zz.shape != sel.shape:
             raise ShapeError(
                 invalid("z.shape", zz.shape, f"one reading per selected camera {sel.shape}")
             )
-        return zz, sel, np.ascontiguousarray(np.asarray(x, float)[..., :2].reshape(-1, 2))
+        if np.isinf(zz).any():
+            raise MeasurementError(invalid("z", zz.tolist(), "finite readings, NaN where unseen"))
+        return zz, sel, check_points("x", np.asarray(x, float)[..., :2])
 
     def _occluder_arrays(
         self, occluders: OccluderPriors | ArrayLike | None
@@ -162,7 +169,7 @@ class OcclusionAwareLikelihood:
             centres = (
                 occluders.mean
                 if isinstance(occluders, OccluderPriors)
-                else np.asarray(occluders, float).reshape(-1, 2)
+                else check_points("occluders", occluders)
             )
             return 1, np.ascontiguousarray(centres), none[1]
         if not isinstance(occluders, OccluderPriors):
@@ -247,13 +254,7 @@ class OcclusionAwareLikelihood:
         occluders: OccluderPriors | ArrayLike | None = None,
     ) -> Array:
         """NumPy reference of :meth:`log_likelihood` built from the world's occlusion functions."""
-        sel = np.asarray(selected, dtype=np.intp).reshape(-1)
-        zz = np.asarray(z, float).reshape(-1)
-        if zz.shape != sel.shape:
-            raise ShapeError(
-                invalid("z.shape", zz.shape, f"one reading per selected camera {sel.shape}")
-            )
-        pts = np.asarray(x, float)[..., :2].reshape(-1, 2)
+        zz, sel, pts = self._inputs(z, selected, x)
         eta = np.isfinite(zz)
         A = self.assigned(sel, pts)
         log_p = self._log_pattern(eta, sel, pts, A, occluders)
@@ -278,12 +279,7 @@ class OcclusionAwareLikelihood:
         if self.prior_mode == "none":
             p = possible.astype(float)
         elif self.prior_mode == "perfect":
-            if occluders is None or isinstance(occluders, OccluderPriors):
-                centres = (
-                    occluders.mean if isinstance(occluders, OccluderPriors) else np.zeros((0, 2))
-                )
-            else:
-                centres = np.asarray(occluders, float).reshape(-1, 2)
+            _, centres, _ = self._occluder_arrays(occluders)
             cams = self.cameras.subset(sel)
             vis = A & ~disks_block(cams.positions, x, centres, self.diameter)
             p = np.all(vis == eta[:, None], axis=0).astype(float)

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import erf, ndtr
 
-from ..core import ConfigError, ShapeError, invalid
+from ..core import ConfigError, ShapeError, check_points, invalid
 from .geometry import Array, segment_point_distance
 from .occlusion_kernels import (
     disks_block_kernel,
@@ -111,8 +111,7 @@ def occlusion_probability(
     """
     if not 0 <= exclusion < np.inf:
         raise ConfigError(invalid("exclusion", exclusion, "a finite length >= 0"))
-    c = np.ascontiguousarray(np.asarray(viewers, float).reshape(-1, 2))
-    x = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 2))
+    c, x = check_points("viewers", viewers), check_points("points", points)
     return np.asarray(
         occlusion_probability_kernel(
             c, x, priors.mean, np.ascontiguousarray(priors.cov), float(diameter), float(exclusion)
@@ -220,9 +219,8 @@ def disks_block(
     viewers: ArrayLike, points: ArrayLike, centers: ArrayLike, diameter: float
 ) -> NDArray[np.bool_]:
     """``(K, L)``: does any disc (centres ``(M, 2)``, diameter D) touch segment viewer -> point?"""
-    c = np.ascontiguousarray(np.asarray(viewers, float).reshape(-1, 2))
-    x = np.ascontiguousarray(np.asarray(points, float).reshape(-1, 2))
-    o = np.ascontiguousarray(np.asarray(centers, float).reshape(-1, 2))
+    c, x = check_points("viewers", viewers), check_points("points", points)
+    o = check_points("centers", centers)
     return np.asarray(disks_block_kernel(c, x, o, float(diameter)))
 
 
