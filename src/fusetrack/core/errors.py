@@ -88,9 +88,8 @@ def check_points(field: str, value: ArrayLike, dim: int = 2) -> NDArray[np.float
     if a.size % dim:
         raise ShapeError(invalid(f"{field}.shape", a.shape, f"(n, {dim}): {dim} numbers per point"))
     pts = np.ascontiguousarray(a.reshape(-1, dim))
-    bad = ~np.isfinite(pts).all(axis=1)
-    if bad.any():
-        row = int(np.argmax(bad))
+    if not np.isfinite(pts).all():  # one pass on the hot path; the row only when one is bad
+        row = int(np.argmax(~np.isfinite(pts).all(axis=1)))
         raise ConfigError(
             invalid(f"{field}[{row}]", pts[row].tolist(), "finite coordinates (no NaN or inf)")
         )
