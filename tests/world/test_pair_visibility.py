@@ -50,3 +50,36 @@ def test_hand_computed_pair():
     assert p2[0, 1, 0] == p2[1, 0, 0] == (1 - 0.1 - 0.3) * max(1 - 0.2 - 0.5, 0.0)
     p1, p2 = pair_visibility_per_particle_kernel(q, np.array([[True], [False]]))
     assert p1[1, 0] == 0.0 and p2[0, 1, 0] == 0.0 and p2[0, 0, 0] == p1[0, 0]
+
+
+def test_from_the_priors_equals_the_kernel_on_the_q_array_bit_for_bit():
+    """Camera selection's one-pass kernel (q one particle at a time, only on assigned cameras)
+    against the two-step path it replaces (q of every triple, then the pair kernel): identical
+    values, isotropic and correlated priors, with and without the shortened rectangles, points at
+    a camera (empty rectangle) included."""
+    from fusetrack.world import OccluderPriors, occlusion_probability
+    from fusetrack.world.occlusion_kernels import pair_visibility_of_priors_kernel
+
+    rng = np.random.default_rng(11)
+    cams = np.array([[0.0, 0.0], [50.0, 0.0], [50.0, 50.0], [0.0, 50.0], [25.0, 0.0]])
+    for trial in range(6):
+        x = rng.uniform(10, 40, 2) + rng.normal(0, [0.5, 3.0, 9.0][trial % 3], (300, 2))
+        x[0] = cams[1]
+        mu = rng.uniform(0, 50, (25, 2))
+        if trial % 2:
+            a = rng.normal(0, 1, (25, 2, 2))
+            cov = a @ np.swapaxes(a, 1, 2) * 4.0 + 0.1 * np.eye(2)
+        else:
+            cov = np.broadcast_to(np.eye(2) * rng.choice([0.5, 30.0, 120.0]), (25, 2, 2))
+        priors = OccluderPriors(mu, cov)
+        exclusion = 3.33 * (trial // 3)
+        assigned = rng.random((len(cams), len(x))) < 0.6
+        w = rng.random(len(x))
+        q = occlusion_probability(cams, x, priors, 3.33, exclusion)
+        two_step = pair_visibility_kernel(q, assigned, w)
+        one_pass = pair_visibility_of_priors_kernel(
+            cams, x, priors.mean, np.ascontiguousarray(priors.cov), 3.33, exclusion, assigned, w
+        )
+        assert np.all(q[1, 0] == 0.0) and 0.0 < two_step[1][0, 2] < two_step[0][0]
+        for a_, b_ in zip(two_step, one_pass, strict=True):
+            assert np.array_equal(a_, b_)

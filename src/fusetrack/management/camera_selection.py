@@ -51,7 +51,7 @@ from ..world import (
     Room,
     disks_block,
     occlusion_probability,
-    pair_visibility_kernel,
+    pair_visibility_of_priors_kernel,
     pair_visibility_per_particle_kernel,
 )
 
@@ -76,6 +76,13 @@ class SelectionMoments:
         return len(self.p_visible)
 
 
+def _gaussian_priors(occluders: OccluderPriors | ArrayLike | None) -> OccluderPriors:
+    """The occluders of ``prior_mode="gaussian"``: they must be :class:`OccluderPriors`."""
+    if not isinstance(occluders, OccluderPriors):
+        raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
+    return occluders
+
+
 def _gaussian_occlusion(
     cameras: CameraArray,
     x: Array,
@@ -85,9 +92,9 @@ def _gaussian_occlusion(
 ) -> Array:
     """``q`` ``(N, L, M)``: each occluder prior's probability of hiding each particle from each
     camera (Gaussian priors only)."""
-    if not isinstance(occluders, OccluderPriors):
-        raise ConfigError(invalid("occluders", type(occluders).__name__, "OccluderPriors"))
-    return occlusion_probability(cameras.positions, x, occluders, diameter, exclusion)
+    return occlusion_probability(
+        cameras.positions, x, _gaussian_priors(occluders), diameter, exclusion
+    )
 
 
 def _certain_visibility(
@@ -129,8 +136,19 @@ def visibility_probabilities(
     """
     assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
     if prior_mode == "gaussian":
-        q = _gaussian_occlusion(cameras, x, occluders, diameter, exclusion)  # (N, L, M)
-        p1, p2 = pair_visibility_kernel(q, np.ascontiguousarray(assigned), np.ascontiguousarray(w))
+        priors = _gaussian_priors(occluders)
+        if not 0 <= exclusion < np.inf:
+            raise ConfigError(invalid("exclusion", exclusion, "a finite length >= 0"))
+        p1, p2 = pair_visibility_of_priors_kernel(
+            check_points("cameras.positions", cameras.positions),
+            check_points("x", x),
+            priors.mean,
+            np.ascontiguousarray(priors.cov),
+            float(diameter),
+            float(exclusion),
+            np.ascontiguousarray(assigned),
+            np.ascontiguousarray(w, dtype=float),
+        )
         return p1, p2
     vis = _certain_visibility(cameras, x, occluders, diameter, prior_mode, assigned)
     vw = vis * w[None, :]

@@ -50,6 +50,9 @@ from .occlusion import pattern_probability as pattern_probability
 from .occlusion_kernels import camera_likelihood_kernel as camera_likelihood_kernel
 from .occlusion_kernels import pair_visibility_kernel as pair_visibility_kernel
 from .occlusion_kernels import (
+    pair_visibility_of_priors_kernel as pair_visibility_of_priors_kernel,
+)
+from .occlusion_kernels import (
     pair_visibility_per_particle_kernel as pair_visibility_per_particle_kernel,
 )
 from .occlusion_kernels import prior_draw_hits_kernel as prior_draw_hits_kernel

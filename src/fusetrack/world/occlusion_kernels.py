@@ -127,34 +127,10 @@ def occlusion_probability_kernel(
     likelihood and camera selection share one formula (and one ``exclusion`` option)."""
     K, L, M = cams.shape[0], x.shape[0], mu.shape[0]
     out = np.zeros((K, L, M))
-    half = 0.5 * diameter
-    p11, p12, p22, iso, inv_sd, reach = _occluder_precisions(cov)
-    all_iso = np.all(iso)
-    m1 = np.empty(M)
-    m2 = np.empty(M)
-    pm1 = np.empty(M)
-    pm2 = np.empty(M)
-    work, index = np.empty((_ROW_WORK, M)), np.empty((4, M), dtype=np.int32)
+    t = _sight_line_tables(cams, mu, cov, diameter, exclusion)
     for i in range(K):
-        cx, cy = cams[i, 0], cams[i, 1]
-        for j in range(M):
-            m1[j] = mu[j, 0] - cx
-            m2[j] = mu[j, 1] - cy
-            pm1[j] = p11[j] * m1[j] + p12[j] * m2[j]
-            pm2[j] = p12[j] * m1[j] + p22[j] * m2[j]
         for l in range(L):
-            u1, u2, r_eff = _sight_line(x[l, 0] - cx, x[l, 1] - cy, exclusion)
-            if r_eff <= 0.0:
-                continue
-            if all_iso:
-                _q_row_iso(u1, u2, r_eff, m1, m2, inv_sd, reach, half, M, out[i, l], work, index)
-                continue
-            for j in range(M):
-                out[i, l, j] = _q_one(
-                    u1, u2, r_eff, m1[j], m2[j], pm1[j], pm2[j],
-                    cov[j, 0, 0], cov[j, 0, 1], cov[j, 1, 1],
-                    p11[j], p12[j], p22[j], iso[j], inv_sd[j], reach[j], half,
-                )  # fmt: skip
+            _q_sight_line(t, i, cams[i, 0], cams[i, 1], x[l, 0], x[l, 1], cov, out[i, l])
     return out
 
 
@@ -289,25 +265,51 @@ def segments_cross_edges_paired_kernel(
 
 
 @numba.njit(cache=True, inline="always")
-def _seen_by_one(q: np.ndarray, i: int, l: int) -> float:  # pragma: no cover - jit
-    """P{eta_i = 1 | u_l} = prod_j max(1 - q_ij, 0) (Eq. 8, Q = {i})."""
+def _seen_by_one(q: np.ndarray, i: int) -> float:  # pragma: no cover - jit
+    """P{eta_i = 1 | u} = prod_j max(1 - q_ij, 0) (Eq. 8, Q = {i}); ``q (K, M)`` of one point."""
     prod = 1.0
-    for j in range(q.shape[2]):
-        f = 1.0 - q[i, l, j]
+    for j in range(q.shape[1]):
+        f = 1.0 - q[i, j]
         prod *= f if f > 0.0 else 0.0
     return prod
 
 
 @numba.njit(cache=True, inline="always")
-def _seen_by_both(q: np.ndarray, i: int, k: int, l: int) -> float:  # pragma: no cover - jit
-    """P{eta_i = 1, eta_k = 1 | u_l} = prod_j max(1 - q_ij - q_kj, 0) (Eq. 8, Q = {i, k})."""
+def _seen_by_both(q: np.ndarray, i: int, k: int) -> float:  # pragma: no cover - jit
+    """P{eta_i = 1, eta_k = 1 | u} = prod_j max(1 - q_ij - q_kj, 0) (Eq. 8, Q = {i, k})."""
     prod = 1.0
-    for j in range(q.shape[2]):
-        f = 1.0 - q[i, l, j] - q[k, l, j]
+    for j in range(q.shape[1]):
+        f = 1.0 - q[i, j] - q[k, j]
         if f <= 0.0:
             return 0.0
         prod *= f
     return prod
+
+
+@numba.njit(cache=True, inline="always")
+def _add_pairs(
+    q: np.ndarray, assigned: np.ndarray, w: float, p1: np.ndarray, p2: np.ndarray
+) -> None:  # pragma: no cover - jit
+    """Add one point's ``w P{eta_i = 1 | u}`` to ``p1`` and ``w P{eta_i = 1, eta_k = 1 | u}``
+    (i < k) to ``p2``, on the cameras ``assigned (K,)`` to it; ``q (K, M)``."""
+    N = q.shape[0]
+    for i in range(N):
+        if not assigned[i]:
+            continue
+        p1[i] += w * _seen_by_one(q, i)
+        for k in range(i + 1, N):
+            if assigned[k]:
+                p2[i, k] += w * _seen_by_both(q, i, k)
+
+
+@numba.njit(cache=True, inline="always")
+def _fill_pairs(p1: np.ndarray, p2: np.ndarray) -> None:  # pragma: no cover - jit
+    """``p2``'s diagonal is ``p1`` and its lower triangle the upper one."""
+    N = p1.shape[0]
+    for i in range(N):
+        p2[i, i] = p1[i]
+        for k in range(i + 1, N):
+            p2[k, i] = p2[i, k]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -319,17 +321,36 @@ def pair_visibility_kernel(
     p1 = np.zeros(N)
     p2 = np.zeros((N, N))
     for l in range(L):
-        for i in range(N):
-            if not assigned[i, l]:
-                continue
-            p1[i] += w[l] * _seen_by_one(q, i, l)
-            for k in range(i + 1, N):
-                if assigned[k, l]:
-                    p2[i, k] += w[l] * _seen_by_both(q, i, k, l)
-    for i in range(N):
-        p2[i, i] = p1[i]
-        for k in range(i + 1, N):
-            p2[k, i] = p2[i, k]
+        _add_pairs(q[:, l, :], assigned[:, l], w[l], p1, p2)
+    _fill_pairs(p1, p2)
+    return p1, p2
+
+
+@numba.njit(cache=True, nogil=True)
+def pair_visibility_of_priors_kernel(
+    cams: np.ndarray,
+    x: np.ndarray,
+    mu: np.ndarray,
+    cov: np.ndarray,
+    diameter: float,
+    exclusion: float,
+    assigned: np.ndarray,
+    w: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
+    """:func:`pair_visibility_kernel` of :func:`occlusion_probability_kernel`'s q, bit for bit,
+    without the ``(K, L, M)`` array: q one particle at a time, and only on the cameras assigned
+    to it (the others' q is never read)."""
+    K, L, M = cams.shape[0], x.shape[0], mu.shape[0]
+    t = _sight_line_tables(cams, mu, cov, diameter, exclusion)
+    q = np.zeros((K, M))
+    p1 = np.zeros(K)
+    p2 = np.zeros((K, K))
+    for l in range(L):
+        for i in range(K):
+            if assigned[i, l]:
+                _q_sight_line(t, i, cams[i, 0], cams[i, 1], x[l, 0], x[l, 1], cov, q[i])
+        _add_pairs(q, assigned[:, l], w[l], p1, p2)
+    _fill_pairs(p1, p2)
     return p1, p2
 
 
@@ -346,12 +367,12 @@ def pair_visibility_per_particle_kernel(
     for i in range(N):
         for l in range(L):
             if assigned[i, l]:
-                p1[i, l] = _seen_by_one(q, i, l)
+                p1[i, l] = _seen_by_one(q[:, l, :], i)
                 p2[i, i, l] = p1[i, l]
         for k in range(i + 1, N):
             for l in range(L):
                 if assigned[i, l] and assigned[k, l]:
-                    v = _seen_by_both(q, i, k, l)
+                    v = _seen_by_both(q[:, l, :], i, k)
                     p2[i, k, l] = v
                     p2[k, i, l] = v
     return p1, p2
@@ -615,6 +636,45 @@ def _camera_offsets(
             pm1[i, j] = p11[j] * m1[i, j] + p12[j] * m2[i, j]
             pm2[i, j] = p12[j] * m1[i, j] + p22[j] * m2[i, j]
     return m1, m2, pm1, pm2
+
+
+@numba.njit(cache=True, inline="always")
+def _sight_line_tables(
+    cams: np.ndarray, mu: np.ndarray, cov: np.ndarray, diameter: float, exclusion: float
+) -> tuple:  # pragma: no cover - jit
+    """What :func:`_q_sight_line` reads: the occluders' precisions, the per-(camera, occluder)
+    offsets of :func:`_camera_offsets`, D/2, ``exclusion`` and the row's scratch."""
+    M = mu.shape[0]
+    p11, p12, p22, iso, inv_sd, reach = _occluder_precisions(cov)
+    m1, m2, pm1, pm2 = _camera_offsets(cams, mu, p11, p12, p22)
+    work, index = np.empty((_ROW_WORK, M)), np.empty((4, M), dtype=np.int32)
+    return (p11, p12, p22, iso, inv_sd, reach, np.all(iso), m1, m2, pm1, pm2,
+            0.5 * diameter, exclusion, work, index)  # fmt: skip
+
+
+@numba.njit(cache=True, inline="always")
+def _q_sight_line(
+    t: tuple, i: int, cx: float, cy: float, px: float, py: float, cov: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover - jit
+    """``out[:M]``: q of the sight line from camera ``i`` at ``(cx, cy)`` to the point ``(px,
+    py)`` against every occluder (Eq. 7; all 0 when the rectangle is empty), from the tables
+    ``t`` of :func:`_sight_line_tables`: the per-(camera, point) step of the selection kernels."""
+    p11, p12, p22, iso, inv_sd, reach, all_iso, m1, m2, pm1, pm2, half, excl, work, index = t
+    M = out.shape[0]
+    u1, u2, r_eff = _sight_line(px - cx, py - cy, excl)
+    if r_eff <= 0.0:
+        for j in range(M):
+            out[j] = 0.0
+        return
+    if all_iso:
+        _q_row_iso(u1, u2, r_eff, m1[i], m2[i], inv_sd, reach, half, M, out, work, index)
+        return
+    for j in range(M):
+        out[j] = _q_one(
+            u1, u2, r_eff, m1[i, j], m2[i, j], pm1[i, j], pm2[i, j],
+            cov[j, 0, 0], cov[j, 0, 1], cov[j, 1, 1],
+            p11[j], p12[j], p22[j], iso[j], inv_sd[j], reach[j], half,
+        )  # fmt: skip
 
 
 @numba.njit(cache=True, inline="always")
