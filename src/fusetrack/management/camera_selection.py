@@ -125,6 +125,7 @@ def visibility_probabilities(
     diameter: float,
     prior_mode: str,
     exclusion: float = 0.0,
+    in_view: NDArray[np.bool_] | None = None,
 ) -> tuple[Array, Array]:
     """``P{eta_i = 1}`` ``(N,)`` and ``P{eta_i = 1, eta_j = 1}`` ``(N, N)`` over the particle cloud.
 
@@ -132,9 +133,12 @@ def visibility_probabilities(
     ``{i, j}``) on the cameras assigned to each particle, or the deterministic visibility of the
     extreme priors (Sec. 6.1). ``exclusion``: Eq. 7's rectangles end this far before the particle,
     the option of :class:`~fusetrack.sensors.occlusion_aware_camera.OcclusionAwareLikelihood`
-    (both call :func:`~fusetrack.world.occlusion.occlusion_probability`'s per-triple kernel).
+    (both compute q a sight line at a time with the same per-triple formula). ``in_view``: the
+    cameras' fields of view ``(L, N)`` (:meth:`CameraArray.in_fov`) when already at hand.
     """
-    assigned = cameras.in_fov(x[:, None, :]).T & ~room.sight_blocked_grid(cameras.positions, x)
+    if in_view is None:
+        in_view = cameras.in_fov(x[:, None, :])
+    assigned = in_view.T & ~room.sight_blocked_grid(cameras.positions, x)
     if prior_mode == "gaussian":
         priors = _gaussian_priors(occluders)
         if not 0 <= exclusion < np.inf:
@@ -229,21 +233,21 @@ def selection_moments(
     mu = w @ x
     dx = x - mu
     sigma_x = (dx * w[:, None]).T @ dx
+    d, h = cameras.depth_lateral(x[:, None, :])  # (L, N)
+    in_view = cameras.in_fov_of(d, h)
     p1, p2 = visibility_probabilities(
-        cameras, room, x, w, occluders, diameter, prior_mode, exclusion
+        cameras, room, x, w, occluders, diameter, prior_mode, exclusion, in_view
     )
     cov_zx: dict[str, Array] = {}
     cov_z: dict[str, Array] = {}
     f = cameras.focals
     if "perspective" in models:
-        d, h = cameras.depth_lateral(x[:, None, :])  # (L, N)
         bound = np.tan(cameras.fovs / 2)
         r = np.clip(h / np.where(np.abs(d) > MIN_DEPTH, d, MIN_DEPTH), -bound, bound)
         e_z = f * (w @ r)  # Eq. 11
         cov_zx["perspective"] = (p1 * f)[:, None] * (r * w[:, None]).T @ dx  # Eq. 12
         rr = (r * w[:, None]).T @ r
-        in_view = cameras.in_fov(x[:, None, :])
-        var = cameras.noise_var(x[:, None, :])
+        var = cameras.noise_var_of(d, h)
         wv = w[:, None] * in_view
         mass = wv.sum(axis=0)
         centre_var = cameras.noise_var(mu[None, :])

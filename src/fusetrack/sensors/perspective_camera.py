@@ -207,7 +207,10 @@ class CameraArray:
         return d, h
 
     def in_fov(self, x: ArrayLike) -> NDArray[np.bool_]:
-        d, h = self.depth_lateral(x)
+        return self.in_fov_of(*self.depth_lateral(x))
+
+    def in_fov_of(self, d: Array, h: Array) -> NDArray[np.bool_]:
+        """:meth:`in_fov` from :meth:`depth_lateral`'s ``d, h`` (computed once, used thrice)."""
         return np.asarray((d > 0) & (np.abs(h) <= np.tan(self.fovs / 2) * d))
 
     def image_coordinate(self, x: ArrayLike) -> Array:
@@ -217,7 +220,10 @@ class CameraArray:
 
     def noise_var(self, x: ArrayLike) -> Array:
         """``var(v_i | x)`` (Ercan et al. 2013, Eq. 2), depth clamped at :data:`MIN_DEPTH`."""
-        d, h = self.depth_lateral(x)
+        return self.noise_var_of(*self.depth_lateral(x))
+
+    def noise_var_of(self, d: Array, h: Array) -> Array:
+        """:meth:`noise_var` from :meth:`depth_lateral`'s ``d, h``."""
         d = np.maximum(d, MIN_DEPTH)
         r2 = (h / d) ** 2
         f2 = self.focals**2
