@@ -44,10 +44,9 @@ SWEEP_FULL = (0.0, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, math.inf)
 """sigma_psi of the full run (the spec's sweep, as E2's): perfect, six Gaussian accuracies, none;
 the measured RMSE_occ is in the report. With every k = 1..8 (:data:`KS_FULL`) the grid is 64
 configurations (71 with the printed series, 77 with the best possible's, 385 runs); a run costs
-2-62 CPU s (more cameras and wider priors cost more; 2/3 of it in the occlusion-aware likelihood
-kernel under cProfile), 6,000 CPU s for the grid in the full-size run of 2026-12-02, 6,928 in
-the first of 2026-12-04 (with the best possible's 245: 3,725 s with 2 workers) and 5,664 in the
-second, with the vectorised q of Eq. 7 (best possible 231: 2,974 s; same results bit for bit)."""
+2-62 CPU s (more cameras and wider priors cost more; ~80% of it in the occlusion-aware
+likelihood). Each run's CPU seconds are in the committed report's ``results.parquet``;
+``benchmarks/reproduction_budget.py`` splits them against the 30-minute budget."""
 KS_FULL = tuple(range(1, 9))
 KS_QUICK = (3, 8)
 SWEEP_QUICK = (0.0, 8.0, math.inf)
