@@ -336,6 +336,23 @@ class Run:
         return path
 
 
+def measured(
+    args: argparse.Namespace,
+    script: str,
+    measure: Callable[[], list[dict[str, Any]]],
+    default_blas: int | None = None,
+) -> list[dict[str, Any]]:
+    """Run ``measure`` under the threads ``--threads`` asks for (:func:`limit_threads`), save its
+    results where ``--save`` / ``--out`` says (:class:`Run`) and return them: the harness of a
+    benchmark script's ``main``."""
+    run = Run()
+    with limit_threads(args.threads, default_blas=default_blas) as threads:
+        run.threads = threads
+        out = measure()
+    run.save(out_path(args, script), out)
+    return out
+
+
 def _relative(arg: str) -> str:
     """A path inside the repository as ``benchmarks/...``; anything else unchanged."""
     try:

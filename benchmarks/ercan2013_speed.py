@@ -68,11 +68,7 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     _results.add_arguments(ap)
     a = ap.parse_args()
-    run = _results.Run()
-    with _results.limit_threads(a.threads, default_blas=None) as threads:
-        run.threads = threads
-        out = measure(a)
-    run.save(_results.out_path(a, __file__), [out])
+    (out,) = _results.measured(a, __file__, lambda: [measure(a)])
     if a.json:
         print(json.dumps(out))
     else:

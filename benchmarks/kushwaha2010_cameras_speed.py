@@ -124,11 +124,7 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     _results.add_arguments(ap)
     args = ap.parse_args()
-    run = _results.Run()
-    with _results.limit_threads(args.threads, default_blas=None) as threads:
-        run.threads = threads
-        res = measure(args.repeats, args.particles)
-    run.save(_results.out_path(args, __file__), [res])
+    (res,) = _results.measured(args, __file__, lambda: [measure(args.repeats, args.particles)])
     if args.json:
         print(json.dumps(res, indent=2))
         return

@@ -20,6 +20,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -60,15 +61,16 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     _results.add_arguments(ap)
     args = ap.parse_args()
-    run = _results.Run()
-    with _results.limit_threads(args.threads, default_blas=None) as threads:
-        run.threads = threads
+
+    def both() -> list[dict[str, Any]]:
         out = front_end_fps(args.frames)
         out["ekf_people"] = args.people
         ekf_step_time(args.people, steps=2)  # warm-up (imports, compilation): not timed
         out["ekf_fps"] = 1.0 / ekf_step_time(args.people)
         out["wall"]["ekf_fps"] = 1.0 / ekf_step_time(args.people, clock=time.perf_counter)  # type: ignore[index]
-    run.save(_results.out_path(args, __file__), [out])
+        return [out]
+
+    (out,) = _results.measured(args, __file__, both)
     if args.json:
         print(json.dumps(out, indent=2))
         return
