@@ -44,6 +44,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from fusetrack.evaluation.machine import machine
+
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 SE_FACTOR = 3.0  # libraries disagree when |difference| > 3 combined standard errors ...
@@ -248,17 +250,6 @@ def all_agree(flags: Sequence[bool | None]) -> bool | None:
 # metadata and the results file
 
 
-def cpu_model() -> str:
-    """The CPU's model name from ``/proc/cpuinfo`` (``platform.processor()`` elsewhere)."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.lower().startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
 def versions(names: Sequence[str] = PEERS) -> dict[str, str]:
     """Python and the version of each of ``names`` that this process has imported."""
     out = {"python": platform.python_version()}
@@ -313,11 +304,7 @@ class Run:
             "seconds": round(
                 (datetime.datetime.now(datetime.UTC) - self.started).total_seconds(), 1
             ),
-            "machine": {
-                "platform": platform.platform(),
-                "cpu_model": cpu_model(),
-                "cores": os.cpu_count(),
-            },
+            "machine": machine(),
             "load": {"start": list(self.load_start), "end": list(os.getloadavg())},
             "versions": versions(),
             "threads": self.threads,

@@ -1,4 +1,5 @@
 import json
+import os
 
 import pandas as pd
 import pytest
@@ -35,6 +36,9 @@ def test_write_outputs_follows_the_contract(tmp_path):
     assert {"experiment", "claims", "runs", "seed", "seconds"} <= set(s)
     assert s["experiment"] == "toy" and s["runs"] == 2 and s["seed"] == 4 and s["seconds"] == 1.25
     assert s["workers"] == 3  # the wall time means little without the worker count
+    # ... nor without the machine: its CPU, the microarchitecture the kernels were compiled for
+    assert set(s["machine"]) == {"cpu_model", "cpu_arch", "avx512", "cores", "platform"}
+    assert s["machine"]["cores"] == os.cpu_count() and isinstance(s["machine"]["avx512"], bool)
     assert [c["holds"] for c in s["claims"]] == [True, False, True]
     assert set(s["claims"][0]) == {"id", "statement", "paper", "ours", "tolerance", "holds", "kind"}
     assert [c["kind"] for c in s["claims"]] == ["paper", "paper", "calibration"]
@@ -43,6 +47,7 @@ def test_write_outputs_follows_the_contract(tmp_path):
     assert "**no**" in report and "## Body" in report
     assert "| c3 | calibration | tuned |" in report
     assert "--workers 3`" in report
+    assert f"1.2 s on {s['machine']['cores']} cores, {s['machine']['cpu_model']} (" in report
 
 
 def test_claim_kind_is_required_and_checked():

@@ -100,11 +100,16 @@ def test_wall_times_against_the_30_minute_budget(tmp_path):
     _summary(tmp_path / "zhai2007-mcmc", "zhai2007-mcmc", claim, seconds=561.2, workers=2)
     _summary(tmp_path / "zhai2007-scalar", "zhai2007-scalar", [], seconds=1800.5, workers=1)
     _summary(tmp_path / "zhai2007-galerkin", "zhai2007-galerkin", [])
+    machine = {"cpu_model": "AMD EPYC", "cpu_arch": "znver4", "avx512": True, "cores": 2}
+    _summary(
+        tmp_path / "zhai2007-grid", "zhai2007-grid", [], seconds=60, workers=2, machine=machine
+    )
     block = tally_markdown(tmp_path)
+    assert "| zhai2007-grid | – | – | – | – | 1.0 min (2 workers, znver4) |" in block
     assert "| zhai2007-mcmc | 1 of 1 | – | – | – | 9.4 min (2 workers) |" in block
     assert "| zhai2007-scalar | – | – | – | – | **30.0 min (1 worker)** |" in block
     assert "| zhai2007-galerkin | – | – | – | – | – |" in block
     assert (
-        "1 of 2 within 30 minutes; over it (bold): zhai2007-scalar 30 min." in block
+        "2 of 3 within 30 minutes; over it (bold): zhai2007-scalar 30 min." in block
         and "| Zhai 2007 | 1 of 1 | – | – | – |\n" in block  # per paper: no time column
     )

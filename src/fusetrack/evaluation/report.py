@@ -1,7 +1,8 @@
 """The files every experiment run writes: ``results.parquet``, ``summary.json`` and ``report.md``.
 
 An experiment returns an :class:`Outcome` (tidy rows, claims, the report's markdown body); this
-module writes the three files, with the cost of the run (seconds, peak memory) measured here.
+module writes the three files, with the cost of the run (seconds, peak memory) measured here and
+the machine it was measured on (:mod:`.machine`).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import pandas as pd
 
 from ..core import ConfigError, invalid
 from .checkpoint import CHECKPOINT_NAME, Checkpoint
+from .machine import machine, machine_line
 from .montecarlo import ENGINES, RunFunction, run_monte_carlo
 from .options import ExperimentOptions
 
@@ -260,6 +262,7 @@ def write_outputs(
         "seconds": round(seconds, 3),
         "workers": ctx.n_workers(),
         "peak_memory_mb": round(memory_mb, 1),
+        "machine": machine(),
         "quick": ctx.quick,
         "engine": ctx.engine,
     }
@@ -272,7 +275,7 @@ def write_outputs(
         f"# {outcome.title or ctx.name}",
         "",
         f"`fusetrack run {ctx.name}{' --quick' if ctx.quick else ''} --runs {outcome.runs} --seed {ctx.seed}"
-        f" --engine {ctx.engine} --workers {ctx.n_workers()}{_option_flags(ctx.extra)}` — {seconds:.1f} s, peak memory {memory_mb:.0f} MiB"
+        f" --engine {ctx.engine} --workers {ctx.n_workers()}{_option_flags(ctx.extra)}` — {seconds:.1f} s on {machine_line(machine())}, peak memory {memory_mb:.0f} MiB"
         f"{' (quick run: fewer runs, wider tolerances)' if ctx.quick else ''}.",
         "",
         *(

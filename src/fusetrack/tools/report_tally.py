@@ -37,6 +37,7 @@ class Tally:
     retired: list[str] = field(default_factory=list)  # ids of claims no longer made
     seconds: float | None = None  # wall time of the run that wrote the summary
     workers: int | None = None
+    arch: str | None = None  # the machine's microarchitecture, when the summary names it
 
     def add(self, kind: str, holds: bool) -> None:
         self.total[kind] += 1
@@ -52,12 +53,14 @@ class Tally:
         return f"{self.held[kind]} of {self.total[kind]}" if self.total[kind] else "–"
 
     def run_time(self) -> str:
-        """``"49.6 min (2 workers)"``, bold when over :data:`RUN_BUDGET_SECONDS`."""
+        """``"49.6 min (2 workers, znver4)"``, bold when over :data:`RUN_BUDGET_SECONDS` (the
+        microarchitecture when the summary records the machine: machines differ by 2x)."""
         if self.seconds is None:
             return "–"
         workers = "? workers" if self.workers is None else f"{self.workers} worker"
         workers += "s" if self.workers != 1 else ""
-        text = f"{self.seconds / 60:.1f} min ({workers})"
+        where = f", {self.arch}" if self.arch else ""
+        text = f"{self.seconds / 60:.1f} min ({workers}{where})"
         return f"**{text}**" if self.over_budget() else text
 
     def over_budget(self) -> bool:
@@ -94,7 +97,12 @@ def tally_experiment(folder: Path) -> Tally:
     """Tally of the claims in ``folder/summary.json``."""
     summary = json.loads((folder / "summary.json").read_text())
     name = experiment_name(folder, summary)
-    tally = Tally(folder.name, seconds=summary.get("seconds"), workers=summary.get("workers"))
+    tally = Tally(
+        folder.name,
+        seconds=summary.get("seconds"),
+        workers=summary.get("workers"),
+        arch=(summary.get("machine") or {}).get("cpu_arch"),
+    )
     for claim in summary["claims"]:
         if is_retired(name, claim):
             tally.retired.append(f"{folder.name} {claim['id']}")
