@@ -83,3 +83,22 @@ def test_numba_sample_equals_the_numpy_reference(sigma_v):
     ref = dyn.sample_reference(u, np.random.default_rng(9), sampler, free)
     assert np.array_equal(fast, ref)
     assert not np.array_equal(fast[:, :2], u[:, :2])
+
+
+def test_numba_mean_equals_the_numpy_reference():
+    """kappa bit for bit: moving particles, reached ones (they stay), one on its destination and
+    one with zero speed."""
+    dyn = WaypointRegimeDynamics()
+    rng = np.random.default_rng(6)
+    u = np.empty((2000, 5))
+    u[:, :2] = rng.uniform(0, 100, (2000, 2))
+    u[:, 2:4] = u[:, :2] + rng.normal(0, 3, (2000, 2))
+    u[:, 4] = rng.uniform(0.2, 4.0, 2000)
+    u[0, 2:4] = u[0, :2]
+    u[1, 4] = 0.0
+    kappa = dyn.mean(u)
+    assert np.array_equal(kappa, dyn.mean_reference(u))
+    reached = np.hypot(*(u[:, 2:4] - u[:, :2]).T) < u[:, 4]
+    assert 0 < reached.sum() < len(u)  # both regimes present
+    assert np.array_equal(kappa[reached], u[reached])
+    assert not np.array_equal(dyn.mean(u[::2]), u[::2])  # strided input

@@ -268,3 +268,22 @@ def test_non_finite_points_give_nan_not_a_read_outside_the_table(cov):
         occlusion_probability([[np.inf, 0.0]], x[:1], pri, D)
     with pytest.raises(ShapeError, match="2 numbers per point"):
         occlusion_probability(np.zeros((1, 2)), [1.0, 2.0, 3.0], pri, D)
+
+
+def test_isotropic_priors_equal_the_general_constructor():
+    """OccluderPriors.isotropic is the constructor with cov = var I, bit for bit, and refuses or
+    regularises what the constructor does."""
+    rng = np.random.default_rng(8)
+    mu = rng.uniform(0, 100, (12, 2))
+    for var in (7.3, 1e-12, 0.0):  # the last two: floored to MIN_PRIOR_VARIANCE by the constructor
+        fast, general = OccluderPriors.isotropic(mu, var), OccluderPriors(mu, var * np.eye(2))
+        assert np.array_equal(fast.mean, general.mean) and np.array_equal(fast.cov, general.cov)
+    assert len(OccluderPriors.isotropic(np.zeros((0, 2)), 4.0)) == 0
+    bad = mu.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(ConfigError, match=r"occluder priors' means\[3\]"):
+        OccluderPriors.isotropic(bad, 4.0)
+    with pytest.raises(ConfigError):
+        OccluderPriors.isotropic(mu, np.inf)
+    with pytest.raises(ConfigError):
+        OccluderPriors.isotropic(mu, -1.0)  # not positive semi-definite

@@ -60,6 +60,40 @@ def regime_move_kernel(
 
 
 @numba.njit(cache=True, nogil=True)
+def regime_mean_kernel(u: np.ndarray) -> np.ndarray:  # pragma: no cover - jit
+    """``kappa``: a copy of ``u`` with every particle moved one noise-free MTD step towards its
+    destination, or left in place once it is within one step of it (``|tau - x| < s``)."""
+    out = u.copy()
+    for i in range(u.shape[0]):
+        tx, ty = u[i, 2] - u[i, 0], u[i, 3] - u[i, 1]
+        dist = math.hypot(tx, ty)
+        safe = dist if dist > 0.0 else 1.0
+        step = 0.0 if dist < u[i, 4] else u[i, 4]
+        out[i, 0] = u[i, 0] + step * (tx / safe)
+        out[i, 1] = u[i, 1] + step * (ty / safe)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def regimes_kernel(
+    u: np.ndarray, r: np.ndarray, beta: tuple, lam: tuple
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
+    """Each particle's regime from its uniform draw ``r``: MTD (``r < beta``) or CD (``beta <=
+    r < beta + lambda``), with ``(beta, lambda)`` = ``(beta[0], lam[0])`` while moving and
+    ``(beta[1], lam[1])`` once the destination is reached (``|tau - x| < s``)."""
+    n = u.shape[0]
+    mtd = np.empty(n, dtype=np.bool_)
+    cd = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        reached = math.hypot(u[i, 2] - u[i, 0], u[i, 3] - u[i, 1]) < u[i, 4]
+        b = beta[1] if reached else beta[0]
+        lm = lam[1] if reached else lam[0]
+        mtd[i] = r[i] < b
+        cd[i] = (r[i] >= b) & (r[i] < b + lm)
+    return mtd, cd
+
+
+@numba.njit(cache=True, nogil=True)
 def apply_moves_kernel(
     out: np.ndarray, new: np.ndarray, travelled: np.ndarray, move: np.ndarray, phi: float
 ) -> None:  # pragma: no cover - jit
@@ -118,7 +152,12 @@ class WaypointRegimeDynamics:
         return to / safe[:, None], dist
 
     def mean(self, u: Array) -> Array:
-        """``kappa``: the noise-free MTD step, or stay once the destination is reached."""
+        """``kappa``: the noise-free MTD step, or stay once the destination is reached (one Numba
+        pass, :func:`regime_mean_kernel`; :meth:`mean_reference` is the NumPy reference)."""
+        return np.asarray(regime_mean_kernel(np.ascontiguousarray(u, dtype=float)))
+
+    def mean_reference(self, u: Array) -> Array:
+        """NumPy reference of :meth:`mean` (same result, bit for bit)."""
         direction, dist = self._direction(u)
         reached = dist < u[:, 4]
         out = u.copy()
@@ -135,21 +174,22 @@ class WaypointRegimeDynamics:
         """Draw ``u(t) ~ f(u | u(t-1))`` for every particle (Sec. 4.1).
 
         The random draws are made here, in the order of :meth:`sample_reference` (regimes, new
-        destinations, motion noise); the moves themselves are one Numba pass
-        (:func:`regime_move_kernel`), then the free-floor test, then :func:`apply_moves_kernel`.
+        destinations, motion noise); the regimes (:func:`regimes_kernel`) and the moves
+        (:func:`regime_move_kernel`) are Numba passes, then the free-floor test, then
+        :func:`apply_moves_kernel`.
         """
         n = len(u)
-        to = u[:, 2:4] - u[:, :2]
-        reached = np.hypot(to[:, 0], to[:, 1]) < u[:, 4]
-        beta = np.where(reached, self.beta_reached, self.beta_moving)
-        lam = np.where(reached, self.lambda_reached, self.lambda_moving)
-        r = rng.random(n)
-        mtd = r < beta
-        cd = (r >= beta) & (r < beta + lam)
+        u = np.ascontiguousarray(u, dtype=float)
+        mtd, cd = regimes_kernel(
+            u,
+            rng.random(n),
+            (float(self.beta_moving), float(self.beta_reached)),
+            (float(self.lambda_moving), float(self.lambda_reached)),
+        )
         dest = sample_free(rng, int(cd.sum())) if cd.any() else np.zeros((0, 2))
         noise = self.sigma_v * rng.standard_normal((n, 2))
         out, new, travelled = regime_move_kernel(
-            np.ascontiguousarray(u, dtype=float), cd, np.ascontiguousarray(dest, dtype=float), noise
+            u, cd, np.ascontiguousarray(dest, dtype=float), noise
         )
         move = mtd | cd
         if free is not None:

@@ -84,8 +84,7 @@ class RandomWalkPriorFilter:
     @staticmethod
     def priors(means: Array, var: float) -> OccluderPriors:
         """The priors at one step as :class:`OccluderPriors`."""
-        m = len(means)
-        return OccluderPriors(means, np.broadcast_to(var * np.eye(2), (m, 2, 2)).copy())
+        return OccluderPriors.isotropic(means, var)
 
 
 @dataclass(frozen=True)

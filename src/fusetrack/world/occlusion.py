@@ -89,6 +89,22 @@ class OccluderPriors:
         object.__setattr__(self, "mean", mu)
         object.__setattr__(self, "cov", cov)
 
+    @classmethod
+    def isotropic(cls, mean: ArrayLike, var: float) -> OccluderPriors:
+        """Priors ``N(mean_j, var I)`` for every occluder (the Kalman priors of
+        :mod:`~fusetrack.world.occluder_priors`): the same object as ``OccluderPriors(mean,
+        var * I)``, with only one variance to check (a tracker builds one per step)."""
+        if not (np.isfinite(var) and var >= MIN_PRIOR_VARIANCE) or not np.size(mean):
+            return cls(np.asarray(mean, float), float(var) * np.eye(2))  # the general checks
+        mu = check_points("occluder priors' means", mean)
+        cov = np.zeros((len(mu), 2, 2))
+        cov[:, 0, 0] = var
+        cov[:, 1, 1] = var
+        priors = object.__new__(cls)
+        object.__setattr__(priors, "mean", mu)
+        object.__setattr__(priors, "cov", cov)
+        return priors
+
     def __len__(self) -> int:
         return len(self.mean)
 
