@@ -1,7 +1,7 @@
 """The machine a run was timed on, written beside every wall time (``summary.json``, benchmark
 results): wall times compare only between like machines. Two machines that both call themselves
-"AMD EPYC" ran the same Ercan et al. reproduction 1.6-2x apart (issue 19, item 6), so the
-model string alone is not enough: ``cpu_arch`` is the microarchitecture LLVM (which compiles
+"AMD EPYC" ran the same full-size Ercan et al. reproduction 1.4x apart (1.1-1.6x per
+configuration; issue 19, item 6), so the model string alone is not enough: ``cpu_arch`` is the microarchitecture LLVM (which compiles
 the Numba kernels) detects, e.g. ``znver3`` or ``znver4``, and ``avx512`` whether the kernels
 may use 512-bit vectors."""
 

@@ -10,10 +10,8 @@ priors instead of tens. With wide priors (sigma_psi = 32 in ``ercan2013-tradeoff
 be skipped: about 210 of the 320 (camera, occluder) pairs of a particle have q > 0, four normal
 CDF lookups each, and the inclusion-exclusion over ~4 occluded cameras has ~30 terms of 40
 factors. The q of one sight line against its occluders runs in passes that vectorise
-(:func:`_q_row_iso`; ``benchmarks/ercan2013_q_rows.py``); replayed likelihood calls of a tracking
-run with 4 cameras and sigma_psi = 8 (1000 particles) take about 1.4 ms instead of 1.9, with 8
-cameras and sigma_psi = 32 about 5.5 instead of 7.3, and with narrow priors (6 cameras,
-sigma_psi = 1, ~8 occluders left per sight line) the same 2.2.
+(:func:`_q_row_iso`); what that gains depends on the CPU (``benchmarks/ercan2013_q_rows.py`` and
+its section of ``benchmarks/README.md``). A triple costs ~6 ns, most of it the four table reads.
 """
 
 from __future__ import annotations
@@ -444,7 +442,8 @@ def _q_row_iso(
 ) -> None:  # pragma: no cover - jit
     """``out[u] = q`` of one sight line against ``n`` isotropic occluders given by contiguous rows:
     :func:`_q_iso` bit for bit, in four passes over the occluders so that all but the table reads
-    run in SIMD lanes (one loop with the reads in it does not vectorise; ~2x faster). Pass 1: the
+    run in SIMD lanes (one loop with the reads in it does not vectorise; 1.8-2.0x faster on
+    session 17's machine, 1.13-1.18x on an AMD znver4 with AVX-512, where the reads dominate). Pass 1: the
     four CDF arguments and the far test; 2: table rows and offsets (:func:`_phi_fast`); 3: the
     table reads; 4: the tails, Eq. 7's product and the clamps. ``work (9, >= n)`` and ``index (4,
     >= n) int32``: scratch."""
