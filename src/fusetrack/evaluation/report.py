@@ -254,6 +254,7 @@ def write_outputs(
                 lambda v: v if v is None or isinstance(v, str) else json.dumps(_jsonable(v))
             )
     df.to_parquet(out / "results.parquet", index=False)
+    facts = machine()
     summary = {
         "experiment": ctx.name,
         "claims": [_jsonable(asdict(c)) for c in outcome.claims],
@@ -262,7 +263,7 @@ def write_outputs(
         "seconds": round(seconds, 3),
         "workers": ctx.n_workers(),
         "peak_memory_mb": round(memory_mb, 1),
-        "machine": machine(),
+        "machine": facts,
         "quick": ctx.quick,
         "engine": ctx.engine,
     }
@@ -275,7 +276,7 @@ def write_outputs(
         f"# {outcome.title or ctx.name}",
         "",
         f"`fusetrack run {ctx.name}{' --quick' if ctx.quick else ''} --runs {outcome.runs} --seed {ctx.seed}"
-        f" --engine {ctx.engine} --workers {ctx.n_workers()}{_option_flags(ctx.extra)}` — {seconds:.1f} s on {machine_line(machine())}, peak memory {memory_mb:.0f} MiB"
+        f" --engine {ctx.engine} --workers {ctx.n_workers()}{_option_flags(ctx.extra)}` — {seconds:.1f} s on {machine_line(facts)}, peak memory {memory_mb:.0f} MiB"
         f"{' (quick run: fewer runs, wider tolerances)' if ctx.quick else ''}.",
         "",
         *(
