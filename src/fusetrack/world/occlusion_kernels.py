@@ -442,11 +442,11 @@ def _q_row_iso(
 ) -> None:  # pragma: no cover - jit
     """``out[u] = q`` of one sight line against ``n`` isotropic occluders given by contiguous rows:
     :func:`_q_iso` bit for bit, in four passes over the occluders so that all but the table reads
-    run in SIMD lanes (one loop with the reads in it does not vectorise; 1.8-2.0x faster on
-    session 17's machine, 1.13-1.18x on an AMD znver4 with AVX-512, where the reads dominate). Pass 1: the
-    four CDF arguments and the far test; 2: table rows and offsets (:func:`_phi_fast`); 3: the
-    table reads; 4: the tails, Eq. 7's product and the clamps. ``work (9, >= n)`` and ``index (4,
-    >= n) int32``: scratch."""
+    run in SIMD lanes (one loop with the reads in it does not vectorise). Pass 1: the four CDF
+    arguments and the far test; 2: table rows and offsets (:func:`_phi_fast`); 3: the table reads,
+    kept scalar (AVX-512 gathers, which LLVM emits for this loop otherwise, cost 5.6 instead of 4.5
+    ns per triple on an AMD znver4); 4: the tails, Eq. 7's product and the clamps. ``work (9,
+    >= n)`` and ``index (4, >= n) int32``: scratch."""
     for u in range(n):
         phi = -u2 * m1[u] + u1 * m2[u]
         m_a = u1 * m1[u] + u2 * m2[u]
@@ -465,9 +465,13 @@ def _q_row_iso(
             index[c, u] = np.int32(k)
             work[4 + c, u] = pos - k
     for c in range(4):
-        for u in range(n):
+        u = 0
+        while u < n:  # scalar loads: the early exit (never taken) keeps LLVM from vectorising
             row = np.uint32(index[c, u])  # unsigned: no wrap-around test for negative indices
+            if row >= _TABLE_SIZE:
+                break
             work[4 + c, u] = _PHI_TABLE[row, 0] + work[4 + c, u] * _PHI_TABLE[row, 1]
+            u += 1
     for u in range(n):
         a0 = _tails(work[0, u], work[4, u])
         a1 = _tails(work[1, u], work[5, u])
