@@ -43,6 +43,22 @@ def test_averaged_kernel_is_the_weighted_sum_of_the_terms():
     np.testing.assert_allclose(p2, t2 @ w, rtol=1e-13, atol=1e-16)
 
 
+def test_one_particle_at_a_time_equals_the_terms_bit_for_bit():
+    """The averaged kernel works a camera's pairs four at a time; with one particle of weight 1
+    each of its sums is one term, which must equal the one-pair products exactly (12 cameras,
+    so that most particles have blocks of four pairs and a remainder)."""
+    rng = np.random.default_rng(11)
+    q = rng.random((12, 40, 30)) * 0.12
+    q[rng.random(q.shape) < 0.3] = 0.0
+    q[:, :5, 3] = 0.7  # pairs whose factor 1 - q_i - q_k <= 0: products of 0
+    assigned = rng.random((12, 40)) < 0.8
+    t1, t2 = pair_visibility_per_particle_kernel(q, assigned)
+    for l in range(40):
+        p1, p2 = pair_visibility_kernel(q[:, l : l + 1], assigned[:, l : l + 1], np.ones(1))
+        assert np.array_equal(p1, t1[:, l]) and np.array_equal(p2, t2[:, :, l])
+    assert (t2 == 0).any() and (t2 > 0).any() and assigned.sum(0).max() >= 9
+
+
 def test_hand_computed_pair():
     q = np.array([[[0.1, 0.2]], [[0.3, 0.5]]])  # 2 cameras, 1 particle, 2 occluders
     p1, p2 = pair_visibility_per_particle_kernel(q, np.ones((2, 1), dtype=bool))
