@@ -76,3 +76,29 @@ def test_camera_array_subset_and_ids():
         arr.subset([2])
     with pytest.raises(ConfigError):
         CameraArray.from_cameras([cam(sensor_id="a"), cam(sensor_id="a")])
+
+
+def test_grid_of_points_takes_the_numba_pass_with_the_same_bits():
+    """``depth_lateral`` of points ``(L, 1, 2)`` and ``noise_var_of`` of ``(L, N)`` run as Numba
+    passes; they must give NumPy's broadcast formulas bit for bit, including points on a camera
+    (d = 0: the depth clamp), behind it (d < 0) and NaN."""
+    cams = CameraArray.from_cameras([cam(sensor_id=f"c{i}", yaw=0.5 * i, position=np.array([i, -i / 2]))
+                           for i in range(5)])  # fmt: skip
+    x = np.random.default_rng(2).uniform(-30.0, 30.0, (400, 2))
+    x[:5] = cams.positions
+    x[5] = np.nan
+    d, h = cams.depth_lateral(x[:, None, :])
+    rel = x[:, None, :] - cams.positions
+    c, s = np.cos(cams.yaws), np.sin(cams.yaws)
+    d_np, h_np = c * rel[..., 0] + s * rel[..., 1], -s * rel[..., 0] + c * rel[..., 1]
+    assert np.array_equal(d, d_np, equal_nan=True) and np.array_equal(h, h_np, equal_nan=True)
+    dd = np.maximum(d_np, 1e-6)
+    r2 = (h_np / dd) ** 2
+    f2 = cams.focals**2
+    var_np = f2 * (1 + r2) ** 2 * cams.sigma_theta**2 + f2 * (1 + r2) / dd**2 * cams.sigma_pos**2
+    var_np = var_np + cams.sigma_read**2
+    assert np.array_equal(cams.noise_var_of(d, h), var_np, equal_nan=True)
+    assert (d == 0).sum() == 5 and (d < 0).any() and np.isnan(d[5]).all()
+    # one point (shape (2,)) takes the NumPy path; noise_var composes the two passes
+    assert np.array_equal(cams.depth_lateral(x[7])[0], d[7])
+    assert np.array_equal(cams.noise_var(x[:9, None, :]), var_np[:9], equal_nan=True)

@@ -27,6 +27,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -40,6 +41,41 @@ such points are outside every field of view, so the clamp only keeps arithmetic 
 
 DEFAULT_IMAGE_WIDTH = 640.0
 """Image width (px) used for the focal length when none is given: f = (W/2) / tan(fov/2)."""
+
+
+@numba.njit(cache=True, nogil=True)
+def _depth_lateral_kernel(
+    x: np.ndarray, positions: np.ndarray, c: np.ndarray, s: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - jit
+    """``d, h`` ``(L, N)`` of points ``x (L, 2)``: :meth:`CameraArray.depth_lateral`'s arithmetic
+    in one pass (NumPy strides over the ``(L, N, 2)`` differences several times)."""
+    L, N = x.shape[0], positions.shape[0]
+    d, h = np.empty((L, N)), np.empty((L, N))
+    for l in range(L):
+        for i in range(N):
+            r0 = x[l, 0] - positions[i, 0]
+            r1 = x[l, 1] - positions[i, 1]
+            d[l, i] = c[i] * r0 + s[i] * r1
+            h[l, i] = -s[i] * r0 + c[i] * r1
+    return d, h
+
+
+@numba.njit(cache=True, nogil=True)
+def _noise_var_kernel(
+    d: np.ndarray, h: np.ndarray, f2: np.ndarray, st2: np.ndarray, sp2: np.ndarray, sr2: np.ndarray
+) -> np.ndarray:  # pragma: no cover - jit
+    """Eq. 2 for ``d, h`` ``(L, N)``: :meth:`CameraArray.noise_var_of`'s arithmetic, term by term
+    in its order, in one pass."""
+    L, N = d.shape
+    out = np.empty((L, N))
+    for l in range(L):
+        for i in range(N):
+            dd = d[l, i]
+            dd = dd if (dd >= MIN_DEPTH or dd != dd) else MIN_DEPTH  # np.maximum keeps NaN
+            q = h[l, i] / dd
+            a = 1.0 + q * q
+            out[l, i] = f2[i] * (a * a) * st2[i] + f2[i] * a / (dd * dd) * sp2[i] + sr2[i]
+    return out
 
 
 def focal_for(fov: float, image_width: float = DEFAULT_IMAGE_WIDTH) -> float:
@@ -200,8 +236,12 @@ class CameraArray:
 
     def depth_lateral(self, x: ArrayLike) -> tuple[Array, Array]:
         """``d_i(x)`` and ``h_i(x)`` (Appendix B), each ``(..., N)``."""
-        rel = np.asarray(x, float) - self.positions
+        p = np.asarray(x, float)
         c, s = np.cos(self.yaws), np.sin(self.yaws)
+        if p.ndim == 3 and p.shape[1:] == (1, 2):  # points (L, 1, 2): one Numba pass, same bits
+            pts = np.ascontiguousarray(p[:, 0, :])
+            return _depth_lateral_kernel(pts, np.ascontiguousarray(self.positions, float), c, s)
+        rel = p - self.positions
         d = c * rel[..., 0] + s * rel[..., 1]
         h = -s * rel[..., 0] + c * rel[..., 1]
         return d, h
@@ -224,6 +264,20 @@ class CameraArray:
 
     def noise_var_of(self, d: Array, h: Array) -> Array:
         """:meth:`noise_var` from :meth:`depth_lateral`'s ``d, h``."""
+        n = len(self.positions)
+        if np.ndim(d) == 2 and np.shape(d) == np.shape(h) and np.shape(d)[1] == n:
+            per_camera = (
+                self.focals**2,
+                self.sigma_theta**2,
+                self.sigma_pos**2,
+                self.sigma_read**2,
+            )
+            f2, st2, sp2, sr2 = (
+                np.ascontiguousarray(np.broadcast_to(v, (n,)), float) for v in per_camera
+            )
+            return _noise_var_kernel(
+                np.ascontiguousarray(d, float), np.ascontiguousarray(h, float), f2, st2, sp2, sr2
+            )
         d = np.maximum(d, MIN_DEPTH)
         r2 = (h / d) ** 2
         f2 = self.focals**2
