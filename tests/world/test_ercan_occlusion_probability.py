@@ -287,3 +287,101 @@ def test_isotropic_priors_equal_the_general_constructor():
         OccluderPriors.isotropic(mu, np.inf)
     with pytest.raises(ConfigError):
         OccluderPriors.isotropic(mu, -1.0)  # not positive semi-definite
+
+
+def test_exact_cull_skips_only_occluders_far_from_every_sight_line():
+    """With isotropic priors the selection kernels compute q only for the occluders that
+    ``_cull_occluders(exact=True)`` keeps; every one it drops is far (q exactly 0) for every
+    sight line of the cloud, so the kernel's q is the one-triple formula bit for bit. Clouds of
+    several spreads, occluder sds from narrow to wide, exclusion on and off; the cull must drop a
+    good share, or the test would not test it."""
+    import numba
+
+    from fusetrack.world.occlusion_kernels import (
+        CUTOFF,
+        _cull_occluders,
+        _q_iso,
+        _sight_line,
+    )
+
+    @numba.njit
+    def one_triple_q(cams, x, mu, sd, half, exclusion):
+        K, L, M = cams.shape[0], x.shape[0], mu.shape[0]
+        out = np.zeros((K, L, M))
+        for i in range(K):
+            for l in range(L):
+                u1, u2, r_eff = _sight_line(x[l, 0] - cams[i, 0], x[l, 1] - cams[i, 1], exclusion)
+                if r_eff <= 0.0:
+                    continue
+                for j in range(M):
+                    m1, m2 = mu[j, 0] - cams[i, 0], mu[j, 1] - cams[i, 1]
+                    out[i, l, j] = _q_iso(u1, u2, r_eff, m1, m2, 1 / sd[j], CUTOFF * sd[j], half)
+        return out
+
+    rng = np.random.default_rng(11)
+    dropped = kept = 0
+    for spread, exclusion in [(2.0, 0.0), (10.0, 3.33), (40.0, 0.0)]:
+        m = 29  # not a whole number of SIMD blocks
+        mu = rng.uniform(0, 200, (m, 2))
+        sd = rng.choice([0.3, 2.0, 6.0, 15.0], m)
+        cov = sd[:, None, None] ** 2 * np.eye(2)
+        cams = np.array([[0.0, 0.0], [200.0, 0.0], [0.0, 200.0], [100.0, 200.0], [200.0, 90.0]])
+        x = rng.uniform(60, 140, 2) + rng.normal(0, spread, (400, 2))
+        q = occlusion_probability_kernel(cams, x, mu, cov, D, exclusion)
+        np.testing.assert_array_equal(q, one_triple_q(cams, x, mu, sd, D / 2, exclusion))
+        _, n_use = _cull_occluders(x, cams, mu, cov, D / 2, True)
+        dropped += int((m - n_use).sum())
+        kept += int(n_use.sum())
+    assert dropped > 0.3 * (dropped + kept) and kept > 0.3 * (dropped + kept)
+
+
+def test_padded_rows_stay_inside_their_arrays():
+    """Rows of Eq. 7 run on whole SIMD blocks (``_row_length``): the likelihood and selection
+    kernels, run with Numba's bounds checks on (a fresh process, its own cache), give the same
+    numbers as here for 13 occluders, 2 cameras and 50 particles, and read or write nothing
+    outside an array."""
+    import json
+    import os
+    import subprocess
+    import sys
+    import tempfile
+    import textwrap
+
+    code = textwrap.dedent(
+        """
+        import json
+        import numpy as np
+        from fusetrack.world import occlusion_kernels as k
+        rng = np.random.default_rng(5)
+        mu = rng.uniform(0, 20, (13, 2))
+        cov = np.broadcast_to(np.eye(2) * 4.0, (13, 2, 2)).copy()
+        cams = np.array([[0.0, 0.0], [20.0, 0.0]])
+        x = rng.uniform(2, 18, (50, 2))
+        z = np.array([np.nan, 3.0])
+        lik = k.camera_likelihood_kernel(
+            x, z, cams, np.array([0.8, 2.3]), np.ones(2), np.full(2, 100.0), np.full(2, 1e-4),
+            np.full(2, 1e-2), np.ones(2), np.zeros((0, 2)), np.zeros((0, 2)),
+            np.zeros(50, dtype=np.bool_), 2, mu, cov, 1.0, 0.0, 1e-12)
+        q = k.occlusion_probability_kernel(cams, x, mu, cov, 1.0)
+        p1, p2 = k.pair_visibility_of_priors_kernel(
+            cams, x, mu, cov, 1.0, 0.0, np.ones((2, 50), dtype=np.bool_), np.full(50, 0.02))
+        print(json.dumps([lik.tolist(), q.sum(), p1.tolist(), p2.tolist()]))
+        """
+    )
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_BOUNDSCHECK": "1", "NUMBA_CACHE_DIR": cache}
+        checked = subprocess.run(
+            [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600
+        )
+    assert checked.returncode == 0, checked.stderr[-2000:]
+    here = subprocess.run(
+        [sys.executable, "-c", code],
+        env={k: v for k, v in os.environ.items() if k != "NUMBA_BOUNDSCHECK"},
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert here.returncode == 0, here.stderr[-2000:]
+    lik, q_sum, p1, p2 = json.loads(checked.stdout)
+    assert [lik, q_sum, p1, p2] == json.loads(here.stdout)
+    assert q_sum > 0 and all(np.isfinite(lik))
