@@ -64,6 +64,7 @@ class Room:
     convex: bool = field(init=False)
     _free_area: float = field(init=False, repr=False, compare=False)
     _edges: tuple[Array, Array] = field(init=False, repr=False, compare=False)
+    _box: tuple[float, float, float, float] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         b = as_polygon(self.boundary, "room.boundary")
@@ -82,12 +83,13 @@ class Room:
         area = signed_area(b) - sum(signed_area(o) for o in occ)
         object.__setattr__(self, "_free_area", area)  # sample_free needs it every call
         object.__setattr__(self, "_edges", _sight_edges(b, occ, self.convex))
+        lo, hi = b.min(axis=0), b.max(axis=0)
+        object.__setattr__(self, "_box", (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])))
 
     @property
     def bounding_box(self) -> tuple[float, float, float, float]:
         """``(xmin, xmax, ymin, ymax)``."""
-        lo, hi = self.boundary.min(axis=0), self.boundary.max(axis=0)
-        return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+        return self._box
 
     @property
     def center(self) -> Array:
@@ -112,6 +114,8 @@ class Room:
 
     def free(self, points: ArrayLike) -> NDArray[np.bool_]:
         """Inside the room and outside every static occluder: where objects may stand."""
+        if not self.static_occluders:  # the common case, asked every prediction step
+            return self.inside(points)
         return self.inside(points) & ~self.in_static_occluder(points)
 
     def sight_blocked(self, viewer: ArrayLike, points: ArrayLike) -> NDArray[np.bool_]:
@@ -158,16 +162,19 @@ class Room:
 
     def sample_free(self, rng: np.random.Generator, n: int) -> Array:
         """``n`` points uniform over the free floor (rejection from the bounding box)."""
-        x0, x1, y0, y1 = self.bounding_box
-        box = (x1 - x0) * (y1 - y0)
-        accept = max(self.free_area / box, 1e-3)
-        out = np.empty((0, 2))
+        x0, x1, y0, y1 = self._box
+        accept = max(self._free_area / ((x1 - x0) * (y1 - y0)), 1e-3)
+        parts: list[Array] = []
+        got = 0
         for _ in range(1000):
-            m = int(1.3 * (n - len(out)) / accept) + 8
-            cand = np.column_stack([rng.uniform(x0, x1, m), rng.uniform(y0, y1, m)])
-            out = np.concatenate([out, cand[self.free(cand)]])
-            if len(out) >= n:
-                return out[:n]
+            m = int(1.3 * (n - got) / accept) + 8
+            cand = np.empty((m, 2))
+            cand[:, 0] = rng.uniform(x0, x1, m)
+            cand[:, 1] = rng.uniform(y0, y1, m)
+            parts.append(cand[self.free(cand)])
+            got += len(parts[-1])
+            if got >= n:  # almost always after the first round
+                return (parts[0] if len(parts) == 1 else np.concatenate(parts))[:n]
         raise ConfigError(
             invalid("room", self.name, "a room with free floor area")
         )  # pragma: no cover
