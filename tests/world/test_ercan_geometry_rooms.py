@@ -67,6 +67,41 @@ def test_sample_free_avoids_occluders():
     assert room.free(pts).all()
 
 
+def test_sample_free_draws_what_rejection_from_the_box_draws():
+    """Room.sample_free is rejection sampling from the bounding box, candidates x then y per
+    round, kept in order: the same points, and the same state of the generator after, as that
+    algorithm written plainly; in rooms where one round is enough and where it often is not
+    (little free floor left, few points)."""
+
+    def plain(room, rng, n):
+        x0, x1, y0, y1 = room.bounding_box
+        accept = max(room.free_area / ((x1 - x0) * (y1 - y0)), 1e-3)
+        out = np.empty((0, 2))
+        while len(out) < n:
+            m = int(1.3 * (n - len(out)) / accept) + 8
+            cand = np.column_stack([rng.uniform(x0, x1, m), rng.uniform(y0, y1, m)])
+            out = np.concatenate([out, cand[room.free(cand)]])
+        return out[:n]
+
+    rooms = [l_shaped_room(), square_room(100, [[[1, 1], [99, 1], [99, 99], [1, 99]]])]
+    rounds = []
+    for room in rooms:
+        for n in (1, 2, 50):
+            for seed in range(20):
+                a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+                free_calls = []
+                room_free = room.free
+                object.__setattr__(room, "free", lambda p: free_calls.append(1) or room_free(p))
+                try:
+                    got = room.sample_free(a, n)
+                finally:
+                    object.__delattr__(room, "free")
+                np.testing.assert_array_equal(got, plain(room, b, n))
+                assert a.random() == b.random()
+                rounds.append(len(free_calls))
+    assert max(rounds) >= 2 and min(rounds) == 1  # both paths were taken
+
+
 def test_paired_crossing_kernel_matches_numpy_reference():
     """Room.sight_blocked's Numba pass equals segments_cross_polygon (the NumPy reference) per
     polygon: hand-made cases (crossing, touching a vertex, running along an edge, ending on a
