@@ -335,8 +335,16 @@ def test_exact_cull_skips_only_occluders_far_from_every_sight_line():
     assert dropped > 0.3 * (dropped + kept) and kept > 0.3 * (dropped + kept)
 
 
+def test_row_length_rounds_up_to_whole_blocks_unless_one_or_two_are_left():
+    from fusetrack.world.occlusion_kernels import _LANES, _row_length
+
+    assert _LANES == 8
+    got = [_row_length(n) for n in range(0, 20)]
+    assert got == [0, 1, 2, 8, 8, 8, 8, 8, 8, 9, 10, 16, 16, 16, 16, 16, 16, 17, 18, 24]
+
+
 def test_padded_rows_stay_inside_their_arrays():
-    """Rows of Eq. 7 run on whole SIMD blocks (``_row_length``): the likelihood and selection
+    """Rows of Eq. 7 run padded to whole SIMD blocks (``_row_length``): the likelihood and selection
     kernels, run with Numba's bounds checks on (a fresh process, its own cache), give the same
     numbers as here for 13 occluders, 2 cameras and 50 particles, and read or write nothing
     outside an array."""

@@ -12,7 +12,8 @@ CDF lookups each, and the inclusion-exclusion over ~4 occluded cameras has ~30 t
 factors. The q of one sight line against its occluders runs in passes that vectorise
 (:func:`_q_row_iso`); what that gains depends on the CPU (``benchmarks/ercan2013_q_rows.py`` and
 its section of ``benchmarks/README.md``): on an AMD znver4 a triple costs ~4.5 ns (2026-12-05),
-~2.8 of them the arithmetic without the four table reads, which are scalar loads.
+~2.8 of them the arithmetic without the four table reads, which are scalar loads, provided the
+row runs on whole SIMD blocks (:func:`_row_length`; a remainder costs ~3x as much per triple).
 """
 
 from __future__ import annotations
@@ -464,12 +465,15 @@ _LANES = 8
 
 @numba.njit(cache=True, inline="always")
 def _row_length(n: int) -> int:  # pragma: no cover - jit
-    """``n`` rounded up to whole blocks of :data:`_LANES`: the length a row of ``n`` occluders is
-    computed on. LLVM vectorises the row's passes ``_LANES`` wide and leaves the last ``n %
-    _LANES`` occluders to a scalar loop that costs ~3x as much per triple (on a znver4, 2026-12-05:
-    a row of 7 took 105 ns, one of 8 51 ns; 31 took 215, 32 142); the padding entries are zero
-    rows of the row tables (finite; their q is computed and never read)."""
-    return (n + _LANES - 1) // _LANES * _LANES
+    """The length a row of ``n`` occluders is computed on: ``n`` rounded up to whole blocks of
+    :data:`_LANES` unless only one or two are left over. LLVM vectorises the row's passes
+    ``_LANES`` wide and leaves the last ``n % _LANES`` occluders to a scalar loop, which costs
+    more than a whole block from three left over on (a znver4, 2026-12-05, ns per sight line on
+    ``n`` / rounded up: 25 occluders 122 / 142, 27 147 / 146, 29 172 / 142, 31 191 / 143;
+    ``benchmarks/ercan2013_q_rows.py --lengths``). The padding entries are zero rows of the row
+    tables (finite; their q is computed and never read)."""
+    r = n % _LANES
+    return n if r < 3 else n + _LANES - r
 
 
 _ROW_WORK = 9
