@@ -91,7 +91,8 @@ def test_sample_free_draws_what_rejection_from_the_box_draws():
                 a, b = np.random.default_rng(seed), np.random.default_rng(seed)
                 free_calls = []
                 room_free = room.free
-                object.__setattr__(room, "free", lambda p: free_calls.append(1) or room_free(p))
+                counted = lambda p, calls=free_calls, f=room_free: calls.append(1) or f(p)  # noqa: E731
+                object.__setattr__(room, "free", counted)
                 try:
                     got = room.sample_free(a, n)
                 finally:

@@ -293,8 +293,9 @@ def test_exact_cull_skips_only_occluders_far_from_every_sight_line():
     """With isotropic priors the selection kernels compute q only for the occluders that
     ``_cull_occluders(exact=True)`` keeps; every one it drops is far (q exactly 0) for every
     sight line of the cloud, so the kernel's q is the one-triple formula bit for bit. Clouds of
-    several spreads, occluder sds from narrow to wide, exclusion on and off; the cull must drop a
-    good share, or the test would not test it."""
+    several spreads, occluder sds from narrow to wide, exclusion on, off and negative (the
+    kernel's rectangles then reach past the point); the cull must drop a good share, or the test
+    would not test it."""
     import numba
 
     from fusetrack.world.occlusion_kernels import (
@@ -320,7 +321,7 @@ def test_exact_cull_skips_only_occluders_far_from_every_sight_line():
 
     rng = np.random.default_rng(11)
     dropped = kept = 0
-    for spread, exclusion in [(2.0, 0.0), (10.0, 3.33), (40.0, 0.0)]:
+    for spread, exclusion in [(2.0, 0.0), (10.0, 3.33), (40.0, 0.0), (10.0, -30.0)]:
         m = 29  # not a whole number of SIMD blocks
         mu = rng.uniform(0, 200, (m, 2))
         sd = rng.choice([0.3, 2.0, 6.0, 15.0], m)
@@ -329,7 +330,7 @@ def test_exact_cull_skips_only_occluders_far_from_every_sight_line():
         x = rng.uniform(60, 140, 2) + rng.normal(0, spread, (400, 2))
         q = occlusion_probability_kernel(cams, x, mu, cov, D, exclusion)
         np.testing.assert_array_equal(q, one_triple_q(cams, x, mu, sd, D / 2, exclusion))
-        _, n_use = _cull_occluders(x, cams, mu, cov, D / 2, True)
+        _, n_use = _cull_occluders(x, cams, mu, cov, D / 2, True, exclusion)
         dropped += int((m - n_use).sum())
         kept += int(n_use.sum())
     assert dropped > 0.3 * (dropped + kept) and kept > 0.3 * (dropped + kept)

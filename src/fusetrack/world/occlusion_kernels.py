@@ -605,6 +605,7 @@ def _cull_occluders(
     occ_cov: np.ndarray,
     half: float,
     exact: bool = False,
+    exclusion: float = 0.0,
 ) -> tuple:  # pragma: no cover - jit
     """Per camera, the occluders that can block a sight line to the particle cloud: ``use[i, :n]``.
 
@@ -615,8 +616,9 @@ def _cull_occluders(
     ``exact`` (isotropic priors): skip only the occluders that :func:`_q_iso` calls far for every
     particle, so that no q changes: every point of its not-far rectangle (``|phi| <= D/2 + 5 sd``,
     ``-5 sd <= m_a <= r + 5 sd``) lies within sqrt((D/2 + 5 sd)^2 + (5 sd)^2) of the sight line
-    segment, which lies within rho of the camera's segment to the centre; a rounding margin is
-    added, and a cloud with a non-finite point skips nothing."""
+    segment, which lies within rho of the camera's segment to the centre (plus ``-exclusion`` if
+    that is negative: the rectangle then reaches past the point); a rounding margin is added,
+    and a cloud with a non-finite point skips nothing."""
     L, K, M = x.shape[0], cam_pos.shape[0], occ_mu.shape[0]
     use = np.zeros((K, M), dtype=np.int64)
     n_use = np.zeros(K, dtype=np.int64)
@@ -651,7 +653,7 @@ def _cull_occluders(
             lim = rho + half + 1.1 * CUTOFF * sd_max
             if exact:
                 r = CUTOFF * math.sqrt(occ_cov[j, 0, 0])  # _occluder_precisions' reach
-                lim = rho + math.sqrt((half + r) ** 2 + r * r)
+                lim = rho + max(-exclusion, 0.0) + math.sqrt((half + r) ** 2 + r * r)
                 lim += 1e-9 * (1.0 + lim + math.sqrt(ox * ox + oy * oy) + math.sqrt(len2))
             if fx * fx + fy * fy <= lim * lim:
                 use[i, n_use[i]] = j
@@ -738,7 +740,7 @@ def _sight_line_tables(
     p11, p12, p22, iso, inv_sd, reach = _occluder_precisions(cov)
     m1, m2, pm1, pm2 = _camera_offsets(cams, mu, p11, p12, p22)
     if np.all(iso):
-        use, n_use = _cull_occluders(x, cams, mu, cov, 0.5 * diameter, True)
+        use, n_use = _cull_occluders(x, cams, mu, cov, 0.5 * diameter, True, exclusion)
     else:
         use, n_use = np.zeros((K, M), dtype=np.int64), np.zeros(K, dtype=np.int64)
     all_iso, rows = _iso_rows(use, n_use, m1, m2, inv_sd, reach, iso)
