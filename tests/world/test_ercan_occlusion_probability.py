@@ -321,7 +321,7 @@ def test_exact_cull_skips_only_occluders_far_from_every_sight_line():
 
     rng = np.random.default_rng(11)
     dropped = kept = 0
-    for spread, exclusion in [(2.0, 0.0), (10.0, 3.33), (40.0, 0.0), (10.0, -30.0)]:
+    for spread, exclusion in [(2.0, 0.0), (10.0, 3.33), (20.0, 0.0), (10.0, -30.0)]:
         m = 29  # not a whole number of SIMD blocks
         mu = rng.uniform(0, 200, (m, 2))
         sd = rng.choice([0.3, 2.0, 6.0, 15.0], m)
@@ -331,9 +331,10 @@ def test_exact_cull_skips_only_occluders_far_from_every_sight_line():
         q = occlusion_probability_kernel(cams, x, mu, cov, D, exclusion)
         np.testing.assert_array_equal(q, one_triple_q(cams, x, mu, sd, D / 2, exclusion))
         _, n_use = _cull_occluders(x, cams, mu, cov, D / 2, True, exclusion)
+        assert 0 < (m - n_use).sum() < m * len(cams)  # some dropped, some kept
         dropped += int((m - n_use).sum())
         kept += int(n_use.sum())
-    assert dropped > 0.3 * (dropped + kept) and kept > 0.3 * (dropped + kept)
+    assert 0.2 * (dropped + kept) < dropped < 0.8 * (dropped + kept)
 
 
 def test_row_length_rounds_up_to_whole_blocks_unless_one_or_two_are_left():
