@@ -622,22 +622,22 @@ def _cull_occluders(
     L, K, M = x.shape[0], cam_pos.shape[0], occ_mu.shape[0]
     use = np.zeros((K, M), dtype=np.int64)
     n_use = np.zeros(K, dtype=np.int64)
+    if exact:  # a non-finite point: keep every occluder
+        for l in range(L):
+            if not (abs(x[l, 0]) < np.inf and abs(x[l, 1]) < np.inf):
+                for i in range(K):
+                    for j in range(M):
+                        use[i, j] = j
+                    n_use[i] = M
+                return use, n_use
     lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
-    finite = True
     for l in range(L):
         lo_x = min(lo_x, x[l, 0])
         hi_x = max(hi_x, x[l, 0])
         lo_y = min(lo_y, x[l, 1])
         hi_y = max(hi_y, x[l, 1])
-        finite = finite and abs(x[l, 0]) < np.inf and abs(x[l, 1]) < np.inf
     bx, by = 0.5 * (lo_x + hi_x), 0.5 * (lo_y + hi_y)
     rho = 0.5 * math.sqrt((hi_x - lo_x) ** 2 + (hi_y - lo_y) ** 2)
-    if exact and not finite:
-        for i in range(K):
-            for j in range(M):
-                use[i, j] = j
-            n_use[i] = M
-        return use, n_use
     for i in range(K):
         sx, sy = bx - cam_pos[i, 0], by - cam_pos[i, 1]
         len2 = sx * sx + sy * sy
@@ -647,14 +647,15 @@ def _cull_occluders(
             t = (ox * sx + oy * sy) / len2 if len2 > 0 else 0.0
             t = min(max(t, 0.0), 1.0)
             fx, fy = ox - t * sx, oy - t * sy
-            sd_max = math.sqrt(  # Gershgorin bound on the largest eigenvalue
-                max(occ_cov[j, 0, 0], occ_cov[j, 1, 1]) + abs(occ_cov[j, 0, 1])
-            )
-            lim = rho + half + 1.1 * CUTOFF * sd_max
             if exact:
                 r = CUTOFF * math.sqrt(occ_cov[j, 0, 0])  # _occluder_precisions' reach
                 lim = rho + max(-exclusion, 0.0) + math.sqrt((half + r) ** 2 + r * r)
                 lim += 1e-9 * (1.0 + lim + math.sqrt(ox * ox + oy * oy) + math.sqrt(len2))
+            else:
+                sd_max = math.sqrt(  # Gershgorin bound on the largest eigenvalue
+                    max(occ_cov[j, 0, 0], occ_cov[j, 1, 1]) + abs(occ_cov[j, 0, 1])
+                )
+                lim = rho + half + 1.1 * CUTOFF * sd_max
             if fx * fx + fy * fy <= lim * lim:
                 use[i, n_use[i]] = j
                 n_use[i] += 1

@@ -174,7 +174,7 @@ class Room:
             parts.append(cand[self.free(cand)])
             got += len(parts[-1])
             if got >= n:  # almost always after the first round
-                return (parts[0] if len(parts) == 1 else np.concatenate(parts))[:n]
+                return np.concatenate(parts)[:n]
         raise ConfigError(
             invalid("room", self.name, "a room with free floor area")
         )  # pragma: no cover
